@@ -1,0 +1,106 @@
+"""Index layout shared by the compiled kernels and their Python callers.
+
+The kernels take plain float64 arrays; this module names every slot so that no caller
+writes a bare number.
+"""
+
+from __future__ import annotations
+
+# --- packed parameter vector -------------------------------------------------------
+P_FLYWHEEL_INERTIA = 0
+P_DRUM_INERTIA = 1
+P_COUPLING_STIFFNESS = 2
+P_COUPLING_DAMPING = 3
+P_DRUM_RADIUS = 4
+P_CONTACT_STIFFNESS = 5
+P_CONTACT_DAMPING = 6
+P_FRICTION_COEFFICIENT = 7
+P_FRICTION_SMOOTHING_SPEED = 8
+P_RIGID_COUPLING = 9  # 1.0: flywheel and drum move as one body (no torsional mode)
+P_SHOE_BASE = 12  # first slot of the left shoe; the right shoe follows at +SHOE_STRIDE
+SHOE_STRIDE = 24
+
+# offsets inside one shoe's block (world frame, shoe at its symmetric rest angle)
+S_SIGN = 0  # +1 left (outward = counter-clockwise), -1 right (outward = clockwise)
+S_PIVOT_X = 1
+S_PIVOT_Y = 2
+S_LINING_CENTRE_X = 3  # centre of the lining arc, m
+S_LINING_CENTRE_Y = 4
+S_LINING_RADIUS = 5
+S_LINING_MID_ANGLE = 6  # polar angle of the arc's middle, seen from the arc centre, rad
+S_LINING_HALF_ANGLE = 7
+S_TIP_X = 8
+S_TIP_Y = 9
+S_ACTUATION_DIR_X = 10
+S_ACTUATION_DIR_Y = 11
+S_MASS = 12
+S_MASS_CENTRE_X = 13
+S_MASS_CENTRE_Y = 14
+S_INERTIA = 15  # about the pivot, kg m^2
+S_ACTUATION_GAIN = 16  # 2 x actuation share
+S_ENABLED = 17  # 0.0: shoe removed from the model (held retracted, no forces)
+S_LINING_HALF_COS = 18  # cos and sin of the half angle, so the kernel needs no atan2
+S_LINING_HALF_SIN = 19
+S_LINING_MID_COS = 20  # unit vector toward the arc's middle at rest
+S_LINING_MID_SIN = 21
+
+N_PARAMS = P_SHOE_BASE + 2 * SHOE_STRIDE
+
+# --- state vector ---------------------------------------------------------------------
+Y_FLYWHEEL_ANGLE = 0
+Y_DRUM_ANGLE = 1
+Y_LEFT_ANGLE = 2
+Y_RIGHT_ANGLE = 3
+Y_FLYWHEEL_SPEED = 4
+Y_DRUM_SPEED = 5
+Y_LEFT_SPEED = 6
+Y_RIGHT_SPEED = 7
+# energy quadratures, J, integrated with the motion
+Y_FRICTION_WORK = 8
+Y_COUPLING_DAMPER_LOSS = 9
+Y_CONTACT_LOSS = 10
+Y_ACTUATION_WORK = 11
+N_STATE = 12
+
+# --- recorded sample columns -------------------------------------------------------------
+COLUMNS: tuple[str, ...] = (
+    "time_s",
+    "flywheel_angle_rad", "drum_angle_rad", "left_angle_rad", "right_angle_rad",
+    "flywheel_speed_rad_s", "drum_speed_rad_s", "left_speed_rad_s", "right_speed_rad_s",
+    "left_indentation_m", "right_indentation_m",
+    "left_normal_force_n", "right_normal_force_n",
+    "left_friction_force_n", "right_friction_force_n",
+    "left_actuation_force_n", "right_actuation_force_n",
+    "left_pivot_fx_n", "left_pivot_fy_n", "right_pivot_fx_n", "right_pivot_fy_n",
+    "left_contact_x_m", "left_contact_y_m", "right_contact_x_m", "right_contact_y_m",
+    "friction_work_j", "coupling_damper_loss_j", "contact_loss_j", "actuation_work_j",
+    "lock_loss_j",
+    "regime", "left_regime", "right_regime",
+    "left_indentation_rate_m_s", "right_indentation_rate_m_s",
+    "left_sliding_speed_m_s", "right_sliding_speed_m_s",
+)
+COL = {name: i for i, name in enumerate(COLUMNS)}
+N_COLUMNS = len(COLUMNS)
+
+# --- regimes ---------------------------------------------------------------------------
+REGIME_FREE = 0  # not touching the drum (not yet, or released)
+REGIME_IMPACTING = 1  # striking and bouncing off the drum
+REGIME_CONTACT = 2  # riding steadily on the drum
+REGIME_STOPPED = 3  # drum at standstill, brake locked
+REGIME_NAMES = ("free", "impacting", "contact", "stopped")
+
+# --- kernel bookkeeping (int64 array carried between calls) -------------------------------
+K_LOCKED = 0
+K_LEFT_REGIME = 1
+K_RIGHT_REGIME = 2
+K_LEFT_IN_CONTACT = 3
+K_RIGHT_IN_CONTACT = 4
+K_LEFT_LAST_CHANGE_STEP = 5  # step index at which the contact flag last changed
+K_RIGHT_LAST_CHANGE_STEP = 6
+K_STATUS = 7  # 0 running, 1 non-finite state
+N_KSTATE = 8
+
+# contact modes of the right-hand side (the adaptive reference forces them per segment)
+CONTACT_AUTO = -1
+CONTACT_OFF = 0
+CONTACT_ON = 1

@@ -1,0 +1,63 @@
+"""Blocks of recorded samples and the description of a whole braking model setup."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from brake_sim_ros.model import layout as L
+from brake_sim_ros.model.actuation import Actuation
+from brake_sim_ros.model.assembly import ModelOptions
+from brake_sim_ros.model.defects import Defects
+from brake_sim_ros.model.parameters import BrakeParameters
+
+
+@dataclass(frozen=True)
+class BrakeSetup:
+    """Everything that defines a braking event apart from the numerical method."""
+
+    params: BrakeParameters = field(default_factory=BrakeParameters)
+    defects: Defects = field(default_factory=Defects)
+    actuation: Actuation = field(default_factory=Actuation.published_ramp)
+    options: ModelOptions = field(default_factory=ModelOptions)
+
+
+@dataclass(frozen=True)
+class SampleBlock:
+    """Consecutive samples, one row per sample, columns as in ``layout.COLUMNS``.
+
+    Attributes:
+        data: float64 array, shape (n_samples, len(COLUMNS)). Units are in the column
+            names; vectors are in the backing-plate frame.
+        first_index: running index of the first row since the start of the event.
+        sample_period_s: time between rows, s.
+    """
+
+    data: np.ndarray
+    first_index: int
+    sample_period_s: float
+
+    def __len__(self) -> int:
+        return int(self.data.shape[0])
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        return self.data[:, L.COL[name]]
+
+    @property
+    def time_s(self) -> np.ndarray:
+        return self.data[:, 0]
+
+    def pivot_force_magnitude(self, side: str) -> np.ndarray:
+        """|F_pivot| of one shoe, N."""
+        return np.hypot(self[f"{side}_pivot_fx_n"], self[f"{side}_pivot_fy_n"])
+
+    @staticmethod
+    def concatenate(blocks: list[SampleBlock]) -> SampleBlock:
+        if not blocks:
+            raise ValueError("no sample blocks to concatenate")
+        return SampleBlock(np.concatenate([b.data for b in blocks]), blocks[0].first_index,
+                           blocks[0].sample_period_s)
+
+    def as_dict(self) -> dict[str, np.ndarray]:
+        return {name: self.data[:, i] for i, name in enumerate(L.COLUMNS)}

@@ -1,0 +1,161 @@
+"""Benchmark of the ROS node, run as a user would: a node process and a client over DDS.
+
+``python -m brake_sim_ros.ros.benchmark [--duration S] [--scenario NAME] [--afap-seconds S]``
+
+Prints:
+    * CPU use of the node process at real-time factor 1, in % of one core, from
+      ``/proc/<pid>/stat`` (user + system time) over the measured run;
+    * real-time factor and deadline misses over that run (``--duration``, default 60 s),
+      from the node's own counters, plus samples received and lost by the client;
+    * command-to-effect latency: wall time from publishing an ActuationCommand to the
+      arrival of the first BrakeState whose actuation force equals the command (the
+      chunk that starts applying it carries its state; PivotForceChunk has no actuation
+      field);
+    * the highest real-time factor: the ceiling measured as fast as possible, then a
+      check run at 80 % of it, with every topic published and subscribed.
+
+The client subscribes to every topic with the REP 2003 consumer QoS, so the node does
+all of its publishing work. Both processes share the machine's cores.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import statistics
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from brake_sim_ros.ros.harness import NodeProcess, SimClient, domain_id_for
+
+WARM_UP_S = 2.0
+
+
+def _cpu_seconds(pid: int) -> float:
+    """User + system CPU time of a process, s (Linux /proc)."""
+    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    ticks = int(fields[11]) + int(fields[12])  # utime, stime (fields 14 and 15 of stat)
+    return ticks / os.sysconf("SC_CLK_TCK")
+
+
+class _Window:
+    """Node counters, client counters and CPU time between two instants."""
+
+    def __init__(self, client: SimClient, pid: int) -> None:
+        self.client, self.pid = client, pid
+        self.wall0 = time.monotonic()
+        self.cpu0 = _cpu_seconds(pid)
+        self.diag0 = client.next_diagnostics()
+        self.samples0, self.gaps0 = client.sample_count, client.gaps
+
+    def close(self) -> dict[str, float]:
+        diag1 = self.client.next_diagnostics()
+        wall = time.monotonic() - self.wall0
+        dt = 1.0 / float(diag1["sample_rate_hz"])
+        steps = int(diag1["steps_done"]) - int(self.diag0["steps_done"])
+        return {
+            "wall_s": wall,
+            "cpu_pct": 100.0 * (_cpu_seconds(self.pid) - self.cpu0) / wall,
+            "rtf": steps * dt / wall,
+            "deadline_misses": int(diag1["deadline_misses"]) - int(self.diag0["deadline_misses"]),
+            "slips": int(diag1["slips"]) - int(self.diag0["slips"]),
+            "steps": steps,
+            "received": self.client.sample_count - self.samples0,
+            "gaps": self.client.gaps - self.gaps0,
+        }
+
+
+def _latency(client: SimClient, count: int) -> list[float]:
+    """Seconds from publishing a command to the first state that shows it."""
+    out = []
+    for i in range(count):
+        force = 200.0 + 10.0 * i  # distinct, within any scenario's limit
+        client.rx.states.clear()
+        client.rx.state_times.clear()
+        t0 = time.monotonic()
+        client.command(force, force)
+
+        def shows(state, force=force) -> bool:
+            # shares sum to 1, so left + right = 2 x command whatever the share defect
+            total = state.left_actuation_force_n + state.right_actuation_force_n
+            return abs(total - 2.0 * force) < 1e-6
+
+        client.wait_for(lambda: any(shows(s) for s in client.rx.states), 5.0,
+                        f"state with the commanded force {force} N")
+        k = next(j for j, s in enumerate(client.rx.states) if shows(s))
+        out.append(client.rx.state_times[k] - t0)
+        client.spin_for(0.3)  # past the command timeout: back to the profile
+    return out
+
+
+def run(duration_s: float, scenario: str, afap_s: float, latency_count: int) -> str:
+    domain = domain_id_for(90)
+    log = Path(tempfile.mkdtemp(prefix="brake_sim_bench_")) / "node.log"
+    node = NodeProcess.start(["--scenario", scenario, "--duration", "86400"], domain_id=domain,
+                             log_path=log)
+    client = SimClient(domain, keep_chunks=False)
+    lines = []
+    try:
+        client.wait_for_node(60.0)
+        client.spin_for(WARM_UP_S)
+        window = _Window(client, node.pid)
+        client.spin_for(duration_s)
+        rt = window.close()
+        lat = _latency(client, latency_count)
+        client.set_parameter("real_time_factor", 0.0)
+        client.spin_for(1.0)
+        window = _Window(client, node.pid)
+        client.spin_for(afap_s)
+        afap = window.close()
+        check_factor = max(1.0, math.floor(0.8 * afap["rtf"]))
+        client.set_parameter("real_time_factor", check_factor)
+        client.spin_for(1.0)
+        window = _Window(client, node.pid)
+        client.spin_for(afap_s)
+        check = window.close()
+    finally:
+        client.close()
+        code = node.stop()
+    lat_ms = sorted(1e3 * x for x in lat)
+    p95 = lat_ms[min(len(lat_ms) - 1, math.ceil(0.95 * len(lat_ms)) - 1)]
+    lines += [
+        f"brake_sim node benchmark: scenario '{scenario}', {os.cpu_count()} CPUs,"
+        f" node exit code {code}",
+        f"  real-time factor 1 for {rt['wall_s']:.1f} s: CPU {rt['cpu_pct']:.1f} % of one core;"
+        f" real-time factor {rt['rtf']:.4f}; deadline misses {rt['deadline_misses']}, slips"
+        f" {rt['slips']}; samples received {rt['received']} of {rt['steps']}, gaps"
+        f" {rt['gaps']}",
+        f"  command-to-effect latency over {len(lat_ms)} commands: median"
+        f" {statistics.median(lat_ms):.1f} ms, p95 {p95:.1f} ms, max {lat_ms[-1]:.1f} ms",
+        f"  as fast as possible for {afap['wall_s']:.1f} s: real-time factor {afap['rtf']:.1f},"
+        f" CPU {afap['cpu_pct']:.0f} %; client received {afap['received']} of"
+        f" {afap['steps']} samples",
+        f"  check at real-time factor {check_factor:g} for {check['wall_s']:.1f} s: achieved"
+        f" {check['rtf']:.2f}, deadline misses {check['deadline_misses']}, slips"
+        f" {check['slips']}, CPU {check['cpu_pct']:.0f} %",
+        f"  highest sustained real-time factor (all topics published): about"
+        f" {check_factor if check['deadline_misses'] == 0 else check['rtf']:.0f}"
+        f" (ceiling {afap['rtf']:.0f})",
+    ]
+    return "\n".join(lines)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m brake_sim_ros.ros.benchmark",
+                                     description=__doc__.split("\n\n")[0])
+    parser.add_argument("--duration", type=float, default=60.0, metavar="S",
+                        help="wall seconds of the real-time run (default 60)")
+    parser.add_argument("--scenario", default="symmetric")
+    parser.add_argument("--afap-seconds", type=float, default=5.0, metavar="S",
+                        help="wall seconds of the as-fast-as-possible and check runs")
+    parser.add_argument("--latency-samples", type=int, default=20)
+    args = parser.parse_args(argv)
+    print(run(args.duration, args.scenario, args.afap_seconds, args.latency_samples), flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

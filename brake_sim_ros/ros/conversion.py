@@ -1,0 +1,177 @@
+"""SampleBlock -> ROS messages. Pure functions: no rclpy, no clock, no DDS.
+
+Every stamp is simulated time, ``t = sample_index * dt`` in integer nanoseconds
+(:func:`stamp_ns`), never the wall clock; every frame_id is ``brake_backing_plate``
+(see ``model/parameters.py`` for the frame). Units and signs are those of the core's
+columns (``model/layout.py::COLUMNS``), which the message definitions repeat.
+"""
+
+from __future__ import annotations
+
+import array
+import dataclasses
+import math
+
+import numpy as np
+from brake_sim_msgs.msg import BrakeState, DefectState, PivotForceChunk
+from builtin_interfaces.msg import Time
+from rosgraph_msgs.msg import Clock
+from sensor_msgs.msg import JointState
+from std_msgs.msg import Header
+
+from brake_sim_ros.model.defects import Defects
+from brake_sim_ros.model.layout import COL
+from brake_sim_ros.model.parameters import BrakeParameters
+from brake_sim_ros.model.trajectory import SampleBlock
+
+FRAME_ID = "brake_backing_plate"
+JOINT_NAMES = ("flywheel", "drum", "left_shoe", "right_shoe")
+_JOINT_ANGLES = ("flywheel_angle_rad", "drum_angle_rad", "left_angle_rad", "right_angle_rad")
+_JOINT_SPEEDS = ("flywheel_speed_rad_s", "drum_speed_rad_s", "left_speed_rad_s",
+                 "right_speed_rad_s")
+_NS_PER_S = 1_000_000_000
+
+
+def stamp_ns(sample_index: int, dt_s: float) -> int:
+    """Simulated time of a sample, integer ns: ``round(sample_index * dt_s * 1e9)``."""
+    return round(sample_index * dt_s * _NS_PER_S)
+
+
+def sample_rate_hz(period_s: float) -> float:
+    """``1 / period_s``, snapped to the integer it misses by rounding (1 / 4e-5 = 25000.0)."""
+    rate = 1.0 / period_s
+    nearest = round(rate)
+    return float(nearest) if abs(rate - nearest) <= 1e-9 * rate else rate
+
+
+def time_msg(ns: int) -> Time:
+    return Time(sec=ns // _NS_PER_S, nanosec=ns % _NS_PER_S)
+
+
+def header(ns: int) -> Header:
+    return Header(stamp=time_msg(ns), frame_id=FRAME_ID)
+
+
+def all_finite(block: SampleBlock) -> bool:
+    """True when every number of the block is finite (nothing else may be published)."""
+    return bool(np.isfinite(block.data).all())
+
+
+def _doubles(column: np.ndarray) -> array.array:
+    out = array.array("d")
+    out.frombytes(np.ascontiguousarray(column, dtype=np.float64).tobytes())
+    return out
+
+
+def pivot_force_chunk(block: SampleBlock) -> PivotForceChunk:
+    """All samples of ``block`` as one chunk; header stamp = time of its first sample."""
+    lx, ly = block["left_pivot_fx_n"], block["left_pivot_fy_n"]
+    rx, ry = block["right_pivot_fx_n"], block["right_pivot_fy_n"]
+    return PivotForceChunk(
+        header=header(stamp_ns(block.first_index, block.sample_period_s)),
+        first_sample_index=int(block.first_index),
+        sample_rate_hz=sample_rate_hz(block.sample_period_s),
+        left_fx_n=_doubles(lx), left_fy_n=_doubles(ly),
+        right_fx_n=_doubles(rx), right_fy_n=_doubles(ry),
+        left_magnitude_n=_doubles(np.hypot(lx, ly)),
+        right_magnitude_n=_doubles(np.hypot(rx, ry)),
+    )
+
+
+def state_rows(block: SampleBlock, stride: int) -> list[int]:
+    """Rows of ``block`` whose sample index is a multiple of ``stride``.
+
+    Choosing state samples by index, not by position in a chunk, makes the published
+    states independent of how the run was cut into chunks and service calls.
+    """
+    first = block.first_index
+    start = (-first) % stride
+    return list(range(start, len(block), stride))
+
+
+def brake_state(block: SampleBlock, row: int) -> BrakeState:
+    """Row ``row`` of ``block`` as a BrakeState."""
+    r = block.data[row]
+    c = COL
+    index = block.first_index + row
+    left_indent = float(r[c["left_indentation_m"]])
+    right_indent = float(r[c["right_indentation_m"]])
+    return BrakeState(
+        header=header(stamp_ns(index, block.sample_period_s)),
+        sample_index=int(index),
+        flywheel_angle_rad=float(r[c["flywheel_angle_rad"]]),
+        drum_angle_rad=float(r[c["drum_angle_rad"]]),
+        left_shoe_angle_rad=float(r[c["left_angle_rad"]]),
+        right_shoe_angle_rad=float(r[c["right_angle_rad"]]),
+        flywheel_speed_rad_s=float(r[c["flywheel_speed_rad_s"]]),
+        drum_speed_rad_s=float(r[c["drum_speed_rad_s"]]),
+        left_shoe_speed_rad_s=float(r[c["left_speed_rad_s"]]),
+        right_shoe_speed_rad_s=float(r[c["right_speed_rad_s"]]),
+        left_indentation_m=left_indent,
+        right_indentation_m=right_indent,
+        left_normal_force_n=float(r[c["left_normal_force_n"]]),
+        right_normal_force_n=float(r[c["right_normal_force_n"]]),
+        left_friction_force_n=float(r[c["left_friction_force_n"]]),
+        right_friction_force_n=float(r[c["right_friction_force_n"]]),
+        left_actuation_force_n=float(r[c["left_actuation_force_n"]]),
+        right_actuation_force_n=float(r[c["right_actuation_force_n"]]),
+        left_contact_x_m=float(r[c["left_contact_x_m"]]),
+        left_contact_y_m=float(r[c["left_contact_y_m"]]),
+        right_contact_x_m=float(r[c["right_contact_x_m"]]),
+        right_contact_y_m=float(r[c["right_contact_y_m"]]),
+        left_in_contact=left_indent > 0.0,
+        right_in_contact=right_indent > 0.0,
+        regime=int(r[c["regime"]]),
+    )
+
+
+def joint_state(block: SampleBlock, row: int) -> JointState:
+    """The four rotations at row ``row``: positions (rad) and velocities (rad/s).
+
+    Shoe angles follow the core's sign (positive outward, toward the drum), so the left
+    shoe turns counter-clockwise and the right shoe clockwise for a positive value.
+    """
+    r = block.data[row]
+    index = block.first_index + row
+    return JointState(
+        header=header(stamp_ns(index, block.sample_period_s)),
+        name=list(JOINT_NAMES),
+        position=_doubles(np.array([r[COL[n]] for n in _JOINT_ANGLES])),
+        velocity=_doubles(np.array([r[COL[n]] for n in _JOINT_SPEEDS])),
+    )
+
+
+def clock(ns: int) -> Clock:
+    return Clock(clock=time_msg(ns))
+
+
+def defect_state(*, scenario: str, params: BrakeParameters, defects: Defects,
+                 initial_angles_deg: tuple[float, float], ns: int) -> DefectState:
+    """Ground truth of the defects in force from simulated time ``ns`` on.
+
+    Args:
+        scenario: name of the active scenario.
+        params: parameters in force (the pivot radius is reported from them).
+        defects: defects in force.
+        initial_angles_deg: (left, right) starting angles of the run in progress, deg.
+            They differ from ``defects`` after a run-time change of
+            ``initial_angle_deg``, which applies at the next reset.
+    """
+    left = dataclasses.replace(defects.left, initial_angle_deg=initial_angles_deg[0])
+    right = dataclasses.replace(defects.right, initial_angle_deg=initial_angles_deg[1])
+    in_force = Defects(left=left, right=right)
+    nominal = params.shoe.pivot_radius_m
+    return DefectState(
+        header=header(ns),
+        scenario=scenario,
+        healthy=in_force.is_healthy,
+        left_pivot_radius_m=nominal * (1.0 + left.pivot_radius_change_pct / 100.0),
+        right_pivot_radius_m=nominal * (1.0 + right.pivot_radius_change_pct / 100.0),
+        left_pivot_radius_change_pct=float(left.pivot_radius_change_pct),
+        right_pivot_radius_change_pct=float(right.pivot_radius_change_pct),
+        left_initial_angle_rad=math.radians(left.initial_angle_deg),
+        right_initial_angle_rad=math.radians(right.initial_angle_deg),
+        left_actuation_share=float(left.actuation_share),
+        right_actuation_share=float(right.actuation_share),
+        active_defects=in_force.labels(),
+    )

@@ -1,0 +1,635 @@
+"""The simulator as a ROS 2 node: ``python -m brake_sim_ros.ros.node [options] [--ros-args ...]``.
+
+Options (they override ``--ros-args -p`` values of the same parameters):
+    --scenario NAME_OR_PATH   built-in scenario name or .toml path (default "symmetric")
+    --duration S              simulated seconds of the free run (default: the scenario's)
+    --exit-at-end             print a summary and exit 0 when the duration is reached
+
+Topics (node name ``brake_sim``; ``~`` = ``/brake_sim``; QoS in :mod:`.qos`):
+    ~/pivot_forces   brake_sim_msgs/PivotForceChunk   every physics sample, in chunks
+    ~/state          brake_sim_msgs/BrakeState        at state_rate_hz (simulated)
+    ~/joint_states   sensor_msgs/JointState           flywheel, drum, left_shoe, right_shoe
+    ~/defects        brake_sim_msgs/DefectState       ground truth, transient local
+    /clock           rosgraph_msgs/Clock              simulated time (publish_clock)
+    /diagnostics     diagnostic_msgs/DiagnosticArray  every diagnostics_period_s (wall)
+    ~/actuation      brake_sim_msgs/ActuationCommand  (subscribed) overrides the profile
+Services:
+    ~/step   brake_sim_msgs/StepSimulation   advance N steps or a duration while paused
+    ~/reset  brake_sim_msgs/ResetSimulation  back to t = 0, optionally a new scenario/seed
+
+Every header stamp is simulated time (sample index x dt), frame ``brake_backing_plate``.
+Timers run on the steady wall clock, whatever ``use_sim_time`` says. Parameters: see
+:mod:`.parameters`; command semantics: :mod:`.commands`; pacing: :mod:`.pacing`.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import math
+import sys
+import time
+
+import rclpy
+from brake_sim_msgs.msg import ActuationCommand, BrakeState, DefectState, PivotForceChunk
+from brake_sim_msgs.srv import ResetSimulation, StepSimulation
+from diagnostic_msgs.msg import DiagnosticArray
+from rcl_interfaces.msg import SetParametersResult
+from rclpy.clock import Clock, ClockType
+from rclpy.exceptions import ParameterException, ParameterNotDeclaredException
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+from rclpy.utilities import remove_ros_args
+from rosgraph_msgs.msg import Clock as ClockMsg
+from sensor_msgs.msg import JointState
+
+from brake_sim_ros.errors import BrakeSimError, ParameterError
+from brake_sim_ros.model.trajectory import BrakeSetup, SampleBlock
+from brake_sim_ros.ros import conversion, qos
+from brake_sim_ros.ros import parameters as ros_params
+from brake_sim_ros.ros.commands import (
+    ActuationPlanner,
+    CommandPolicy,
+    TimeoutBehaviour,
+    check_command,
+)
+from brake_sim_ros.ros.diagnostics import RunStats, RunView, diagnostic_array, summary
+from brake_sim_ros.ros.pacing import Pacer, PacingMode
+from brake_sim_ros.scenarios import Scenario, load_scenario
+from brake_sim_ros.solvers.fixed_step import FixedStepStepper
+
+NODE_NAME = "brake_sim"
+MAX_LAG_S = 0.5  # wall seconds of backlog that are caught up (see pacing)
+AFAP_TICK_BUDGET_S = 0.02  # wall time per tick as fast as possible (stays responsive)
+MAX_STEP_REQUEST_S = 60.0  # simulated time one ~/step call may advance
+EXIT_LINGER_S = 0.3  # keep spinning this long before exiting, so the last messages go out
+
+
+class BrakeSimNode(Node):
+    """Steps the brake model on a wall-clock timer and publishes what it produces.
+
+    Args:
+        node_name: ROS node name.
+        **kwargs: forwarded to :class:`rclpy.node.Node` (context, parameter_overrides, ...).
+
+    Raises:
+        BrakeSimError: at start-up, for a scenario that cannot be loaded, invalid
+            parameter overrides, or a scenario step too large for max_actuation_force_n
+            (StepSizeError). The message is one line, fit to show the user.
+    """
+
+    def __init__(self, node_name: str = NODE_NAME, **kwargs) -> None:
+        super().__init__(node_name, **kwargs)
+        self.done = False  # set when exit_at_end and the run ended
+        self.stats = RunStats()
+        self._internal_update = False
+        self._failure = ""
+        self._finished = False
+        self._wall = time.monotonic
+        self._steady = Clock(clock_type=ClockType.STEADY_TIME)
+
+        # -- parameters and the model they describe ---------------------------------------
+        self._run_specs = {s.name: s for s in ros_params.run_parameter_specs()}
+        self._declare(self._run_specs.values())
+        self.scenario: Scenario = load_scenario(self._param("scenario"))
+        self._seed = self.scenario.seed
+        self._duration_explicit = self._param("duration_s") > 0.0
+        self._max_force_explicit = self._param("max_actuation_force_n") > 0.0
+        self._model_names = self._declare_model(self.scenario)
+        # the scenario's values and any --ros-args overrides, checked by the core here
+        values = self._model_values()
+        scenario_values = ros_params.model_values(self.scenario.setup.params,
+                                                  self.scenario.setup.defects)
+        overridden = {k: v for k, v in values.items() if v != scenario_values[k]}
+        implied = {k: v for k, v in ros_params.complete_actuation_share(overridden).items()
+                   if k not in overridden}
+        params, defects = ros_params.build_model({**values, **implied})
+        setup = dataclasses.replace(self.scenario.setup, params=params, defects=defects)
+        self._stepper = self._make_stepper(setup, self.scenario.solver.dt_s)
+        self._run_initial_angles = self._initial_angles(setup)
+        self._double_names = {name for name in self._model_names + list(self._run_specs)
+                              if isinstance(self.get_parameter(name).value, float)}
+        self._set_internal({**implied, "duration_s": self._duration_s(),
+                            "max_actuation_force_n": self._stepper.max_actuation_n})
+        self._exit_at_end = bool(self._param("exit_at_end"))
+        try:
+            policy = self._policy_from_params()
+        except ValueError as exc:  # a bad --ros-args override
+            raise ParameterError(str(exc)) from None
+        self._planner = ActuationPlanner(self._stepper.dt_s, policy)
+        self._pacer = Pacer(self._stepper.dt_s, real_time_factor=self._param("real_time_factor"),
+                            paused=self._param("paused"), max_lag_s=MAX_LAG_S)
+        self._publish_clock = bool(self._param("publish_clock"))
+        self._chunk_steps = self._steps_per(self._param("chunk_rate_hz"))
+        self._state_stride = self._steps_per(self._param("state_rate_hz"))
+        self.add_pre_set_parameters_callback(self._pre_set_parameters)
+        self.add_on_set_parameters_callback(self._on_set_parameters)
+
+        # -- interfaces ----------------------------------------------------------------------
+        self._chunk_pub = self.create_publisher(PivotForceChunk, "~/pivot_forces", qos.STREAM)
+        self._state_pub = self.create_publisher(BrakeState, "~/state", qos.STREAM)
+        self._joint_pub = self.create_publisher(JointState, "~/joint_states", qos.STREAM)
+        self._defect_pub = self.create_publisher(DefectState, "~/defects", qos.LATCHED)
+        self._clock_pub = self.create_publisher(ClockMsg, "/clock", qos.CLOCK)
+        self._diag_pub = self.create_publisher(DiagnosticArray, "/diagnostics", qos.DIAGNOSTICS)
+        self.create_subscription(ActuationCommand, "~/actuation", self._on_actuation,
+                                 qos.COMMANDS)
+        self.create_service(StepSimulation, "~/step", self._on_step)
+        self.create_service(ResetSimulation, "~/reset", self._on_reset)
+        self._tick_timer = self.create_timer(self._tick_period_s(), self._on_tick,
+                                             clock=self._steady)
+        self._diag_timer = self.create_timer(self._param("diagnostics_period_s"),
+                                             self._on_diagnostics, clock=self._steady)
+
+        now = self._wall()
+        self._pacer.restart(now, 0)
+        self._last_run_tick: float | None = now
+        self._ticking = False
+        self._diag_last = (now, 0, 0)  # wall, steps_done, deadline misses
+        self._measured_rtf = 0.0
+        self._publish_defects()
+        if self._publish_clock:
+            self._clock_pub.publish(conversion.clock(0))
+        limit = self._stepper.limit
+        self.get_logger().info(
+            f"scenario '{self.scenario.name}' ({self.scenario.source}): dt {self._stepper.dt_s:g}"
+            f" s ({self._sample_rate_hz():g} Hz), step limit {limit.max_step_s:.3g} s for"
+            f" max_actuation_force_n {self._stepper.max_actuation_n:g} N, duration"
+            f" {self._duration_s():g} s, {self._chunk_steps} samples per chunk")
+
+    # -- parameter plumbing ----------------------------------------------------------------------
+    def _param(self, name: str):
+        return self.get_parameter(name).value
+
+    def _declare_model(self, scenario: Scenario) -> list[str]:
+        specs = ros_params.model_parameter_specs(scenario.setup.params, scenario.setup.defects)
+        self._declare(specs)
+        return [spec.name for spec in specs]
+
+    def _declare(self, specs) -> None:
+        for spec in specs:
+            try:
+                self.declare_parameter(spec.name, spec.default, ros_params.descriptor(spec))
+            except ParameterException as exc:  # a bad --ros-args override
+                raise ParameterError(f"--ros-args override refused: {exc}") from None
+
+    def _model_values(self, changes: dict | None = None) -> dict:
+        values = {name: self._param(name) for name in self._model_names}
+        values.update(changes or {})
+        return values
+
+    def _set_internal(self, values: dict) -> None:
+        """Set parameters from inside the node (not validated again, not counted)."""
+        self._internal_update = True
+        try:
+            self.set_parameters([Parameter(k, value=v) for k, v in values.items()])
+        finally:
+            self._internal_update = False
+
+    def _make_stepper(self, setup: BrakeSetup, dt_s: float) -> FixedStepStepper:
+        if self._max_force_explicit:
+            max_force = float(self._param("max_actuation_force_n"))
+        else:
+            max_force, note = ros_params.auto_max_actuation_force(setup, dt_s)
+            if note:
+                self.get_logger().warning(note)
+        stepper = FixedStepStepper(setup, dt_s, max_actuation_n=max_force)
+        stepper.advance(0)  # loads the compiled kernel now (ms), not during the first chunk
+        return stepper
+
+    @staticmethod
+    def _initial_angles(setup: BrakeSetup) -> tuple[float, float]:
+        return (setup.defects.left.initial_angle_deg, setup.defects.right.initial_angle_deg)
+
+    def _policy_from_params(self, changes: dict | None = None) -> CommandPolicy:
+        values = {name: self._param(name) for name in
+                  ("command_timeout_s", "on_command_timeout", "command_ramp_rate_n_per_s")}
+        values.update(changes or {})
+        return CommandPolicy(timeout_s=values["command_timeout_s"],
+                             behaviour=TimeoutBehaviour.parse(values["on_command_timeout"]),
+                             ramp_rate_n_per_s=values["command_ramp_rate_n_per_s"])
+
+    def _duration_s(self) -> float:
+        value = self._param("duration_s")
+        return value if value > 0.0 else self.scenario.duration_s
+
+    def _end_step(self) -> int:
+        return round(self._duration_s() / self._stepper.dt_s)
+
+    def _sample_rate_hz(self) -> float:
+        return conversion.sample_rate_hz(self._stepper.dt_s)
+
+    def _steps_per(self, rate_hz: float) -> int:
+        return max(1, round(self._sample_rate_hz() / rate_hz))
+
+    def _tick_period_s(self) -> float:
+        if self._pacer.mode is PacingMode.REAL_TIME:
+            half_chunk = 0.5 * self._pacer.chunk_wall_period_s(self._chunk_steps)
+            return min(0.01, max(0.001, half_chunk))
+        return 0.001 if self._pacer.mode is PacingMode.AS_FAST_AS_POSSIBLE else 0.01
+
+    def _max_chunks_per_tick(self) -> int:
+        if self._pacer.mode is not PacingMode.REAL_TIME:
+            return 64
+        per_tick = self._tick_period_s() / self._pacer.chunk_wall_period_s(self._chunk_steps)
+        return max(2, 4 * math.ceil(per_tick))
+
+    def set_parameters_atomically(self, parameter_list):
+        """Count every refused external change (descriptor checks included)."""
+        try:
+            result = super().set_parameters_atomically(parameter_list)
+        except ParameterNotDeclaredException:
+            unknown = [p.name for p in parameter_list if not self.has_parameter(p.name)]
+            self._count_parameter_result(False, f"undeclared parameter(s): {unknown}")
+            raise
+        self._count_parameter_result(result.successful, result.reason)
+        return result
+
+    def _count_parameter_result(self, ok: bool, reason: str) -> None:
+        if self._internal_update:
+            return
+        if ok:
+            self.stats.parameter_changes_accepted += 1
+        else:
+            self.stats.parameter_changes_refused += 1
+            self.stats.last_parameter_refusal = reason
+            self.get_logger().warning(f"parameter change refused: {reason}",
+                                      throttle_duration_sec=1.0)
+
+    def _pre_set_parameters(self, parameters: list[Parameter]) -> list[Parameter]:
+        """Accept integers for double parameters; complete a lone actuation-share change."""
+        if self._internal_update:
+            return parameters
+        out = []
+        for p in parameters:
+            if p.name in self._double_names and p.type_ is Parameter.Type.INTEGER:
+                p = Parameter(p.name, Parameter.Type.DOUBLE, float(p.value))
+            out.append(p)
+        changes = {p.name: p.value for p in out}
+        for name, value in ros_params.complete_actuation_share(changes).items():
+            if name not in changes:
+                out.append(Parameter(name, Parameter.Type.DOUBLE, float(value)))
+        return out
+
+    def _on_set_parameters(self, parameters: list[Parameter]) -> SetParametersResult:
+        """Validate a change as a whole through the core; apply it only if all of it is valid."""
+        if self._internal_update:
+            return SetParametersResult(successful=True)
+        changes = {p.name: p.value for p in parameters}
+        for name in changes.keys() & ros_params.FIXED_AT_START:
+            hint = (" (switch scenarios with the ~/reset service)" if name == "scenario"
+                    else " (restart the node to change it)")
+            return SetParametersResult(successful=False,
+                                       reason=f"{name} is fixed at start-up{hint}")
+        try:
+            policy = self._policy_from_params(changes)
+        except ValueError as exc:
+            return SetParametersResult(successful=False, reason=str(exc))
+        if "duration_s" in changes and not changes["duration_s"] > 0.0:
+            return SetParametersResult(successful=False,
+                                       reason="duration_s must be > 0 s at run time")
+        model_changes = {k: v for k, v in changes.items() if k in self._model_names}
+        if model_changes:
+            try:
+                params, defects = ros_params.build_model(self._model_values(model_changes))
+                setup = dataclasses.replace(self._stepper.setup, params=params,
+                                            defects=defects)
+                self._stepper.replace_setup(setup)  # validates, or changes nothing
+            except BrakeSimError as exc:
+                return SetParametersResult(successful=False, reason=str(exc))
+        self._apply_run_changes(changes, policy)
+        if model_changes:
+            self._publish_defects()
+            pending = sorted(model_changes.keys() & ros_params.INITIAL_CONDITIONS)
+            if pending:
+                self.get_logger().info(f"{', '.join(pending)}: initial condition, applies at"
+                                       " the next ~/reset")
+        return SetParametersResult(successful=True)
+
+    def _apply_run_changes(self, changes: dict, policy: CommandPolicy) -> None:
+        now = self._wall()
+        step = self._stepper.step_index
+        self._account_free_run(now)
+        self._planner.policy = policy
+        if "real_time_factor" in changes:
+            self._pacer.set_real_time_factor(changes["real_time_factor"], now, step)
+        if "paused" in changes:
+            self._pacer.set_paused(changes["paused"], now, step)
+        if "chunk_rate_hz" in changes:
+            self._chunk_steps = self._steps_per(changes["chunk_rate_hz"])
+        if "state_rate_hz" in changes:
+            self._state_stride = self._steps_per(changes["state_rate_hz"])
+        if "publish_clock" in changes:
+            self._publish_clock = bool(changes["publish_clock"])
+        if "diagnostics_period_s" in changes:
+            self._diag_timer.timer_period_ns = int(changes["diagnostics_period_s"] * 1e9)
+        if "duration_s" in changes:
+            self._duration_explicit = True
+            if self._finished and round(changes["duration_s"] / self._stepper.dt_s) > step:
+                self._finished = False
+                self._pacer.restart(now, step)
+        if changes.keys() & {"real_time_factor", "paused", "chunk_rate_hz"}:
+            self._tick_timer.timer_period_ns = int(self._tick_period_s() * 1e9)
+
+    # -- commands ----------------------------------------------------------------------------------
+    def _on_actuation(self, msg: ActuationCommand) -> None:
+        reason = check_command(msg.left_force_n, msg.right_force_n,
+                               self._stepper.max_actuation_n)
+        if reason is not None:
+            self.stats.commands_rejected += 1
+            self.stats.last_command_rejection = reason
+            self.get_logger().warning(f"actuation command rejected: {reason}",
+                                      throttle_duration_sec=1.0)
+            return
+        self.stats.commands_accepted += 1
+        if self._failure or self._finished:
+            self.stats.commands_dropped += 1
+            return
+        forces = (msg.left_force_n, msg.right_force_n)
+        if self._planner.command(forces, self._stepper.step_index):
+            self.stats.commands_dropped += 1
+
+    # -- stepping and publishing --------------------------------------------------------------
+    def _on_tick(self) -> None:
+        if self._failure or self._finished:
+            return
+        now = self._wall()
+        if not self._ticking:  # pace from the first tick: start-up costs are not lateness
+            self._ticking = True
+            self._pacer.restart(now, self._stepper.step_index)
+            self._last_run_tick = now
+        mode = self._pacer.mode
+        if mode is PacingMode.PAUSED:
+            return
+        end = self._end_step()
+        self._account_free_run(now)
+        if mode is PacingMode.AS_FAST_AS_POSSIBLE:
+            while self._stepper.step_index < end and self._wall() - now < AFAP_TICK_BUDGET_S:
+                n = min(self._chunk_steps, end - self._stepper.step_index)
+                if not self._advance_and_publish(n, free_run=True):
+                    return
+        else:
+            plan = self._pacer.plan(now, self._stepper.step_index, self._chunk_steps,
+                                    self._max_chunks_per_tick(), end)
+            if plan.slipped_steps:
+                self.stats.slips += 1
+                self.stats.slipped_s += plan.slipped_steps * self._stepper.dt_s
+            tolerance = self._pacer.chunk_wall_period_s(self._chunk_steps)
+            remaining = plan.steps
+            while remaining > 0:
+                n = min(self._chunk_steps, remaining)
+                if not self._advance_and_publish(n, free_run=True):
+                    return
+                remaining -= n
+                late = self._wall() - self._pacer.deadline_s(self._stepper.step_index)
+                if late > tolerance:
+                    self.stats.deadline_misses += 1
+        if self._stepper.step_index >= end:
+            self._finish()
+
+    def _account_free_run(self, now: float) -> None:
+        """Add the wall time since the last accounting to the free run's, if it was running."""
+        running = not (self._failure or self._finished or self._pacer.paused)
+        if running and self._last_run_tick is not None:
+            self.stats.free_run_wall_s += now - self._last_run_tick
+        self._last_run_tick = now
+
+    def _advance_and_publish(self, n_steps: int, *, free_run: bool) -> bool:
+        """Take ``n_steps`` (at most one chunk) and publish them. False on failure."""
+        step0 = self._stepper.step_index
+        blocks = []
+        try:
+            for count, forces in self._planner.segments(step0, n_steps):
+                blocks.append(self._stepper.advance(count, actuation_n=forces))
+        except BrakeSimError as exc:
+            self._fail(str(exc))
+            return False
+        block = blocks[0] if len(blocks) == 1 else SampleBlock.concatenate(blocks)
+        self.stats.steps_done += n_steps
+        if free_run:
+            self.stats.free_run_sim_s += n_steps * self._stepper.dt_s
+        if len(block) != n_steps or not conversion.all_finite(block):
+            self._fail(f"non-finite or missing samples between steps {step0} and"
+                       f" {step0 + n_steps}; nothing of them was published")
+            return False
+        self._publish_block(block)
+        return True
+
+    def _publish_block(self, block: SampleBlock) -> None:
+        self._chunk_pub.publish(conversion.pivot_force_chunk(block))
+        rows = conversion.state_rows(block, self._state_stride)
+        for row in rows:
+            self._state_pub.publish(conversion.brake_state(block, row))
+            self._joint_pub.publish(conversion.joint_state(block, row))
+        if self._publish_clock:
+            ns = conversion.stamp_ns(self._stepper.step_index, self._stepper.dt_s)
+            self._clock_pub.publish(conversion.clock(ns))
+        self.stats.samples_published += len(block)
+        self.stats.chunks_published += 1
+        self.stats.states_published += len(rows)
+
+    def _fail(self, message: str) -> None:
+        self._failure = message
+        self.get_logger().error(f"simulation stopped: {message}")
+
+    def _finish(self) -> None:
+        if not self._finished:
+            self._account_free_run(self._wall())
+            self._finished = True
+            self.get_logger().info(f"reached duration_s = {self._duration_s():g} s")
+        if self._exit_at_end:
+            self.done = True
+
+    # -- services -------------------------------------------------------------------------------
+    def _on_step(self, request: StepSimulation.Request, response: StepSimulation.Response
+                 ) -> StepSimulation.Response:
+        dt = self._stepper.dt_s
+        steps, duration = int(request.steps), float(request.duration_s)
+        error = ""
+        if not self._pacer.paused:
+            error = "the simulation is running: set the parameter paused to true first"
+        elif self._failure:
+            error = f"the simulation failed ({self._failure}); call ~/reset"
+        elif (steps == 0) == (duration == 0.0):
+            error = "give either steps or duration_s (the other 0)"
+        elif not (math.isfinite(duration) and duration >= 0.0):
+            error = f"duration_s={duration!r}: allowed a finite time >= 0 s"
+        else:
+            steps = steps or round(duration / dt)
+            if steps < 1:
+                error = f"duration_s={duration:g} s is shorter than half a step ({dt:g} s)"
+            elif steps * dt > MAX_STEP_REQUEST_S:
+                error = (f"{steps} steps = {steps * dt:g} s: allowed at most"
+                         f" {MAX_STEP_REQUEST_S:g} s of simulated time per call")
+        if not error:
+            done = 0
+            while done < steps:
+                n = min(self._chunk_steps, steps - done)
+                if not self._advance_and_publish(n, free_run=False):
+                    error = f"the simulation failed: {self._failure}"
+                    break
+                done += n
+        response.success = not error
+        index = self._stepper.step_index
+        response.message = error or f"advanced {steps} steps to t = {index * dt:.9g} s"
+        response.sample_index = max(0, index - 1)
+        response.sim_time_s = index * dt
+        return response
+
+    def _on_reset(self, request: ResetSimulation.Request, response: ResetSimulation.Response
+                  ) -> ResetSimulation.Response:
+        seed = int(request.seed)
+        try:
+            if seed < -1:
+                raise BrakeSimError(f"seed={seed}: allowed -1 (keep) or a seed >= 0")
+            if request.scenario:
+                self._switch_scenario(load_scenario(request.scenario), request.scenario)
+            else:
+                self._stepper.reset()
+        except BrakeSimError as exc:
+            response.success, response.message = False, f"reset refused: {exc}"
+            return response
+        if seed >= 0:
+            self._seed = seed
+        if self._planner.clear():
+            self.stats.commands_dropped += 1
+        now = self._wall()
+        self._account_free_run(now)
+        self._failure = ""
+        self._finished = False
+        self._run_initial_angles = self._initial_angles(self._stepper.setup)
+        self._pacer.restart(now, 0)
+        self._publish_defects()
+        if self._publish_clock:
+            self._clock_pub.publish(conversion.clock(0))
+        response.success = True
+        response.message = (f"reset to t = 0 with scenario '{self.scenario.name}' (seed"
+                            f" {self._seed})")
+        return response
+
+    def _switch_scenario(self, scenario: Scenario, name_or_path: str) -> None:
+        """Replace scenario, stepper and timing; on error nothing changes."""
+        stepper = self._make_stepper(scenario.setup, scenario.solver.dt_s)
+        self.scenario, self._stepper, self._seed = scenario, stepper, scenario.seed
+        values = ros_params.model_values(scenario.setup.params, scenario.setup.defects)
+        values["scenario"] = name_or_path
+        values["max_actuation_force_n"] = stepper.max_actuation_n
+        if not self._duration_explicit:
+            values["duration_s"] = scenario.duration_s
+        self._set_internal(values)
+        dt = stepper.dt_s
+        self._planner.dt_s = dt
+        self._pacer = Pacer(dt, real_time_factor=self._pacer.real_time_factor,
+                            paused=self._pacer.paused, max_lag_s=MAX_LAG_S)
+        self._chunk_steps = self._steps_per(self._param("chunk_rate_hz"))
+        self._state_stride = self._steps_per(self._param("state_rate_hz"))
+        self._tick_timer.timer_period_ns = int(self._tick_period_s() * 1e9)
+
+    # -- ground truth and diagnostics --------------------------------------------------------
+    def _publish_defects(self) -> None:
+        setup = self._stepper.setup
+        self._defect_pub.publish(conversion.defect_state(
+            scenario=self.scenario.name, params=setup.params, defects=setup.defects,
+            initial_angles_deg=self._run_initial_angles,
+            ns=conversion.stamp_ns(self._stepper.step_index, self._stepper.dt_s)))
+
+    def run_view(self) -> RunView:
+        if self._failure:
+            state = "failed"
+        elif self._finished:
+            state = "finished"
+        elif self._pacer.paused:
+            state = "paused"
+        else:
+            state = "running"
+        step = self._stepper.step_index
+        return RunView(
+            node_name=self.get_name(), scenario=self.scenario.name, state=state,
+            message=self._failure, sim_time_s=step * self._stepper.dt_s, sample_index=step,
+            sample_rate_hz=self._sample_rate_hz(), duration_s=self._duration_s(),
+            target_real_time_factor=self._pacer.real_time_factor,
+            measured_real_time_factor=self._measured_rtf,
+            actuation_source=self._planner.source(step),
+            stop_time_s=self._stepper.stop_time_s, step_limit_s=self._stepper.limit.max_step_s,
+            max_actuation_force_n=self._stepper.max_actuation_n, seed=self._seed)
+
+    def _on_diagnostics(self) -> None:
+        now = self._wall()
+        last_wall, last_steps, last_misses = self._diag_last
+        if now > last_wall:
+            sim = (self.stats.steps_done - last_steps) * self._stepper.dt_s
+            self._measured_rtf = sim / (now - last_wall)
+        new_misses = self.stats.deadline_misses - last_misses
+        self._diag_last = (now, self.stats.steps_done, self.stats.deadline_misses)
+        ns = conversion.stamp_ns(self._stepper.step_index, self._stepper.dt_s)
+        self._diag_pub.publish(diagnostic_array(self.run_view(), self.stats, ns=ns,
+                                                new_misses=new_misses))
+
+    def summary(self) -> str:
+        return summary(self.run_view(), self.stats)
+
+
+# -- command line ----------------------------------------------------------------------------
+def _parse_cli(argv: list[str]) -> argparse.Namespace:
+    parser = argparse.ArgumentParser(
+        prog="python -m brake_sim_ros.ros.node",
+        description="Drum-brake simulator as a ROS 2 node. ROS parameters go after"
+                    " --ros-args (-p name:=value); the options below override them.")
+    parser.add_argument("--scenario", help="built-in scenario name or path to a .toml file")
+    parser.add_argument("--duration", type=float, metavar="S",
+                        help="simulated seconds of the free run (default: the scenario's)")
+    parser.add_argument("--exit-at-end", action="store_true",
+                        help="print a summary and exit 0 when the duration is reached")
+    args = parser.parse_args(argv)
+    if args.duration is not None and not (math.isfinite(args.duration) and args.duration > 0):
+        parser.error(f"--duration {args.duration}: allowed a finite time > 0 s")
+    return args
+
+
+def main(args: list[str] | None = None) -> int:
+    """Run the node until shutdown (or the end of the run with --exit-at-end).
+
+    Args:
+        args: command line like ``sys.argv`` (program name first); default ``sys.argv``.
+
+    Returns:
+        0 on a clean exit, 1 when the node refused to start, 2 for bad options.
+    """
+    argv = list(sys.argv if args is None else args)
+    cli = _parse_cli(remove_ros_args(argv)[1:])
+    overrides = []
+    if cli.scenario is not None:
+        overrides.append(Parameter("scenario", value=cli.scenario))
+    if cli.duration is not None:
+        overrides.append(Parameter("duration_s", value=float(cli.duration)))
+    if cli.exit_at_end:
+        overrides.append(Parameter("exit_at_end", value=True))
+    rclpy.init(args=argv)
+    node = None
+    try:
+        try:
+            node = BrakeSimNode(parameter_overrides=overrides)
+        except BrakeSimError as exc:
+            print(f"brake_sim: refused to start: {exc}", file=sys.stderr)
+            return 1
+        executor = SingleThreadedExecutor()
+        executor.add_node(node)
+        while not node.done and rclpy.ok():
+            executor.spin_once(timeout_sec=0.1)
+        if node.done:
+            linger_end = time.monotonic() + EXIT_LINGER_S
+            while time.monotonic() < linger_end and rclpy.ok():
+                executor.spin_once(timeout_sec=0.05)
+            print(node.summary(), flush=True)
+        return 0
+    except (KeyboardInterrupt, ExternalShutdownException):
+        return 0
+    finally:
+        if node is not None:
+            node.destroy_node()
+        rclpy.try_shutdown()
+
+
+if __name__ == "__main__":
+    sys.exit(main())

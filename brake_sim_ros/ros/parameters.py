@@ -1,0 +1,326 @@
+"""ROS parameters of the node: run control, and the model parameters generated from the core.
+
+Model parameters are not a second source of truth. Their names, types and default values
+come from the core's frozen dataclasses (``BrakeParameters``'s groups in
+``model/parameters.py``, ``ShoeDefect`` in ``model/defects.py``), read from the loaded
+scenario, and a new value is validated by building the core objects again and handing
+them to the stepper: the core's ``ParameterError`` / ``StepSizeError`` message is the
+refusal reason. Names are ``<group>.<field>`` (``friction.coefficient``,
+``shoe.running_clearance_m``) and ``defects.<side>.<field>``.
+
+The ``FloatingPointRange`` of each descriptor is an envelope for tools such as
+rqt_reconfigure; where the core has fixed bounds (defects, friction, drum radius, ...)
+it equals them, elsewhere it is a generous plausible span. The core checks everything
+else (open bounds, relations between fields such as pivot radius < drum radius, the
+lining clearing the drum, the step limit).
+
+Two model fields are initial conditions and only take effect at the next ``~/reset``:
+``defects.<side>.initial_angle_deg`` (the shoe's starting angle) and
+``driveline.initial_speed_rad_s``. They are validated and accepted at once.
+
+This module imports no rclpy; :func:`descriptor` imports ``rcl_interfaces`` lazily.
+"""
+
+from __future__ import annotations
+
+import inspect
+import math
+from dataclasses import dataclass, fields
+from typing import Any
+
+from brake_sim_ros.model.actuation import NOMINAL_PEAK_ACTUATION_N
+from brake_sim_ros.model.assembly import pack
+from brake_sim_ros.model.defects import Defects, ShoeDefect
+from brake_sim_ros.model.parameters import PARAMETER_GROUPS, BrakeParameters
+from brake_sim_ros.model.trajectory import BrakeSetup
+from brake_sim_ros.solvers.stability import step_limit
+
+SIDES = ("left", "right")
+DEFAULT_SCENARIO = "symmetric"
+
+# Fields that are initial conditions: a change applies at the next reset.
+INITIAL_CONDITIONS = frozenset({
+    "driveline.initial_speed_rad_s",
+    "defects.left.initial_angle_deg",
+    "defects.right.initial_angle_deg",
+})
+
+# UI envelope per model field (see the module docstring); "[core]" marks the core's bounds.
+_RANGES: dict[str, tuple[float, float]] = {
+    "driveline.flywheel_inertia_kg_m2": (0.0, 1000.0),
+    "driveline.drum_inertia_kg_m2": (0.0, 10.0),
+    "driveline.coupling_stiffness_n_m_per_rad": (0.0, 1e7),
+    "driveline.coupling_damping_n_m_s_per_rad": (0.0, 1e5),
+    "driveline.initial_speed_rad_s": (-400.0, 400.0),  # [core]
+    "shoe.drum_radius_m": (0.05, 0.5),  # [core]
+    "shoe.pivot_radius_m": (0.01, 0.5),
+    "shoe.pivot_polar_angle_deg": (0.0, 360.0),
+    "shoe.running_clearance_m": (0.0, 0.05),
+    "shoe.lining_start_deg": (90.0, 270.0),  # [core]
+    "shoe.lining_end_deg": (90.0, 270.0),  # [core]
+    "shoe.lining_width_m": (0.005, 0.2),  # [core]
+    "shoe.tip_x_m": (-0.5, 0.5),
+    "shoe.tip_y_m": (-0.5, 0.5),
+    "shoe.mass_kg": (0.0, 100.0),
+    "shoe.mass_centre_x_m": (-0.5, 0.5),
+    "shoe.mass_centre_y_m": (-0.5, 0.5),
+    "shoe.inertia_about_pivot_kg_m2": (0.0, 10.0),
+    "contact.drum_youngs_modulus_pa": (1e6, 1e13),  # [core]
+    "contact.drum_poisson_ratio": (0.0, 0.5),  # [core] (0.5 itself refused by the core)
+    "contact.shoe_youngs_modulus_pa": (1e6, 1e13),  # [core]
+    "contact.shoe_poisson_ratio": (0.0, 0.5),  # [core] (0.5 itself refused by the core)
+    "contact.damping_n_s_per_m": (0.0, 1e6),
+    "friction.coefficient": (0.0, 1.0),  # [core]
+    "friction.smoothing_speed_m_s": (1e-5, 1.0),  # [core]
+    "defects.pivot_radius_change_pct": (-20.0, 20.0),  # [core]
+    "defects.initial_angle_deg": (-10.0, 10.0),  # [core]
+    "defects.actuation_share": (0.0, 1.0),  # [core]
+}
+
+# Unit suffixes of the core's field names, longest first.
+_UNITS = (
+    ("_n_m_s_per_rad", "N m s/rad"), ("_n_m_per_rad", "N m/rad"), ("_n_s_per_m", "N s/m"),
+    ("_kg_m2", "kg m^2"), ("_rad_s", "rad/s"), ("_m_s", "m/s"), ("_pct", "%"),
+    ("_deg", "deg"), ("_kg", "kg"), ("_pa", "Pa"), ("_m", "m"),
+)
+
+
+@dataclass(frozen=True)
+class ParamSpec:
+    """One ROS parameter: name, default, documentation and UI range.
+
+    Attributes:
+        name: ROS parameter name.
+        default: default value; its Python type (float, int, bool, str) is the ROS type.
+        description: one or two sentences with the unit.
+        range: closed (low, high) FloatingPointRange for doubles, or None.
+        constraints: free-text additional constraints shown by tools.
+    """
+
+    name: str
+    default: float | int | bool | str
+    description: str
+    range: tuple[float, float] | None = None
+    constraints: str = ""
+
+
+# -- run control ---------------------------------------------------------------------------
+def run_parameter_specs() -> list[ParamSpec]:
+    """Parameters that control the run, not the physics.
+
+    ``duration_s`` and ``max_actuation_force_n`` default to 0 = "from the scenario"; the
+    node replaces that by the effective value once the scenario is loaded.
+    """
+    fixed = "Fixed at start-up: a change is refused."
+    return [
+        ParamSpec("scenario", DEFAULT_SCENARIO,
+                  "Scenario loaded at start-up: a built-in name or a path to a .toml file. "
+                  "Switch it with the ~/reset service (its 'scenario' field). " + fixed),
+        ParamSpec("duration_s", 0.0,
+                  "Simulated time after which the free run ends (s); 0 at start-up = the "
+                  "scenario's duration. At the end the node idles, or exits with exit_at_end.",
+                  (0.0, 86_400.0)),
+        ParamSpec("exit_at_end", False,
+                  "Print a summary and exit 0 when duration_s is reached (CLI --exit-at-end). "
+                  + fixed),
+        ParamSpec("real_time_factor", 1.0,
+                  "Simulated seconds per wall second; 0 = as fast as possible.", (0.0, 1000.0)),
+        ParamSpec("paused", False,
+                  "Stop stepping; ~/step then advances the simulation on request."),
+        ParamSpec("chunk_rate_hz", 100.0,
+                  "Pivot-force chunks per simulated second (Hz); each chunk carries "
+                  "round(sample rate / chunk_rate_hz) samples.", (1.0, 1000.0)),
+        ParamSpec("state_rate_hz", 100.0,
+                  "BrakeState and JointState messages per simulated second (Hz), taken at "
+                  "sample indices that are multiples of round(sample rate / state_rate_hz).",
+                  (1.0, 10_000.0)),
+        ParamSpec("publish_clock", True,
+                  "Publish simulated time on /clock (rosgraph_msgs/Clock)."),
+        ParamSpec("diagnostics_period_s", 1.0,
+                  "Wall-time period of /diagnostics (s).", (0.05, 60.0)),
+        ParamSpec("max_actuation_force_n", 0.0,
+                  "Largest accepted actuation command per shoe (N); larger commands are "
+                  "rejected. The physics step limit is computed for it. 0 at start-up = 2 x "
+                  "the scenario's peak force. " + fixed, (0.0, 50_000.0)),
+        ParamSpec("command_timeout_s", 0.2,
+                  "Simulated time a command stays in force without a newer one (s).",
+                  (0.001, 3600.0)),
+        ParamSpec("on_command_timeout", "profile",
+                  "What happens when commands stop: 'profile' (the scenario's force profile "
+                  "resumes at the current time), 'hold' (keep the last command), "
+                  "'ramp_to_zero' (fall linearly at command_ramp_rate_n_per_s, then 0).",
+                  constraints="one of: profile, hold, ramp_to_zero"),
+        ParamSpec("command_ramp_rate_n_per_s", 5000.0,
+                  "Force decrease rate of on_command_timeout = 'ramp_to_zero' (N/s).",
+                  (1.0, 1e7)),
+    ]
+
+
+FIXED_AT_START = frozenset({"scenario", "exit_at_end", "max_actuation_force_n"})
+
+
+# -- model parameters ---------------------------------------------------------------------------
+def _unit(field_name: str) -> str:
+    for suffix, unit in _UNITS:
+        if field_name.endswith(suffix):
+            return unit
+    return "dimensionless"
+
+
+def _first_line(doc: str | None) -> str:
+    return (doc or "").strip().splitlines()[0].rstrip(".") if doc else ""
+
+
+def _attribute_doc(cls: type, field_name: str) -> str:
+    """The field's entry in the class docstring's ``Attributes:`` section, one line."""
+    lines = inspect.cleandoc(cls.__doc__ or "").splitlines()
+    try:
+        start = lines.index("Attributes:") + 1
+    except ValueError:
+        return ""
+    entry: list[str] = []
+    for line in lines[start:]:
+        if not line.strip():
+            break
+        stripped = line.strip()
+        if line.startswith("    ") and not line.startswith("        "):
+            if entry:
+                break
+            if stripped.startswith(f"{field_name}:"):
+                entry.append(stripped[len(field_name) + 1:].strip())
+        elif entry:
+            entry.append(stripped)
+    return " ".join(entry).rstrip(".")
+
+
+def model_values(params: BrakeParameters, defects: Defects) -> dict[str, Any]:
+    """Flat ``{ros_name: value}`` of every model field, in declaration order."""
+    values: dict[str, Any] = {}
+    for side in SIDES:
+        shoe = getattr(defects, side)
+        for f in fields(ShoeDefect):
+            values[f"defects.{side}.{f.name}"] = getattr(shoe, f.name)
+    for group in PARAMETER_GROUPS:
+        obj = getattr(params, group)
+        for f in fields(obj):
+            values[f"{group}.{f.name}"] = getattr(obj, f.name)
+    return values
+
+
+def model_parameter_specs(params: BrakeParameters, defects: Defects) -> list[ParamSpec]:
+    """One spec per model field, defaults from ``params`` and ``defects``."""
+    specs = []
+    for name, value in model_values(params, defects).items():
+        parts = name.split(".")
+        field_name = parts[-1]
+        if parts[0] == "defects":
+            what = f"{parts[1].capitalize()} shoe defect, {field_name}"
+            doc = _attribute_doc(ShoeDefect, field_name)
+            range_key = f"defects.{field_name}"
+        else:
+            cls = PARAMETER_GROUPS[parts[0]]
+            what = f"{field_name}"
+            doc = _attribute_doc(cls, field_name) or _first_line(cls.__doc__)
+            range_key = name
+        text = f"{what} ({_unit(field_name)}): {doc}."
+        if name in INITIAL_CONDITIONS:
+            text += " Initial condition: a change applies at the next ~/reset."
+        if name.endswith("actuation_share"):
+            text += (" Left + right = 1: setting one side alone sets the other side to"
+                     " 1 - value.")
+        text += " Validated by the physics core; invalid values are refused with its reason."
+        specs.append(ParamSpec(name, _ros_value(value), text, _RANGES.get(range_key)))
+    return specs
+
+
+def _ros_value(value: Any) -> float | int | bool | str:
+    if isinstance(value, bool | str):
+        return value
+    if isinstance(value, int):
+        return int(value)
+    return float(value)
+
+
+def build_model(values: dict[str, Any]) -> tuple[BrakeParameters, Defects]:
+    """Core objects from flat ROS values (every model field present).
+
+    Raises:
+        ParameterError: from the core, with its message, when a value or combination is
+            invalid.
+    """
+    shoes = {}
+    for side in SIDES:
+        kwargs = {f.name: values[f"defects.{side}.{f.name}"] for f in fields(ShoeDefect)}
+        shoes[side] = ShoeDefect(**kwargs)
+    defects = Defects(left=shoes["left"], right=shoes["right"])
+    groups = {}
+    for group, cls in PARAMETER_GROUPS.items():
+        groups[group] = cls(**{f.name: values[f"{group}.{f.name}"] for f in fields(cls)})
+    return BrakeParameters(**groups), defects
+
+
+def complete_actuation_share(changes: dict[str, Any]) -> dict[str, Any]:
+    """When one shoe's actuation share changes alone, add the other's as ``1 - value``.
+
+    The core requires left + right = 1 (the total actuation force is kept), so a lone
+    change could never be valid; completing it keeps ``ros2 param set`` usable.
+    """
+    out = dict(changes)
+    for side, other in (("left", "right"), ("right", "left")):
+        name, other_name = (f"defects.{side}.actuation_share", f"defects.{other}.actuation_share")
+        value = changes.get(name)
+        if other_name not in changes and isinstance(value, float | int) \
+                and not isinstance(value, bool):
+            out[other_name] = 1.0 - float(value)
+    return out
+
+
+def descriptor(spec: ParamSpec):
+    """``rcl_interfaces/ParameterDescriptor`` for ``spec``."""
+    from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, ParameterType
+
+    types = {bool: ParameterType.PARAMETER_BOOL, int: ParameterType.PARAMETER_INTEGER,
+             float: ParameterType.PARAMETER_DOUBLE, str: ParameterType.PARAMETER_STRING}
+    desc = ParameterDescriptor(name=spec.name, type=types[type(spec.default)],
+                               description=spec.description,
+                               additional_constraints=spec.constraints)
+    if spec.range is not None and isinstance(spec.default, float):
+        desc.floating_point_range = [FloatingPointRange(from_value=float(spec.range[0]),
+                                                        to_value=float(spec.range[1]),
+                                                        step=0.0)]
+    return desc
+
+
+# -- the actuation limit ------------------------------------------------------------------------
+def auto_max_actuation_force(setup: BrakeSetup, dt_s: float) -> tuple[float, str | None]:
+    """Default ``max_actuation_force_n``: 2 x the scenario's peak force, if the step allows it.
+
+    The fixed step's stability limit shrinks as the largest actuation force grows
+    (friction stiffness near standstill grows with the normal force). When ``dt_s`` is
+    too large for 2 x peak, the default is the largest force, rounded down to 10 N, that
+    ``dt_s`` still allows, but never below the peak (the stepper then refuses the
+    scenario itself). The step is never changed.
+
+    Returns:
+        (force in N, a one-line note when the default is below 2 x peak, else None).
+    """
+    peak = max(setup.actuation.left.peak_n, setup.actuation.right.peak_n)
+    base = peak if peak > 0 else NOMINAL_PEAK_ACTUATION_N
+    packed = pack(setup.params, setup.defects, setup.options)
+
+    def allowed(force: float) -> bool:
+        return dt_s <= step_limit(setup, force, packed=packed).max_step_s
+
+    if allowed(2.0 * base):
+        return 2.0 * base, None
+    if not allowed(base):
+        return base, None  # the scenario itself is refused, with the stepper's reason
+    lo, hi = base, 2.0 * base
+    for _ in range(24):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if allowed(mid) else (lo, mid)
+    force = max(base, math.floor(lo / 10.0) * 10.0)
+    note = (f"max_actuation_force_n defaults to {force:g} N, not 2 x the scenario's peak"
+            f" ({2.0 * base:g} N): the scenario's step {dt_s:g} s allows at most that much"
+            " force; set max_actuation_force_n (and a smaller solver.dt_s) to go higher")
+    return force, note

@@ -1,0 +1,11 @@
+"""Scenarios as data: the paper's cases and user files, loaded strictly."""
+
+from brake_sim_ros.scenarios.loader import (
+    Scenario,
+    SolverSettings,
+    builtin_names,
+    load_scenario,
+    parse_scenario,
+)
+
+__all__ = ["Scenario", "SolverSettings", "builtin_names", "load_scenario", "parse_scenario"]

@@ -1,0 +1,269 @@
+"""Scenario files (TOML): strict loading into a BrakeSetup plus run settings.
+
+A scenario names any parameter override, the defects, the actuation, the duration, the
+stepper and its step. Loading is strict: an unknown key, a wrong type, or a non-finite
+or out-of-range value is an error that names the file, the key, the value and what is
+allowed. See ``builtin/symmetric.toml`` for a commented example.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import math
+import tomllib
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+from brake_sim_ros.errors import BrakeSimError, ScenarioError
+from brake_sim_ros.model.actuation import (
+    NOMINAL_PEAK_ACTUATION_N,
+    Actuation,
+    ForceProfile,
+)
+from brake_sim_ros.model.assembly import SIDES, ModelOptions, pack
+from brake_sim_ros.model.defects import Defects, ShoeDefect
+from brake_sim_ros.model.parameters import PARAMETER_GROUPS, BrakeParameters
+from brake_sim_ros.model.trajectory import BrakeSetup
+
+BUILTIN_PACKAGE = "brake_sim_ros.scenarios.builtin"
+SOLVER_METHODS = ("rk4", "reference")
+DEFAULT_STEP_S = 4e-5
+
+
+@dataclass(frozen=True)
+class SolverSettings:
+    """How a scenario is integrated.
+
+    Attributes:
+        method: "rk4" (fixed-step, compiled, real-time capable) or "reference" (adaptive
+            DOP853 with contact onsets and the lock located as events).
+        dt_s: fixed step for rk4, s.
+        rtol: relative tolerance of the reference solver.
+    """
+
+    method: str = "rk4"
+    dt_s: float = DEFAULT_STEP_S
+    rtol: float = 1e-9
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """A braking event to run: the physics setup and how long and how to integrate it."""
+
+    name: str
+    description: str = ""
+    setup: BrakeSetup = field(default_factory=BrakeSetup)
+    duration_s: float = 7.5
+    seed: int = 0
+    solver: SolverSettings = field(default_factory=SolverSettings)
+    source: str = "<built-in>"
+    text: str = ""
+
+    @property
+    def digest(self) -> str:
+        """SHA-256 of the scenario file's text (empty when built in code)."""
+        return hashlib.sha256(self.text.encode()).hexdigest()
+
+    def with_defects(self, defects: Defects) -> Scenario:
+        setup = dataclasses.replace(self.setup, defects=defects)
+        pack(setup.params, setup.defects, setup.options)  # validity check
+        return dataclasses.replace(self, setup=setup)
+
+
+# --- strict value checks --------------------------------------------------------------------
+class _Ctx:
+    def __init__(self, source: str) -> None:
+        self.source = source
+
+    def fail(self, key: str, value: Any, allowed: str) -> ScenarioError:
+        return ScenarioError(f"{self.source}: key '{key}' = {value!r} is invalid: allowed {allowed}")
+
+    def table(self, data: Any, key: str, allowed_keys: set[str]) -> dict[str, Any]:
+        if not isinstance(data, dict):
+            raise self.fail(key, data, "a table")
+        for k in data:
+            if k not in allowed_keys:
+                where = f"{key}.{k}" if key else k
+                raise self.fail(where, data[k],
+                                f"one of the keys {sorted(allowed_keys)} (unknown key)")
+        return data
+
+    def number(self, value: Any, key: str, lo: float = -math.inf, hi: float = math.inf,
+               lo_open: bool = False) -> float:
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            raise self.fail(key, value, "a number")
+        value = float(value)
+        if not math.isfinite(value):
+            raise self.fail(key, value, "a finite number")
+        if value < lo or value > hi or (lo_open and value == lo):
+            low = f"> {lo:g}" if lo_open else f">= {lo:g}"
+            raise self.fail(key, value, f"a number {low} and <= {hi:g}")
+        return value
+
+    def string(self, value: Any, key: str, choices: tuple[str, ...] | None = None) -> str:
+        if not isinstance(value, str):
+            raise self.fail(key, value, "a string")
+        if choices is not None and value not in choices:
+            raise self.fail(key, value, f"one of {list(choices)}")
+        return value
+
+
+def _profile(ctx: _Ctx, data: Any, key: str) -> ForceProfile:
+    data = ctx.table(data, key, {"times_s", "forces_n"})
+    if set(data) != {"times_s", "forces_n"}:
+        raise ctx.fail(key, data, "a table with both 'times_s' and 'forces_n'")
+    times = data["times_s"]
+    forces = data["forces_n"]
+    for name, seq in (("times_s", times), ("forces_n", forces)):
+        if not isinstance(seq, list) or not seq:
+            raise ctx.fail(f"{key}.{name}", seq, "a non-empty array of numbers")
+    t = tuple(ctx.number(v, f"{key}.times_s[{i}]", 0.0, 1e6) for i, v in enumerate(times))
+    f = tuple(ctx.number(v, f"{key}.forces_n[{i}]", 0.0, 50_000.0) for i, v in enumerate(forces))
+    if len(t) != len(f):
+        raise ctx.fail(key, data, "'times_s' and 'forces_n' of equal length")
+    if any(b <= a for a, b in zip(t, t[1:], strict=False)):
+        raise ctx.fail(f"{key}.times_s", list(t), "strictly increasing times")
+    return ForceProfile(t, f)
+
+
+def _actuation(ctx: _Ctx, data: Any) -> Actuation:
+    data = ctx.table(data, "actuation", {"profile", "peak_force_n", "start_s", "full_s", "left",
+                                         "right"})
+    kind = ctx.string(data.get("profile", "ramp"), "actuation.profile", ("ramp", "piecewise"))
+    if kind == "ramp":
+        extra = {"left", "right"} & set(data)
+        if extra:
+            raise ctx.fail(f"actuation.{sorted(extra)[0]}", data[sorted(extra)[0]],
+                           "per-shoe histories only with profile = \"piecewise\"")
+        peak = ctx.number(data.get("peak_force_n", NOMINAL_PEAK_ACTUATION_N),
+                          "actuation.peak_force_n", 0.0, 50_000.0)
+        start = ctx.number(data.get("start_s", 0.2), "actuation.start_s", 0.0, 1e6)
+        full = ctx.number(data.get("full_s", 0.7), "actuation.full_s", start, 1e6, lo_open=True)
+        ramp = ForceProfile.ramp(peak, start, full)
+        return Actuation(ramp, ramp)
+    extra = {"peak_force_n", "start_s", "full_s"} & set(data)
+    if extra:
+        k = sorted(extra)[0]
+        raise ctx.fail(f"actuation.{k}", data[k], "ramp settings only with profile = \"ramp\"")
+    missing = {"left", "right"} - set(data)
+    if missing:
+        raise ctx.fail("actuation", data, "both [actuation.left] and [actuation.right] tables"
+                       " for a piecewise profile")
+    return Actuation(_profile(ctx, data["left"], "actuation.left"),
+                     _profile(ctx, data["right"], "actuation.right"))
+
+
+def _defects(ctx: _Ctx, data: Any) -> Defects:
+    data = ctx.table(data, "defects", set(SIDES))
+    shoes = {}
+    names = {f.name for f in dataclasses.fields(ShoeDefect)}
+    for side in SIDES:
+        d = ctx.table(data.get(side, {}), f"defects.{side}", names)
+        values = {k: ctx.number(v, f"defects.{side}.{k}") for k, v in d.items()}
+        shoes[side] = values
+    # an actuation share given for one shoe only implies the other's (the sum is kept)
+    for side, other in (("left", "right"), ("right", "left")):
+        if "actuation_share" in shoes[side] and "actuation_share" not in shoes[other]:
+            shoes[other]["actuation_share"] = 1.0 - shoes[side]["actuation_share"]
+    try:
+        return Defects(left=ShoeDefect(**shoes["left"]), right=ShoeDefect(**shoes["right"]))
+    except BrakeSimError as exc:
+        raise ScenarioError(f"{ctx.source}: [defects]: {exc}") from exc
+
+
+def _parameters(ctx: _Ctx, data: Any) -> BrakeParameters:
+    data = ctx.table(data, "parameters", set(PARAMETER_GROUPS))
+    overrides: dict[str, dict[str, float]] = {}
+    for group, values in data.items():
+        cls = PARAMETER_GROUPS[group]
+        names = {f.name for f in dataclasses.fields(cls)}
+        values = ctx.table(values, f"parameters.{group}", names)
+        overrides[group] = {k: ctx.number(v, f"parameters.{group}.{k}") for k, v in values.items()}
+    try:
+        return BrakeParameters().with_overrides(overrides)
+    except BrakeSimError as exc:
+        raise ScenarioError(f"{ctx.source}: [parameters]: {exc}") from exc
+
+
+def _options(ctx: _Ctx, data: Any) -> ModelOptions:
+    data = ctx.table(data, "model", {"rigid_coupling", "shoes"})
+    rigid = data.get("rigid_coupling", False)
+    if not isinstance(rigid, bool):
+        raise ctx.fail("model.rigid_coupling", rigid, "true or false")
+    shoes = data.get("shoes", list(SIDES))
+    if (not isinstance(shoes, list) or not shoes or len(set(shoes)) != len(shoes)
+            or any(s not in SIDES for s in shoes)):
+        raise ctx.fail("model.shoes", shoes, f"a non-empty list of distinct names from {SIDES}")
+    return ModelOptions(rigid_coupling=rigid, shoes=tuple(s for s in SIDES if s in shoes))
+
+
+def _solver(ctx: _Ctx, data: Any) -> SolverSettings:
+    data = ctx.table(data, "solver", {"method", "dt_s", "rtol"})
+    return SolverSettings(
+        method=ctx.string(data.get("method", "rk4"), "solver.method", SOLVER_METHODS),
+        dt_s=ctx.number(data.get("dt_s", DEFAULT_STEP_S), "solver.dt_s", 0.0, 1e-2, lo_open=True),
+        rtol=ctx.number(data.get("rtol", 1e-9), "solver.rtol", 1e-13, 1e-3),
+    )
+
+
+def parse_scenario(text: str, source: str = "<string>") -> Scenario:
+    """Parse scenario TOML text; errors name ``source``."""
+    ctx = _Ctx(source)
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ScenarioError(f"{source}: not valid TOML: {exc}") from exc
+    top = ctx.table(data, "", {"name", "description", "duration_s", "seed", "solver", "actuation",
+                               "defects", "parameters", "model"})
+    if "name" not in top:
+        raise ctx.fail("name", None, "a scenario name (string) is required")
+    name = ctx.string(top["name"], "name")
+    seed = top.get("seed", 0)
+    if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed < 2**63:
+        raise ctx.fail("seed", seed, "an integer from 0 to 2^63 - 1")
+    params = _parameters(ctx, top.get("parameters", {}))
+    defects = _defects(ctx, top.get("defects", {}))
+    setup = BrakeSetup(params=params, defects=defects,
+                       actuation=_actuation(ctx, top.get("actuation", {})),
+                       options=_options(ctx, top.get("model", {})))
+    try:
+        pack(setup.params, setup.defects, setup.options)
+    except BrakeSimError as exc:
+        raise ScenarioError(f"{source}: {exc}") from exc
+    return Scenario(
+        name=name,
+        description=ctx.string(top.get("description", ""), "description"),
+        setup=setup,
+        duration_s=ctx.number(top.get("duration_s", 7.5), "duration_s", 0.0, 86_400.0,
+                              lo_open=True),
+        seed=seed,
+        solver=_solver(ctx, top.get("solver", {})),
+        source=source,
+        text=text,
+    )
+
+
+def builtin_names() -> list[str]:
+    """Names of the scenarios shipped with the package."""
+    files = resources.files(BUILTIN_PACKAGE).iterdir()
+    return sorted(f.name[:-5] for f in files if f.name.endswith(".toml"))
+
+
+def load_scenario(name_or_path: str | Path) -> Scenario:
+    """Load a built-in scenario by name, or a scenario file by path."""
+    path = Path(name_or_path)
+    if path.suffix == ".toml" or path.exists():
+        try:
+            text = path.read_text(encoding="utf-8")
+        except OSError as exc:
+            raise ScenarioError(f"{path}: cannot read the scenario file: {exc.strerror}") from exc
+        return parse_scenario(text, str(path))
+    name = str(name_or_path)
+    if name not in builtin_names():
+        raise ScenarioError(f"unknown scenario '{name}': allowed a path to a .toml file or one of"
+                            f" the built-in scenarios {builtin_names()}")
+    text = resources.files(BUILTIN_PACKAGE).joinpath(f"{name}.toml").read_text(encoding="utf-8")
+    return parse_scenario(text, f"<built-in {name}>")

@@ -1,0 +1,166 @@
+"""Adaptive high-accuracy reference: scipy DOP853 with every discontinuity located.
+
+The Kelvin-Voigt force jumps when a lining touches the drum (the damping term), the
+actuation profile has kinks at its knots, and the brake locks at standstill. The
+integration is split at each of these instants so that no step straddles one: contact
+onsets and separations and the lock are located as events (root-finding on the dense
+output), knots are segment ends. Within a segment each shoe's contact state is fixed,
+so the right-hand side is smooth there and DOP853 keeps its order.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.integrate import solve_ivp
+
+from brake_sim_ros.errors import SimulationError
+from brake_sim_ros.model import kernel
+from brake_sim_ros.model import layout as L
+from brake_sim_ros.model.assembly import initial_state, pack
+from brake_sim_ros.model.trajectory import BrakeSetup, SampleBlock
+
+SHOE_BASES = (L.P_SHOE_BASE, L.P_SHOE_BASE + L.SHOE_STRIDE)
+
+
+@dataclass
+class ReferenceResult:
+    """Reference trajectory.
+
+    Attributes:
+        samples: recorded samples at ``sample_times`` (SampleBlock, non-uniform allowed).
+        onsets_s / separations_s: located contact onsets and separations per shoe, s.
+        stop_time_s: located lock instant (None if the drum did not stop).
+        n_rhs: right-hand-side evaluations. success / message: solver outcome.
+    """
+
+    samples: SampleBlock
+    onsets_s: dict[str, list[float]] = field(default_factory=dict)
+    separations_s: dict[str, list[float]] = field(default_factory=dict)
+    stop_time_s: float | None = None
+    n_rhs: int = 0
+    success: bool = True
+    message: str = ""
+
+
+def default_sample_times(duration_s: float, fine_dt_s: float = 1e-5, fine_until_s: float = 1.0,
+                         coarse_dt_s: float = 1e-3) -> np.ndarray:
+    """Dense sampling over the impacting regime, coarse after it, s."""
+    fine_end = min(fine_until_s, duration_s)
+    fine = np.arange(0.0, fine_end, fine_dt_s)
+    coarse = np.arange(fine_end, duration_s + 0.5 * coarse_dt_s, coarse_dt_s)
+    return np.concatenate([fine, coarse])
+
+
+def run_reference(setup: BrakeSetup, duration_s: float, *, rtol: float = 1e-9,
+                  sample_times: np.ndarray | None = None) -> ReferenceResult:
+    """Integrate ``setup`` over ``[0, duration_s]`` and sample it at ``sample_times``."""
+    p = pack(setup.params, setup.defects, setup.options)
+    y = initial_state(setup.params, setup.defects)
+    tl, fl, tr, fr = setup.actuation.as_arrays()
+    gains = (p[SHOE_BASES[0] + L.S_ACTUATION_GAIN], p[SHOE_BASES[1] + L.S_ACTUATION_GAIN])
+    radius = p[L.P_DRUM_RADIUS]
+    v_lock = p[L.P_FRICTION_SMOOTHING_SPEED]
+    times = default_sample_times(duration_s) if sample_times is None else np.asarray(sample_times)
+    out = np.zeros((times.size, L.N_COLUMNS))
+    knots = sorted({float(k) for k in np.concatenate([tl, tr]) if 0.0 < k < duration_s})
+    bounds = [*knots, duration_s]
+    # absolute tolerances per component: angles rad, speeds rad/s, energies J
+    atol = np.array([1e-10] * 4 + [1e-8] * 4 + [1e-6] * 4)
+    modes = [L.CONTACT_OFF, L.CONTACT_OFF]
+    for i, base in enumerate(SHOE_BASES):
+        modes[i] = L.CONTACT_ON if _eps(p, base, y[L.Y_LEFT_ANGLE + i]) > 0 else L.CONTACT_OFF
+    locked = 0
+    lock_loss = 0.0
+    result = ReferenceResult(SampleBlock(out, 0, 0.0), {"left": [], "right": []},
+                             {"left": [], "right": []})
+    dydt = np.zeros(L.N_STATE)
+    counter = [0]
+
+    def forces(t: float) -> tuple[float, float]:
+        return gains[0] * np.interp(t, tl, fl), gains[1] * np.interp(t, tr, fr)
+
+    def fun(t: float, yy: np.ndarray) -> np.ndarray:
+        counter[0] += 1
+        fe = forces(t)
+        kernel.rhs(yy, p, fe[0], fe[1], locked, modes[0], modes[1], dydt)
+        return dydt.copy()
+
+    t = 0.0
+    sample_pos = 0
+    segment_end = bounds.pop(0)
+    while t < duration_s:
+        events = []
+        for i, base in enumerate(SHOE_BASES):
+            if p[base + L.S_ENABLED] <= 0:
+                continue
+            ev = _shoe_event(p, base, i)
+            ev.terminal = True
+            ev.direction = 1.0 if modes[i] == L.CONTACT_OFF else -1.0
+            events.append(ev)
+        if not locked and L.CONTACT_ON in modes:
+            def lock_event(_t: float, yy: np.ndarray) -> float:
+                return abs(yy[L.Y_DRUM_SPEED]) * radius - v_lock
+            lock_event.terminal = True
+            lock_event.direction = -1.0
+            events.append(lock_event)
+        sol = solve_ivp(fun, (t, segment_end), y, method="DOP853", rtol=rtol, atol=atol,
+                        events=events, dense_output=True)
+        if sol.status == -1:
+            result.success, result.message = False, sol.message
+            raise SimulationError(f"reference solver failed at t = {sol.t[-1]:.6f} s: {sol.message}")
+        t_end = float(sol.t[-1])
+        # sample everything inside [t, t_end) with this segment's dense output
+        stop = np.searchsorted(times, t_end, side="left")
+        if t_end >= duration_s:
+            stop = times.size
+        for k in range(sample_pos, stop):
+            tk = times[k]
+            yk = sol.sol(min(tk, t_end))
+            fe = forces(tk)
+            kernel.evaluate(yk, p, fe[0], fe[1], locked, L.CONTACT_AUTO, L.CONTACT_AUTO, dydt,
+                            out, k, tk)
+            out[k, L.COL["lock_loss_j"]] = lock_loss
+            out[k, L.COL["regime"]] = L.REGIME_STOPPED if locked else -1
+        sample_pos = stop
+        y = sol.y[:, -1].copy()
+        t = t_end
+        if sol.status == 1:  # an event fired
+            for ev_index, ev_times in enumerate(sol.t_events):
+                if ev_times.size == 0:
+                    continue
+                ev = events[ev_index]
+                if ev.__name__ == "lock_event":
+                    locked = 1
+                    lock_loss += 0.5 * p[L.P_FLYWHEEL_INERTIA] * y[L.Y_FLYWHEEL_SPEED] ** 2
+                    lock_loss += 0.5 * p[L.P_DRUM_INERTIA] * y[L.Y_DRUM_SPEED] ** 2
+                    y[L.Y_FLYWHEEL_SPEED] = 0.0
+                    y[L.Y_DRUM_SPEED] = 0.0
+                    result.stop_time_s = t
+                    continue
+                shoe = ev.shoe_index
+                side = ("left", "right")[shoe]
+                if modes[shoe] == L.CONTACT_OFF:
+                    modes[shoe] = L.CONTACT_ON
+                    result.onsets_s[side].append(t)
+                else:
+                    modes[shoe] = L.CONTACT_OFF
+                    result.separations_s[side].append(t)
+        elif t >= segment_end and bounds:
+            segment_end = bounds.pop(0)
+    result.samples = SampleBlock(out, 0, float(times[1] - times[0]) if times.size > 1 else 0.0)
+    result.n_rhs = counter[0]
+    return result
+
+
+def _eps(p: np.ndarray, base: int, theta: float) -> float:
+    return float(kernel.shoe_eval(p, base, theta, 0.0, 0.0, 0.0, L.CONTACT_AUTO)[2])
+
+
+def _shoe_event(p: np.ndarray, base: int, index: int):
+    def shoe_contact_event(_t: float, yy: np.ndarray) -> float:
+        return _eps(p, base, yy[L.Y_LEFT_ANGLE + index])
+
+    shoe_contact_event.shoe_index = index
+    return shoe_contact_event

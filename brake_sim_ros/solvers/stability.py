@@ -1,0 +1,152 @@
+"""Largest fixed step the current parameters allow, from the stiffest linearised mode.
+
+Two operating points bound the stiffness of the model:
+
+* sliding: both shoes pressed by the largest actuation force, the drum turning at the
+  lock speed (sliding speed = friction smoothing width), where the friction law is
+  steepest before the brake locks;
+* locked: the drum held at rest, the shoes still free to move on it, where the smoothed
+  friction acts on the shoes as a viscous damper of slope mu Fn / v_s.
+
+At each, the Jacobian of the right-hand side (central differences, contact held on) gives
+the eigenvalues ``lambda``. The step must keep every ``lambda dt`` inside the RK4
+stability region, with a 10 % margin, and must resolve the fastest oscillation with at
+least ``STEPS_PER_PERIOD`` steps: past that, RK4 stays bounded but gives false impacts and
+wrong stopping times long before anything diverges.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import brentq
+
+from brake_sim_ros.model import kernel
+from brake_sim_ros.model import layout as L
+from brake_sim_ros.model.assembly import pack
+
+STEPS_PER_PERIOD = 16
+STABILITY_MARGIN = 0.9
+
+
+@dataclass(frozen=True)
+class StepLimit:
+    """Step limit and where it comes from.
+
+    Attributes:
+        max_step_s: largest allowed fixed step, s.
+        stability_step_s: RK4 stability limit alone (without the margin), s.
+        resolution_step_s: limit from resolving the fastest oscillation, s.
+        fastest_frequency_hz: fastest oscillatory mode, Hz.
+        stiffest_rate_per_s: largest |lambda|, 1/s.
+        reason: one sentence naming the limiting mode.
+    """
+
+    max_step_s: float
+    stability_step_s: float
+    resolution_step_s: float
+    fastest_frequency_hz: float
+    stiffest_rate_per_s: float
+    reason: str
+
+
+def _rk4_amplification(z: complex) -> float:
+    return abs(1 + z + z * z / 2 + z**3 / 6 + z**4 / 24)
+
+
+def rk4_stable_step(lam: complex) -> float:
+    """Largest h with |R(lambda h)| <= 1 along the ray (inf for lambda with Re >= 0)."""
+    if lam.real >= 0.0 or abs(lam) == 0.0:
+        return math.inf
+    lo, hi = 0.0, 3.0 / abs(lam)
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        if _rk4_amplification(lam * mid) <= 1.0:
+            lo = mid
+        else:
+            hi = mid
+    return lo
+
+
+def _loaded_angle(p: np.ndarray, base: int, force_n: float, drum_speed: float) -> float:
+    """Shoe angle where actuation, contact and sliding friction balance (rad)."""
+    def eps(theta: float) -> float:
+        return kernel.shoe_eval(p, base, theta, 0.0, drum_speed, 0.0, L.CONTACT_AUTO)[2]
+
+    hi = 0.5
+    if eps(hi) <= 0.0:
+        return 0.0
+    onset = brentq(eps, -0.2, hi, xtol=1e-14) if eps(-0.2) < 0.0 else -0.2
+
+    def moment(theta: float) -> float:
+        return kernel.shoe_eval(p, base, theta, 0.0, drum_speed, force_n, L.CONTACT_ON)[0]
+
+    upper = onset + 1e-6
+    while moment(upper) > 0.0 and upper < onset + 0.05:
+        upper = onset + 2.0 * (upper - onset)
+    if moment(upper) > 0.0:
+        return upper  # self-locking: the contact never balances the actuation
+    return brentq(moment, onset, upper, xtol=1e-15)
+
+
+def _jacobian(y: np.ndarray, p: np.ndarray, fe: tuple[float, float], locked: int,
+              modes: tuple[int, int]) -> np.ndarray:
+    n = 8
+    jac = np.zeros((n, n))
+    f_plus = np.zeros(L.N_STATE)
+    f_minus = np.zeros(L.N_STATE)
+    for j in range(n):
+        h = 1e-7 * max(1.0, abs(y[j]))
+        yp = y.copy()
+        ym = y.copy()
+        yp[j] += h
+        ym[j] -= h
+        kernel.rhs(yp, p, fe[0], fe[1], locked, modes[0], modes[1], f_plus)
+        kernel.rhs(ym, p, fe[0], fe[1], locked, modes[0], modes[1], f_minus)
+        jac[:, j] = (f_plus[:n] - f_minus[:n]) / (2 * h)
+    if locked:
+        keep = [L.Y_LEFT_ANGLE, L.Y_RIGHT_ANGLE, L.Y_LEFT_SPEED, L.Y_RIGHT_SPEED]
+        jac = jac[np.ix_(keep, keep)]
+    return jac
+
+
+def step_limit(setup, max_actuation_n: float, *, packed: np.ndarray | None = None) -> StepLimit:
+    """Step limit for ``setup`` (a BrakeSetup) when actuation never exceeds ``max_actuation_n``."""
+    p = pack(setup.params, setup.defects, setup.options) if packed is None else packed
+    radius = p[L.P_DRUM_RADIUS]
+    v_lock = p[L.P_FRICTION_SMOOTHING_SPEED]
+    direction = 1.0 if setup.params.driveline.initial_speed_rad_s >= 0.0 else -1.0
+    drum_speed = direction * v_lock / radius
+    gains = (p[L.P_SHOE_BASE + L.S_ACTUATION_GAIN],
+             p[L.P_SHOE_BASE + L.SHOE_STRIDE + L.S_ACTUATION_GAIN])
+    fe = (max_actuation_n * gains[0], max_actuation_n * gains[1])
+    y = np.zeros(L.N_STATE)
+    bases = (L.P_SHOE_BASE, L.P_SHOE_BASE + L.SHOE_STRIDE)
+    for i, base in enumerate(bases):
+        # a small load still engages the contact stiffness
+        y[L.Y_LEFT_ANGLE + i] = _loaded_angle(p, base, max(fe[i], 1.0), 100.0 * direction)
+    y[L.Y_DRUM_SPEED] = y[L.Y_FLYWHEEL_SPEED] = drum_speed
+    on = (L.CONTACT_ON, L.CONTACT_ON)
+    eigs = np.concatenate([
+        np.linalg.eigvals(_jacobian(y, p, fe, 0, on)),
+        np.linalg.eigvals(_jacobian(y, p, fe, 1, on)),
+    ])
+    stable = min((rk4_stable_step(complex(lam)) for lam in eigs), default=math.inf)
+    fastest = max(abs(lam.imag) for lam in eigs)
+    resolution = 2.0 * math.pi / (STEPS_PER_PERIOD * fastest) if fastest > 0 else math.inf
+    stiffest = max(abs(lam) for lam in eigs)
+    limit = min(STABILITY_MARGIN * stable, resolution)
+    if limit == resolution:
+        reason = (f"the fastest oscillation ({fastest / (2 * math.pi):.0f} Hz, contact stiffness"
+                  f" {p[L.P_CONTACT_STIFFNESS]:.3g} N/m) needs at least {STEPS_PER_PERIOD} steps"
+                  " per period")
+    else:
+        reason = (f"RK4 stability (with a {100 * (1 - STABILITY_MARGIN):.0f} % margin) of the"
+                  f" stiffest mode, rate {stiffest:.3g} 1/s: friction smoothed over"
+                  f" {v_lock:g} m/s under {max_actuation_n:g} N of actuation, and contact damping"
+                  f" {p[L.P_CONTACT_DAMPING]:g} N s/m")
+    return StepLimit(max_step_s=limit, stability_step_s=stable, resolution_step_s=resolution,
+                     fastest_frequency_hz=fastest / (2 * math.pi), stiffest_rate_per_s=stiffest,
+                     reason=reason)

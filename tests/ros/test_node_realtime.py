@@ -1,0 +1,245 @@
+"""The brake_sim node in real time, over real DDS, started as a user would start it.
+
+One node process runs the symmetric scenario for 3 s of simulated time at real-time
+factor 1 while this module's client (its own rclpy context, on a ROS domain of its own)
+checks the interfaces, sends bad commands and bad parameters, and records everything.
+The recorded stream must be complete, stamped with simulated time, and equal, sample for
+sample, to the offline FixedStepStepper run: the refused inputs changed nothing.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+
+pytestmark = [
+    pytest.mark.ros,
+    pytest.mark.filterwarnings("ignore:module 'sre_(parse|constants)' is deprecated"),
+]
+
+rclpy = pytest.importorskip("rclpy", reason="rclpy not installed (run scripts/setup.sh)")
+
+from rclpy.qos import (  # noqa: E402
+    DurabilityPolicy,
+    QoSProfile,
+    ReliabilityPolicy,
+)
+
+from brake_sim_ros.ros import qos  # noqa: E402
+from brake_sim_ros.ros.harness import (  # noqa: E402
+    NodeProcess,
+    SimClient,
+    domain_id_for,
+    ros_environment,
+)
+from brake_sim_ros.scenarios import load_scenario  # noqa: E402
+from brake_sim_ros.solvers.fixed_step import FixedStepStepper  # noqa: E402
+
+DOMAIN = domain_id_for(1)
+RUN_S = 3.0
+DT = 4e-5
+N_SAMPLES = round(RUN_S / DT)
+LOSSLESS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
+BAD_COMMANDS = [(math.nan, 0.0), (0.0, math.inf), (-math.inf, 0.0), (-1.0, 0.0), (0.0, 1e9)]
+BAD_PARAMETERS = {
+    "friction.coefficient": 1.5,  # outside the descriptor's range
+    "contact.damping_n_s_per_m": "high",  # wrong type
+    "defects.left.initial_angle_deg": 10.0,  # lining inside the drum (core)
+    "friction.smoothing_speed_m_s": 1e-4,  # step too large for the new parameters (core)
+    "max_actuation_force_n": 100.0,  # fixed at start-up
+}
+
+
+@pytest.fixture(scope="module")
+def run(tmp_path_factory):
+    """Start the node, record its whole 3 s run, stop it; return (client, node process)."""
+    log = tmp_path_factory.mktemp("node") / "node.log"
+    node = NodeProcess.start(["--duration", str(RUN_S), "--ros-args",
+                              "-p", "diagnostics_period_s:=0.2"],
+                             domain_id=DOMAIN, log_path=log)
+    client = SimClient(DOMAIN, stream_qos=LOSSLESS)
+    try:
+        client.wait_for_node(30.0)
+        client.refusals = {}
+        for left, right in BAD_COMMANDS:
+            client.command(left, right)
+        for name, value in BAD_PARAMETERS.items():
+            client.refusals[name] = client.set_parameter(name, value)
+        client.wait_for(lambda: client.diagnostics().get("state") == "finished",
+                        RUN_S + 15.0, "end of the run")
+        client.wait_for(lambda: client.sample_count >= N_SAMPLES, 5.0, "all samples")
+        client.final = client.next_diagnostics()
+        yield client, node
+    finally:
+        client.close()
+        node.stop()
+
+
+def test_topics_types_qos_and_services(run):
+    client, _ = run
+    topics = dict(client.node.get_topic_names_and_types())
+    expected = {
+        "/brake_sim/pivot_forces": "brake_sim_msgs/msg/PivotForceChunk",
+        "/brake_sim/state": "brake_sim_msgs/msg/BrakeState",
+        "/brake_sim/joint_states": "sensor_msgs/msg/JointState",
+        "/brake_sim/defects": "brake_sim_msgs/msg/DefectState",
+        "/brake_sim/actuation": "brake_sim_msgs/msg/ActuationCommand",
+        "/clock": "rosgraph_msgs/msg/Clock",
+        "/diagnostics": "diagnostic_msgs/msg/DiagnosticArray",
+    }
+    for topic, type_name in expected.items():
+        assert topics.get(topic) == [type_name], topic
+
+    def offered(topic):
+        infos = [i for i in client.node.get_publishers_info_by_topic(topic)
+                 if i.node_name == "brake_sim"]
+        assert len(infos) == 1, topic
+        return infos[0].qos_profile
+
+    for topic in ("/brake_sim/pivot_forces", "/brake_sim/state", "/brake_sim/joint_states"):
+        profile = offered(topic)  # REP 2003: a driver offers system-default (reliable) QoS
+        assert profile.reliability == ReliabilityPolicy.RELIABLE
+        assert profile.durability == DurabilityPolicy.VOLATILE
+    defects = offered("/brake_sim/defects")
+    assert defects.reliability == ReliabilityPolicy.RELIABLE
+    assert defects.durability == DurabilityPolicy.TRANSIENT_LOCAL
+    assert offered("/clock").reliability == ReliabilityPolicy.BEST_EFFORT
+    services = dict(client.node.get_service_names_and_types())
+    assert services["/brake_sim/step"] == ["brake_sim_msgs/srv/StepSimulation"]
+    assert services["/brake_sim/reset"] == ["brake_sim_msgs/srv/ResetSimulation"]
+
+
+def test_chunks_are_contiguous_and_complete(run):
+    client, _ = run
+    chunks = client.rx.chunks
+    assert client.gaps == 0
+    assert chunks[0].first_sample_index == 0
+    for a, b in itertools.pairwise(chunks):
+        assert b.first_sample_index == a.first_sample_index + len(a.left_fx_n)
+    assert sum(len(c.left_fx_n) for c in chunks) == N_SAMPLES
+    assert {len(c.left_fx_n) for c in chunks} == {250}  # 100 chunks per simulated second
+    assert {c.sample_rate_hz for c in chunks} == {25_000.0}
+    for c in chunks:
+        for name in ("left_fx_n", "left_fy_n", "right_fx_n", "right_fy_n",
+                     "left_magnitude_n", "right_magnitude_n"):
+            assert np.isfinite(np.asarray(getattr(c, name))).all()
+
+
+def test_stamps_are_simulated_time(run):
+    client, _ = run
+    rx = client.rx
+
+    def ns(stamp):
+        return stamp.sec * 1_000_000_000 + stamp.nanosec
+
+    for c in rx.chunks:
+        assert ns(c.header.stamp) == c.first_sample_index * 40_000
+        assert c.header.frame_id == "brake_backing_plate"
+    assert [s.sample_index for s in rx.states] == list(range(0, N_SAMPLES, 250))
+    for s, j in zip(rx.states, rx.joints, strict=True):
+        assert ns(s.header.stamp) == s.sample_index * 40_000 == ns(j.header.stamp)
+        assert s.header.frame_id == j.header.frame_id == "brake_backing_plate"
+        assert list(j.name) == ["flywheel", "drum", "left_shoe", "right_shoe"]
+        assert list(j.position) == [s.flywheel_angle_rad, s.drum_angle_rad,
+                                    s.left_shoe_angle_rad, s.right_shoe_angle_rad]
+    clocks = [ns(c.clock) for c in rx.clocks]
+    assert clocks == sorted(clocks) and clocks[-1] == N_SAMPLES * 40_000
+    for array in rx.diagnostics + rx.defects:
+        assert ns(array.header.stamp) <= N_SAMPLES * 40_000  # not the wall clock's epoch
+
+
+def test_the_stream_equals_the_offline_stepper(run):
+    """Sample for sample: the bad commands and parameters changed nothing."""
+    client, _ = run
+    scenario = load_scenario("symmetric")
+    stepper = FixedStepStepper(scenario.setup, scenario.solver.dt_s,
+                               max_actuation_n=float(client.final["max_actuation_force_n"]))
+    block = stepper.advance(N_SAMPLES)
+    got = client.chunk_arrays()
+    np.testing.assert_array_equal(got["index"], np.arange(N_SAMPLES))
+    for side in ("left", "right"):
+        np.testing.assert_array_equal(got[f"{side}_fx_n"], block[f"{side}_pivot_fx_n"])
+        np.testing.assert_array_equal(got[f"{side}_fy_n"], block[f"{side}_pivot_fy_n"])
+        np.testing.assert_array_equal(got[f"{side}_magnitude_n"],
+                                      block.pivot_force_magnitude(side))
+    states = client.rx.states
+    np.testing.assert_array_equal([s.left_normal_force_n for s in states],
+                                  block["left_normal_force_n"][::250])
+    np.testing.assert_array_equal([s.drum_speed_rad_s for s in states],
+                                  block["drum_speed_rad_s"][::250])
+
+
+def test_bad_commands_and_parameters_are_refused_and_counted(run):
+    client, _ = run
+    diag = client.final
+    assert int(diag["commands_rejected"]) == len(BAD_COMMANDS)
+    assert int(diag["commands_accepted"]) == 0
+    assert "exceeds max_actuation_force_n" in diag["last_command_rejection"]
+    assert int(diag["parameter_changes_refused"]) == len(BAD_PARAMETERS)
+    reasons = {name: result.reason for name, result in client.refusals.items()}
+    assert not any(result.successful for result in client.refusals.values())
+    assert "out of range" in reasons["friction.coefficient"]
+    assert "Wrong parameter type" in reasons["contact.damping_n_s_per_m"]
+    assert "inside the drum" in reasons["defects.left.initial_angle_deg"]
+    assert "per step" in reasons["friction.smoothing_speed_m_s"]
+    assert "fixed at start-up" in reasons["max_actuation_force_n"]
+    values = client.get_parameters(list(BAD_PARAMETERS))
+    assert values["friction.coefficient"] == 0.285
+    assert values["max_actuation_force_n"] == float(diag["max_actuation_force_n"])
+
+
+def test_pacing_tracks_the_wall_clock(run):
+    client, _ = run
+    times = client.rx.chunk_times
+    assert times[-1] - times[0] == pytest.approx(RUN_S, rel=0.1)
+    diag = client.final
+    assert float(diag["real_time_factor_achieved"]) == pytest.approx(1.0, rel=0.05)
+    assert diag["state"] == "finished"
+    assert int(diag["deadline_misses"]) <= 5  # a loaded CI machine may miss a few
+
+
+def test_ground_truth_is_latched_for_late_subscribers(run):
+    client, _ = run
+    from brake_sim_msgs.msg import DefectState
+
+    late = []
+    client.node.create_subscription(DefectState, "/brake_sim/defects", late.append, qos.LATCHED)
+    client.wait_for(lambda: bool(late), 10.0, "latched DefectState")
+    assert late[-1].scenario == "symmetric" and late[-1].healthy
+    assert late[-1].left_actuation_share == 0.5 and list(late[-1].active_defects) == []
+
+
+def test_exit_at_end_prints_a_summary_and_exits_0(tmp_path):
+    node = NodeProcess.start(["--duration", "0.5", "--exit-at-end", "--ros-args",
+                              "-p", "real_time_factor:=0.0"],
+                             domain_id=domain_id_for(3), log_path=tmp_path / "node.log")
+    try:
+        assert node.wait(60.0) == 0, node.output()
+    finally:
+        node.stop()
+    out = node.output()
+    assert "ended at simulated time 0.5000 s" in out
+    assert "published 12500 samples in 50 chunks" in out
+    assert "commands accepted 0, rejected 0" in out
+
+
+@pytest.mark.parametrize(("args", "message"), [
+    (["--ros-args", "-p", "max_actuation_force_n:=5000.0"], "exceeds the limit"),
+    (["--scenario", "no_such_scenario"], "unknown scenario 'no_such_scenario'"),
+    (["--ros-args", "-p", "defects.left.initial_angle_deg:=10.0"], "inside the drum"),
+])
+def test_refuses_to_start_with_a_one_line_reason(args, message, tmp_path):
+    start = time.monotonic()
+    proc = subprocess.run([sys.executable, "-m", "brake_sim_ros.ros.node", *args],
+                          env=ros_environment(domain_id_for(4)), capture_output=True,
+                          text=True, timeout=60)
+    assert proc.returncode == 1, proc.stderr
+    lines = [line for line in proc.stderr.splitlines() if line.startswith("brake_sim:")]
+    assert len(lines) == 1 and message in lines[0], proc.stderr
+    assert time.monotonic() - start < 30.0

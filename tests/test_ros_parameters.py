@@ -1,0 +1,119 @@
+"""ROS parameter declarations of the node, generated from the core: pure logic, no rclpy."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import pytest
+
+from brake_sim_ros.errors import ParameterError
+from brake_sim_ros.model.defects import Defects, ShoeDefect
+from brake_sim_ros.model.parameters import PARAMETER_GROUPS, BrakeParameters
+from brake_sim_ros.ros import parameters as ros_params
+from brake_sim_ros.scenarios import builtin_names, load_scenario
+from brake_sim_ros.solvers.stability import step_limit
+
+
+def test_every_core_field_is_a_parameter():
+    names = ros_params.model_values(BrakeParameters(), Defects())
+    expected = {f"defects.{side}.{f.name}" for side in ros_params.SIDES
+                for f in dataclasses.fields(ShoeDefect)}
+    expected |= {f"{group}.{f.name}" for group, cls in PARAMETER_GROUPS.items()
+                 for f in dataclasses.fields(cls)}
+    assert set(names) == expected
+    for required in ("defects.left.pivot_radius_change_pct", "defects.right.actuation_share",
+                     "friction.coefficient", "friction.smoothing_speed_m_s",
+                     "contact.damping_n_s_per_m", "shoe.running_clearance_m"):
+        assert required in names
+
+
+@pytest.mark.parametrize("name", builtin_names())
+def test_round_trip_and_ranges_for_every_builtin_scenario(name):
+    setup = load_scenario(name).setup
+    values = ros_params.model_values(setup.params, setup.defects)
+    params, defects = ros_params.build_model(values)
+    assert params == setup.params and defects == setup.defects
+    for spec in ros_params.model_parameter_specs(setup.params, setup.defects):
+        assert spec.range is not None, spec.name
+        assert spec.range[0] <= spec.default <= spec.range[1], spec.name
+        assert spec.description and "(" in spec.description
+
+
+@pytest.mark.parametrize(("field", "low", "high"), [
+    ("pivot_radius_change_pct", -20.0, 20.0),
+    ("initial_angle_deg", -10.0, 10.0),
+])
+def test_defect_ranges_equal_the_core_bounds(field, low, high):
+    specs = {s.name: s for s in ros_params.model_parameter_specs(BrakeParameters(), Defects())}
+    assert specs[f"defects.left.{field}"].range == (low, high)
+    for ok in (low, high):
+        ShoeDefect(**{field: ok})
+    for bad in (low - 1e-6, high + 1e-6):
+        with pytest.raises(ParameterError):
+            ShoeDefect(**{field: bad})
+
+
+def test_invalid_values_raise_the_core_message():
+    values = ros_params.model_values(BrakeParameters(), Defects())
+    with pytest.raises(ParameterError, match="coefficient"):
+        ros_params.build_model({**values, "friction.coefficient": 1.5})
+    with pytest.raises(ParameterError, match="allowed a sum of exactly 1"):
+        ros_params.build_model({**values, "defects.left.actuation_share": 0.6})
+
+
+def test_a_lone_actuation_share_change_is_completed():
+    assert ros_params.complete_actuation_share({"defects.left.actuation_share": 0.6}) == {
+        "defects.left.actuation_share": 0.6, "defects.right.actuation_share": pytest.approx(0.4)}
+    both = {"defects.left.actuation_share": 0.6, "defects.right.actuation_share": 0.3}
+    assert ros_params.complete_actuation_share(both) == both
+    assert ros_params.complete_actuation_share({"friction.coefficient": 0.3}) == {
+        "friction.coefficient": 0.3}
+
+
+def test_initial_conditions_are_documented():
+    specs = {s.name: s for s in ros_params.model_parameter_specs(BrakeParameters(), Defects())}
+    for name in ros_params.INITIAL_CONDITIONS:
+        assert "next ~/reset" in specs[name].description
+
+
+def test_run_parameters():
+    specs = {s.name: s for s in ros_params.run_parameter_specs()}
+    assert specs["chunk_rate_hz"].default == 100.0
+    assert specs["state_rate_hz"].default == 100.0
+    assert specs["real_time_factor"].default == 1.0
+    assert specs["paused"].default is False
+    assert specs["publish_clock"].default is True
+    assert specs["command_timeout_s"].default == 0.2
+    assert specs["on_command_timeout"].default == "profile"
+    assert set(specs) >= ros_params.FIXED_AT_START
+
+
+def test_auto_max_force_is_twice_the_peak_when_the_step_allows_it():
+    setup = load_scenario("symmetric").setup
+    force, note = ros_params.auto_max_actuation_force(setup, 1e-5)
+    assert force == 2 * 1300.0 and note is None
+
+
+def test_auto_max_force_falls_back_to_what_the_step_allows():
+    scenario = load_scenario("symmetric")
+    dt = scenario.solver.dt_s
+    force, note = ros_params.auto_max_actuation_force(scenario.setup, dt)
+    if force == 2 * 1300.0:
+        pytest.skip("the scenario's step allows 2 x peak: no fallback to check")
+    assert note is not None and "allows at most" in note
+    assert 1300.0 <= force < 2600.0
+    assert dt <= step_limit(scenario.setup, force).max_step_s
+    assert dt > step_limit(scenario.setup, force + 10.0).max_step_s
+
+
+def test_descriptors():
+    pytest.importorskip("rcl_interfaces")
+    from rcl_interfaces.msg import ParameterType
+
+    spec = ros_params.ParamSpec("friction.coefficient", 0.3, "text", (0.0, 1.0))
+    desc = ros_params.descriptor(spec)
+    assert desc.type == ParameterType.PARAMETER_DOUBLE
+    assert desc.floating_point_range[0].from_value == 0.0
+    assert desc.floating_point_range[0].to_value == 1.0
+    flag = ros_params.descriptor(ros_params.ParamSpec("paused", False, "t"))
+    assert flag.type == ParameterType.PARAMETER_BOOL
