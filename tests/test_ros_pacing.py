@@ -150,3 +150,18 @@ def test_invalid_arguments_are_refused():
         Pacer(DT, max_lag_s=0.0)
     with pytest.raises(ValueError):
         Pacer(DT).plan(0.0, 0, 0, 1)
+
+
+def test_pure_ros_modules_do_not_import_rclpy():
+    """pacing, commands, parameters, conversion and diagnostics stay testable without DDS."""
+    import subprocess
+    import sys
+
+    code = ("import sys, brake_sim_ros.ros, brake_sim_ros.ros.pacing, brake_sim_ros.ros.commands,"
+            " brake_sim_ros.ros.parameters\n"
+            "try:\n    import brake_sim_ros.ros.conversion, brake_sim_ros.ros.diagnostics\n"
+            "except ImportError:\n    pass  # message packages not installed\n"
+            "print(sorted(m for m in sys.modules if m.split('.')[0] == 'rclpy'))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True)
+    assert out.stdout.strip() == "[]"

@@ -82,7 +82,7 @@ def _contact_point(p, base, c, sn):
 
 
 @njit(cache=True, inline="always")
-def shoe_eval(p, base, theta, omega, drum_speed, actuation, mode):
+def shoe_eval(p, base, theta, omega, drum_speed, actuation, mode, locked=0):
     """Forces on one shoe and what they do.
 
     Args:
@@ -91,6 +91,9 @@ def shoe_eval(p, base, theta, omega, drum_speed, actuation, mode):
         drum_speed: drum angular speed about +z, rad/s.
         actuation: actuation force on the tip, N (gain already applied).
         mode: CONTACT_AUTO (contact while eps > 0), CONTACT_OFF or CONTACT_ON.
+        locked: != 0 when the brake holds the drum at standstill. The drum is held and the
+            coupling twist frozen, so no tangential load passes through the linings:
+            friction is zero and each shoe settles where Fn d = Fe q.
 
     Returns:
         (theta_ddot rad/s^2, drum torque N m, eps m, eps_dot m/s, Fn N, Ff N,
@@ -122,7 +125,7 @@ def shoe_eval(p, base, theta, omega, drum_speed, actuation, mode):
         if fn < 0.0:
             fn = 0.0  # a contact never pulls
     ff = 0.0
-    if fn > 0.0:
+    if fn > 0.0 and not locked:
         ff = p[L.P_FRICTION_COEFFICIENT] * fn * math.tanh(
             v_slide / p[L.P_FRICTION_SMOOTHING_SPEED])
     fcx = -fn * nx - ff * ny
@@ -147,7 +150,7 @@ def shoe_eval(p, base, theta, omega, drum_speed, actuation, mode):
             fcx + fex, fcy + fey, p_fric, p_contact, p_act)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def evaluate(y, p, fe_left, fe_right, locked, mode_left, mode_right, dydt, out, row, t):
     """Time derivative of the state ``y`` (layout.Y_*) into ``dydt``; if ``row >= 0``, also
     every recorded quantity at time ``t`` into ``out[row]`` (layout.COLUMNS).
@@ -158,8 +161,9 @@ def evaluate(y, p, fe_left, fe_right, locked, mode_left, mode_right, dydt, out, 
     wd = 0.0 if locked else y[L.Y_DRUM_SPEED]
     bl = L.P_SHOE_BASE
     br = L.P_SHOE_BASE + L.SHOE_STRIDE
-    sl = shoe_eval(p, bl, y[L.Y_LEFT_ANGLE], y[L.Y_LEFT_SPEED], wd, fe_left, mode_left)
-    sr = shoe_eval(p, br, y[L.Y_RIGHT_ANGLE], y[L.Y_RIGHT_SPEED], wd, fe_right, mode_right)
+    sl = shoe_eval(p, bl, y[L.Y_LEFT_ANGLE], y[L.Y_LEFT_SPEED], wd, fe_left, mode_left, locked)
+    sr = shoe_eval(p, br, y[L.Y_RIGHT_ANGLE], y[L.Y_RIGHT_SPEED], wd, fe_right, mode_right,
+                   locked)
     dydt[L.Y_LEFT_ANGLE] = y[L.Y_LEFT_SPEED]
     dydt[L.Y_RIGHT_ANGLE] = y[L.Y_RIGHT_SPEED]
     dydt[L.Y_LEFT_SPEED] = sl[0]
@@ -219,6 +223,15 @@ def evaluate(y, p, fe_left, fe_right, locked, mode_left, mode_right, dydt, out, 
     o[34] = sr[3]
     o[35] = sl[6]
     o[36] = sr[6]
+
+
+@njit(cache=True)
+def evaluate_rows(ys, times, p, fe_left, fe_right, locked, out):
+    """Recorded quantities for many states: ``ys`` (n, N_STATE) at ``times`` into ``out``."""
+    dydt = np.empty(ys.shape[1])
+    for i in range(ys.shape[0]):
+        evaluate(ys[i], p, fe_left[i], fe_right[i], locked, L.CONTACT_AUTO, L.CONTACT_AUTO, dydt,
+                 out, i, times[i])
 
 
 @njit(cache=True)

@@ -12,7 +12,8 @@ Prints:
       chunk that starts applying it carries its state; PivotForceChunk has no actuation
       field);
     * the highest real-time factor: the ceiling measured as fast as possible, then a
-      check run at 80 % of it, with every topic published and subscribed.
+      search down from 80 % of it for the highest factor held within 2 % with deadline
+      misses on fewer than 1 % of the chunks, every topic published and subscribed.
 
 The client subscribes to every topic with the REP 2003 consumer QoS, so the node does
 all of its publishing work. Both processes share the machine's cores.
@@ -45,10 +46,12 @@ class _Window:
     """Node counters, client counters and CPU time between two instants."""
 
     def __init__(self, client: SimClient, pid: int) -> None:
+        # opened and closed on the arrival of a /diagnostics message, so that the node's
+        # counters and the wall and CPU clocks cover the same interval
         self.client, self.pid = client, pid
+        self.diag0 = client.next_diagnostics()
         self.wall0 = time.monotonic()
         self.cpu0 = _cpu_seconds(pid)
-        self.diag0 = client.next_diagnostics()
         self.samples0, self.gaps0 = client.sample_count, client.gaps
 
     def close(self) -> dict[str, float]:
@@ -61,6 +64,7 @@ class _Window:
             "cpu_pct": 100.0 * (_cpu_seconds(self.pid) - self.cpu0) / wall,
             "rtf": steps * dt / wall,
             "deadline_misses": int(diag1["deadline_misses"]) - int(self.diag0["deadline_misses"]),
+            "chunks": int(diag1["chunks_published"]) - int(self.diag0["chunks_published"]),
             "slips": int(diag1["slips"]) - int(self.diag0["slips"]),
             "steps": steps,
             "received": self.client.sample_count - self.samples0,
@@ -91,13 +95,19 @@ def _latency(client: SimClient, count: int) -> list[float]:
     return out
 
 
+def _sustained(factor: float, check: dict) -> bool:
+    """Within 2 % of the factor, with deadline misses on fewer than 1 % of the chunks."""
+    return (check["rtf"] >= 0.98 * factor
+            and check["deadline_misses"] <= 0.01 * max(1, check["chunks"]))
+
+
 def run(duration_s: float, scenario: str, afap_s: float, latency_count: int) -> str:
+    load_before = os.getloadavg()[0]  # other work on the machine skews every figure
     domain = domain_id_for(90)
     log = Path(tempfile.mkdtemp(prefix="brake_sim_bench_")) / "node.log"
     node = NodeProcess.start(["--scenario", scenario, "--duration", "86400"], domain_id=domain,
                              log_path=log)
     client = SimClient(domain, keep_chunks=False)
-    lines = []
     try:
         client.wait_for_node(60.0)
         client.spin_for(WARM_UP_S)
@@ -110,20 +120,25 @@ def run(duration_s: float, scenario: str, afap_s: float, latency_count: int) -> 
         window = _Window(client, node.pid)
         client.spin_for(afap_s)
         afap = window.close()
-        check_factor = max(1.0, math.floor(0.8 * afap["rtf"]))
-        client.set_parameter("real_time_factor", check_factor)
-        client.spin_for(1.0)
-        window = _Window(client, node.pid)
-        client.spin_for(afap_s)
-        check = window.close()
+        checks = []
+        for fraction in (0.8, 0.6, 0.4, 0.2):
+            factor = max(1.0, math.floor(fraction * afap["rtf"]))
+            client.set_parameter("real_time_factor", factor)
+            client.spin_for(1.0)
+            window = _Window(client, node.pid)
+            client.spin_for(afap_s)
+            check = window.close()
+            checks.append((factor, check))
+            if _sustained(factor, check) or factor == 1.0:
+                break
     finally:
         client.close()
         code = node.stop()
     lat_ms = sorted(1e3 * x for x in lat)
     p95 = lat_ms[min(len(lat_ms) - 1, math.ceil(0.95 * len(lat_ms)) - 1)]
-    lines += [
-        f"brake_sim node benchmark: scenario '{scenario}', {os.cpu_count()} CPUs,"
-        f" node exit code {code}",
+    lines = [
+        f"brake_sim node benchmark: scenario '{scenario}', {os.cpu_count()} CPUs, load average"
+        f" {load_before:.2f} before the start, node exit code {code}",
         f"  real-time factor 1 for {rt['wall_s']:.1f} s: CPU {rt['cpu_pct']:.1f} % of one core;"
         f" real-time factor {rt['rtf']:.4f}; deadline misses {rt['deadline_misses']}, slips"
         f" {rt['slips']}; samples received {rt['received']} of {rt['steps']}, gaps"
@@ -133,13 +148,17 @@ def run(duration_s: float, scenario: str, afap_s: float, latency_count: int) -> 
         f"  as fast as possible for {afap['wall_s']:.1f} s: real-time factor {afap['rtf']:.1f},"
         f" CPU {afap['cpu_pct']:.0f} %; client received {afap['received']} of"
         f" {afap['steps']} samples",
-        f"  check at real-time factor {check_factor:g} for {check['wall_s']:.1f} s: achieved"
-        f" {check['rtf']:.2f}, deadline misses {check['deadline_misses']}, slips"
-        f" {check['slips']}, CPU {check['cpu_pct']:.0f} %",
-        f"  highest sustained real-time factor (all topics published): about"
-        f" {check_factor if check['deadline_misses'] == 0 else check['rtf']:.0f}"
-        f" (ceiling {afap['rtf']:.0f})",
     ]
+    for factor, check in checks:
+        verdict = "sustained" if _sustained(factor, check) else "not sustained"
+        lines.append(
+            f"  real-time factor {factor:g} for {check['wall_s']:.1f} s: achieved"
+            f" {check['rtf']:.2f}, deadline misses {check['deadline_misses']} of"
+            f" {check['chunks']} chunks, slips {check['slips']}, CPU {check['cpu_pct']:.0f} %:"
+            f" {verdict}")
+    best = max((f for f, c in checks if _sustained(f, c)), default=None)
+    lines.append("  highest sustained real-time factor with every topic published: "
+                 + (f"{best:g}" if best is not None else "below the last factor tried"))
     return "\n".join(lines)
 
 

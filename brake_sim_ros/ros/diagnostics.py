@@ -6,8 +6,9 @@ them into a ``diagnostic_msgs/DiagnosticArray`` or a one-paragraph summary.
 Counters (cumulative since the node started; a reset does not clear them):
     steps_done: physics steps taken.
     samples_published / chunks_published / states_published: what went out.
-    deadline_misses: chunks published more than one chunk period (wall) after their last
-        sample was due, in real-time mode.
+    deadline_misses: chunks published, in real-time mode, later than one chunk period
+        (wall) after their last sample was due, or two timer ticks at high real-time
+        factors, whichever is longer (10 ms at the defaults).
     slips / slipped_s: times the node fell more than ``max_lag_s`` behind and dropped the
         backlog, and the simulated time skipped that way (pacing re-anchored; the sample
         stream itself has no gap).

@@ -135,6 +135,7 @@ class SimClient:
         self.gaps = 0
         self._next_index: int | None = None
         n = self.node
+        self._stream_topics = (f"{node}/pivot_forces", f"{node}/state", f"{node}/joint_states")
         n.create_subscription(PivotForceChunk, f"{node}/pivot_forces", self._on_chunk, stream_qos)
         n.create_subscription(BrakeState, f"{node}/state", self._on_state, stream_qos)
         n.create_subscription(JointState, f"{node}/joint_states", self.rx.joints.append,
@@ -193,12 +194,21 @@ class SimClient:
             self.executor.spin_once(timeout_sec=0.05)
 
     def wait_for_node(self, timeout_s: float = 30.0) -> None:
-        """Wait until the node is up: its latched ground truth arrived, services ready."""
+        """Wait until the node is up and discovered both ways.
+
+        Its latched ground truth arrived, its services answer, it subscribes to our
+        commands and we see its stream publishers. A node that starts running at once
+        publishes before any subscriber has matched (volatile topics do not replay), so
+        start it paused and unpause it after this to receive its stream from sample 0.
+        """
         self.wait_for(lambda: bool(self.rx.defects), timeout_s, "DefectState from the node")
         for client in (self._step, self._reset, self._set, self._set_atomic, self._get):
             self.wait_for(client.service_is_ready, timeout_s, f"service {client.srv_name}")
         self.wait_for(lambda: self.node.count_subscribers(self.actuation.topic_name) > 0,
                       timeout_s, "subscriber of the actuation topic")
+        for topic in self._stream_topics:
+            self.wait_for(lambda topic=topic: self.node.count_publishers(topic) > 0,
+                          timeout_s, f"publisher of {topic}")
 
     def diagnostics(self) -> dict[str, str]:
         """Key-values of the newest /diagnostics status of the node ({} if none yet)."""

@@ -343,8 +343,8 @@ class BrakeSimNode(Node):
                                       throttle_duration_sec=1.0)
             return
         self.stats.commands_accepted += 1
-        if self._failure or self._finished:
-            self.stats.commands_dropped += 1
+        if self._failure or (self._finished and not self._pacer.paused):
+            self.stats.commands_dropped += 1  # no physics will run to use it
             return
         forces = (msg.left_force_n, msg.right_force_n)
         if self._planner.command(forces, self._stepper.step_index):
@@ -375,7 +375,10 @@ class BrakeSimNode(Node):
             if plan.slipped_steps:
                 self.stats.slips += 1
                 self.stats.slipped_s += plan.slipped_steps * self._stepper.dt_s
-            tolerance = self._pacer.chunk_wall_period_s(self._chunk_steps)
+            # a chunk is late when published more than a chunk period after its last sample
+            # was due, or two ticks (what tick granularity alone costs at high factors)
+            tolerance = max(self._pacer.chunk_wall_period_s(self._chunk_steps),
+                            2.0 * self._tick_period_s())
             remaining = plan.steps
             while remaining > 0:
                 n = min(self._chunk_steps, remaining)

@@ -60,12 +60,15 @@ BAD_PARAMETERS = {
 def run(tmp_path_factory):
     """Start the node, record its whole 3 s run, stop it; return (client, node process)."""
     log = tmp_path_factory.mktemp("node") / "node.log"
-    node = NodeProcess.start(["--duration", str(RUN_S), "--ros-args",
+    # started paused: the stream is recorded from sample 0 once discovery is complete
+    node = NodeProcess.start(["--duration", str(RUN_S), "--ros-args", "-p", "paused:=true",
                               "-p", "diagnostics_period_s:=0.2"],
                              domain_id=DOMAIN, log_path=log)
     client = SimClient(DOMAIN, stream_qos=LOSSLESS)
     try:
         client.wait_for_node(30.0)
+        client.spin_for(0.2)
+        assert client.set_parameter("paused", False).successful
         client.refusals = {}
         for left, right in BAD_COMMANDS:
             client.command(left, right)

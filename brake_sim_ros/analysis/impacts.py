@@ -1,0 +1,144 @@
+"""Impacts, impact periods, regimes and stopping time from recorded samples.
+
+Definitions (used by the validation report and the tests alike):
+
+* impact: a contact onset, the instant a shoe's indentation crosses zero upward
+  (linearly interpolated between samples);
+* impact period ``T``: time from a shoe's first impact to its second; the whole series of
+  onset-to-onset intervals is kept too;
+* peak pivot force of an impact: the largest ``|F_pivot|`` between that onset and the
+  next separation (parabolic refinement around the largest sample);
+* end of the impacting regime: the onset of the first contact that lasts at least
+  ``settle_s`` (the shoe rides on the drum from then on);
+* contact-regime pivot force: time-weighted mean ``|F_pivot|`` over ``window_s``
+  (default 1 s to 6 s), cut at the stop if the drum stops earlier;
+* stopping time: the instant the brake locks (sliding speed down to the smoothing width).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from brake_sim_ros.model import layout as L
+from brake_sim_ros.model.trajectory import SampleBlock
+
+CONTACT_WINDOW_S = (1.0, 6.0)
+SETTLE_S = 0.05
+
+
+@dataclass(frozen=True)
+class ShoeMetrics:
+    """What happened to one shoe; forces in N, times in s."""
+
+    onsets_s: np.ndarray
+    separations_s: np.ndarray
+    impact_peaks_n: np.ndarray
+    first_impact_actuation_n: float
+    end_of_impacting_s: float
+    contact_regime_force_n: float
+
+    @property
+    def n_impacts(self) -> int:
+        return int(self.onsets_s.size)
+
+    @property
+    def first_impact_peak_n(self) -> float:
+        return float(self.impact_peaks_n[0]) if self.impact_peaks_n.size else float("nan")
+
+    @property
+    def period_s(self) -> float:
+        """First-to-second impact period T (nan with fewer than two impacts)."""
+        return float(self.onsets_s[1] - self.onsets_s[0]) if self.onsets_s.size > 1 else float(
+            "nan")
+
+    @property
+    def periods_s(self) -> np.ndarray:
+        return np.diff(self.onsets_s)
+
+
+@dataclass(frozen=True)
+class EventMetrics:
+    left: ShoeMetrics
+    right: ShoeMetrics
+    stop_time_s: float | None
+
+    def shoe(self, side: str) -> ShoeMetrics:
+        return self.left if side == "left" else self.right
+
+
+def _crossings(t: np.ndarray, x: np.ndarray, upward: bool) -> tuple[np.ndarray, np.ndarray]:
+    """Interpolated times where ``x`` crosses zero, and the sample index after each."""
+    if upward:
+        idx = np.flatnonzero((x[:-1] <= 0.0) & (x[1:] > 0.0))
+    else:
+        idx = np.flatnonzero((x[:-1] > 0.0) & (x[1:] <= 0.0))
+    frac = -x[idx] / (x[idx + 1] - x[idx])
+    return t[idx] + frac * (t[idx + 1] - t[idx]), idx + 1
+
+
+def _refined_peak(y: np.ndarray, i: int) -> float:
+    """Parabolic refinement of a sampled maximum at index ``i`` (uniform spacing assumed)."""
+    if 0 < i < y.size - 1:
+        a, b, c = y[i - 1], y[i], y[i + 1]
+        denom = a - 2 * b + c
+        if denom < 0:
+            return float(b - 0.125 * (a - c) ** 2 / denom)
+    return float(y[i])
+
+
+def time_weighted_mean(t: np.ndarray, y: np.ndarray, start: float, end: float) -> float:
+    mask = (t >= start) & (t <= end)
+    if mask.sum() < 2:
+        return float("nan")
+    tt, yy = t[mask], y[mask]
+    return float(np.trapezoid(yy, tt) / (tt[-1] - tt[0]))
+
+
+def shoe_metrics(block: SampleBlock, side: str, *, stop_time_s: float | None,
+                 window_s: tuple[float, float] = CONTACT_WINDOW_S, settle_s: float = SETTLE_S
+                 ) -> ShoeMetrics:
+    t = block.time_s
+    eps = block[f"{side}_indentation_m"]
+    fr = block.pivot_force_magnitude(side)
+    onsets, on_idx = _crossings(t, eps, upward=True)
+    seps, sep_idx = _crossings(t, eps, upward=False)
+    peaks = []
+    for i0 in on_idx:
+        later = sep_idx[sep_idx > i0 - 1]
+        i1 = int(later[0]) if later.size else t.size - 1
+        window = fr[i0:i1 + 1] if i1 >= i0 else fr[i0:i0 + 1]
+        j = int(np.argmax(window))
+        # refine only an interior maximum: at the window's edge the force jumps (onset)
+        peaks.append(_refined_peak(fr, i0 + j) if 0 < j < window.size - 1 else float(window[j]))
+    actuation = float(np.interp(onsets[0], t, block[f"{side}_actuation_force_n"])) if (
+        onsets.size) else float("nan")
+    end_impacting = float("nan")
+    for t_on in onsets:
+        nxt = seps[seps > t_on]
+        lasts = (nxt[0] if nxt.size else t[-1]) - t_on
+        if lasts >= settle_s:
+            end_impacting = float(t_on)
+            break
+    end = window_s[1] if stop_time_s is None else min(window_s[1], stop_time_s)
+    contact = time_weighted_mean(t, fr, window_s[0], end)
+    return ShoeMetrics(onsets_s=onsets, separations_s=seps, impact_peaks_n=np.asarray(peaks),
+                       first_impact_actuation_n=actuation, end_of_impacting_s=end_impacting,
+                       contact_regime_force_n=contact)
+
+
+def stop_time_from_samples(block: SampleBlock) -> float | None:
+    """First sample in the stopped regime (for blocks without a located lock instant)."""
+    stopped = np.flatnonzero(block["regime"] == L.REGIME_STOPPED)
+    return float(block.time_s[stopped[0]]) if stopped.size else None
+
+
+def event_metrics(block: SampleBlock, *, stop_time_s: float | None,
+                  window_s: tuple[float, float] = CONTACT_WINDOW_S) -> EventMetrics:
+    """Metrics of both shoes. ``stop_time_s``: the located lock instant (or None)."""
+    return EventMetrics(
+        left=shoe_metrics(block, "left", stop_time_s=stop_time_s, window_s=window_s),
+        right=shoe_metrics(block, "right", stop_time_s=stop_time_s, window_s=window_s),
+        stop_time_s=stop_time_s,
+    )
