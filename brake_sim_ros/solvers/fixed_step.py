@@ -86,6 +86,13 @@ class FixedStepStepper:
         """Copy of the state vector (layout.Y_*)."""
         return self._y.copy()
 
+    def set_state(self, y: np.ndarray) -> None:
+        """Replace the state vector (layout.Y_*), e.g. to start from a twisted coupling."""
+        y = np.asarray(y, dtype=float)
+        if y.shape != (L.N_STATE,) or not np.all(np.isfinite(y)):
+            raise ParameterError(f"state of shape {y.shape}: allowed {L.N_STATE} finite values")
+        self._y = y.copy()
+
     @property
     def locked(self) -> bool:
         """The drum reached standstill and the brake holds it."""

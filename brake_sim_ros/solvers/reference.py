@@ -146,19 +146,29 @@ def run_reference(setup: BrakeSetup, duration_s: float, *, rtol: float = 1e-9,
                     y[L.Y_DRUM_SPEED] = 0.0
                     result.stop_time_s = t
                     continue
-                shoe = ev.shoe_index
-                side = ("left", "right")[shoe]
-                if modes[shoe] == L.CONTACT_OFF:
-                    modes[shoe] = L.CONTACT_ON
-                    result.onsets_s[side].append(t)
-                else:
-                    modes[shoe] = L.CONTACT_OFF
-                    result.separations_s[side].append(t)
+                _flip(modes, ev.shoe_index, t, result)
+            # Simultaneous events (a symmetric brake's shoes touch at the same instant) may
+            # be reported one at a time; re-sync every shoe with the geometry.
+            for i, base in enumerate(SHOE_BASES):
+                eps = _eps(p, base, y[L.Y_LEFT_ANGLE + i])
+                if (modes[i] == L.CONTACT_OFF and eps > 0.0) or (
+                        modes[i] == L.CONTACT_ON and eps < -SEPARATION_HYSTERESIS_M):
+                    _flip(modes, i, t, result)
         elif t >= segment_end and bounds:
             segment_end = bounds.pop(0)
     result.samples = SampleBlock(out, 0, float(times[1] - times[0]) if times.size > 1 else 0.0)
     result.n_rhs = counter[0]
     return result
+
+
+def _flip(modes: list[int], shoe: int, t: float, result: ReferenceResult) -> None:
+    side = ("left", "right")[shoe]
+    if modes[shoe] == L.CONTACT_OFF:
+        modes[shoe] = L.CONTACT_ON
+        result.onsets_s[side].append(t)
+    else:
+        modes[shoe] = L.CONTACT_OFF
+        result.separations_s[side].append(t)
 
 
 def _eps(p: np.ndarray, base: int, theta: float) -> float:
