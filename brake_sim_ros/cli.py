@@ -36,9 +36,15 @@ def _progress(label: str):
 # --- simulate ---------------------------------------------------------------------------------
 def _write_history(path: Path, result, scenario) -> None:
     columns = result.samples.as_dict()
-    meta = {"scenario": scenario.name, "source": scenario.source, "method": result.method,
-            "stop_time_s": result.stop_time_s, "version": __version__,
-            "sample_period_s": result.samples.sample_period_s, "scenario_toml": scenario.text}
+    meta = {
+        "scenario": scenario.name,
+        "source": scenario.source,
+        "method": result.method,
+        "stop_time_s": result.stop_time_s,
+        "version": __version__,
+        "sample_period_s": result.samples.sample_period_s,
+        "scenario_toml": scenario.text,
+    }
     path.parent.mkdir(parents=True, exist_ok=True)
     if path.suffix == ".npz":
         np.savez_compressed(path, **columns, metadata=np.array(json.dumps(meta)))
@@ -47,8 +53,10 @@ def _write_history(path: Path, result, scenario) -> None:
         data = np.column_stack([columns[n] for n in names])
         np.savetxt(path, data, delimiter=",", header=",".join(names), comments="", fmt="%.10g")
     else:
-        raise BrakeSimError(f"output file {path}: allowed suffixes .npz (numpy; pandas via"
-                            " pd.DataFrame(dict(np.load(f)))) or .csv")
+        raise BrakeSimError(
+            f"output file {path}: allowed suffixes .npz (numpy; pandas via"
+            " pd.DataFrame(dict(np.load(f)))) or .csv"
+        )
 
 
 def cmd_simulate(args: argparse.Namespace) -> int:
@@ -57,25 +65,34 @@ def cmd_simulate(args: argparse.Namespace) -> int:
 
     scenario = load_scenario(args.scenario)
     progress = _progress(f"simulating {scenario.name}") if not args.quiet else None
-    result = run_scenario(scenario, duration_s=args.duration, method=args.method, dt_s=args.dt,
-                          progress=progress)
+    result = run_scenario(
+        scenario, duration_s=args.duration, method=args.method, dt_s=args.dt, progress=progress
+    )
     m = result.metrics
     sim_s = result.samples.time_s[-1] if len(result.samples) else 0.0
     rtf = sim_s / result.cpu_s if result.cpu_s > 0 else float("inf")
     stop = f"{m.stop_time_s:.4f} s" if m.stop_time_s is not None else "not stopped"
-    print(f"scenario {scenario.name} ({result.method}): drum stop {stop};"
-          f" cost {result.cpu_s:.3f} s CPU for {sim_s:.3f} s simulated"
-          f" ({rtf:.0f}x real time, {result.n_steps} {'steps' if result.method == 'rk4' else 'f-evals'})")
+    unit = "steps" if result.method == "rk4" else "f-evals"
+    print(
+        f"scenario {scenario.name} ({result.method}): drum stop {stop};"
+        f" cost {result.cpu_s:.3f} s CPU for {sim_s:.3f} s simulated"
+        f" ({rtf:.0f}x real time, {result.n_steps} {unit})"
+    )
     for side in ("left", "right"):
         s = m.shoe(side)
-        print(f"  {side:5s}: {s.n_impacts} impacts, first at {s.onsets_s[0] if s.n_impacts else float('nan'):.4f} s"
-              f" ({s.first_impact_actuation_n:.1f} N actuation), first-impact peak |F_pivot|"
-              f" {s.first_impact_peak_n:.0f} N, period T {1e3 * s.period_s:.2f} ms,"
-              f" contact-regime |F_pivot| {s.contact_regime_force_n:.0f} N")
+        first = s.onsets_s[0] if s.n_impacts else float("nan")
+        print(
+            f"  {side:5s}: {s.n_impacts} impacts, first at {first:.4f} s"
+            f" ({s.first_impact_actuation_n:.1f} N actuation), first-impact peak |F_pivot|"
+            f" {s.first_impact_peak_n:.0f} N, period T {1e3 * s.period_s:.2f} ms,"
+            f" contact-regime |F_pivot| {s.contact_regime_force_n:.0f} N"
+        )
     if args.out:
         _write_history(Path(args.out), result, scenario)
-        print(f"time history: {args.out} ({len(result.samples)} samples x"
-              f" {result.samples.data.shape[1]} columns)")
+        print(
+            f"time history: {args.out} ({len(result.samples)} samples x"
+            f" {result.samples.data.shape[1]} columns)"
+        )
     return 0
 
 
@@ -84,14 +101,21 @@ def cmd_validate(args: argparse.Namespace) -> int:
     from brake_sim_ros.analysis.validation import write_report
 
     out = Path(args.out)
-    fig, check_list = write_report(out, Path(args.json) if args.json else None,
-                                   progress=lambda name: print(f"running {name}", file=sys.stderr))
+    _fig, check_list = write_report(
+        out,
+        Path(args.json) if args.json else None,
+        progress=lambda name: print(f"running {name}", file=sys.stderr),
+    )
     passed = sum(c.passed for c in check_list)
     for c in check_list:
-        print(f"{'ok  ' if c.passed else 'MISS'} {c.what}: published {c.published},"
-              f" model {c.model} ({c.difference})")
-    print(f"{passed}/{len(check_list)} calibration checks within their bands;"
-          f" report: {out / 'report.md'}")
+        print(
+            f"{'ok  ' if c.passed else 'MISS'} {c.what}: published {c.published},"
+            f" model {c.model} ({c.difference})"
+        )
+    print(
+        f"{passed}/{len(check_list)} calibration checks within their bands;"
+        f" report: {out / 'report.md'}"
+    )
     return 0
 
 
@@ -104,7 +128,7 @@ def cmd_scenarios(args: argparse.Namespace) -> int:
     return 0
 
 
-# --- bench -----------------------------------------------------------------------------------------
+# --- bench ---------------------------------------------------------------------------
 def cmd_bench(args: argparse.Namespace) -> int:
     if args.what == "core":
         from brake_sim_ros.solvers.benchmark import main as bench_core
@@ -120,7 +144,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
 def cmd_node(args: argparse.Namespace) -> int:
     from brake_sim_ros.ros.node import main as node_main
 
-    return node_main(args.rest) or 0
+    return node_main(["brake-sim node", *args.rest]) or 0
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -10,8 +10,13 @@ import numpy as np
 
 
 def _cli(*args, cwd=None):
-    return subprocess.run([sys.executable, "-m", "brake_sim_ros.cli", *args], capture_output=True,
-                          text=True, cwd=cwd, timeout=600)
+    return subprocess.run(
+        [sys.executable, "-m", "brake_sim_ros.cli", *args],
+        capture_output=True,
+        text=True,
+        cwd=cwd,
+        timeout=600,
+    )
 
 
 def test_simulate_writes_a_history_numpy_opens(tmp_path):
@@ -36,8 +41,11 @@ def test_simulate_csv(tmp_path):
 def test_errors_are_one_line_and_nonzero(tmp_path):
     bad = tmp_path / "bad.toml"
     bad.write_text('name = "b"\n[parameters.friction]\ncoefficient = -1.0\n')
-    for args in (("simulate", str(bad)), ("simulate", "nope"),
-                 ("simulate", "symmetric", "--dt", "1e-3")):
+    for args in (
+        ("simulate", str(bad)),
+        ("simulate", "nope"),
+        ("simulate", "symmetric", "--dt", "1e-3"),
+    ):
         r = _cli(*args)
         assert r.returncode == 2
         lines = r.stderr.strip().splitlines()
@@ -49,17 +57,31 @@ def test_validate_writes_report_and_json(tmp_path):
     assert r.returncode == 0, r.stderr
     fig = json.loads((tmp_path / "f.json").read_text())
     sym = fig["symmetric"]
-    assert set(sym) >= {"stop_time_s", "first_impact_actuation_n", "first_impact_peak_fr_n",
-                        "period_s"}
+    assert set(sym) >= {
+        "stop_time_s",
+        "first_impact_actuation_n",
+        "first_impact_peak_fr_n",
+        "period_s",
+    }
     assert set(fig["cases"]) == {str(i) for i in range(1, 9)}
     for case in fig["cases"].values():
-        assert set(case) >= {"shoe", "first_impact_actuation_n", "peak_fr_change_pct",
-                             "period_change_pct", "contact_fr_change_pct",
-                             "other_shoe_peak_fr_change_pct", "other_shoe_period_change_pct"}
+        assert set(case) >= {
+            "shoe",
+            "first_impact_actuation_n",
+            "peak_fr_change_pct",
+            "period_change_pct",
+            "contact_fr_change_pct",
+            "other_shoe_peak_fr_change_pct",
+            "other_shoe_period_change_pct",
+        }
     report = (tmp_path / "v" / "report.md").read_text()
     assert "| case 1: peak F_r change | -43.0 % |" in report
-    for png in ("pivot_forces_event.png", "pivot_forces_impacting.png",
-                "defects_vs_symmetric.png", "drum_speed.png"):
+    for png in (
+        "pivot_forces_event.png",
+        "pivot_forces_impacting.png",
+        "defects_vs_symmetric.png",
+        "drum_speed.png",
+    ):
         assert (tmp_path / "v" / png).stat().st_size > 10_000
 
 

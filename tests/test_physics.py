@@ -19,8 +19,12 @@ from brake_sim_ros.solvers.reference import run_reference
 
 
 def test_hertz_line_contact_stiffness_closed_form():
-    c = ContactParameters(drum_youngs_modulus_pa=100e9, drum_poisson_ratio=0.3,
-                          shoe_youngs_modulus_pa=2e9, shoe_poisson_ratio=0.2)
+    c = ContactParameters(
+        drum_youngs_modulus_pa=100e9,
+        drum_poisson_ratio=0.3,
+        shoe_youngs_modulus_pa=2e9,
+        shoe_poisson_ratio=0.2,
+    )
     e_eq = 1.0 / ((1 - 0.09) / 100e9 + (1 - 0.04) / 2e9)
     params = BrakeParameters(contact=c, shoe=ShoeGeometry(lining_width_m=0.05))
     assert params.contact_stiffness_n_per_m == pytest.approx(math.pi / 4 * e_eq * 0.05, rel=1e-12)
@@ -28,8 +32,9 @@ def test_hertz_line_contact_stiffness_closed_form():
 
 def test_torsional_mode_matches_closed_form_with_shoes_held_off():
     params = BrakeParameters()
-    setup = BrakeSetup(params=params, actuation=Actuation(ForceProfile.constant(0.0),
-                                                          ForceProfile.constant(0.0)))
+    setup = BrakeSetup(
+        params=params, actuation=Actuation(ForceProfile.constant(0.0), ForceProfile.constant(0.0))
+    )
     dt = 1e-5
     stepper = FixedStepStepper(setup, dt)
     y = stepper.state
@@ -44,10 +49,15 @@ def test_torsional_mode_matches_closed_form_with_shoes_held_off():
     t_up = t[up] - twist[up] * dt / (twist[up + 1] - twist[up])
     measured = 1.0 / np.mean(np.diff(t_up))
     d = params.driveline
-    i_red = d.flywheel_inertia_kg_m2 * d.drum_inertia_kg_m2 / (
-        d.flywheel_inertia_kg_m2 + d.drum_inertia_kg_m2)
+    i_red = (
+        d.flywheel_inertia_kg_m2
+        * d.drum_inertia_kg_m2
+        / (d.flywheel_inertia_kg_m2 + d.drum_inertia_kg_m2)
+    )
     wn = math.sqrt(d.coupling_stiffness_n_m_per_rad / i_red)
-    zeta = d.coupling_damping_n_m_s_per_rad / (2 * math.sqrt(d.coupling_stiffness_n_m_per_rad * i_red))
+    zeta = d.coupling_damping_n_m_s_per_rad / (
+        2 * math.sqrt(d.coupling_stiffness_n_m_per_rad * i_red)
+    )
     expected = wn * math.sqrt(1 - zeta**2) / (2 * math.pi)
     assert measured == pytest.approx(expected, rel=1e-4)
     assert np.all(block["left_normal_force_n"] == 0) and np.all(block["right_normal_force_n"] == 0)
@@ -59,17 +69,24 @@ def _energy_residual(block, params: BrakeParameters) -> tuple[float, float]:
     c = L.COL
     e0 = 0.5 * (d.flywheel_inertia_kg_m2 + d.drum_inertia_kg_m2) * d.initial_speed_rad_s**2
     i_s = params.shoe.inertia_about_pivot_kg_m2
-    kinetic = (0.5 * d.flywheel_inertia_kg_m2 * r[c["flywheel_speed_rad_s"]] ** 2
-               + 0.5 * d.drum_inertia_kg_m2 * r[c["drum_speed_rad_s"]] ** 2
-               + 0.5 * i_s * (r[c["left_speed_rad_s"]] ** 2 + r[c["right_speed_rad_s"]] ** 2))
+    kinetic = (
+        0.5 * d.flywheel_inertia_kg_m2 * r[c["flywheel_speed_rad_s"]] ** 2
+        + 0.5 * d.drum_inertia_kg_m2 * r[c["drum_speed_rad_s"]] ** 2
+        + 0.5 * i_s * (r[c["left_speed_rad_s"]] ** 2 + r[c["right_speed_rad_s"]] ** 2)
+    )
     k_c = params.contact_stiffness_n_per_m
-    potential = (0.5 * d.coupling_stiffness_n_m_per_rad
-                 * (r[c["flywheel_angle_rad"]] - r[c["drum_angle_rad"]]) ** 2
-                 + sum(0.5 * k_c * max(r[c[f"{s}_indentation_m"]], 0.0) ** 2
-                       for s in ("left", "right")))
+    potential = 0.5 * d.coupling_stiffness_n_m_per_rad * (
+        r[c["flywheel_angle_rad"]] - r[c["drum_angle_rad"]]
+    ) ** 2 + sum(0.5 * k_c * max(r[c[f"{s}_indentation_m"]], 0.0) ** 2 for s in ("left", "right"))
     supplied = e0 + r[c["actuation_work_j"]]
-    spent = (r[c["friction_work_j"]] + r[c["coupling_damper_loss_j"]] + r[c["contact_loss_j"]]
-             + r[c["lock_loss_j"]] + kinetic + potential)
+    spent = (
+        r[c["friction_work_j"]]
+        + r[c["coupling_damper_loss_j"]]
+        + r[c["contact_loss_j"]]
+        + r[c["lock_loss_j"]]
+        + kinetic
+        + potential
+    )
     return supplied - spent, e0
 
 
@@ -85,7 +102,9 @@ def test_contact_never_pulls_and_leading_shoe_carries_more(symmetric_rk4):
     b = symmetric_rk4.samples
     assert b["left_normal_force_n"].min() >= 0.0 and b["right_normal_force_n"].min() >= 0.0
     turning = (b.time_s > 1.0) & (b.time_s < symmetric_rk4.stop_time_s - 0.05)
-    assert np.all(b.pivot_force_magnitude("left")[turning] > b.pivot_force_magnitude("right")[turning])
+    assert np.all(
+        b.pivot_force_magnitude("left")[turning] > b.pivot_force_magnitude("right")[turning]
+    )
 
 
 def test_pivot_forces_equal_and_nothing_moves_after_standstill(symmetric_rk4):
@@ -109,19 +128,25 @@ def _mirror_run(defects: Defects, speed: float):
 
 def test_mirrored_brake_gives_mirrored_results():
     """Swapping the shoes' defects and reversing the drum mirrors every signal about y."""
-    a = _mirror_run(Defects(left=ShoeDefect(pivot_radius_change_pct=2.0, initial_angle_deg=-1.0)),
-                    103.5)
-    b = _mirror_run(Defects(right=ShoeDefect(pivot_radius_change_pct=2.0, initial_angle_deg=-1.0)),
-                    -103.5)
+    a = _mirror_run(
+        Defects(left=ShoeDefect(pivot_radius_change_pct=2.0, initial_angle_deg=-1.0)), 103.5
+    )
+    b = _mirror_run(
+        Defects(right=ShoeDefect(pivot_radius_change_pct=2.0, initial_angle_deg=-1.0)), -103.5
+    )
     for left, right in (("left", "right"), ("right", "left")):
-        np.testing.assert_allclose(b[f"{right}_angle_rad"], a[f"{left}_angle_rad"],
-                                   rtol=1e-6, atol=1e-12)
-        np.testing.assert_allclose(b[f"{right}_normal_force_n"], a[f"{left}_normal_force_n"],
-                                   rtol=1e-6, atol=1e-6)
-        np.testing.assert_allclose(b[f"{right}_pivot_fx_n"], -a[f"{left}_pivot_fx_n"],
-                                   rtol=1e-6, atol=1e-6)
-        np.testing.assert_allclose(b[f"{right}_pivot_fy_n"], a[f"{left}_pivot_fy_n"],
-                                   rtol=1e-6, atol=1e-6)
+        np.testing.assert_allclose(
+            b[f"{right}_angle_rad"], a[f"{left}_angle_rad"], rtol=1e-6, atol=1e-12
+        )
+        np.testing.assert_allclose(
+            b[f"{right}_normal_force_n"], a[f"{left}_normal_force_n"], rtol=1e-6, atol=1e-6
+        )
+        np.testing.assert_allclose(
+            b[f"{right}_pivot_fx_n"], -a[f"{left}_pivot_fx_n"], rtol=1e-6, atol=1e-6
+        )
+        np.testing.assert_allclose(
+            b[f"{right}_pivot_fy_n"], a[f"{left}_pivot_fy_n"], rtol=1e-6, atol=1e-6
+        )
     np.testing.assert_allclose(b["drum_speed_rad_s"], -a["drum_speed_rad_s"], rtol=1e-9)
 
 
@@ -172,7 +197,8 @@ def test_first_impact_and_stop_of_default_step_match_reference(symmetric_rk4, sy
     fixed, ref = symmetric_rk4.metrics, symmetric_reference.metrics
     for side in ("left", "right"):
         assert fixed.shoe(side).first_impact_peak_n == pytest.approx(
-            ref.shoe(side).first_impact_peak_n, rel=0.01)
+            ref.shoe(side).first_impact_peak_n, rel=0.01
+        )
         assert fixed.shoe(side).period_s == pytest.approx(ref.shoe(side).period_s, rel=0.01)
     assert fixed.stop_time_s == pytest.approx(ref.stop_time_s, rel=0.001)
 
@@ -187,7 +213,8 @@ def test_reference_locates_both_shoes_contacts(symmetric_reference):
 
 def test_rigid_coupling_removes_the_torsional_mode():
     s = load_scenario("symmetric")
-    setup = dataclasses.replace(s.setup, options=dataclasses.replace(s.setup.options,
-                                                                     rigid_coupling=True))
+    setup = dataclasses.replace(
+        s.setup, options=dataclasses.replace(s.setup.options, rigid_coupling=True)
+    )
     b = FixedStepStepper(setup, s.solver.dt_s).run(1.0)
     np.testing.assert_array_equal(b["flywheel_speed_rad_s"], b["drum_speed_rad_s"])

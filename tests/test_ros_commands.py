@@ -25,13 +25,16 @@ def covered(segments) -> int:
 
 
 # -- checks ---------------------------------------------------------------------------------------
-@pytest.mark.parametrize(("left", "right", "fragment"), [
-    (math.nan, 0.0, "left_force_n=nan is not a finite number"),
-    (0.0, math.inf, "right_force_n=inf is not a finite number"),
-    (-math.inf, 0.0, "left_force_n=-inf is not a finite number"),
-    (-1.0, 0.0, "negative"),
-    (0.0, 2000.5, "exceeds max_actuation_force_n = 2000 N"),
-])
+@pytest.mark.parametrize(
+    ("left", "right", "fragment"),
+    [
+        (math.nan, 0.0, "left_force_n=nan is not a finite number"),
+        (0.0, math.inf, "right_force_n=inf is not a finite number"),
+        (-math.inf, 0.0, "left_force_n=-inf is not a finite number"),
+        (-1.0, 0.0, "negative"),
+        (0.0, 2000.5, "exceeds max_actuation_force_n = 2000 N"),
+    ],
+)
 def test_bad_commands_are_rejected_with_a_reason(left, right, fragment):
     reason = check_command(left, right, 2000.0)
     assert reason is not None and fragment in reason

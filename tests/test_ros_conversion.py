@@ -61,8 +61,9 @@ def test_pivot_force_chunk_carries_every_sample(block):
         fx, fy = part[f"{side}_pivot_fx_n"], part[f"{side}_pivot_fy_n"]
         np.testing.assert_array_equal(np.asarray(getattr(msg, f"{side}_fx_n")), fx)
         np.testing.assert_array_equal(np.asarray(getattr(msg, f"{side}_fy_n")), fy)
-        np.testing.assert_array_equal(np.asarray(getattr(msg, f"{side}_magnitude_n")),
-                                      np.hypot(fx, fy))
+        np.testing.assert_array_equal(
+            np.asarray(getattr(msg, f"{side}_magnitude_n")), np.hypot(fx, fy)
+        )
 
 
 def test_state_rows_do_not_depend_on_chunking(block):
@@ -70,7 +71,7 @@ def test_state_rows_do_not_depend_on_chunking(block):
     pieces = []
     start = 0
     for n in (1, 249, 250, 77, 423, 1000, 28_000):
-        part = SampleBlock(block.data[start:start + n], start, DT)
+        part = SampleBlock(block.data[start : start + n], start, DT)
         pieces += [start + r for r in conversion.state_rows(part, 250)]
         start += n
     assert pieces == whole == list(range(0, 30_000, 250))
@@ -83,12 +84,15 @@ def test_brake_state_and_joint_state_map_the_columns(block):
     assert msg.sample_index == row
     assert (msg.header.stamp.sec, msg.header.stamp.nanosec) == (1, 160_000_000)
     pairs = {
-        "flywheel_angle_rad": "flywheel_angle_rad", "drum_speed_rad_s": "drum_speed_rad_s",
-        "left_shoe_angle_rad": "left_angle_rad", "right_shoe_speed_rad_s": "right_speed_rad_s",
+        "flywheel_angle_rad": "flywheel_angle_rad",
+        "drum_speed_rad_s": "drum_speed_rad_s",
+        "left_shoe_angle_rad": "left_angle_rad",
+        "right_shoe_speed_rad_s": "right_speed_rad_s",
         "left_normal_force_n": "left_normal_force_n",
         "right_friction_force_n": "right_friction_force_n",
         "left_actuation_force_n": "left_actuation_force_n",
-        "right_contact_y_m": "right_contact_y_m", "left_indentation_m": "left_indentation_m",
+        "right_contact_y_m": "right_contact_y_m",
+        "left_indentation_m": "left_indentation_m",
     }
     for field, column in pairs.items():
         assert getattr(msg, field) == r[COL[column]], field
@@ -96,10 +100,18 @@ def test_brake_state_and_joint_state_map_the_columns(block):
     assert msg.regime == int(r[COL["regime"]])
     joints = conversion.joint_state(block, row)
     assert list(joints.name) == ["flywheel", "drum", "left_shoe", "right_shoe"]
-    assert list(joints.position) == [msg.flywheel_angle_rad, msg.drum_angle_rad,
-                                     msg.left_shoe_angle_rad, msg.right_shoe_angle_rad]
-    assert list(joints.velocity) == [msg.flywheel_speed_rad_s, msg.drum_speed_rad_s,
-                                     msg.left_shoe_speed_rad_s, msg.right_shoe_speed_rad_s]
+    assert list(joints.position) == [
+        msg.flywheel_angle_rad,
+        msg.drum_angle_rad,
+        msg.left_shoe_angle_rad,
+        msg.right_shoe_angle_rad,
+    ]
+    assert list(joints.velocity) == [
+        msg.flywheel_speed_rad_s,
+        msg.drum_speed_rad_s,
+        msg.left_shoe_speed_rad_s,
+        msg.right_shoe_speed_rad_s,
+    ]
     assert joints.header == msg.header
 
 
@@ -112,11 +124,17 @@ def test_all_finite_catches_any_non_finite_number(block):
 
 
 def test_defect_state_is_the_ground_truth_in_force():
-    defects = Defects(left=ShoeDefect(pivot_radius_change_pct=3.0, initial_angle_deg=-2.0,
-                                      actuation_share=0.55),
-                      right=ShoeDefect(actuation_share=0.45))
-    msg = conversion.defect_state(scenario="mine", params=BrakeParameters(), defects=defects,
-                                  initial_angles_deg=(-2.0, 0.0), ns=1_500_000_000)
+    defects = Defects(
+        left=ShoeDefect(pivot_radius_change_pct=3.0, initial_angle_deg=-2.0, actuation_share=0.55),
+        right=ShoeDefect(actuation_share=0.45),
+    )
+    msg = conversion.defect_state(
+        scenario="mine",
+        params=BrakeParameters(),
+        defects=defects,
+        initial_angles_deg=(-2.0, 0.0),
+        ns=1_500_000_000,
+    )
     assert msg.scenario == "mine" and not msg.healthy
     assert msg.left_pivot_radius_m == pytest.approx(0.150 * 1.03)
     assert msg.right_pivot_radius_m == 0.150
@@ -125,27 +143,50 @@ def test_defect_state_is_the_ground_truth_in_force():
     assert list(msg.active_defects) == defects.labels()
     assert (msg.header.stamp.sec, msg.header.stamp.nanosec) == (1, 500_000_000)
     # a changed initial angle applies at the next reset: the run's own start is reported
-    pending = conversion.defect_state(scenario="s", params=BrakeParameters(),
-                                      defects=Defects(left=ShoeDefect(initial_angle_deg=-1.0)),
-                                      initial_angles_deg=(0.0, 0.0), ns=0)
+    pending = conversion.defect_state(
+        scenario="s",
+        params=BrakeParameters(),
+        defects=Defects(left=ShoeDefect(initial_angle_deg=-1.0)),
+        initial_angles_deg=(0.0, 0.0),
+        ns=0,
+    )
     assert pending.healthy and pending.left_initial_angle_rad == 0.0
     assert list(pending.active_defects) == []
 
 
 def view(**changes) -> RunView:
-    values = dict(node_name="brake_sim", scenario="symmetric", state="running", message="",
-                  sim_time_s=7.5, sample_index=187_500, sample_rate_hz=25_000.0,
-                  duration_s=7.5, target_real_time_factor=1.0, measured_real_time_factor=0.998,
-                  actuation_source="profile", stop_time_s=6.58, step_limit_s=4.0e-5,
-                  max_actuation_force_n=2080.0, seed=0)
+    values = dict(
+        node_name="brake_sim",
+        scenario="symmetric",
+        state="running",
+        message="",
+        sim_time_s=7.5,
+        sample_index=187_500,
+        sample_rate_hz=25_000.0,
+        duration_s=7.5,
+        target_real_time_factor=1.0,
+        measured_real_time_factor=0.998,
+        actuation_source="profile",
+        stop_time_s=6.58,
+        step_limit_s=4.0e-5,
+        max_actuation_force_n=2080.0,
+        seed=0,
+    )
     values.update(changes)
     return RunView(**values)
 
 
 def test_diagnostics_report_every_counter():
-    stats = RunStats(steps_done=187_500, deadline_misses=2, commands_accepted=3,
-                     commands_rejected=4, commands_dropped=1, parameter_changes_refused=5,
-                     free_run_sim_s=7.5, free_run_wall_s=7.5)
+    stats = RunStats(
+        steps_done=187_500,
+        deadline_misses=2,
+        commands_accepted=3,
+        commands_rejected=4,
+        commands_dropped=1,
+        parameter_changes_refused=5,
+        free_run_sim_s=7.5,
+        free_run_wall_s=7.5,
+    )
     array = diagnostic_array(view(), stats, ns=7_500_000_000, new_misses=0)
     assert (array.header.stamp.sec, array.header.stamp.nanosec) == (7, 500_000_000)
     (status,) = array.status
@@ -161,17 +202,30 @@ def test_diagnostics_report_every_counter():
     assert status.level == status.OK
     warn = diagnostic_array(view(), stats, ns=0, new_misses=3).status[0]
     assert warn.level == warn.WARN and "3 deadline misses" in warn.message
-    failed = diagnostic_array(view(state="failed", message="non-finite state"), stats, ns=0,
-                              new_misses=0).status[0]
+    failed = diagnostic_array(
+        view(state="failed", message="non-finite state"), stats, ns=0, new_misses=0
+    ).status[0]
     assert failed.level == failed.ERROR and "non-finite state" in failed.message
 
 
 def test_summary_is_one_paragraph_with_the_figures():
-    stats = RunStats(samples_published=187_500, chunks_published=750, states_published=750,
-                     commands_accepted=3, commands_rejected=4, free_run_sim_s=7.5,
-                     free_run_wall_s=7.5)
+    stats = RunStats(
+        samples_published=187_500,
+        chunks_published=750,
+        states_published=750,
+        commands_accepted=3,
+        commands_rejected=4,
+        free_run_sim_s=7.5,
+        free_run_wall_s=7.5,
+    )
     text = summary(view(state="finished"), stats)
     assert "\n" not in text
-    for fragment in ("7.5000 s", "187500 samples in 750 chunks", "accepted 3", "rejected 4",
-                     "stopped at t = 6.5800 s", "real-time factor achieved 1.000"):
+    for fragment in (
+        "7.5000 s",
+        "187500 samples in 750 chunks",
+        "accepted 3",
+        "rejected 4",
+        "stopped at t = 6.5800 s",
+        "real-time factor achieved 1.000",
+    ):
         assert fragment in text

@@ -12,8 +12,14 @@ DT = 4e-5  # 25 kHz
 CHUNK = 250  # 100 chunks per simulated second
 
 
-def run_ticks(pacer: Pacer, tick_times: list[float], *, step: int = 0, max_chunks: int = 8,
-              end_step: int | None = None) -> int:
+def run_ticks(
+    pacer: Pacer,
+    tick_times: list[float],
+    *,
+    step: int = 0,
+    max_chunks: int = 8,
+    end_step: int | None = None,
+) -> int:
     for now in tick_times:
         step += pacer.plan(now, step, CHUNK, max_chunks, end_step).steps
     return step
@@ -157,11 +163,12 @@ def test_pure_ros_modules_do_not_import_rclpy():
     import subprocess
     import sys
 
-    code = ("import sys, brake_sim_ros.ros, brake_sim_ros.ros.pacing, brake_sim_ros.ros.commands,"
-            " brake_sim_ros.ros.parameters\n"
-            "try:\n    import brake_sim_ros.ros.conversion, brake_sim_ros.ros.diagnostics\n"
-            "except ImportError:\n    pass  # message packages not installed\n"
-            "print(sorted(m for m in sys.modules if m.split('.')[0] == 'rclpy'))")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                         check=True)
+    code = (
+        "import sys, brake_sim_ros.ros, brake_sim_ros.ros.pacing, brake_sim_ros.ros.commands,"
+        " brake_sim_ros.ros.parameters\n"
+        "try:\n    import brake_sim_ros.ros.conversion, brake_sim_ros.ros.diagnostics\n"
+        "except ImportError:\n    pass  # message packages not installed\n"
+        "print(sorted(m for m in sys.modules if m.split('.')[0] == 'rclpy'))"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "[]"

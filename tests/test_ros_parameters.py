@@ -16,14 +16,25 @@ from brake_sim_ros.solvers.stability import step_limit
 
 def test_every_core_field_is_a_parameter():
     names = ros_params.model_values(BrakeParameters(), Defects())
-    expected = {f"defects.{side}.{f.name}" for side in ros_params.SIDES
-                for f in dataclasses.fields(ShoeDefect)}
-    expected |= {f"{group}.{f.name}" for group, cls in PARAMETER_GROUPS.items()
-                 for f in dataclasses.fields(cls)}
+    expected = {
+        f"defects.{side}.{f.name}"
+        for side in ros_params.SIDES
+        for f in dataclasses.fields(ShoeDefect)
+    }
+    expected |= {
+        f"{group}.{f.name}"
+        for group, cls in PARAMETER_GROUPS.items()
+        for f in dataclasses.fields(cls)
+    }
     assert set(names) == expected
-    for required in ("defects.left.pivot_radius_change_pct", "defects.right.actuation_share",
-                     "friction.coefficient", "friction.smoothing_speed_m_s",
-                     "contact.damping_n_s_per_m", "shoe.running_clearance_m"):
+    for required in (
+        "defects.left.pivot_radius_change_pct",
+        "defects.right.actuation_share",
+        "friction.coefficient",
+        "friction.smoothing_speed_m_s",
+        "contact.damping_n_s_per_m",
+        "shoe.running_clearance_m",
+    ):
         assert required in names
 
 
@@ -39,10 +50,13 @@ def test_round_trip_and_ranges_for_every_builtin_scenario(name):
         assert spec.description and "(" in spec.description
 
 
-@pytest.mark.parametrize(("field", "low", "high"), [
-    ("pivot_radius_change_pct", -20.0, 20.0),
-    ("initial_angle_deg", -10.0, 10.0),
-])
+@pytest.mark.parametrize(
+    ("field", "low", "high"),
+    [
+        ("pivot_radius_change_pct", -20.0, 20.0),
+        ("initial_angle_deg", -10.0, 10.0),
+    ],
+)
 def test_defect_ranges_equal_the_core_bounds(field, low, high):
     specs = {s.name: s for s in ros_params.model_parameter_specs(BrakeParameters(), Defects())}
     assert specs[f"defects.left.{field}"].range == (low, high)
@@ -63,11 +77,14 @@ def test_invalid_values_raise_the_core_message():
 
 def test_a_lone_actuation_share_change_is_completed():
     assert ros_params.complete_actuation_share({"defects.left.actuation_share": 0.6}) == {
-        "defects.left.actuation_share": 0.6, "defects.right.actuation_share": pytest.approx(0.4)}
+        "defects.left.actuation_share": 0.6,
+        "defects.right.actuation_share": pytest.approx(0.4),
+    }
     both = {"defects.left.actuation_share": 0.6, "defects.right.actuation_share": 0.3}
     assert ros_params.complete_actuation_share(both) == both
     assert ros_params.complete_actuation_share({"friction.coefficient": 0.3}) == {
-        "friction.coefficient": 0.3}
+        "friction.coefficient": 0.3
+    }
 
 
 def test_initial_conditions_are_documented():

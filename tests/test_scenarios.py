@@ -46,19 +46,29 @@ shoes = ["left"]
     assert s.setup.options.rigid_coupling and s.setup.options.shoes == ("left",)
 
 
-@pytest.mark.parametrize(("extra", "key", "fragment"), [
-    ("bogus = 1", "actuation.bogus", "unknown key"),
-    ("[parameters.friction]\ncoefficent = 0.3", "parameters.friction.coefficent", "unknown key"),
-    ("[parameters.friction]\ncoefficient = \"high\"", "parameters.friction.coefficient",
-     "a number"),
-    ("[parameters.friction]\ncoefficient = nan", "parameters.friction.coefficient", "finite"),
-    ("[parameters.shoe]\nmass_kg = inf", "parameters.shoe.mass_kg", "finite"),
-    ("[solver]\ndt_s = -1e-5", "solver.dt_s", "> 0"),
-    ("[solver]\nmax_step = 1", "solver.max_step", "unknown key"),
-    ("[solver]\nmethod = \"euler\"", "solver.method", "one of"),
-    ("seed = -3", "seed", "integer"),
-    ("[defects.left]\ninitial_angle_deg = true", "defects.left.initial_angle_deg", "a number"),
-])
+@pytest.mark.parametrize(
+    ("extra", "key", "fragment"),
+    [
+        ("bogus = 1", "actuation.bogus", "unknown key"),
+        (
+            "[parameters.friction]\ncoefficent = 0.3",
+            "parameters.friction.coefficent",
+            "unknown key",
+        ),
+        (
+            '[parameters.friction]\ncoefficient = "high"',
+            "parameters.friction.coefficient",
+            "a number",
+        ),
+        ("[parameters.friction]\ncoefficient = nan", "parameters.friction.coefficient", "finite"),
+        ("[parameters.shoe]\nmass_kg = inf", "parameters.shoe.mass_kg", "finite"),
+        ("[solver]\ndt_s = -1e-5", "solver.dt_s", "> 0"),
+        ("[solver]\nmax_step = 1", "solver.max_step", "unknown key"),
+        ('[solver]\nmethod = "euler"', "solver.method", "one of"),
+        ("seed = -3", "seed", "integer"),
+        ("[defects.left]\ninitial_angle_deg = true", "defects.left.initial_angle_deg", "a number"),
+    ],
+)
 def test_malformed_values_name_file_key_value_and_what_is_allowed(extra, key, fragment):
     text = extra + "\n" + GOOD if not extra.startswith(("[", "bogus")) else GOOD + "\n" + extra
     with pytest.raises(ScenarioError) as info:
@@ -67,17 +77,22 @@ def test_malformed_values_name_file_key_value_and_what_is_allowed(extra, key, fr
     assert "my_case.toml" in message and f"'{key}'" in message and fragment in message
 
 
-@pytest.mark.parametrize(("extra", "fragment"), [
-    ("[parameters.friction]\ncoefficient = 3.0", "coefficient=3.0 is invalid: allowed 0 to 1"),
-    ("[parameters.shoe]\npivot_radius_m = 0.5", "pivot_radius_m=0.5 is invalid"),
-    ("[defects.left]\ninitial_angle_deg = 2.0", "inside the drum"),
-    ("[defects.right]\npivot_radius_change_pct = 15.0", "inside the drum"),
-    ("[defects.left]\nactuation_share = 1.5", "actuation_share=1.5 is invalid"),
-    ("[defects.left]\nactuation_share = 0.6\n[defects.right]\nactuation_share = 0.6",
-     "allowed a sum of exactly 1"),
-])
+@pytest.mark.parametrize(
+    ("extra", "fragment"),
+    [
+        ("[parameters.friction]\ncoefficient = 3.0", "coefficient=3.0 is invalid: allowed 0 to 1"),
+        ("[parameters.shoe]\npivot_radius_m = 0.5", "pivot_radius_m=0.5 is invalid"),
+        ("[defects.left]\ninitial_angle_deg = 2.0", "inside the drum"),
+        ("[defects.right]\npivot_radius_change_pct = 15.0", "inside the drum"),
+        ("[defects.left]\nactuation_share = 1.5", "actuation_share=1.5 is invalid"),
+        (
+            "[defects.left]\nactuation_share = 0.6\n[defects.right]\nactuation_share = 0.6",
+            "allowed a sum of exactly 1",
+        ),
+    ],
+)
 def test_absurd_physics_is_refused_with_the_reason(extra, fragment):
-    with pytest.raises(ScenarioError, match="my_case.toml") as info:
+    with pytest.raises(ScenarioError, match=r"my_case\.toml") as info:
         parse_scenario(GOOD + "\n" + extra, "my_case.toml")
     assert fragment in str(info.value)
 
@@ -88,13 +103,19 @@ def test_broken_toml_and_piecewise_mistakes():
     with pytest.raises(ScenarioError, match="'name'"):
         parse_scenario("duration_s = 1.0", "x.toml")
     with pytest.raises(ScenarioError, match="equal length"):
-        parse_scenario('name="x"\n[actuation]\nprofile="piecewise"\n'
-                       'left={times_s=[0.0,1.0],forces_n=[1.0]}\n'
-                       'right={times_s=[0.0],forces_n=[1.0]}', "x.toml")
+        parse_scenario(
+            'name="x"\n[actuation]\nprofile="piecewise"\n'
+            "left={times_s=[0.0,1.0],forces_n=[1.0]}\n"
+            "right={times_s=[0.0],forces_n=[1.0]}",
+            "x.toml",
+        )
     with pytest.raises(ScenarioError, match="strictly increasing"):
-        parse_scenario('name="x"\n[actuation]\nprofile="piecewise"\n'
-                       'left={times_s=[1.0,0.5],forces_n=[1.0,2.0]}\n'
-                       'right={times_s=[0.0],forces_n=[1.0]}', "x.toml")
+        parse_scenario(
+            'name="x"\n[actuation]\nprofile="piecewise"\n'
+            "left={times_s=[1.0,0.5],forces_n=[1.0,2.0]}\n"
+            "right={times_s=[0.0],forces_n=[1.0]}",
+            "x.toml",
+        )
 
 
 def test_unknown_scenario_and_unreadable_file(tmp_path):

@@ -50,8 +50,9 @@ class ShoeMetrics:
     @property
     def period_s(self) -> float:
         """First-to-second impact period T (nan with fewer than two impacts)."""
-        return float(self.onsets_s[1] - self.onsets_s[0]) if self.onsets_s.size > 1 else float(
-            "nan")
+        return (
+            float(self.onsets_s[1] - self.onsets_s[0]) if self.onsets_s.size > 1 else float("nan")
+        )
 
     @property
     def periods_s(self) -> np.ndarray:
@@ -96,9 +97,14 @@ def time_weighted_mean(t: np.ndarray, y: np.ndarray, start: float, end: float) -
     return float(np.trapezoid(yy, tt) / (tt[-1] - tt[0]))
 
 
-def shoe_metrics(block: SampleBlock, side: str, *, stop_time_s: float | None,
-                 window_s: tuple[float, float] = CONTACT_WINDOW_S, settle_s: float = SETTLE_S
-                 ) -> ShoeMetrics:
+def shoe_metrics(
+    block: SampleBlock,
+    side: str,
+    *,
+    stop_time_s: float | None,
+    window_s: tuple[float, float] = CONTACT_WINDOW_S,
+    settle_s: float = SETTLE_S,
+) -> ShoeMetrics:
     t = block.time_s
     eps = block[f"{side}_indentation_m"]
     fr = block.pivot_force_magnitude(side)
@@ -108,12 +114,15 @@ def shoe_metrics(block: SampleBlock, side: str, *, stop_time_s: float | None,
     for i0 in on_idx:
         later = sep_idx[sep_idx > i0 - 1]
         i1 = int(later[0]) if later.size else t.size - 1
-        window = fr[i0:i1 + 1] if i1 >= i0 else fr[i0:i0 + 1]
+        window = fr[i0 : i1 + 1] if i1 >= i0 else fr[i0 : i0 + 1]
         j = int(np.argmax(window))
         # refine only an interior maximum: at the window's edge the force jumps (onset)
         peaks.append(_refined_peak(fr, i0 + j) if 0 < j < window.size - 1 else float(window[j]))
-    actuation = float(np.interp(onsets[0], t, block[f"{side}_actuation_force_n"])) if (
-        onsets.size) else float("nan")
+    actuation = (
+        float(np.interp(onsets[0], t, block[f"{side}_actuation_force_n"]))
+        if (onsets.size)
+        else float("nan")
+    )
     end_impacting = float("nan")
     for t_on in onsets:
         nxt = seps[seps > t_on]
@@ -123,9 +132,14 @@ def shoe_metrics(block: SampleBlock, side: str, *, stop_time_s: float | None,
             break
     end = window_s[1] if stop_time_s is None else min(window_s[1], stop_time_s)
     contact = time_weighted_mean(t, fr, window_s[0], end)
-    return ShoeMetrics(onsets_s=onsets, separations_s=seps, impact_peaks_n=np.asarray(peaks),
-                       first_impact_actuation_n=actuation, end_of_impacting_s=end_impacting,
-                       contact_regime_force_n=contact)
+    return ShoeMetrics(
+        onsets_s=onsets,
+        separations_s=seps,
+        impact_peaks_n=np.asarray(peaks),
+        first_impact_actuation_n=actuation,
+        end_of_impacting_s=end_impacting,
+        contact_regime_force_n=contact,
+    )
 
 
 def stop_time_from_samples(block: SampleBlock) -> float | None:
@@ -134,8 +148,12 @@ def stop_time_from_samples(block: SampleBlock) -> float | None:
     return float(block.time_s[stopped[0]]) if stopped.size else None
 
 
-def event_metrics(block: SampleBlock, *, stop_time_s: float | None,
-                  window_s: tuple[float, float] = CONTACT_WINDOW_S) -> EventMetrics:
+def event_metrics(
+    block: SampleBlock,
+    *,
+    stop_time_s: float | None,
+    window_s: tuple[float, float] = CONTACT_WINDOW_S,
+) -> EventMetrics:
     """Metrics of both shoes. ``stop_time_s``: the located lock instant (or None)."""
     return EventMetrics(
         left=shoe_metrics(block, "left", stop_time_s=stop_time_s, window_s=window_s),

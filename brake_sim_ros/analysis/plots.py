@@ -7,8 +7,8 @@ from pathlib import Path
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
 
 MAX_POINTS = 20_000
 
@@ -22,8 +22,8 @@ def _decimate(t: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     tt = np.empty(2 * n)
     yy = np.empty(2 * n)
     for i in range(n):
-        seg = y[edges[i]:edges[i + 1]]
-        tseg = t[edges[i]:edges[i + 1]]
+        seg = y[edges[i] : edges[i + 1]]
+        tseg = t[edges[i] : edges[i + 1]]
         lo, hi = int(np.argmin(seg)), int(np.argmax(seg))
         a, b = sorted((lo, hi))
         tt[2 * i], yy[2 * i] = tseg[a], seg[a]
@@ -39,10 +39,17 @@ def plot_validation(base, runs, out_dir: Path) -> list[Path]:
 
     fig, ax = plt.subplots(figsize=(9, 4.5))
     for side, colour in (("left", "C3"), ("right", "C0")):
-        ax.plot(*_decimate(t, b.pivot_force_magnitude(side)), colour, lw=0.7,
-                label=f"{side} ({'leading' if side == 'left' else 'trailing'}) shoe")
-    ax.set(xlabel="time (s)", ylabel="|pivot force| (N)",
-           title="Symmetric brake: pivot force over the braking event")
+        ax.plot(
+            *_decimate(t, b.pivot_force_magnitude(side)),
+            colour,
+            lw=0.7,
+            label=f"{side} ({'leading' if side == 'left' else 'trailing'}) shoe",
+        )
+    ax.set(
+        xlabel="time (s)",
+        ylabel="|pivot force| (N)",
+        title="Symmetric brake: pivot force over the braking event",
+    )
     ax.legend()
     ax.grid(alpha=0.3)
     paths.append(_save(fig, out_dir / "pivot_forces_event.png"))
@@ -51,8 +58,7 @@ def plot_validation(base, runs, out_dir: Path) -> list[Path]:
     zoom = (t >= 0.2) & (t <= 0.35)
     for side, colour in (("left", "C3"), ("right", "C0")):
         ax.plot(t[zoom], b.pivot_force_magnitude(side)[zoom], colour, lw=0.8, label=f"{side} shoe")
-    ax.set(xlabel="time (s)", ylabel="|pivot force| (N)",
-           title="Symmetric brake: impacting regime")
+    ax.set(xlabel="time (s)", ylabel="|pivot force| (N)", title="Symmetric brake: impacting regime")
     ax.legend()
     ax.grid(alpha=0.3)
     paths.append(_save(fig, out_dir / "pivot_forces_impacting.png"))
@@ -63,10 +69,16 @@ def plot_validation(base, runs, out_dir: Path) -> list[Path]:
         zoom_b = (t >= 0.2) & (t <= 0.35)
         ts = s.time_s
         zoom_s = (ts >= 0.2) & (ts <= 0.35)
-        ax.plot(t[zoom_b], b.pivot_force_magnitude(run.shoe)[zoom_b], "0.6", lw=0.8,
-                label="symmetric")
-        ax.plot(ts[zoom_s], s.pivot_force_magnitude(run.shoe)[zoom_s], "C3", lw=0.8,
-                label=f"case {run.case}")
+        ax.plot(
+            t[zoom_b], b.pivot_force_magnitude(run.shoe)[zoom_b], "0.6", lw=0.8, label="symmetric"
+        )
+        ax.plot(
+            ts[zoom_s],
+            s.pivot_force_magnitude(run.shoe)[zoom_s],
+            "C3",
+            lw=0.8,
+            label=f"case {run.case}",
+        )
         ax.set_title(f"case {run.case}: {run.scenario} ({run.shoe} shoe)", fontsize=9)
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)

@@ -33,8 +33,11 @@ CASES: dict[str, tuple[str, str]] = {  # case number: (built-in scenario, shoe w
 PUBLISHED_STOP_TIME_S = 6.6
 PUBLISHED_FIRST_IMPACT_ACTUATION_N = 56.0
 PUBLISHED_CASES: dict[str, dict[str, float]] = {
-    "1": {"peak_fr_change_pct": -43.0, "period_change_pct": -23.6,
-          "first_impact_actuation_n": 42.0},
+    "1": {
+        "peak_fr_change_pct": -43.0,
+        "period_change_pct": -23.6,
+        "first_impact_actuation_n": 42.0,
+    },
     "5": {"peak_fr_change_pct": 79.7, "period_change_pct": 39.3},
     "7": {"peak_fr_change_pct": 11.1, "period_change_pct": 0.0},
 }
@@ -78,8 +81,9 @@ def figures(base: EventMetrics, runs: list[CaseRun]) -> dict:
         "symmetric": {
             "stop_time_s": base.stop_time_s,
             "first_impact_actuation_n": base.left.first_impact_actuation_n,
-            "first_impact_peak_fr_n": {s: base.shoe(s).first_impact_peak_n
-                                       for s in ("left", "right")},
+            "first_impact_peak_fr_n": {
+                s: base.shoe(s).first_impact_peak_n for s in ("left", "right")
+            },
             "period_s": {s: base.shoe(s).period_s for s in ("left", "right")},
             "contact_fr_n": {s: base.shoe(s).contact_regime_force_n for s in ("left", "right")},
         },
@@ -93,13 +97,16 @@ def figures(base: EventMetrics, runs: list[CaseRun]) -> dict:
             "shoe": shoe,
             "stop_time_s": m.stop_time_s,
             "first_impact_actuation_n": m.shoe(shoe).first_impact_actuation_n,
-            "peak_fr_change_pct": _pct(m.shoe(shoe).first_impact_peak_n,
-                                       base.shoe(shoe).first_impact_peak_n),
+            "peak_fr_change_pct": _pct(
+                m.shoe(shoe).first_impact_peak_n, base.shoe(shoe).first_impact_peak_n
+            ),
             "period_change_pct": _pct(m.shoe(shoe).period_s, base.shoe(shoe).period_s),
-            "contact_fr_change_pct": _pct(m.shoe(shoe).contact_regime_force_n,
-                                          base.shoe(shoe).contact_regime_force_n),
-            "other_shoe_peak_fr_change_pct": _pct(m.shoe(other).first_impact_peak_n,
-                                                  base.shoe(other).first_impact_peak_n),
+            "contact_fr_change_pct": _pct(
+                m.shoe(shoe).contact_regime_force_n, base.shoe(shoe).contact_regime_force_n
+            ),
+            "other_shoe_peak_fr_change_pct": _pct(
+                m.shoe(other).first_impact_peak_n, base.shoe(other).first_impact_peak_n
+            ),
             "other_shoe_period_change_pct": _pct(m.shoe(other).period_s, base.shoe(other).period_s),
         }
     return out
@@ -119,45 +126,90 @@ def checks(fig: dict, base: EventMetrics) -> list[Check]:
     sym = fig["symmetric"]
     out = []
     stop = sym["stop_time_s"] or math.nan
-    out.append(Check("symmetric: drum stop time", f"{PUBLISHED_STOP_TIME_S:.2f} s", f"{stop:.3f} s",
-                     f"{_pct(stop, PUBLISHED_STOP_TIME_S):+.2f} %",
-                     abs(stop / PUBLISHED_STOP_TIME_S - 1) <= BANDS["stop_time_rel"]))
+    out.append(
+        Check(
+            "symmetric: drum stop time",
+            f"{PUBLISHED_STOP_TIME_S:.2f} s",
+            f"{stop:.3f} s",
+            f"{_pct(stop, PUBLISHED_STOP_TIME_S):+.2f} %",
+            abs(stop / PUBLISHED_STOP_TIME_S - 1) <= BANDS["stop_time_rel"],
+        )
+    )
     fe = sym["first_impact_actuation_n"]
-    out.append(Check("symmetric: actuation force at first impact",
-                     f"{PUBLISHED_FIRST_IMPACT_ACTUATION_N:.0f} N", f"{fe:.1f} N",
-                     f"{_pct(fe, PUBLISHED_FIRST_IMPACT_ACTUATION_N):+.1f} %",
-                     abs(fe / PUBLISHED_FIRST_IMPACT_ACTUATION_N - 1)
-                     <= BANDS["first_impact_actuation_rel"]))
+    out.append(
+        Check(
+            "symmetric: actuation force at first impact",
+            f"{PUBLISHED_FIRST_IMPACT_ACTUATION_N:.0f} N",
+            f"{fe:.1f} N",
+            f"{_pct(fe, PUBLISHED_FIRST_IMPACT_ACTUATION_N):+.1f} %",
+            abs(fe / PUBLISHED_FIRST_IMPACT_ACTUATION_N - 1) <= BANDS["first_impact_actuation_rel"],
+        )
+    )
     lead, trail = sym["contact_fr_n"]["left"], sym["contact_fr_n"]["right"]
-    out.append(Check("symmetric: leading pivot force above trailing while the drum turns",
-                     "left > right", f"{lead:.0f} N > {trail:.0f} N", f"{lead - trail:+.0f} N",
-                     lead > trail))
+    out.append(
+        Check(
+            "symmetric: leading pivot force above trailing while the drum turns",
+            "left > right",
+            f"{lead:.0f} N > {trail:.0f} N",
+            f"{lead - trail:+.0f} N",
+            lead > trail,
+        )
+    )
     for case, pub in PUBLISHED_CASES.items():
         c = fig["cases"][case]
         if case in ("1", "5"):
-            for key, label in (("peak_fr_change_pct", "peak F_r change"),
-                               ("period_change_pct", "impact period change")):
-                ok = (math.copysign(1, c[key]) == math.copysign(1, pub[key])
-                      and abs(c[key] - pub[key]) <= BANDS["change_points"])
-                out.append(Check(f"case {case}: {label}", f"{pub[key]:+.1f} %", f"{c[key]:+.1f} %",
-                                 f"{c[key] - pub[key]:+.1f} points", ok))
+            for key, label in (
+                ("peak_fr_change_pct", "peak F_r change"),
+                ("period_change_pct", "impact period change"),
+            ):
+                ok = (
+                    math.copysign(1, c[key]) == math.copysign(1, pub[key])
+                    and abs(c[key] - pub[key]) <= BANDS["change_points"]
+                )
+                out.append(
+                    Check(
+                        f"case {case}: {label}",
+                        f"{pub[key]:+.1f} %",
+                        f"{c[key]:+.1f} %",
+                        f"{c[key] - pub[key]:+.1f} points",
+                        ok,
+                    )
+                )
         if "first_impact_actuation_n" in pub:
             v, p = c["first_impact_actuation_n"], pub["first_impact_actuation_n"]
-            out.append(Check(f"case {case}: actuation force at first impact", f"{p:.0f} N",
-                             f"{v:.1f} N", f"{_pct(v, p):+.1f} %",
-                             abs(v / p - 1) <= BANDS["first_impact_actuation_rel"]))
+            out.append(
+                Check(
+                    f"case {case}: actuation force at first impact",
+                    f"{p:.0f} N",
+                    f"{v:.1f} N",
+                    f"{_pct(v, p):+.1f} %",
+                    abs(v / p - 1) <= BANDS["first_impact_actuation_rel"],
+                )
+            )
         if case == "7":
             v = c["contact_fr_change_pct"]
             p = pub["peak_fr_change_pct"]
-            out.append(Check("case 7: contact-regime pivot force change (vs published +11.1 %)",
-                             f"{p:+.1f} %", f"{v:+.1f} %", f"{v - p:+.1f} points",
-                             abs(v - p) <= BANDS["case7_contact_points"]))
+            out.append(
+                Check(
+                    "case 7: contact-regime pivot force change (vs published +11.1 %)",
+                    f"{p:+.1f} %",
+                    f"{v:+.1f} %",
+                    f"{v - p:+.1f} points",
+                    abs(v - p) <= BANDS["case7_contact_points"],
+                )
+            )
     for case in ("1", "2", "3", "4", "5", "6"):
         c = fig["cases"][case]
         worst = max(abs(c["other_shoe_peak_fr_change_pct"]), abs(c["other_shoe_period_change_pct"]))
-        out.append(Check(f"case {case}: other shoe unchanged (first-impact peak and period)",
-                         "0 %", f"{worst:.2f} % (largest)", f"{worst:.2f} points",
-                         worst <= BANDS["other_shoe_pct"]))
+        out.append(
+            Check(
+                f"case {case}: other shoe unchanged (first-impact peak and period)",
+                "0 %",
+                f"{worst:.2f} % (largest)",
+                f"{worst:.2f} points",
+                worst <= BANDS["other_shoe_pct"],
+            )
+        )
     return out
 
 
@@ -176,8 +228,10 @@ def markdown(fig: dict, check_list: list[Check], base: EventMetrics) -> str:
         "|---|---|---|---|---|",
     ]
     for c in check_list:
-        lines.append(f"| {c.what} | {c.published} | {c.model} | {c.difference} |"
-                     f" {'yes' if c.passed else '**no**'} |")
+        lines.append(
+            f"| {c.what} | {c.published} | {c.model} | {c.difference} |"
+            f" {'yes' if c.passed else '**no**'} |"
+        )
     lines += [
         "",
         "## Symmetric brake",
@@ -188,8 +242,10 @@ def markdown(fig: dict, check_list: list[Check], base: EventMetrics) -> str:
     ]
     for s in ("left", "right"):
         m = base.shoe(s)
-        lines.append(f"| {s} | {m.first_impact_peak_n:.0f} | {1e3 * m.period_s:.2f} | {m.n_impacts}"
-                     f" | {m.end_of_impacting_s:.3f} | {m.contact_regime_force_n:.0f} |")
+        lines.append(
+            f"| {s} | {m.first_impact_peak_n:.0f} | {1e3 * m.period_s:.2f} | {m.n_impacts}"
+            f" | {m.end_of_impacting_s:.3f} | {m.contact_regime_force_n:.0f} |"
+        )
     lines += [
         "",
         f"Drum stop (brake locks): {sym['stop_time_s']:.3f} s.",
@@ -210,7 +266,8 @@ def markdown(fig: dict, check_list: list[Check], base: EventMetrics) -> str:
             f"| {case} | {c['scenario']} | {c['shoe']} | {c['first_impact_actuation_n']:.1f} |"
             f" {c['peak_fr_change_pct']:+.1f} %{pp} | {c['period_change_pct']:+.1f} %{pt} |"
             f" {c['contact_fr_change_pct']:+.1f} % | {c['other_shoe_peak_fr_change_pct']:+.2f} % /"
-            f" {c['other_shoe_period_change_pct']:+.2f} % | {stop} |")
+            f" {c['other_shoe_period_change_pct']:+.2f} % | {stop} |"
+        )
     lines += ["", NOTES, ""]
     return "\n".join(lines)
 
@@ -240,8 +297,9 @@ NOTES = """## Where the model departs from the study, and why
 """
 
 
-def write_report(out_dir: Path, json_path: Path | None = None,
-                 progress: Callable[[str], None] | None = None) -> tuple[dict, list[Check]]:
+def write_report(
+    out_dir: Path, json_path: Path | None = None, progress: Callable[[str], None] | None = None
+) -> tuple[dict, list[Check]]:
     """Run everything and write report.md, figures.json and the plots into ``out_dir``."""
     out_dir.mkdir(parents=True, exist_ok=True)
     base, runs = run_all(progress)

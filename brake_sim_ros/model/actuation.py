@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass
 
@@ -29,14 +30,16 @@ class ForceProfile:
         if len(t) == 0 or len(t) != len(f):
             raise ParameterError(
                 f"force profile has {len(t)} times and {len(f)} forces: allowed equal, non-zero"
-                " lengths")
+                " lengths"
+            )
         for i, (ti, fi) in enumerate(zip(t, f, strict=True)):
             if not (math.isfinite(ti) and math.isfinite(fi)):
                 raise ParameterError(f"force profile knot {i} ({ti}, {fi}): allowed finite values")
             if not 0.0 <= fi <= MAX_ACTUATION_FORCE_N:
                 raise ParameterError(
-                    f"force profile knot {i} force {fi} N: allowed 0 to {MAX_ACTUATION_FORCE_N} N")
-        if any(b <= a for a, b in zip(t, t[1:], strict=False)):
+                    f"force profile knot {i} force {fi} N: allowed 0 to {MAX_ACTUATION_FORCE_N} N"
+                )
+        if any(b <= a for a, b in itertools.pairwise(t)):
             raise ParameterError(f"force profile times {t}: allowed strictly increasing times")
 
     def __call__(self, time_s: float | np.ndarray) -> np.ndarray:
@@ -57,7 +60,9 @@ class ForceProfile:
     def ramp(cls, peak_n: float, start_s: float = 0.2, full_s: float = 0.7) -> ForceProfile:
         """The published history: zero until ``start_s``, linear to ``peak_n`` at ``full_s``."""
         if not full_s > start_s >= 0.0:
-            raise ParameterError(f"ramp start {start_s} s, full {full_s} s: allowed 0 <= start < full")
+            raise ParameterError(
+                f"ramp start {start_s} s, full {full_s} s: allowed 0 <= start < full"
+            )
         return cls((0.0, start_s, full_s), (0.0, 0.0, float(peak_n)))
 
 
@@ -80,5 +85,9 @@ class Actuation:
 
     def as_arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """(left times, left forces, right times, right forces) as float64 arrays."""
-        return (np.asarray(self.left.times_s, float), np.asarray(self.left.forces_n, float),
-                np.asarray(self.right.times_s, float), np.asarray(self.right.forces_n, float))
+        return (
+            np.asarray(self.left.times_s, float),
+            np.asarray(self.left.forces_n, float),
+            np.asarray(self.right.times_s, float),
+            np.asarray(self.right.forces_n, float),
+        )

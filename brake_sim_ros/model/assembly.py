@@ -69,14 +69,16 @@ def place_shoe(params: BrakeParameters, side: str, defect: ShoeDefect) -> ShoePl
     )
 
 
-def pack(params: BrakeParameters, defects: Defects, options: ModelOptions | None = None
-         ) -> np.ndarray:
+def pack(
+    params: BrakeParameters, defects: Defects, options: ModelOptions | None = None
+) -> np.ndarray:
     """Packed parameter vector for the kernels (layout.P_* / S_*), after validity checks."""
     options = options or ModelOptions()
     unknown = set(options.shoes) - set(SIDES)
     if unknown or not options.shoes:
-        raise ParameterError(f"model shoes {options.shoes!r}: allowed a non-empty subset of"
-                             f" {SIDES}")
+        raise ParameterError(
+            f"model shoes {options.shoes!r}: allowed a non-empty subset of {SIDES}"
+        )
     d = params.driveline
     p = np.zeros(L.N_PARAMS)
     p[L.P_FLYWHEEL_INERTIA] = d.flywheel_inertia_kg_m2
@@ -114,22 +116,30 @@ def pack(params: BrakeParameters, defects: Defects, options: ModelOptions | None
     return p
 
 
-def _check_shoe(params: BrakeParameters, side: str, defect: ShoeDefect, s: ShoePlacement,
-                p: np.ndarray, base: int) -> None:
+def _check_shoe(
+    params: BrakeParameters,
+    side: str,
+    defect: ShoeDefect,
+    s: ShoePlacement,
+    p: np.ndarray,
+    base: int,
+) -> None:
     lining_radius = s.lining_radius_m
     pivot_r = math.hypot(*s.pivot_xy_m)
     if pivot_r >= lining_radius:
         raise ParameterError(
             f"{side} pivot radius change {defect.pivot_radius_change_pct:+g} % puts the pivot"
             f" {pivot_r * 1e3:.1f} mm from the drum centre, at or beyond the lining surface"
-            f" ({lining_radius * 1e3:.1f} mm): allowed a pivot inside the shoe")
+            f" ({lining_radius * 1e3:.1f} mm): allowed a pivot inside the shoe"
+        )
     eps0 = indentation_at(p, base, math.radians(defect.initial_angle_deg))
     if eps0 >= 0.0:
         raise ParameterError(
             f"{side} shoe defects (pivot radius {defect.pivot_radius_change_pct:+g} %, initial"
             f" angle {defect.initial_angle_deg:+g} deg) start the lining {eps0 * 1e3:.3f} mm"
             " inside the drum: allowed only defects that leave the shoe clear of the drum at"
-            f" the start (running clearance {params.shoe.running_clearance_m * 1e3:.2f} mm)")
+            f" the start (running clearance {params.shoe.running_clearance_m * 1e3:.2f} mm)"
+        )
 
 
 def indentation_at(p: np.ndarray, base: int, theta_rad: float) -> float:

@@ -34,19 +34,25 @@ class ShoeDefect:
         if not -20.0 <= self.pivot_radius_change_pct <= 20.0:
             raise ParameterError(
                 f"defect pivot_radius_change_pct={self.pivot_radius_change_pct} is invalid:"
-                " allowed -20 to +20 %")
+                " allowed -20 to +20 %"
+            )
         if not -10.0 <= self.initial_angle_deg <= 10.0:
             raise ParameterError(
                 f"defect initial_angle_deg={self.initial_angle_deg} is invalid: allowed -10 to"
-                " +10 deg")
+                " +10 deg"
+            )
         if not 0.0 <= self.actuation_share <= 1.0:
             raise ParameterError(
-                f"defect actuation_share={self.actuation_share} is invalid: allowed 0 to 1")
+                f"defect actuation_share={self.actuation_share} is invalid: allowed 0 to 1"
+            )
 
     @property
     def is_healthy(self) -> bool:
-        return (self.pivot_radius_change_pct == 0.0 and self.initial_angle_deg == 0.0
-                and self.actuation_share == 0.5)
+        return (
+            self.pivot_radius_change_pct == 0.0
+            and self.initial_angle_deg == 0.0
+            and self.actuation_share == 0.5
+        )
 
     @property
     def actuation_gain(self) -> float:
@@ -77,7 +83,8 @@ class Defects:
             raise ParameterError(
                 f"defect actuation shares left={self.left.actuation_share} +"
                 f" right={self.right.actuation_share} = {total}: allowed a sum of exactly 1"
-                " (the total actuation force is kept)")
+                " (the total actuation force is kept)"
+            )
 
     @property
     def is_healthy(self) -> bool:

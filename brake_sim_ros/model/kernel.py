@@ -126,8 +126,7 @@ def shoe_eval(p, base, theta, omega, drum_speed, actuation, mode, locked=0):
             fn = 0.0  # a contact never pulls
     ff = 0.0
     if fn > 0.0 and not locked:
-        ff = p[L.P_FRICTION_COEFFICIENT] * fn * math.tanh(
-            v_slide / p[L.P_FRICTION_SMOOTHING_SPEED])
+        ff = p[L.P_FRICTION_COEFFICIENT] * fn * math.tanh(v_slide / p[L.P_FRICTION_SMOOTHING_SPEED])
     fcx = -fn * nx - ff * ny
     fcy = -fn * ny + ff * nx
     # actuation on the tip, fixed world direction
@@ -146,8 +145,22 @@ def shoe_eval(p, base, theta, omega, drum_speed, actuation, mode, locked=0):
         # Kelvin-Voigt loss: power into the contact minus the rate of elastic energy
         p_contact = (fn - p[L.P_CONTACT_STIFFNESS] * eps) * eps_dot
     p_act = fex * (-w * ty) + fey * (w * tx)
-    return (theta_ddot, drum_torque, eps, eps_dot, fn, ff, v_slide, xx, xy,
-            fcx + fex, fcy + fey, p_fric, p_contact, p_act)
+    return (
+        theta_ddot,
+        drum_torque,
+        eps,
+        eps_dot,
+        fn,
+        ff,
+        v_slide,
+        xx,
+        xy,
+        fcx + fex,
+        fcy + fey,
+        p_fric,
+        p_contact,
+        p_act,
+    )
 
 
 @njit(cache=True)
@@ -162,8 +175,7 @@ def evaluate(y, p, fe_left, fe_right, locked, mode_left, mode_right, dydt, out, 
     bl = L.P_SHOE_BASE
     br = L.P_SHOE_BASE + L.SHOE_STRIDE
     sl = shoe_eval(p, bl, y[L.Y_LEFT_ANGLE], y[L.Y_LEFT_SPEED], wd, fe_left, mode_left, locked)
-    sr = shoe_eval(p, br, y[L.Y_RIGHT_ANGLE], y[L.Y_RIGHT_SPEED], wd, fe_right, mode_right,
-                   locked)
+    sr = shoe_eval(p, br, y[L.Y_RIGHT_ANGLE], y[L.Y_RIGHT_SPEED], wd, fe_right, mode_right, locked)
     dydt[L.Y_LEFT_ANGLE] = y[L.Y_LEFT_SPEED]
     dydt[L.Y_RIGHT_ANGLE] = y[L.Y_RIGHT_SPEED]
     dydt[L.Y_LEFT_SPEED] = sl[0]
@@ -230,8 +242,19 @@ def evaluate_rows(ys, times, p, fe_left, fe_right, locked, out):
     """Recorded quantities for many states: ``ys`` (n, N_STATE) at ``times`` into ``out``."""
     dydt = np.empty(ys.shape[1])
     for i in range(ys.shape[0]):
-        evaluate(ys[i], p, fe_left[i], fe_right[i], locked, L.CONTACT_AUTO, L.CONTACT_AUTO, dydt,
-                 out, i, times[i])
+        evaluate(
+            ys[i],
+            p,
+            fe_left[i],
+            fe_right[i],
+            locked,
+            L.CONTACT_AUTO,
+            L.CONTACT_AUTO,
+            dydt,
+            out,
+            i,
+            times[i],
+        )
 
 
 @njit(cache=True)
@@ -283,8 +306,23 @@ def _update_regime(kstate, k_regime, k_flag, k_change, touching, step, settle_st
 
 
 @njit(cache=True)
-def rk4_advance(y, step0, dt, n_steps, p, tl, fl, tr, fr, gain_override, kstate, fstate,
-                settle_steps, record_every, out):
+def rk4_advance(
+    y,
+    step0,
+    dt,
+    n_steps,
+    p,
+    tl,
+    fl,
+    tr,
+    fr,
+    gain_override,
+    kstate,
+    fstate,
+    settle_steps,
+    record_every,
+    out,
+):
     """Advance ``y`` in place by ``n_steps`` classical RK4 steps of ``dt`` seconds.
 
     Time is ``(step0 + i) * dt`` exactly, so runs are reproducible bit for bit.
@@ -324,17 +362,33 @@ def rk4_advance(y, step0, dt, n_steps, p, tl, fl, tr, fr, gain_override, kstate,
         evaluate(y, p, fel, fer, locked, auto, auto, k1, out, rows if record else -1, t)
         if record:
             touching_l = 1 if out[rows, 9] > 0.0 and p[L.P_SHOE_BASE + L.S_ENABLED] > 0.0 else 0
-            touching_r = 1 if (out[rows, 10] > 0.0
-                               and p[L.P_SHOE_BASE + L.SHOE_STRIDE + L.S_ENABLED] > 0.0) else 0
+            touching_r = (
+                1
+                if (out[rows, 10] > 0.0 and p[L.P_SHOE_BASE + L.SHOE_STRIDE + L.S_ENABLED] > 0.0)
+                else 0
+            )
         else:
             # contact flags still drive the regime bookkeeping on unrecorded steps
             touching_l = 1 if _touching(p, L.P_SHOE_BASE, y[L.Y_LEFT_ANGLE]) else 0
-            touching_r = 1 if _touching(p, L.P_SHOE_BASE + L.SHOE_STRIDE,
-                                        y[L.Y_RIGHT_ANGLE]) else 0
-        _update_regime(kstate, L.K_LEFT_REGIME, L.K_LEFT_IN_CONTACT,
-                       L.K_LEFT_LAST_CHANGE_STEP, touching_l, step, settle_steps)
-        _update_regime(kstate, L.K_RIGHT_REGIME, L.K_RIGHT_IN_CONTACT,
-                       L.K_RIGHT_LAST_CHANGE_STEP, touching_r, step, settle_steps)
+            touching_r = 1 if _touching(p, L.P_SHOE_BASE + L.SHOE_STRIDE, y[L.Y_RIGHT_ANGLE]) else 0
+        _update_regime(
+            kstate,
+            L.K_LEFT_REGIME,
+            L.K_LEFT_IN_CONTACT,
+            L.K_LEFT_LAST_CHANGE_STEP,
+            touching_l,
+            step,
+            settle_steps,
+        )
+        _update_regime(
+            kstate,
+            L.K_RIGHT_REGIME,
+            L.K_RIGHT_IN_CONTACT,
+            L.K_RIGHT_LAST_CHANGE_STEP,
+            touching_r,
+            step,
+            settle_steps,
+        )
         if record:
             o = out[rows]
             rl = kstate[L.K_LEFT_REGIME]

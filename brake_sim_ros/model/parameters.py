@@ -48,16 +48,31 @@ class DrivelineParameters:
 
     def __post_init__(self) -> None:
         _finite(self)
-        _require(self.flywheel_inertia_kg_m2 > 0, "flywheel_inertia_kg_m2",
-                 self.flywheel_inertia_kg_m2, "> 0")
-        _require(self.drum_inertia_kg_m2 > 0, "drum_inertia_kg_m2", self.drum_inertia_kg_m2,
-                 "> 0")
-        _require(self.coupling_stiffness_n_m_per_rad > 0, "coupling_stiffness_n_m_per_rad",
-                 self.coupling_stiffness_n_m_per_rad, "> 0")
-        _require(self.coupling_damping_n_m_s_per_rad >= 0, "coupling_damping_n_m_s_per_rad",
-                 self.coupling_damping_n_m_s_per_rad, ">= 0")
-        _require(abs(self.initial_speed_rad_s) <= 400.0, "initial_speed_rad_s",
-                 self.initial_speed_rad_s, "|speed| <= 400 rad/s (about 260 km/h)")
+        _require(
+            self.flywheel_inertia_kg_m2 > 0,
+            "flywheel_inertia_kg_m2",
+            self.flywheel_inertia_kg_m2,
+            "> 0",
+        )
+        _require(self.drum_inertia_kg_m2 > 0, "drum_inertia_kg_m2", self.drum_inertia_kg_m2, "> 0")
+        _require(
+            self.coupling_stiffness_n_m_per_rad > 0,
+            "coupling_stiffness_n_m_per_rad",
+            self.coupling_stiffness_n_m_per_rad,
+            "> 0",
+        )
+        _require(
+            self.coupling_damping_n_m_s_per_rad >= 0,
+            "coupling_damping_n_m_s_per_rad",
+            self.coupling_damping_n_m_s_per_rad,
+            ">= 0",
+        )
+        _require(
+            abs(self.initial_speed_rad_s) <= 400.0,
+            "initial_speed_rad_s",
+            self.initial_speed_rad_s,
+            "|speed| <= 400 rad/s (about 260 km/h)",
+        )
 
 
 @dataclass(frozen=True)
@@ -107,29 +122,59 @@ class ShoeGeometry:
         _finite(self)
         r = self.drum_radius_m
         _require(0.05 <= r <= 0.5, "drum_radius_m", r, "0.05 to 0.5 m")
-        _require(0.2 * r <= self.pivot_radius_m < r, "pivot_radius_m", self.pivot_radius_m,
-                 f"0.2 x drum radius to < drum radius ({0.2 * r:.4g} to {r:.4g} m)")
-        _require(0.0 < self.running_clearance_m < 0.1 * r, "running_clearance_m",
-                 self.running_clearance_m, f"> 0 and < 10 % of the drum radius ({0.1 * r:.4g} m)")
-        _require(90.0 < self.lining_start_deg < self.lining_end_deg < 270.0, "lining_start_deg",
-                 (self.lining_start_deg, self.lining_end_deg),
-                 "90 < lining_start_deg < lining_end_deg < 270 (the left half of the drum)")
-        _require(self.lining_end_deg - self.lining_start_deg <= 150.0, "lining_end_deg",
-                 self.lining_end_deg, "an arc of at most 150 deg")
-        _require(0.005 <= self.lining_width_m <= 0.2, "lining_width_m", self.lining_width_m,
-                 "5 to 200 mm")
-        _require(math.hypot(self.tip_x_m, self.tip_y_m) < r, "tip_x_m/tip_y_m",
-                 (self.tip_x_m, self.tip_y_m), "a point inside the drum")
+        _require(
+            0.2 * r <= self.pivot_radius_m < r,
+            "pivot_radius_m",
+            self.pivot_radius_m,
+            f"0.2 x drum radius to < drum radius ({0.2 * r:.4g} to {r:.4g} m)",
+        )
+        _require(
+            0.0 < self.running_clearance_m < 0.1 * r,
+            "running_clearance_m",
+            self.running_clearance_m,
+            f"> 0 and < 10 % of the drum radius ({0.1 * r:.4g} m)",
+        )
+        _require(
+            90.0 < self.lining_start_deg < self.lining_end_deg < 270.0,
+            "lining_start_deg",
+            (self.lining_start_deg, self.lining_end_deg),
+            "90 < lining_start_deg < lining_end_deg < 270 (the left half of the drum)",
+        )
+        _require(
+            self.lining_end_deg - self.lining_start_deg <= 150.0,
+            "lining_end_deg",
+            self.lining_end_deg,
+            "an arc of at most 150 deg",
+        )
+        _require(
+            0.005 <= self.lining_width_m <= 0.2,
+            "lining_width_m",
+            self.lining_width_m,
+            "5 to 200 mm",
+        )
+        _require(
+            math.hypot(self.tip_x_m, self.tip_y_m) < r,
+            "tip_x_m/tip_y_m",
+            (self.tip_x_m, self.tip_y_m),
+            "a point inside the drum",
+        )
         _require(self.mass_kg >= 0, "mass_kg", self.mass_kg, ">= 0")
-        _require(self.inertia_about_pivot_kg_m2 > 0, "inertia_about_pivot_kg_m2",
-                 self.inertia_about_pivot_kg_m2, "> 0")
+        _require(
+            self.inertia_about_pivot_kg_m2 > 0,
+            "inertia_about_pivot_kg_m2",
+            self.inertia_about_pivot_kg_m2,
+            "> 0",
+        )
         gx = self.mass_centre_x_m - self.pivot_xy_m[0]
         gy = self.mass_centre_y_m - self.pivot_xy_m[1]
         arm2 = gx * gx + gy * gy
-        _require(self.inertia_about_pivot_kg_m2 >= self.mass_kg * arm2,
-                 "inertia_about_pivot_kg_m2", self.inertia_about_pivot_kg_m2,
-                 f">= mass x (mass-centre distance from pivot)^2 = {self.mass_kg * arm2:.4g}"
-                 " kg m^2 (parallel-axis theorem)")
+        _require(
+            self.inertia_about_pivot_kg_m2 >= self.mass_kg * arm2,
+            "inertia_about_pivot_kg_m2",
+            self.inertia_about_pivot_kg_m2,
+            f">= mass x (mass-centre distance from pivot)^2 = {self.mass_kg * arm2:.4g}"
+            " kg m^2 (parallel-axis theorem)",
+        )
 
     @property
     def pivot_xy_m(self) -> tuple[float, float]:
@@ -156,18 +201,20 @@ class ContactParameters:
     def __post_init__(self) -> None:
         _finite(self)
         for name in ("drum_youngs_modulus_pa", "shoe_youngs_modulus_pa"):
-            _require(1e6 <= getattr(self, name) <= 1e13, name, getattr(self, name),
-                     "1e6 to 1e13 Pa")
+            _require(
+                1e6 <= getattr(self, name) <= 1e13, name, getattr(self, name), "1e6 to 1e13 Pa"
+            )
         for name in ("drum_poisson_ratio", "shoe_poisson_ratio"):
             _require(0.0 <= getattr(self, name) < 0.5, name, getattr(self, name), "0 <= nu < 0.5")
-        _require(self.damping_n_s_per_m >= 0, "damping_n_s_per_m", self.damping_n_s_per_m,
-                 ">= 0")
+        _require(self.damping_n_s_per_m >= 0, "damping_n_s_per_m", self.damping_n_s_per_m, ">= 0")
 
     @property
     def equivalent_modulus_pa(self) -> float:
         """E_eq = [(1 - nu_d^2)/E_d + (1 - nu_s^2)/E_s]^-1, Pa."""
-        return 1.0 / ((1.0 - self.drum_poisson_ratio**2) / self.drum_youngs_modulus_pa
-                      + (1.0 - self.shoe_poisson_ratio**2) / self.shoe_youngs_modulus_pa)
+        return 1.0 / (
+            (1.0 - self.drum_poisson_ratio**2) / self.drum_youngs_modulus_pa
+            + (1.0 - self.shoe_poisson_ratio**2) / self.shoe_youngs_modulus_pa
+        )
 
 
 @dataclass(frozen=True)
@@ -185,8 +232,12 @@ class FrictionParameters:
     def __post_init__(self) -> None:
         _finite(self)
         _require(0.0 <= self.coefficient <= 1.0, "coefficient", self.coefficient, "0 to 1")
-        _require(1e-5 <= self.smoothing_speed_m_s <= 1.0, "smoothing_speed_m_s",
-                 self.smoothing_speed_m_s, "1e-5 to 1 m/s")
+        _require(
+            1e-5 <= self.smoothing_speed_m_s <= 1.0,
+            "smoothing_speed_m_s",
+            self.smoothing_speed_m_s,
+            "1e-5 to 1 m/s",
+        )
 
 
 @dataclass(frozen=True)

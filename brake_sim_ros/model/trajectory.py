@@ -56,8 +56,11 @@ class SampleBlock:
     def concatenate(blocks: list[SampleBlock]) -> SampleBlock:
         if not blocks:
             raise ValueError("no sample blocks to concatenate")
-        return SampleBlock(np.concatenate([b.data for b in blocks]), blocks[0].first_index,
-                           blocks[0].sample_period_s)
+        return SampleBlock(
+            np.concatenate([b.data for b in blocks]),
+            blocks[0].first_index,
+            blocks[0].sample_period_s,
+        )
 
     def as_dict(self) -> dict[str, np.ndarray]:
         return {name: self.data[:, i] for i, name in enumerate(L.COLUMNS)}

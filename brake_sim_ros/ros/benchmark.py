@@ -87,8 +87,11 @@ def _latency(client: SimClient, count: int) -> list[float]:
             total = state.left_actuation_force_n + state.right_actuation_force_n
             return abs(total - 2.0 * force) < 1e-6
 
-        client.wait_for(lambda: any(shows(s) for s in client.rx.states), 5.0,
-                        f"state with the commanded force {force} N")
+        client.wait_for(
+            lambda: any(shows(s) for s in client.rx.states),
+            5.0,
+            f"state with the commanded force {force} N",
+        )
         k = next(j for j, s in enumerate(client.rx.states) if shows(s))
         out.append(client.rx.state_times[k] - t0)
         client.spin_for(0.3)  # past the command timeout: back to the profile
@@ -97,16 +100,18 @@ def _latency(client: SimClient, count: int) -> list[float]:
 
 def _sustained(factor: float, check: dict) -> bool:
     """Within 2 % of the factor, with deadline misses on fewer than 1 % of the chunks."""
-    return (check["rtf"] >= 0.98 * factor
-            and check["deadline_misses"] <= 0.01 * max(1, check["chunks"]))
+    return check["rtf"] >= 0.98 * factor and check["deadline_misses"] <= 0.01 * max(
+        1, check["chunks"]
+    )
 
 
 def run(duration_s: float, scenario: str, afap_s: float, latency_count: int) -> str:
     load_before = os.getloadavg()[0]  # other work on the machine skews every figure
     domain = domain_id_for(90)
     log = Path(tempfile.mkdtemp(prefix="brake_sim_bench_")) / "node.log"
-    node = NodeProcess.start(["--scenario", scenario, "--duration", "86400"], domain_id=domain,
-                             log_path=log)
+    node = NodeProcess.start(
+        ["--scenario", scenario, "--duration", "86400"], domain_id=domain, log_path=log
+    )
     client = SimClient(domain, keep_chunks=False)
     try:
         client.wait_for_node(60.0)
@@ -155,21 +160,35 @@ def run(duration_s: float, scenario: str, afap_s: float, latency_count: int) -> 
             f"  real-time factor {factor:g} for {check['wall_s']:.1f} s: achieved"
             f" {check['rtf']:.2f}, deadline misses {check['deadline_misses']} of"
             f" {check['chunks']} chunks, slips {check['slips']}, CPU {check['cpu_pct']:.0f} %:"
-            f" {verdict}")
+            f" {verdict}"
+        )
     best = max((f for f, c in checks if _sustained(f, c)), default=None)
-    lines.append("  highest sustained real-time factor with every topic published: "
-                 + (f"{best:g}" if best is not None else "below the last factor tried"))
+    lines.append(
+        "  highest sustained real-time factor with every topic published: "
+        + (f"{best:g}" if best is not None else "below the last factor tried")
+    )
     return "\n".join(lines)
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m brake_sim_ros.ros.benchmark",
-                                     description=__doc__.split("\n\n")[0])
-    parser.add_argument("--duration", type=float, default=60.0, metavar="S",
-                        help="wall seconds of the real-time run (default 60)")
+    parser = argparse.ArgumentParser(
+        prog="python -m brake_sim_ros.ros.benchmark", description=__doc__.split("\n\n")[0]
+    )
+    parser.add_argument(
+        "--duration",
+        type=float,
+        default=60.0,
+        metavar="S",
+        help="wall seconds of the real-time run (default 60)",
+    )
     parser.add_argument("--scenario", default="symmetric")
-    parser.add_argument("--afap-seconds", type=float, default=5.0, metavar="S",
-                        help="wall seconds of the as-fast-as-possible and check runs")
+    parser.add_argument(
+        "--afap-seconds",
+        type=float,
+        default=5.0,
+        metavar="S",
+        help="wall seconds of the as-fast-as-possible and check runs",
+    )
     parser.add_argument("--latency-samples", type=int, default=20)
     args = parser.parse_args(argv)
     print(run(args.duration, args.scenario, args.afap_seconds, args.latency_samples), flush=True)

@@ -66,8 +66,7 @@ def check_command(left_n: float, right_n: float, max_force_n: float) -> str | No
         if value < 0.0:
             return f"{side}_force_n={value:g} N is negative (a shoe is pushed, never pulled)"
         if value > max_force_n:
-            return (f"{side}_force_n={value:g} N exceeds max_actuation_force_n ="
-                    f" {max_force_n:g} N")
+            return f"{side}_force_n={value:g} N exceeds max_actuation_force_n = {max_force_n:g} N"
     return None
 
 
@@ -83,8 +82,10 @@ class CommandPolicy:
         if not (math.isfinite(self.timeout_s) and self.timeout_s > 0):
             raise ValueError(f"command_timeout_s={self.timeout_s!r}: allowed a finite time > 0 s")
         if not (math.isfinite(self.ramp_rate_n_per_s) and self.ramp_rate_n_per_s > 0):
-            raise ValueError(f"command_ramp_rate_n_per_s={self.ramp_rate_n_per_s!r}: allowed a"
-                             " finite rate > 0 N/s")
+            raise ValueError(
+                f"command_ramp_rate_n_per_s={self.ramp_rate_n_per_s!r}: allowed a"
+                " finite rate > 0 N/s"
+            )
 
 
 @dataclass(frozen=True)

@@ -27,8 +27,12 @@ from brake_sim_ros.model.trajectory import SampleBlock
 FRAME_ID = "brake_backing_plate"
 JOINT_NAMES = ("flywheel", "drum", "left_shoe", "right_shoe")
 _JOINT_ANGLES = ("flywheel_angle_rad", "drum_angle_rad", "left_angle_rad", "right_angle_rad")
-_JOINT_SPEEDS = ("flywheel_speed_rad_s", "drum_speed_rad_s", "left_speed_rad_s",
-                 "right_speed_rad_s")
+_JOINT_SPEEDS = (
+    "flywheel_speed_rad_s",
+    "drum_speed_rad_s",
+    "left_speed_rad_s",
+    "right_speed_rad_s",
+)
 _NS_PER_S = 1_000_000_000
 
 
@@ -71,8 +75,10 @@ def pivot_force_chunk(block: SampleBlock) -> PivotForceChunk:
         header=header(stamp_ns(block.first_index, block.sample_period_s)),
         first_sample_index=int(block.first_index),
         sample_rate_hz=sample_rate_hz(block.sample_period_s),
-        left_fx_n=_doubles(lx), left_fy_n=_doubles(ly),
-        right_fx_n=_doubles(rx), right_fy_n=_doubles(ry),
+        left_fx_n=_doubles(lx),
+        left_fy_n=_doubles(ly),
+        right_fx_n=_doubles(rx),
+        right_fy_n=_doubles(ry),
         left_magnitude_n=_doubles(np.hypot(lx, ly)),
         right_magnitude_n=_doubles(np.hypot(rx, ry)),
     )
@@ -145,8 +151,14 @@ def clock(ns: int) -> Clock:
     return Clock(clock=time_msg(ns))
 
 
-def defect_state(*, scenario: str, params: BrakeParameters, defects: Defects,
-                 initial_angles_deg: tuple[float, float], ns: int) -> DefectState:
+def defect_state(
+    *,
+    scenario: str,
+    params: BrakeParameters,
+    defects: Defects,
+    initial_angles_deg: tuple[float, float],
+    ns: int,
+) -> DefectState:
     """Ground truth of the defects in force from simulated time ``ns`` on.
 
     Args:

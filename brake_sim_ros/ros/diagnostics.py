@@ -86,16 +86,18 @@ def _level(view: RunView, stats: RunStats, new_misses: int) -> tuple[bytes, str]
         return DiagnosticStatus.OK, f"finished at t = {view.sim_time_s:.6f} s"
     target = view.target_real_time_factor
     if target == 0.0:
-        return DiagnosticStatus.OK, (f"running as fast as possible,"
-                                     f" {view.measured_real_time_factor:.2f}x real time")
+        return DiagnosticStatus.OK, (
+            f"running as fast as possible, {view.measured_real_time_factor:.2f}x real time"
+        )
     text = f"running at {view.measured_real_time_factor:.3f}x real time (target {target:g}x)"
     if new_misses:
         return DiagnosticStatus.WARN, f"{text}; {new_misses} deadline misses in the last period"
     return DiagnosticStatus.OK, text
 
 
-def diagnostic_array(view: RunView, stats: RunStats, *, ns: int, new_misses: int
-                     ) -> DiagnosticArray:
+def diagnostic_array(
+    view: RunView, stats: RunStats, *, ns: int, new_misses: int
+) -> DiagnosticArray:
     """One DiagnosticStatus named ``<node>: simulation``; stamp = simulated time ``ns``."""
     level, message = _level(view, stats, new_misses)
     values = {
@@ -130,9 +132,12 @@ def diagnostic_array(view: RunView, stats: RunStats, *, ns: int, new_misses: int
         "failure": view.message if view.state == "failed" else "",
     }
     status = DiagnosticStatus(
-        level=level, name=f"{view.node_name}: simulation", message=message,
+        level=level,
+        name=f"{view.node_name}: simulation",
+        message=message,
         hardware_id=HARDWARE_ID,
-        values=[KeyValue(key=k, value=v) for k, v in values.items()])
+        values=[KeyValue(key=k, value=v) for k, v in values.items()],
+    )
     return DiagnosticArray(header=header(ns), status=[status])
 
 
@@ -142,8 +147,11 @@ def summary(view: RunView, stats: RunStats) -> str:
         stop = "the drum had not stopped"
     else:
         stop = f"the drum stopped at t = {view.stop_time_s:.4f} s"
-    target = ("as fast as possible" if view.target_real_time_factor == 0
-              else f"target {view.target_real_time_factor:g}")
+    target = (
+        "as fast as possible"
+        if view.target_real_time_factor == 0
+        else f"target {view.target_real_time_factor:g}"
+    )
     failed = f" The simulation FAILED: {view.message}." if view.state == "failed" else ""
     return (
         f"brake_sim: scenario '{view.scenario}' ended at simulated time"

@@ -63,13 +63,17 @@ class NodeProcess:
     log_path: Path
 
     @classmethod
-    def start(cls, args: list[str], *, domain_id: int, log_path: Path,
-              python: str = sys.executable) -> NodeProcess:
+    def start(
+        cls, args: list[str], *, domain_id: int, log_path: Path, python: str = sys.executable
+    ) -> NodeProcess:
         log_path.parent.mkdir(parents=True, exist_ok=True)
         with log_path.open("w") as log:
-            proc = subprocess.Popen([python, "-m", "brake_sim_ros.ros.node", *args],
-                                    stdout=log, stderr=subprocess.STDOUT,
-                                    env=ros_environment(domain_id))
+            proc = subprocess.Popen(
+                [python, "-m", "brake_sim_ros.ros.node", *args],
+                stdout=log,
+                stderr=subprocess.STDOUT,
+                env=ros_environment(domain_id),
+            )
         return cls(proc, log_path)
 
     @property
@@ -121,8 +125,14 @@ class SimClient:
         keep_chunks: store every chunk (False: only count them, for long runs).
     """
 
-    def __init__(self, domain_id: int, *, stream_qos: QoSProfile = qos.STREAM_CONSUMER,
-                 keep_chunks: bool = True, node: str = NODE) -> None:
+    def __init__(
+        self,
+        domain_id: int,
+        *,
+        stream_qos: QoSProfile = qos.STREAM_CONSUMER,
+        keep_chunks: bool = True,
+        node: str = NODE,
+    ) -> None:
         self.context = Context()
         rclpy.init(context=self.context, domain_id=domain_id)
         self.node = rclpy.create_node("brake_sim_client", context=self.context)
@@ -138,18 +148,19 @@ class SimClient:
         self._stream_topics = (f"{node}/pivot_forces", f"{node}/state", f"{node}/joint_states")
         n.create_subscription(PivotForceChunk, f"{node}/pivot_forces", self._on_chunk, stream_qos)
         n.create_subscription(BrakeState, f"{node}/state", self._on_state, stream_qos)
-        n.create_subscription(JointState, f"{node}/joint_states", self.rx.joints.append,
-                              stream_qos)
+        n.create_subscription(JointState, f"{node}/joint_states", self.rx.joints.append, stream_qos)
         n.create_subscription(DefectState, f"{node}/defects", self.rx.defects.append, qos.LATCHED)
         n.create_subscription(Clock, "/clock", self.rx.clocks.append, qos.CLOCK)
-        n.create_subscription(DiagnosticArray, "/diagnostics", self.rx.diagnostics.append,
-                              qos.DIAGNOSTICS)
+        n.create_subscription(
+            DiagnosticArray, "/diagnostics", self.rx.diagnostics.append, qos.DIAGNOSTICS
+        )
         self.actuation = n.create_publisher(ActuationCommand, f"{node}/actuation", qos.STREAM)
         self._step = n.create_client(StepSimulation, f"{node}/step")
         self._reset = n.create_client(ResetSimulation, f"{node}/reset")
         self._set = n.create_client(SetParameters, f"{node}/set_parameters")
-        self._set_atomic = n.create_client(SetParametersAtomically,
-                                           f"{node}/set_parameters_atomically")
+        self._set_atomic = n.create_client(
+            SetParametersAtomically, f"{node}/set_parameters_atomically"
+        )
         self._get = n.create_client(GetParameters, f"{node}/get_parameters")
 
     # -- receiving ------------------------------------------------------------------------
@@ -204,11 +215,17 @@ class SimClient:
         self.wait_for(lambda: bool(self.rx.defects), timeout_s, "DefectState from the node")
         for client in (self._step, self._reset, self._set, self._set_atomic, self._get):
             self.wait_for(client.service_is_ready, timeout_s, f"service {client.srv_name}")
-        self.wait_for(lambda: self.node.count_subscribers(self.actuation.topic_name) > 0,
-                      timeout_s, "subscriber of the actuation topic")
+        self.wait_for(
+            lambda: self.node.count_subscribers(self.actuation.topic_name) > 0,
+            timeout_s,
+            "subscriber of the actuation topic",
+        )
         for topic in self._stream_topics:
-            self.wait_for(lambda topic=topic: self.node.count_publishers(topic) > 0,
-                          timeout_s, f"publisher of {topic}")
+            self.wait_for(
+                lambda topic=topic: self.node.count_publishers(topic) > 0,
+                timeout_s,
+                f"publisher of {topic}",
+            )
 
     def diagnostics(self) -> dict[str, str]:
         """Key-values of the newest /diagnostics status of the node ({} if none yet)."""
@@ -226,8 +243,9 @@ class SimClient:
 
     # -- acting ------------------------------------------------------------------------------
     def command(self, left_n: float, right_n: float) -> None:
-        self.actuation.publish(ActuationCommand(left_force_n=float(left_n),
-                                                right_force_n=float(right_n)))
+        self.actuation.publish(
+            ActuationCommand(left_force_n=float(left_n), right_force_n=float(right_n))
+        )
 
     def _call(self, client, request, timeout_s: float):
         future = client.call_async(request)
@@ -235,42 +253,58 @@ class SimClient:
         return future.result()
 
     def step(self, steps: int = 0, duration_s: float = 0.0, timeout_s: float = 30.0):
-        return self._call(self._step, StepSimulation.Request(steps=steps, duration_s=duration_s),
-                          timeout_s)
+        return self._call(
+            self._step, StepSimulation.Request(steps=steps, duration_s=duration_s), timeout_s
+        )
 
     def reset(self, scenario: str = "", seed: int = -1, timeout_s: float = 30.0):
-        return self._call(self._reset, ResetSimulation.Request(scenario=scenario, seed=seed),
-                          timeout_s)
+        return self._call(
+            self._reset, ResetSimulation.Request(scenario=scenario, seed=seed), timeout_s
+        )
 
     def set_parameters(self, values: dict, timeout_s: float = 10.0) -> list[SetParametersResult]:
         """One SetParameters request; one result per parameter, in order."""
         request = SetParameters.Request(
-            parameters=[Parameter(k, value=v).to_parameter_msg() for k, v in values.items()])
+            parameters=[Parameter(k, value=v).to_parameter_msg() for k, v in values.items()]
+        )
         return list(self._call(self._set, request, timeout_s).results)
 
     def set_parameter(self, name: str, value, timeout_s: float = 10.0) -> SetParametersResult:
         return self.set_parameters({name: value}, timeout_s)[0]
 
-    def set_parameters_atomically(self, values: dict, timeout_s: float = 10.0
-                                  ) -> SetParametersResult:
+    def set_parameters_atomically(
+        self, values: dict, timeout_s: float = 10.0
+    ) -> SetParametersResult:
         request = SetParametersAtomically.Request(
-            parameters=[Parameter(k, value=v).to_parameter_msg() for k, v in values.items()])
+            parameters=[Parameter(k, value=v).to_parameter_msg() for k, v in values.items()]
+        )
         return self._call(self._set_atomic, request, timeout_s).result
 
     def get_parameters(self, names: list[str], timeout_s: float = 10.0) -> dict:
         response = self._call(self._get, GetParameters.Request(names=names), timeout_s)
-        return {name: Parameter.from_parameter_msg(_named(name, value)).value
-                for name, value in zip(names, response.values, strict=True)}
+        return {
+            name: Parameter.from_parameter_msg(_named(name, value)).value
+            for name, value in zip(names, response.values, strict=True)
+        }
 
     # -- collected data ------------------------------------------------------------------------
     def chunk_arrays(self) -> dict[str, np.ndarray]:
         """Received chunks concatenated: first indices checked contiguous by the caller."""
-        names = ("left_fx_n", "left_fy_n", "right_fx_n", "right_fy_n", "left_magnitude_n",
-                 "right_magnitude_n")
-        out = {name: np.concatenate([np.asarray(getattr(c, name)) for c in self.rx.chunks])
-               for name in names}
-        out["index"] = np.concatenate([
-            c.first_sample_index + np.arange(len(c.left_fx_n)) for c in self.rx.chunks])
+        names = (
+            "left_fx_n",
+            "left_fy_n",
+            "right_fx_n",
+            "right_fy_n",
+            "left_magnitude_n",
+            "right_magnitude_n",
+        )
+        out = {
+            name: np.concatenate([np.asarray(getattr(c, name)) for c in self.rx.chunks])
+            for name in names
+        }
+        out["index"] = np.concatenate(
+            [c.first_sample_index + np.arange(len(c.left_fx_n)) for c in self.rx.chunks]
+        )
         return out
 
     def close(self) -> None:
@@ -281,4 +315,5 @@ class SimClient:
 
 def _named(name: str, value):
     from rcl_interfaces.msg import Parameter as ParameterMsg
+
     return ParameterMsg(name=name, value=value)

@@ -99,27 +99,43 @@ class BrakeSimNode(Node):
         self._model_names = self._declare_model(self.scenario)
         # the scenario's values and any --ros-args overrides, checked by the core here
         values = self._model_values()
-        scenario_values = ros_params.model_values(self.scenario.setup.params,
-                                                  self.scenario.setup.defects)
+        scenario_values = ros_params.model_values(
+            self.scenario.setup.params, self.scenario.setup.defects
+        )
         overridden = {k: v for k, v in values.items() if v != scenario_values[k]}
-        implied = {k: v for k, v in ros_params.complete_actuation_share(overridden).items()
-                   if k not in overridden}
+        implied = {
+            k: v
+            for k, v in ros_params.complete_actuation_share(overridden).items()
+            if k not in overridden
+        }
         params, defects = ros_params.build_model({**values, **implied})
         setup = dataclasses.replace(self.scenario.setup, params=params, defects=defects)
         self._stepper = self._make_stepper(setup, self.scenario.solver.dt_s)
         self._run_initial_angles = self._initial_angles(setup)
-        self._double_names = {name for name in self._model_names + list(self._run_specs)
-                              if isinstance(self.get_parameter(name).value, float)}
-        self._set_internal({**implied, "duration_s": self._duration_s(),
-                            "max_actuation_force_n": self._stepper.max_actuation_n})
+        self._double_names = {
+            name
+            for name in self._model_names + list(self._run_specs)
+            if isinstance(self.get_parameter(name).value, float)
+        }
+        self._set_internal(
+            {
+                **implied,
+                "duration_s": self._duration_s(),
+                "max_actuation_force_n": self._stepper.max_actuation_n,
+            }
+        )
         self._exit_at_end = bool(self._param("exit_at_end"))
         try:
             policy = self._policy_from_params()
         except ValueError as exc:  # a bad --ros-args override
             raise ParameterError(str(exc)) from None
         self._planner = ActuationPlanner(self._stepper.dt_s, policy)
-        self._pacer = Pacer(self._stepper.dt_s, real_time_factor=self._param("real_time_factor"),
-                            paused=self._param("paused"), max_lag_s=MAX_LAG_S)
+        self._pacer = Pacer(
+            self._stepper.dt_s,
+            real_time_factor=self._param("real_time_factor"),
+            paused=self._param("paused"),
+            max_lag_s=MAX_LAG_S,
+        )
         self._publish_clock = bool(self._param("publish_clock"))
         self._chunk_steps = self._steps_per(self._param("chunk_rate_hz"))
         self._state_stride = self._steps_per(self._param("state_rate_hz"))
@@ -133,14 +149,15 @@ class BrakeSimNode(Node):
         self._defect_pub = self.create_publisher(DefectState, "~/defects", qos.LATCHED)
         self._clock_pub = self.create_publisher(ClockMsg, "/clock", qos.CLOCK)
         self._diag_pub = self.create_publisher(DiagnosticArray, "/diagnostics", qos.DIAGNOSTICS)
-        self.create_subscription(ActuationCommand, "~/actuation", self._on_actuation,
-                                 qos.COMMANDS)
+        self.create_subscription(ActuationCommand, "~/actuation", self._on_actuation, qos.COMMANDS)
         self.create_service(StepSimulation, "~/step", self._on_step)
         self.create_service(ResetSimulation, "~/reset", self._on_reset)
-        self._tick_timer = self.create_timer(self._tick_period_s(), self._on_tick,
-                                             clock=self._steady)
-        self._diag_timer = self.create_timer(self._param("diagnostics_period_s"),
-                                             self._on_diagnostics, clock=self._steady)
+        self._tick_timer = self.create_timer(
+            self._tick_period_s(), self._on_tick, clock=self._steady
+        )
+        self._diag_timer = self.create_timer(
+            self._param("diagnostics_period_s"), self._on_diagnostics, clock=self._steady
+        )
 
         now = self._wall()
         self._pacer.restart(now, 0)
@@ -156,7 +173,8 @@ class BrakeSimNode(Node):
             f"scenario '{self.scenario.name}' ({self.scenario.source}): dt {self._stepper.dt_s:g}"
             f" s ({self._sample_rate_hz():g} Hz), step limit {limit.max_step_s:.3g} s for"
             f" max_actuation_force_n {self._stepper.max_actuation_n:g} N, duration"
-            f" {self._duration_s():g} s, {self._chunk_steps} samples per chunk")
+            f" {self._duration_s():g} s, {self._chunk_steps} samples per chunk"
+        )
 
     # -- parameter plumbing ----------------------------------------------------------------------
     def _param(self, name: str):
@@ -203,12 +221,16 @@ class BrakeSimNode(Node):
         return (setup.defects.left.initial_angle_deg, setup.defects.right.initial_angle_deg)
 
     def _policy_from_params(self, changes: dict | None = None) -> CommandPolicy:
-        values = {name: self._param(name) for name in
-                  ("command_timeout_s", "on_command_timeout", "command_ramp_rate_n_per_s")}
+        values = {
+            name: self._param(name)
+            for name in ("command_timeout_s", "on_command_timeout", "command_ramp_rate_n_per_s")
+        }
         values.update(changes or {})
-        return CommandPolicy(timeout_s=values["command_timeout_s"],
-                             behaviour=TimeoutBehaviour.parse(values["on_command_timeout"]),
-                             ramp_rate_n_per_s=values["command_ramp_rate_n_per_s"])
+        return CommandPolicy(
+            timeout_s=values["command_timeout_s"],
+            behaviour=TimeoutBehaviour.parse(values["on_command_timeout"]),
+            ramp_rate_n_per_s=values["command_ramp_rate_n_per_s"],
+        )
 
     def _duration_s(self) -> float:
         value = self._param("duration_s")
@@ -254,8 +276,9 @@ class BrakeSimNode(Node):
         else:
             self.stats.parameter_changes_refused += 1
             self.stats.last_parameter_refusal = reason
-            self.get_logger().warning(f"parameter change refused: {reason}",
-                                      throttle_duration_sec=1.0)
+            self.get_logger().warning(
+                f"parameter change refused: {reason}", throttle_duration_sec=1.0
+            )
 
     def _pre_set_parameters(self, parameters: list[Parameter]) -> list[Parameter]:
         """Accept integers for double parameters; complete a lone actuation-share change."""
@@ -278,23 +301,27 @@ class BrakeSimNode(Node):
             return SetParametersResult(successful=True)
         changes = {p.name: p.value for p in parameters}
         for name in changes.keys() & ros_params.FIXED_AT_START:
-            hint = (" (switch scenarios with the ~/reset service)" if name == "scenario"
-                    else " (restart the node to change it)")
-            return SetParametersResult(successful=False,
-                                       reason=f"{name} is fixed at start-up{hint}")
+            hint = (
+                " (switch scenarios with the ~/reset service)"
+                if name == "scenario"
+                else " (restart the node to change it)"
+            )
+            return SetParametersResult(
+                successful=False, reason=f"{name} is fixed at start-up{hint}"
+            )
         try:
             policy = self._policy_from_params(changes)
         except ValueError as exc:
             return SetParametersResult(successful=False, reason=str(exc))
         if "duration_s" in changes and not changes["duration_s"] > 0.0:
-            return SetParametersResult(successful=False,
-                                       reason="duration_s must be > 0 s at run time")
+            return SetParametersResult(
+                successful=False, reason="duration_s must be > 0 s at run time"
+            )
         model_changes = {k: v for k, v in changes.items() if k in self._model_names}
         if model_changes:
             try:
                 params, defects = ros_params.build_model(self._model_values(model_changes))
-                setup = dataclasses.replace(self._stepper.setup, params=params,
-                                            defects=defects)
+                setup = dataclasses.replace(self._stepper.setup, params=params, defects=defects)
                 self._stepper.replace_setup(setup)  # validates, or changes nothing
             except BrakeSimError as exc:
                 return SetParametersResult(successful=False, reason=str(exc))
@@ -303,8 +330,9 @@ class BrakeSimNode(Node):
             self._publish_defects()
             pending = sorted(model_changes.keys() & ros_params.INITIAL_CONDITIONS)
             if pending:
-                self.get_logger().info(f"{', '.join(pending)}: initial condition, applies at"
-                                       " the next ~/reset")
+                self.get_logger().info(
+                    f"{', '.join(pending)}: initial condition, applies at the next ~/reset"
+                )
         return SetParametersResult(successful=True)
 
     def _apply_run_changes(self, changes: dict, policy: CommandPolicy) -> None:
@@ -334,13 +362,13 @@ class BrakeSimNode(Node):
 
     # -- commands ----------------------------------------------------------------------------------
     def _on_actuation(self, msg: ActuationCommand) -> None:
-        reason = check_command(msg.left_force_n, msg.right_force_n,
-                               self._stepper.max_actuation_n)
+        reason = check_command(msg.left_force_n, msg.right_force_n, self._stepper.max_actuation_n)
         if reason is not None:
             self.stats.commands_rejected += 1
             self.stats.last_command_rejection = reason
-            self.get_logger().warning(f"actuation command rejected: {reason}",
-                                      throttle_duration_sec=1.0)
+            self.get_logger().warning(
+                f"actuation command rejected: {reason}", throttle_duration_sec=1.0
+            )
             return
         self.stats.commands_accepted += 1
         if self._failure or (self._finished and not self._pacer.paused):
@@ -370,15 +398,17 @@ class BrakeSimNode(Node):
                 if not self._advance_and_publish(n, free_run=True):
                     return
         else:
-            plan = self._pacer.plan(now, self._stepper.step_index, self._chunk_steps,
-                                    self._max_chunks_per_tick(), end)
+            plan = self._pacer.plan(
+                now, self._stepper.step_index, self._chunk_steps, self._max_chunks_per_tick(), end
+            )
             if plan.slipped_steps:
                 self.stats.slips += 1
                 self.stats.slipped_s += plan.slipped_steps * self._stepper.dt_s
             # a chunk is late when published more than a chunk period after its last sample
             # was due, or two ticks (what tick granularity alone costs at high factors)
-            tolerance = max(self._pacer.chunk_wall_period_s(self._chunk_steps),
-                            2.0 * self._tick_period_s())
+            tolerance = max(
+                self._pacer.chunk_wall_period_s(self._chunk_steps), 2.0 * self._tick_period_s()
+            )
             remaining = plan.steps
             while remaining > 0:
                 n = min(self._chunk_steps, remaining)
@@ -413,8 +443,10 @@ class BrakeSimNode(Node):
         if free_run:
             self.stats.free_run_sim_s += n_steps * self._stepper.dt_s
         if len(block) != n_steps or not conversion.all_finite(block):
-            self._fail(f"non-finite or missing samples between steps {step0} and"
-                       f" {step0 + n_steps}; nothing of them was published")
+            self._fail(
+                f"non-finite or missing samples between steps {step0} and"
+                f" {step0 + n_steps}; nothing of them was published"
+            )
             return False
         self._publish_block(block)
         return True
@@ -445,8 +477,9 @@ class BrakeSimNode(Node):
             self.done = True
 
     # -- services -------------------------------------------------------------------------------
-    def _on_step(self, request: StepSimulation.Request, response: StepSimulation.Response
-                 ) -> StepSimulation.Response:
+    def _on_step(
+        self, request: StepSimulation.Request, response: StepSimulation.Response
+    ) -> StepSimulation.Response:
         dt = self._stepper.dt_s
         steps, duration = int(request.steps), float(request.duration_s)
         error = ""
@@ -463,8 +496,10 @@ class BrakeSimNode(Node):
             if steps < 1:
                 error = f"duration_s={duration:g} s is shorter than half a step ({dt:g} s)"
             elif steps * dt > MAX_STEP_REQUEST_S:
-                error = (f"{steps} steps = {steps * dt:g} s: allowed at most"
-                         f" {MAX_STEP_REQUEST_S:g} s of simulated time per call")
+                error = (
+                    f"{steps} steps = {steps * dt:g} s: allowed at most"
+                    f" {MAX_STEP_REQUEST_S:g} s of simulated time per call"
+                )
         if not error:
             done = 0
             while done < steps:
@@ -480,8 +515,9 @@ class BrakeSimNode(Node):
         response.sim_time_s = index * dt
         return response
 
-    def _on_reset(self, request: ResetSimulation.Request, response: ResetSimulation.Response
-                  ) -> ResetSimulation.Response:
+    def _on_reset(
+        self, request: ResetSimulation.Request, response: ResetSimulation.Response
+    ) -> ResetSimulation.Response:
         seed = int(request.seed)
         try:
             if seed < -1:
@@ -507,8 +543,9 @@ class BrakeSimNode(Node):
         if self._publish_clock:
             self._clock_pub.publish(conversion.clock(0))
         response.success = True
-        response.message = (f"reset to t = 0 with scenario '{self.scenario.name}' (seed"
-                            f" {self._seed})")
+        response.message = (
+            f"reset to t = 0 with scenario '{self.scenario.name}' (seed {self._seed})"
+        )
         return response
 
     def _switch_scenario(self, scenario: Scenario, name_or_path: str) -> None:
@@ -523,8 +560,12 @@ class BrakeSimNode(Node):
         self._set_internal(values)
         dt = stepper.dt_s
         self._planner.dt_s = dt
-        self._pacer = Pacer(dt, real_time_factor=self._pacer.real_time_factor,
-                            paused=self._pacer.paused, max_lag_s=MAX_LAG_S)
+        self._pacer = Pacer(
+            dt,
+            real_time_factor=self._pacer.real_time_factor,
+            paused=self._pacer.paused,
+            max_lag_s=MAX_LAG_S,
+        )
         self._chunk_steps = self._steps_per(self._param("chunk_rate_hz"))
         self._state_stride = self._steps_per(self._param("state_rate_hz"))
         self._tick_timer.timer_period_ns = int(self._tick_period_s() * 1e9)
@@ -532,10 +573,15 @@ class BrakeSimNode(Node):
     # -- ground truth and diagnostics --------------------------------------------------------
     def _publish_defects(self) -> None:
         setup = self._stepper.setup
-        self._defect_pub.publish(conversion.defect_state(
-            scenario=self.scenario.name, params=setup.params, defects=setup.defects,
-            initial_angles_deg=self._run_initial_angles,
-            ns=conversion.stamp_ns(self._stepper.step_index, self._stepper.dt_s)))
+        self._defect_pub.publish(
+            conversion.defect_state(
+                scenario=self.scenario.name,
+                params=setup.params,
+                defects=setup.defects,
+                initial_angles_deg=self._run_initial_angles,
+                ns=conversion.stamp_ns(self._stepper.step_index, self._stepper.dt_s),
+            )
+        )
 
     def run_view(self) -> RunView:
         if self._failure:
@@ -548,14 +594,22 @@ class BrakeSimNode(Node):
             state = "running"
         step = self._stepper.step_index
         return RunView(
-            node_name=self.get_name(), scenario=self.scenario.name, state=state,
-            message=self._failure, sim_time_s=step * self._stepper.dt_s, sample_index=step,
-            sample_rate_hz=self._sample_rate_hz(), duration_s=self._duration_s(),
+            node_name=self.get_name(),
+            scenario=self.scenario.name,
+            state=state,
+            message=self._failure,
+            sim_time_s=step * self._stepper.dt_s,
+            sample_index=step,
+            sample_rate_hz=self._sample_rate_hz(),
+            duration_s=self._duration_s(),
             target_real_time_factor=self._pacer.real_time_factor,
             measured_real_time_factor=self._measured_rtf,
             actuation_source=self._planner.source(step),
-            stop_time_s=self._stepper.stop_time_s, step_limit_s=self._stepper.limit.max_step_s,
-            max_actuation_force_n=self._stepper.max_actuation_n, seed=self._seed)
+            stop_time_s=self._stepper.stop_time_s,
+            step_limit_s=self._stepper.limit.max_step_s,
+            max_actuation_force_n=self._stepper.max_actuation_n,
+            seed=self._seed,
+        )
 
     def _on_diagnostics(self) -> None:
         now = self._wall()
@@ -566,8 +620,9 @@ class BrakeSimNode(Node):
         new_misses = self.stats.deadline_misses - last_misses
         self._diag_last = (now, self.stats.steps_done, self.stats.deadline_misses)
         ns = conversion.stamp_ns(self._stepper.step_index, self._stepper.dt_s)
-        self._diag_pub.publish(diagnostic_array(self.run_view(), self.stats, ns=ns,
-                                                new_misses=new_misses))
+        self._diag_pub.publish(
+            diagnostic_array(self.run_view(), self.stats, ns=ns, new_misses=new_misses)
+        )
 
     def summary(self) -> str:
         return summary(self.run_view(), self.stats)
@@ -578,12 +633,20 @@ def _parse_cli(argv: list[str]) -> argparse.Namespace:
     parser = argparse.ArgumentParser(
         prog="python -m brake_sim_ros.ros.node",
         description="Drum-brake simulator as a ROS 2 node. ROS parameters go after"
-                    " --ros-args (-p name:=value); the options below override them.")
+        " --ros-args (-p name:=value); the options below override them.",
+    )
     parser.add_argument("--scenario", help="built-in scenario name or path to a .toml file")
-    parser.add_argument("--duration", type=float, metavar="S",
-                        help="simulated seconds of the free run (default: the scenario's)")
-    parser.add_argument("--exit-at-end", action="store_true",
-                        help="print a summary and exit 0 when the duration is reached")
+    parser.add_argument(
+        "--duration",
+        type=float,
+        metavar="S",
+        help="simulated seconds of the free run (default: the scenario's)",
+    )
+    parser.add_argument(
+        "--exit-at-end",
+        action="store_true",
+        help="print a summary and exit 0 when the duration is reached",
+    )
     args = parser.parse_args(argv)
     if args.duration is not None and not (math.isfinite(args.duration) and args.duration > 0):
         parser.error(f"--duration {args.duration}: allowed a finite time > 0 s")

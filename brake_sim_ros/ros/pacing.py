@@ -69,8 +69,14 @@ class Pacer:
     All ``now_s`` arguments are readings of one monotonic clock, s.
     """
 
-    def __init__(self, dt_s: float, *, real_time_factor: float = 1.0, paused: bool = False,
-                 max_lag_s: float = 0.5) -> None:
+    def __init__(
+        self,
+        dt_s: float,
+        *,
+        real_time_factor: float = 1.0,
+        paused: bool = False,
+        max_lag_s: float = 0.5,
+    ) -> None:
         if not (math.isfinite(dt_s) and dt_s > 0):
             raise ValueError(f"dt_s={dt_s!r}: allowed a finite step > 0 s")
         _check_factor(real_time_factor)
@@ -133,8 +139,14 @@ class Pacer:
         """Wall time one chunk spans (real-time mode)."""
         return chunk_steps * self.dt_s / self._factor
 
-    def plan(self, now_s: float, step: int, chunk_steps: int, max_chunks: int,
-             end_step: int | None = None) -> TickPlan:
+    def plan(
+        self,
+        now_s: float,
+        step: int,
+        chunk_steps: int,
+        max_chunks: int,
+        end_step: int | None = None,
+    ) -> TickPlan:
         """Steps to take at ``now_s`` when the simulation is at ``step``.
 
         Args:
@@ -175,5 +187,6 @@ class Pacer:
 
 def _check_factor(factor: float) -> None:
     if not (isinstance(factor, int | float) and math.isfinite(factor) and factor >= 0.0):
-        raise ValueError(f"real_time_factor={factor!r}: allowed a finite factor >= 0"
-                         " (0 = as fast as possible)")
+        raise ValueError(
+            f"real_time_factor={factor!r}: allowed a finite factor >= 0 (0 = as fast as possible)"
+        )

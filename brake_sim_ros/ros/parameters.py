@@ -39,11 +39,13 @@ SIDES = ("left", "right")
 DEFAULT_SCENARIO = "symmetric"
 
 # Fields that are initial conditions: a change applies at the next reset.
-INITIAL_CONDITIONS = frozenset({
-    "driveline.initial_speed_rad_s",
-    "defects.left.initial_angle_deg",
-    "defects.right.initial_angle_deg",
-})
+INITIAL_CONDITIONS = frozenset(
+    {
+        "driveline.initial_speed_rad_s",
+        "defects.left.initial_angle_deg",
+        "defects.right.initial_angle_deg",
+    }
+)
 
 # UI envelope per model field (see the module docstring); "[core]" marks the core's bounds.
 _RANGES: dict[str, tuple[float, float]] = {
@@ -79,9 +81,17 @@ _RANGES: dict[str, tuple[float, float]] = {
 
 # Unit suffixes of the core's field names, longest first.
 _UNITS = (
-    ("_n_m_s_per_rad", "N m s/rad"), ("_n_m_per_rad", "N m/rad"), ("_n_s_per_m", "N s/m"),
-    ("_kg_m2", "kg m^2"), ("_rad_s", "rad/s"), ("_m_s", "m/s"), ("_pct", "%"),
-    ("_deg", "deg"), ("_kg", "kg"), ("_pa", "Pa"), ("_m", "m"),
+    ("_n_m_s_per_rad", "N m s/rad"),
+    ("_n_m_per_rad", "N m/rad"),
+    ("_n_s_per_m", "N s/m"),
+    ("_kg_m2", "kg m^2"),
+    ("_rad_s", "rad/s"),
+    ("_m_s", "m/s"),
+    ("_pct", "%"),
+    ("_deg", "deg"),
+    ("_kg", "kg"),
+    ("_pa", "Pa"),
+    ("_m", "m"),
 )
 
 
@@ -113,46 +123,79 @@ def run_parameter_specs() -> list[ParamSpec]:
     """
     fixed = "Fixed at start-up: a change is refused."
     return [
-        ParamSpec("scenario", DEFAULT_SCENARIO,
-                  "Scenario loaded at start-up: a built-in name or a path to a .toml file. "
-                  "Switch it with the ~/reset service (its 'scenario' field). " + fixed),
-        ParamSpec("duration_s", 0.0,
-                  "Simulated time after which the free run ends (s); 0 at start-up = the "
-                  "scenario's duration. At the end the node idles, or exits with exit_at_end.",
-                  (0.0, 86_400.0)),
-        ParamSpec("exit_at_end", False,
-                  "Print a summary and exit 0 when duration_s is reached (CLI --exit-at-end). "
-                  + fixed),
-        ParamSpec("real_time_factor", 1.0,
-                  "Simulated seconds per wall second; 0 = as fast as possible.", (0.0, 1000.0)),
-        ParamSpec("paused", False,
-                  "Stop stepping; ~/step then advances the simulation on request."),
-        ParamSpec("chunk_rate_hz", 100.0,
-                  "Pivot-force chunks per simulated second (Hz); each chunk carries "
-                  "round(sample rate / chunk_rate_hz) samples.", (1.0, 1000.0)),
-        ParamSpec("state_rate_hz", 100.0,
-                  "BrakeState and JointState messages per simulated second (Hz), taken at "
-                  "sample indices that are multiples of round(sample rate / state_rate_hz).",
-                  (1.0, 10_000.0)),
-        ParamSpec("publish_clock", True,
-                  "Publish simulated time on /clock (rosgraph_msgs/Clock)."),
-        ParamSpec("diagnostics_period_s", 1.0,
-                  "Wall-time period of /diagnostics (s).", (0.05, 60.0)),
-        ParamSpec("max_actuation_force_n", 0.0,
-                  "Largest accepted actuation command per shoe (N); larger commands are "
-                  "rejected. The physics step limit is computed for it. 0 at start-up = 2 x "
-                  "the scenario's peak force. " + fixed, (0.0, 50_000.0)),
-        ParamSpec("command_timeout_s", 0.2,
-                  "Simulated time a command stays in force without a newer one (s).",
-                  (0.001, 3600.0)),
-        ParamSpec("on_command_timeout", "profile",
-                  "What happens when commands stop: 'profile' (the scenario's force profile "
-                  "resumes at the current time), 'hold' (keep the last command), "
-                  "'ramp_to_zero' (fall linearly at command_ramp_rate_n_per_s, then 0).",
-                  constraints="one of: profile, hold, ramp_to_zero"),
-        ParamSpec("command_ramp_rate_n_per_s", 5000.0,
-                  "Force decrease rate of on_command_timeout = 'ramp_to_zero' (N/s).",
-                  (1.0, 1e7)),
+        ParamSpec(
+            "scenario",
+            DEFAULT_SCENARIO,
+            "Scenario loaded at start-up: a built-in name or a path to a .toml file. "
+            "Switch it with the ~/reset service (its 'scenario' field). " + fixed,
+        ),
+        ParamSpec(
+            "duration_s",
+            0.0,
+            "Simulated time after which the free run ends (s); 0 at start-up = the "
+            "scenario's duration. At the end the node idles, or exits with exit_at_end.",
+            (0.0, 86_400.0),
+        ),
+        ParamSpec(
+            "exit_at_end",
+            False,
+            "Print a summary and exit 0 when duration_s is reached (CLI --exit-at-end). " + fixed,
+        ),
+        ParamSpec(
+            "real_time_factor",
+            1.0,
+            "Simulated seconds per wall second; 0 = as fast as possible.",
+            (0.0, 1000.0),
+        ),
+        ParamSpec(
+            "paused", False, "Stop stepping; ~/step then advances the simulation on request."
+        ),
+        ParamSpec(
+            "chunk_rate_hz",
+            100.0,
+            "Pivot-force chunks per simulated second (Hz); each chunk carries "
+            "round(sample rate / chunk_rate_hz) samples.",
+            (1.0, 1000.0),
+        ),
+        ParamSpec(
+            "state_rate_hz",
+            100.0,
+            "BrakeState and JointState messages per simulated second (Hz), taken at "
+            "sample indices that are multiples of round(sample rate / state_rate_hz).",
+            (1.0, 10_000.0),
+        ),
+        ParamSpec("publish_clock", True, "Publish simulated time on /clock (rosgraph_msgs/Clock)."),
+        ParamSpec(
+            "diagnostics_period_s", 1.0, "Wall-time period of /diagnostics (s).", (0.05, 60.0)
+        ),
+        ParamSpec(
+            "max_actuation_force_n",
+            0.0,
+            "Largest accepted actuation command per shoe (N); larger commands are "
+            "rejected. The physics step limit is computed for it. 0 at start-up = 2 x "
+            "the scenario's peak force. " + fixed,
+            (0.0, 50_000.0),
+        ),
+        ParamSpec(
+            "command_timeout_s",
+            0.2,
+            "Simulated time a command stays in force without a newer one (s).",
+            (0.001, 3600.0),
+        ),
+        ParamSpec(
+            "on_command_timeout",
+            "profile",
+            "What happens when commands stop: 'profile' (the scenario's force profile "
+            "resumes at the current time), 'hold' (keep the last command), "
+            "'ramp_to_zero' (fall linearly at command_ramp_rate_n_per_s, then 0).",
+            constraints="one of: profile, hold, ramp_to_zero",
+        ),
+        ParamSpec(
+            "command_ramp_rate_n_per_s",
+            5000.0,
+            "Force decrease rate of on_command_timeout = 'ramp_to_zero' (N/s).",
+            (1.0, 1e7),
+        ),
     ]
 
 
@@ -187,7 +230,7 @@ def _attribute_doc(cls: type, field_name: str) -> str:
             if entry:
                 break
             if stripped.startswith(f"{field_name}:"):
-                entry.append(stripped[len(field_name) + 1:].strip())
+                entry.append(stripped[len(field_name) + 1 :].strip())
         elif entry:
             entry.append(stripped)
     return " ".join(entry).rstrip(".")
@@ -226,8 +269,7 @@ def model_parameter_specs(params: BrakeParameters, defects: Defects) -> list[Par
         if name in INITIAL_CONDITIONS:
             text += " Initial condition: a change applies at the next ~/reset."
         if name.endswith("actuation_share"):
-            text += (" Left + right = 1: setting one side alone sets the other side to"
-                     " 1 - value.")
+            text += " Left + right = 1: setting one side alone sets the other side to 1 - value."
         text += " Validated by the physics core; invalid values are refused with its reason."
         specs.append(ParamSpec(name, _ros_value(value), text, _RANGES.get(range_key)))
     return specs
@@ -269,8 +311,11 @@ def complete_actuation_share(changes: dict[str, Any]) -> dict[str, Any]:
     for side, other in (("left", "right"), ("right", "left")):
         name, other_name = (f"defects.{side}.actuation_share", f"defects.{other}.actuation_share")
         value = changes.get(name)
-        if other_name not in changes and isinstance(value, float | int) \
-                and not isinstance(value, bool):
+        if (
+            other_name not in changes
+            and isinstance(value, float | int)
+            and not isinstance(value, bool)
+        ):
             out[other_name] = 1.0 - float(value)
     return out
 
@@ -279,15 +324,24 @@ def descriptor(spec: ParamSpec):
     """``rcl_interfaces/ParameterDescriptor`` for ``spec``."""
     from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, ParameterType
 
-    types = {bool: ParameterType.PARAMETER_BOOL, int: ParameterType.PARAMETER_INTEGER,
-             float: ParameterType.PARAMETER_DOUBLE, str: ParameterType.PARAMETER_STRING}
-    desc = ParameterDescriptor(name=spec.name, type=types[type(spec.default)],
-                               description=spec.description,
-                               additional_constraints=spec.constraints)
+    types = {
+        bool: ParameterType.PARAMETER_BOOL,
+        int: ParameterType.PARAMETER_INTEGER,
+        float: ParameterType.PARAMETER_DOUBLE,
+        str: ParameterType.PARAMETER_STRING,
+    }
+    desc = ParameterDescriptor(
+        name=spec.name,
+        type=types[type(spec.default)],
+        description=spec.description,
+        additional_constraints=spec.constraints,
+    )
     if spec.range is not None and isinstance(spec.default, float):
-        desc.floating_point_range = [FloatingPointRange(from_value=float(spec.range[0]),
-                                                        to_value=float(spec.range[1]),
-                                                        step=0.0)]
+        desc.floating_point_range = [
+            FloatingPointRange(
+                from_value=float(spec.range[0]), to_value=float(spec.range[1]), step=0.0
+            )
+        ]
     return desc
 
 
@@ -320,7 +374,9 @@ def auto_max_actuation_force(setup: BrakeSetup, dt_s: float) -> tuple[float, str
         mid = 0.5 * (lo + hi)
         lo, hi = (mid, hi) if allowed(mid) else (lo, mid)
     force = max(base, math.floor(lo / 10.0) * 10.0)
-    note = (f"max_actuation_force_n defaults to {force:g} N, not 2 x the scenario's peak"
-            f" ({2.0 * base:g} N): the scenario's step {dt_s:g} s allows at most that much"
-            " force; set max_actuation_force_n (and a smaller solver.dt_s) to go higher")
+    note = (
+        f"max_actuation_force_n defaults to {force:g} N, not 2 x the scenario's peak"
+        f" ({2.0 * base:g} N): the scenario's step {dt_s:g} s allows at most that much"
+        " force; set max_actuation_force_n (and a smaller solver.dt_s) to go higher"
+    )
     return force, note

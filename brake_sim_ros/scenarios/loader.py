@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
+import itertools
 import math
 import tomllib
 from dataclasses import dataclass, field
@@ -79,7 +80,9 @@ class _Ctx:
         self.source = source
 
     def fail(self, key: str, value: Any, allowed: str) -> ScenarioError:
-        return ScenarioError(f"{self.source}: key '{key}' = {value!r} is invalid: allowed {allowed}")
+        return ScenarioError(
+            f"{self.source}: key '{key}' = {value!r} is invalid: allowed {allowed}"
+        )
 
     def table(self, data: Any, key: str, allowed_keys: set[str]) -> dict[str, Any]:
         if not isinstance(data, dict):
@@ -87,12 +90,19 @@ class _Ctx:
         for k in data:
             if k not in allowed_keys:
                 where = f"{key}.{k}" if key else k
-                raise self.fail(where, data[k],
-                                f"one of the keys {sorted(allowed_keys)} (unknown key)")
+                raise self.fail(
+                    where, data[k], f"one of the keys {sorted(allowed_keys)} (unknown key)"
+                )
         return data
 
-    def number(self, value: Any, key: str, lo: float = -math.inf, hi: float = math.inf,
-               lo_open: bool = False) -> float:
+    def number(
+        self,
+        value: Any,
+        key: str,
+        lo: float = -math.inf,
+        hi: float = math.inf,
+        lo_open: bool = False,
+    ) -> float:
         if isinstance(value, bool) or not isinstance(value, int | float):
             raise self.fail(key, value, "a number")
         value = float(value)
@@ -124,22 +134,30 @@ def _profile(ctx: _Ctx, data: Any, key: str) -> ForceProfile:
     f = tuple(ctx.number(v, f"{key}.forces_n[{i}]", 0.0, 50_000.0) for i, v in enumerate(forces))
     if len(t) != len(f):
         raise ctx.fail(key, data, "'times_s' and 'forces_n' of equal length")
-    if any(b <= a for a, b in zip(t, t[1:], strict=False)):
+    if any(b <= a for a, b in itertools.pairwise(t)):
         raise ctx.fail(f"{key}.times_s", list(t), "strictly increasing times")
     return ForceProfile(t, f)
 
 
 def _actuation(ctx: _Ctx, data: Any) -> Actuation:
-    data = ctx.table(data, "actuation", {"profile", "peak_force_n", "start_s", "full_s", "left",
-                                         "right"})
+    data = ctx.table(
+        data, "actuation", {"profile", "peak_force_n", "start_s", "full_s", "left", "right"}
+    )
     kind = ctx.string(data.get("profile", "ramp"), "actuation.profile", ("ramp", "piecewise"))
     if kind == "ramp":
         extra = {"left", "right"} & set(data)
         if extra:
-            raise ctx.fail(f"actuation.{sorted(extra)[0]}", data[sorted(extra)[0]],
-                           "per-shoe histories only with profile = \"piecewise\"")
-        peak = ctx.number(data.get("peak_force_n", NOMINAL_PEAK_ACTUATION_N),
-                          "actuation.peak_force_n", 0.0, 50_000.0)
+            raise ctx.fail(
+                f"actuation.{sorted(extra)[0]}",
+                data[sorted(extra)[0]],
+                'per-shoe histories only with profile = "piecewise"',
+            )
+        peak = ctx.number(
+            data.get("peak_force_n", NOMINAL_PEAK_ACTUATION_N),
+            "actuation.peak_force_n",
+            0.0,
+            50_000.0,
+        )
         start = ctx.number(data.get("start_s", 0.2), "actuation.start_s", 0.0, 1e6)
         full = ctx.number(data.get("full_s", 0.7), "actuation.full_s", start, 1e6, lo_open=True)
         ramp = ForceProfile.ramp(peak, start, full)
@@ -147,13 +165,18 @@ def _actuation(ctx: _Ctx, data: Any) -> Actuation:
     extra = {"peak_force_n", "start_s", "full_s"} & set(data)
     if extra:
         k = sorted(extra)[0]
-        raise ctx.fail(f"actuation.{k}", data[k], "ramp settings only with profile = \"ramp\"")
+        raise ctx.fail(f"actuation.{k}", data[k], 'ramp settings only with profile = "ramp"')
     missing = {"left", "right"} - set(data)
     if missing:
-        raise ctx.fail("actuation", data, "both [actuation.left] and [actuation.right] tables"
-                       " for a piecewise profile")
-    return Actuation(_profile(ctx, data["left"], "actuation.left"),
-                     _profile(ctx, data["right"], "actuation.right"))
+        raise ctx.fail(
+            "actuation",
+            data,
+            "both [actuation.left] and [actuation.right] tables for a piecewise profile",
+        )
+    return Actuation(
+        _profile(ctx, data["left"], "actuation.left"),
+        _profile(ctx, data["right"], "actuation.right"),
+    )
 
 
 def _defects(ctx: _Ctx, data: Any) -> Defects:
@@ -194,8 +217,12 @@ def _options(ctx: _Ctx, data: Any) -> ModelOptions:
     if not isinstance(rigid, bool):
         raise ctx.fail("model.rigid_coupling", rigid, "true or false")
     shoes = data.get("shoes", list(SIDES))
-    if (not isinstance(shoes, list) or not shoes or len(set(shoes)) != len(shoes)
-            or any(s not in SIDES for s in shoes)):
+    if (
+        not isinstance(shoes, list)
+        or not shoes
+        or len(set(shoes)) != len(shoes)
+        or any(s not in SIDES for s in shoes)
+    ):
         raise ctx.fail("model.shoes", shoes, f"a non-empty list of distinct names from {SIDES}")
     return ModelOptions(rigid_coupling=rigid, shoes=tuple(s for s in SIDES if s in shoes))
 
@@ -216,8 +243,21 @@ def parse_scenario(text: str, source: str = "<string>") -> Scenario:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise ScenarioError(f"{source}: not valid TOML: {exc}") from exc
-    top = ctx.table(data, "", {"name", "description", "duration_s", "seed", "solver", "actuation",
-                               "defects", "parameters", "model"})
+    top = ctx.table(
+        data,
+        "",
+        {
+            "name",
+            "description",
+            "duration_s",
+            "seed",
+            "solver",
+            "actuation",
+            "defects",
+            "parameters",
+            "model",
+        },
+    )
     if "name" not in top:
         raise ctx.fail("name", None, "a scenario name (string) is required")
     name = ctx.string(top["name"], "name")
@@ -226,9 +266,12 @@ def parse_scenario(text: str, source: str = "<string>") -> Scenario:
         raise ctx.fail("seed", seed, "an integer from 0 to 2^63 - 1")
     params = _parameters(ctx, top.get("parameters", {}))
     defects = _defects(ctx, top.get("defects", {}))
-    setup = BrakeSetup(params=params, defects=defects,
-                       actuation=_actuation(ctx, top.get("actuation", {})),
-                       options=_options(ctx, top.get("model", {})))
+    setup = BrakeSetup(
+        params=params,
+        defects=defects,
+        actuation=_actuation(ctx, top.get("actuation", {})),
+        options=_options(ctx, top.get("model", {})),
+    )
     try:
         pack(setup.params, setup.defects, setup.options)
     except BrakeSimError as exc:
@@ -237,8 +280,9 @@ def parse_scenario(text: str, source: str = "<string>") -> Scenario:
         name=name,
         description=ctx.string(top.get("description", ""), "description"),
         setup=setup,
-        duration_s=ctx.number(top.get("duration_s", 7.5), "duration_s", 0.0, 86_400.0,
-                              lo_open=True),
+        duration_s=ctx.number(
+            top.get("duration_s", 7.5), "duration_s", 0.0, 86_400.0, lo_open=True
+        ),
         seed=seed,
         solver=_solver(ctx, top.get("solver", {})),
         source=source,
@@ -263,7 +307,9 @@ def load_scenario(name_or_path: str | Path) -> Scenario:
         return parse_scenario(text, str(path))
     name = str(name_or_path)
     if name not in builtin_names():
-        raise ScenarioError(f"unknown scenario '{name}': allowed a path to a .toml file or one of"
-                            f" the built-in scenarios {builtin_names()}")
+        raise ScenarioError(
+            f"unknown scenario '{name}': allowed a path to a .toml file or one of"
+            f" the built-in scenarios {builtin_names()}"
+        )
     text = resources.files(BUILTIN_PACKAGE).joinpath(f"{name}.toml").read_text(encoding="utf-8")
     return parse_scenario(text, f"<built-in {name}>")

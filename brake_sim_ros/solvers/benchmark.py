@@ -48,8 +48,11 @@ def _best_cpu(fn, repeats: int) -> float:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="brake-sim bench core", description=__doc__)
     parser.add_argument("--scenario", default="symmetric")
-    parser.add_argument("--steps", default="1e-5,2e-5,4e-5,5e-5,6e-5",
-                        help="comma-separated fixed steps to compare, s")
+    parser.add_argument(
+        "--steps",
+        default="1e-5,2e-5,4e-5,5e-5,6e-5",
+        help="comma-separated fixed steps to compare, s",
+    )
     parser.add_argument("--repeats", type=int, default=3)
     args = parser.parse_args(argv)
     scenario = load_scenario(args.scenario)
@@ -61,7 +64,9 @@ def main(argv: list[str] | None = None) -> int:
     _rhs_loop(y.copy(), p, 10)
     n_eval = 2_000_000
     rhs_cpu = _best_cpu(lambda: _rhs_loop(y.copy(), p, n_eval), args.repeats)
-    print(f"right-hand side: {1e9 * rhs_cpu / n_eval:.1f} ns per evaluation (both shoes in contact)")
+    print(
+        f"right-hand side: {1e9 * rhs_cpu / n_eval:.1f} ns per evaluation (both shoes in contact)"
+    )
 
     def full_run(dt: float, record: bool = True):
         st = FixedStepStepper(scenario.setup, dt, check_step=False)
@@ -77,20 +82,28 @@ def main(argv: list[str] | None = None) -> int:
     n0 = round(duration / dt0)
     cpu_rec = _best_cpu(lambda: full_run(dt0), args.repeats)
     cpu_norec = _best_cpu(lambda: full_run(dt0, record=False), args.repeats)
-    print(f"fixed step {dt0:g} s ({n0} steps, 4 evaluations each):"
-          f" {1e9 * cpu_rec / n0:.0f} ns per step recording every sample,"
-          f" {1e9 * cpu_norec / n0:.0f} ns per step without recording")
-    print(f"  {duration:g} s event in {cpu_rec:.3f} s CPU: {duration / cpu_rec:.0f}x real time"
-          f" (target >= {TARGET_RTF:.0f}x)")
+    print(
+        f"fixed step {dt0:g} s ({n0} steps, 4 evaluations each):"
+        f" {1e9 * cpu_rec / n0:.0f} ns per step recording every sample,"
+        f" {1e9 * cpu_norec / n0:.0f} ns per step without recording"
+    )
+    print(
+        f"  {duration:g} s event in {cpu_rec:.3f} s CPU: {duration / cpu_rec:.0f}x real time"
+        f" (target >= {TARGET_RTF:.0f}x)"
+    )
 
-    print(f"reference: adaptive DOP853, rtol {scenario.solver.rtol:g}, events located ...", flush=True)
+    print(
+        f"reference: adaptive DOP853, rtol {scenario.solver.rtol:g}, events located ...", flush=True
+    )
     start = time.process_time()
     ref = run_scenario(scenario, method="reference")
     ref_cpu = time.process_time() - start
     rm = ref.metrics
     print(f"  {ref_cpu:.2f} s CPU, {ref.n_steps} evaluations, stop {rm.stop_time_s:.6f} s")
     print()
-    print("step (s) | x real time | peak F_r err L/R (%) | period err L/R (%) | stop err (%) | meets")
+    print(
+        "step (s) | x real time | peak F_r err L/R (%) | period err L/R (%) | stop err (%) | meets"
+    )
     print("---|---|---|---|---|---")
     limit = stepper.limit.max_step_s
     for dt in (float(s) for s in args.steps.split(",")):
@@ -100,13 +113,22 @@ def main(argv: list[str] | None = None) -> int:
             print(f"{dt:g} | - | refused: above the step limit {limit:.3g} s | | |")
             continue
         m = st_res.metrics
-        pe = [100 * (m.shoe(s).first_impact_peak_n / rm.shoe(s).first_impact_peak_n - 1)
-              for s in ("left", "right")]
+        pe = [
+            100 * (m.shoe(s).first_impact_peak_n / rm.shoe(s).first_impact_peak_n - 1)
+            for s in ("left", "right")
+        ]
         te = [100 * (m.shoe(s).period_s / rm.shoe(s).period_s - 1) for s in ("left", "right")]
         se = 100 * (m.stop_time_s / rm.stop_time_s - 1)
-        ok = (max(map(abs, pe)) <= 100 * TARGET_IMPACT_REL and max(map(abs, te)) <= 100 * TARGET_IMPACT_REL
-              and abs(se) <= 100 * TARGET_STOP_REL and duration / cpu >= TARGET_RTF)
-        print(f"{dt:g} | {duration / cpu:.0f} | {pe[0]:+.3f} / {pe[1]:+.3f} | {te[0]:+.3f} / {te[1]:+.3f}"
-              f" | {se:+.5f} | {'yes' if ok else 'no'}")
+        ok = (
+            max(map(abs, pe)) <= 100 * TARGET_IMPACT_REL
+            and max(map(abs, te)) <= 100 * TARGET_IMPACT_REL
+            and abs(se) <= 100 * TARGET_STOP_REL
+            and duration / cpu >= TARGET_RTF
+        )
+        print(
+            f"{dt:g} | {duration / cpu:.0f} | {pe[0]:+.3f} / {pe[1]:+.3f} |"
+            f" {te[0]:+.3f} / {te[1]:+.3f}"
+            f" | {se:+.5f} | {'yes' if ok else 'no'}"
+        )
     print(f"\nstep limit for this scenario: {limit:.3g} s ({stepper.limit.reason})")
     return 0

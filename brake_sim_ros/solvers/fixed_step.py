@@ -42,8 +42,14 @@ class FixedStepStepper:
             friction stiffness near standstill grows with the normal force.
     """
 
-    def __init__(self, setup: BrakeSetup, dt_s: float, *, max_actuation_n: float | None = None,
-                 check_step: bool = True) -> None:
+    def __init__(
+        self,
+        setup: BrakeSetup,
+        dt_s: float,
+        *,
+        max_actuation_n: float | None = None,
+        check_step: bool = True,
+    ) -> None:
         if not (isinstance(dt_s, float | int) and math.isfinite(dt_s) and dt_s > 0):
             raise StepSizeError(f"step dt_s={dt_s!r} is invalid: allowed a finite step > 0 s")
         self.setup = setup
@@ -51,14 +57,16 @@ class FixedStepStepper:
         peak = max(setup.actuation.left.peak_n, setup.actuation.right.peak_n)
         self.max_actuation_n = float(peak if max_actuation_n is None else max_actuation_n)
         if not 0.0 <= self.max_actuation_n <= MAX_ACTUATION_FORCE_N:
-            raise ParameterError(f"max_actuation_n={self.max_actuation_n}: allowed 0 to"
-                                 f" {MAX_ACTUATION_FORCE_N} N")
+            raise ParameterError(
+                f"max_actuation_n={self.max_actuation_n}: allowed 0 to {MAX_ACTUATION_FORCE_N} N"
+            )
         self._p = pack(setup.params, setup.defects, setup.options)
         self.limit: StepLimit = step_limit(setup, self.max_actuation_n, packed=self._p)
         if check_step and self.dt_s > self.limit.max_step_s:
             raise StepSizeError(
                 f"step {self.dt_s:.3g} s exceeds the limit {self.limit.max_step_s:.3g} s for these"
-                f" parameters: {self.limit.reason}")
+                f" parameters: {self.limit.reason}"
+            )
         self._settle_steps = max(1, round(SETTLE_TIME_S / self.dt_s))
         self._profile = setup.actuation.as_arrays()
         self.reset()
@@ -116,13 +124,15 @@ class FixedStepStepper:
         if self.dt_s > limit.max_step_s:
             raise StepSizeError(
                 f"the new parameters allow at most {limit.max_step_s:.3g} s per step, the"
-                f" stepper runs at {self.dt_s:.3g} s: {limit.reason}")
+                f" stepper runs at {self.dt_s:.3g} s: {limit.reason}"
+            )
         self.setup, self._p, self.limit = setup, p, limit
         self._profile = setup.actuation.as_arrays()
 
     # -- stepping -------------------------------------------------------------------------------
-    def advance(self, n_steps: int, *, actuation_n: tuple[float, float] | None = None,
-                record_every: int = 1) -> SampleBlock:
+    def advance(
+        self, n_steps: int, *, actuation_n: tuple[float, float] | None = None, record_every: int = 1
+    ) -> SampleBlock:
         """Advance ``n_steps`` steps and return one sample every ``record_every`` steps.
 
         Args:
@@ -137,8 +147,10 @@ class FixedStepStepper:
         gap-free series; the block's ``first_index`` is the step index before the call.
         """
         if n_steps < 0 or record_every < 1:
-            raise ValueError(f"n_steps={n_steps}, record_every={record_every}: allowed"
-                             " n_steps >= 0 and record_every >= 1")
+            raise ValueError(
+                f"n_steps={n_steps}, record_every={record_every}: allowed"
+                " n_steps >= 0 and record_every >= 1"
+            )
         if self.status is StepperStatus.FAILED:
             raise SimulationError("the stepper failed earlier (non-finite state); reset it")
         if actuation_n is None:
@@ -149,26 +161,43 @@ class FixedStepStepper:
                 if not (math.isfinite(value) and 0.0 <= value <= self.max_actuation_n):
                     raise ParameterError(
                         f"{side} actuation force {value!r} N: allowed a finite force from 0 to"
-                        f" {self.max_actuation_n:g} N")
+                        f" {self.max_actuation_n:g} N"
+                    )
             tl = tr = np.zeros(1)
             fl = np.array([left])
             fr = np.array([right])
         rows = -(-n_steps // record_every)
         out = np.empty((rows, L.N_COLUMNS))
         first = self._step
-        written = kernel.rk4_advance(self._y, self._step, self.dt_s, n_steps, self._p, tl, fl,
-                                     tr, fr, 0, self._kstate, self._fstate, self._settle_steps,
-                                     record_every, out)
+        written = kernel.rk4_advance(
+            self._y,
+            self._step,
+            self.dt_s,
+            n_steps,
+            self._p,
+            tl,
+            fl,
+            tr,
+            fr,
+            0,
+            self._kstate,
+            self._fstate,
+            self._settle_steps,
+            record_every,
+            out,
+        )
         if self._kstate[L.K_STATUS]:
             self.status = StepperStatus.FAILED
             raise SimulationError(
                 f"non-finite state at t = {(first + written * record_every) * self.dt_s:.6f} s"
-                f" with step {self.dt_s:g} s")
+                f" with step {self.dt_s:g} s"
+            )
         self._step += n_steps
         return SampleBlock(out[:written], first, self.dt_s * record_every)
 
-    def run(self, duration_s: float, *, record_every: int = 1, chunk_steps: int = 100_000,
-            progress=None) -> SampleBlock:
+    def run(
+        self, duration_s: float, *, record_every: int = 1, chunk_steps: int = 100_000, progress=None
+    ) -> SampleBlock:
         """Advance until ``duration_s`` (from the current time) and return all samples."""
         total = round(duration_s / self.dt_s)
         blocks = []
@@ -179,5 +208,8 @@ class FixedStepStepper:
             done += n
             if progress is not None:
                 progress(done / total)
-        return SampleBlock.concatenate(blocks) if blocks else SampleBlock(
-            np.empty((0, L.N_COLUMNS)), self._step, self.dt_s * record_every)
+        return (
+            SampleBlock.concatenate(blocks)
+            if blocks
+            else SampleBlock(np.empty((0, L.N_COLUMNS)), self._step, self.dt_s * record_every)
+        )

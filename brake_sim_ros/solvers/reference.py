@@ -50,8 +50,9 @@ class ReferenceResult:
     message: str = ""
 
 
-def default_sample_times(duration_s: float, fine_dt_s: float = 1e-5, fine_until_s: float = 1.0,
-                         coarse_dt_s: float = 1e-3) -> np.ndarray:
+def default_sample_times(
+    duration_s: float, fine_dt_s: float = 1e-5, fine_until_s: float = 1.0, coarse_dt_s: float = 1e-3
+) -> np.ndarray:
     """Dense sampling over the impacting regime, coarse after it, s."""
     fine_end = min(fine_until_s, duration_s)
     fine = np.arange(0.0, fine_end, fine_dt_s)
@@ -59,8 +60,13 @@ def default_sample_times(duration_s: float, fine_dt_s: float = 1e-5, fine_until_
     return np.concatenate([fine, coarse])
 
 
-def run_reference(setup: BrakeSetup, duration_s: float, *, rtol: float = 1e-9,
-                  sample_times: np.ndarray | None = None) -> ReferenceResult:
+def run_reference(
+    setup: BrakeSetup,
+    duration_s: float,
+    *,
+    rtol: float = 1e-9,
+    sample_times: np.ndarray | None = None,
+) -> ReferenceResult:
     """Integrate ``setup`` over ``[0, duration_s]`` and sample it at ``sample_times``."""
     p = pack(setup.params, setup.defects, setup.options)
     y = initial_state(setup.params, setup.defects)
@@ -79,8 +85,9 @@ def run_reference(setup: BrakeSetup, duration_s: float, *, rtol: float = 1e-9,
         modes[i] = L.CONTACT_ON if _eps(p, base, y[L.Y_LEFT_ANGLE + i]) > 0 else L.CONTACT_OFF
     locked = 0
     lock_loss = 0.0
-    result = ReferenceResult(SampleBlock(out, 0, 0.0), {"left": [], "right": []},
-                             {"left": [], "right": []})
+    result = ReferenceResult(
+        SampleBlock(out, 0, 0.0), {"left": [], "right": []}, {"left": [], "right": []}
+    )
     dydt = np.zeros(L.N_STATE)
     counter = [0]
 
@@ -101,22 +108,35 @@ def run_reference(setup: BrakeSetup, duration_s: float, *, rtol: float = 1e-9,
         for i, base in enumerate(SHOE_BASES):
             if p[base + L.S_ENABLED] <= 0:
                 continue
-            ev = _shoe_event(p, base, i, 0.0 if modes[i] == L.CONTACT_OFF
-                             else SEPARATION_HYSTERESIS_M)
+            ev = _shoe_event(
+                p, base, i, 0.0 if modes[i] == L.CONTACT_OFF else SEPARATION_HYSTERESIS_M
+            )
             ev.terminal = True
             ev.direction = 1.0 if modes[i] == L.CONTACT_OFF else -1.0
             events.append(ev)
         if not locked and L.CONTACT_ON in modes:
+
             def lock_event(_t: float, yy: np.ndarray) -> float:
                 return abs(yy[L.Y_DRUM_SPEED]) * radius - v_lock
+
             lock_event.terminal = True
             lock_event.direction = -1.0
             events.append(lock_event)
-        sol = solve_ivp(fun, (t, segment_end), y, method="DOP853", rtol=rtol, atol=atol,
-                        events=events, dense_output=True)
+        sol = solve_ivp(
+            fun,
+            (t, segment_end),
+            y,
+            method="DOP853",
+            rtol=rtol,
+            atol=atol,
+            events=events,
+            dense_output=True,
+        )
         if sol.status == -1:
             result.success, result.message = False, sol.message
-            raise SimulationError(f"reference solver failed at t = {sol.t[-1]:.6f} s: {sol.message}")
+            raise SimulationError(
+                f"reference solver failed at t = {sol.t[-1]:.6f} s: {sol.message}"
+            )
         t_end = float(sol.t[-1])
         # sample everything inside [t, t_end) with this segment's dense output
         stop = np.searchsorted(times, t_end, side="left")
@@ -152,7 +172,8 @@ def run_reference(setup: BrakeSetup, duration_s: float, *, rtol: float = 1e-9,
             for i, base in enumerate(SHOE_BASES):
                 eps = _eps(p, base, y[L.Y_LEFT_ANGLE + i])
                 if (modes[i] == L.CONTACT_OFF and eps > 0.0) or (
-                        modes[i] == L.CONTACT_ON and eps < -SEPARATION_HYSTERESIS_M):
+                    modes[i] == L.CONTACT_ON and eps < -SEPARATION_HYSTERESIS_M
+                ):
                     _flip(modes, i, t, result)
         elif t >= segment_end and bounds:
             segment_end = bounds.pop(0)

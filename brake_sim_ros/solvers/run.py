@@ -39,9 +39,14 @@ class RunResult:
         return self.metrics.stop_time_s
 
 
-def run_scenario(scenario: Scenario, *, duration_s: float | None = None,
-                 method: str | None = None, dt_s: float | None = None,
-                 progress: Callable[[float], None] | None = None) -> RunResult:
+def run_scenario(
+    scenario: Scenario,
+    *,
+    duration_s: float | None = None,
+    method: str | None = None,
+    dt_s: float | None = None,
+    progress: Callable[[float], None] | None = None,
+) -> RunResult:
     """Integrate ``scenario`` over its duration (or ``duration_s``) and analyse it."""
     duration = scenario.duration_s if duration_s is None else duration_s
     method = method or scenario.solver.method
@@ -55,5 +60,10 @@ def run_scenario(scenario: Scenario, *, duration_s: float | None = None,
         samples = stepper.run(duration, progress=progress)
         cpu = time.process_time() - start
         stop, n = stepper.stop_time_s, stepper.step_index
-    return RunResult(samples=samples, metrics=event_metrics(samples, stop_time_s=stop), cpu_s=cpu,
-                     n_steps=n, method=method)
+    return RunResult(
+        samples=samples,
+        metrics=event_metrics(samples, stop_time_s=stop),
+        cpu_s=cpu,
+        n_steps=n,
+        method=method,
+    )

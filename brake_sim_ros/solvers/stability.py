@@ -72,6 +72,7 @@ def rk4_stable_step(lam: complex) -> float:
 
 def _loaded_angle(p: np.ndarray, base: int, force_n: float, drum_speed: float) -> float:
     """Shoe angle where actuation, contact and sliding friction balance (rad)."""
+
     def eps(theta: float) -> float:
         return kernel.shoe_eval(p, base, theta, 0.0, drum_speed, 0.0, L.CONTACT_AUTO)[2]
 
@@ -91,8 +92,9 @@ def _loaded_angle(p: np.ndarray, base: int, force_n: float, drum_speed: float) -
     return brentq(moment, onset, upper, xtol=1e-15)
 
 
-def _jacobian(y: np.ndarray, p: np.ndarray, fe: tuple[float, float], locked: int,
-              modes: tuple[int, int]) -> np.ndarray:
+def _jacobian(
+    y: np.ndarray, p: np.ndarray, fe: tuple[float, float], locked: int, modes: tuple[int, int]
+) -> np.ndarray:
     n = 8
     jac = np.zeros((n, n))
     f_plus = np.zeros(L.N_STATE)
@@ -119,8 +121,10 @@ def step_limit(setup, max_actuation_n: float, *, packed: np.ndarray | None = Non
     v_lock = p[L.P_FRICTION_SMOOTHING_SPEED]
     direction = 1.0 if setup.params.driveline.initial_speed_rad_s >= 0.0 else -1.0
     drum_speed = direction * v_lock / radius
-    gains = (p[L.P_SHOE_BASE + L.S_ACTUATION_GAIN],
-             p[L.P_SHOE_BASE + L.SHOE_STRIDE + L.S_ACTUATION_GAIN])
+    gains = (
+        p[L.P_SHOE_BASE + L.S_ACTUATION_GAIN],
+        p[L.P_SHOE_BASE + L.SHOE_STRIDE + L.S_ACTUATION_GAIN],
+    )
     fe = (max_actuation_n * gains[0], max_actuation_n * gains[1])
     y = np.zeros(L.N_STATE)
     bases = (L.P_SHOE_BASE, L.P_SHOE_BASE + L.SHOE_STRIDE)
@@ -129,24 +133,35 @@ def step_limit(setup, max_actuation_n: float, *, packed: np.ndarray | None = Non
         y[L.Y_LEFT_ANGLE + i] = _loaded_angle(p, base, max(fe[i], 1.0), 100.0 * direction)
     y[L.Y_DRUM_SPEED] = y[L.Y_FLYWHEEL_SPEED] = drum_speed
     on = (L.CONTACT_ON, L.CONTACT_ON)
-    eigs = np.concatenate([
-        np.linalg.eigvals(_jacobian(y, p, fe, 0, on)),
-        np.linalg.eigvals(_jacobian(y, p, fe, 1, on)),
-    ])
+    eigs = np.concatenate(
+        [
+            np.linalg.eigvals(_jacobian(y, p, fe, 0, on)),
+            np.linalg.eigvals(_jacobian(y, p, fe, 1, on)),
+        ]
+    )
     stable = min((rk4_stable_step(complex(lam)) for lam in eigs), default=math.inf)
     fastest = max(abs(lam.imag) for lam in eigs)
     resolution = 2.0 * math.pi / (STEPS_PER_PERIOD * fastest) if fastest > 0 else math.inf
     stiffest = max(abs(lam) for lam in eigs)
     limit = min(STABILITY_MARGIN * stable, resolution)
     if limit == resolution:
-        reason = (f"the fastest oscillation ({fastest / (2 * math.pi):.0f} Hz, contact stiffness"
-                  f" {p[L.P_CONTACT_STIFFNESS]:.3g} N/m) needs at least {STEPS_PER_PERIOD} steps"
-                  " per period")
+        reason = (
+            f"the fastest oscillation ({fastest / (2 * math.pi):.0f} Hz, contact stiffness"
+            f" {p[L.P_CONTACT_STIFFNESS]:.3g} N/m) needs at least {STEPS_PER_PERIOD} steps"
+            " per period"
+        )
     else:
-        reason = (f"RK4 stability (with a {100 * (1 - STABILITY_MARGIN):.0f} % margin) of the"
-                  f" stiffest mode, rate {stiffest:.3g} 1/s: friction smoothed over"
-                  f" {v_lock:g} m/s under {max_actuation_n:g} N of actuation, and contact damping"
-                  f" {p[L.P_CONTACT_DAMPING]:g} N s/m")
-    return StepLimit(max_step_s=limit, stability_step_s=stable, resolution_step_s=resolution,
-                     fastest_frequency_hz=fastest / (2 * math.pi), stiffest_rate_per_s=stiffest,
-                     reason=reason)
+        reason = (
+            f"RK4 stability (with a {100 * (1 - STABILITY_MARGIN):.0f} % margin) of the"
+            f" stiffest mode, rate {stiffest:.3g} 1/s: friction smoothed over"
+            f" {v_lock:g} m/s under {max_actuation_n:g} N of actuation, and contact damping"
+            f" {p[L.P_CONTACT_DAMPING]:g} N s/m"
+        )
+    return StepLimit(
+        max_step_s=limit,
+        stability_step_s=stable,
+        resolution_step_s=resolution,
+        fastest_frequency_hz=fastest / (2 * math.pi),
+        stiffest_rate_per_s=stiffest,
+        reason=reason,
+    )

@@ -41,9 +41,20 @@ LOSSLESS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
 def client(tmp_path_factory):
     log = tmp_path_factory.mktemp("node") / "node.log"
     node = NodeProcess.start(
-        ["--ros-args", "-p", "paused:=true", "-p", "diagnostics_period_s:=0.1",
-         "-p", f"max_actuation_force_n:={MAX_FORCE}", "-p", "state_rate_hz:=1000.0"],
-        domain_id=DOMAIN, log_path=log)
+        [
+            "--ros-args",
+            "-p",
+            "paused:=true",
+            "-p",
+            "diagnostics_period_s:=0.1",
+            "-p",
+            f"max_actuation_force_n:={MAX_FORCE}",
+            "-p",
+            "state_rate_hz:=1000.0",
+        ],
+        domain_id=DOMAIN,
+        log_path=log,
+    )
     sim = SimClient(DOMAIN, stream_qos=LOSSLESS)
     try:
         sim.wait_for_node(30.0)
@@ -57,8 +68,13 @@ def client(tmp_path_factory):
 def sim(client):
     """The client, with the node reset to t = 0 and the symmetric defaults."""
     assert client.reset(scenario="symmetric").success
-    client.set_parameters({"on_command_timeout": "profile", "command_timeout_s": 0.2,
-                           "command_ramp_rate_n_per_s": 5000.0})
+    client.set_parameters(
+        {
+            "on_command_timeout": "profile",
+            "command_timeout_s": 0.2,
+            "command_ramp_rate_n_per_s": 5000.0,
+        }
+    )
     client.forget()
     return client
 
@@ -70,8 +86,11 @@ def step(sim: SimClient, state_stride: int = STATE_STRIDE, **request) -> None:
     last = response.sample_index
     sim.wait_for(lambda: sim.next_sample_index == last + 1, 10.0, "the stepped samples")
     last_state = last - last % state_stride
-    sim.wait_for(lambda: sim.rx.states and sim.rx.states[-1].sample_index == last_state, 10.0,
-                 "the stepped states")
+    sim.wait_for(
+        lambda: sim.rx.states and sim.rx.states[-1].sample_index == last_state,
+        10.0,
+        "the stepped states",
+    )
 
 
 def command_and_sync(sim: SimClient, left: float, right: float) -> None:
@@ -80,8 +99,11 @@ def command_and_sync(sim: SimClient, left: float, right: float) -> None:
     for _ in range(3):  # a best-effort subscription may, rarely, lose one
         sim.command(left, right)
         try:
-            sim.wait_for(lambda: int(sim.diagnostics()["commands_accepted"]) > before, 1.0,
-                         "the command in /diagnostics")
+            sim.wait_for(
+                lambda: int(sim.diagnostics()["commands_accepted"]) > before,
+                1.0,
+                "the command in /diagnostics",
+            )
             return
         except TimeoutError:
             continue
@@ -105,13 +127,15 @@ def assert_stream_equals(sim: SimClient, expected_rows: np.ndarray, first_index:
     np.testing.assert_array_equal(got["index"], first_index + np.arange(len(expected_rows)))
     for side in ("left", "right"):
         for axis in ("fx", "fy"):
-            np.testing.assert_array_equal(got[f"{side}_{axis}_n"],
-                                          expected_rows[:, COL[f"{side}_pivot_{axis}_n"]])
+            np.testing.assert_array_equal(
+                got[f"{side}_{axis}_n"], expected_rows[:, COL[f"{side}_pivot_{axis}_n"]]
+            )
 
 
 def actuation(sim: SimClient) -> dict[int, tuple[float, float]]:
-    return {s.sample_index: (s.left_actuation_force_n, s.right_actuation_force_n)
-            for s in sim.rx.states}
+    return {
+        s.sample_index: (s.left_actuation_force_n, s.right_actuation_force_n) for s in sim.rx.states
+    }
 
 
 def test_step_and_reset_are_deterministic_and_equal_the_offline_run(sim):
@@ -141,8 +165,9 @@ def test_command_overrides_the_profile_then_the_profile_resumes(sim):
     assert forces[6000][0] == pytest.approx(1300.0 * (t - 0.2) / 0.5)
     normal = {s.sample_index: s.left_normal_force_n for s in sim.rx.states}
     assert max(normal[k] for k in range(1000, 6000, STATE_STRIDE)) > 1000.0  # shoes pressed
-    assert_stream_equals(sim, offline([(1000, None, None), (5000, (1500.0, 1200.0), None),
-                                       (2500, None, None)]))
+    assert_stream_equals(
+        sim, offline([(1000, None, None), (5000, (1500.0, 1200.0), None), (2500, None, None)])
+    )
 
 
 def test_hold_and_ramp_to_zero_after_commands_stop(sim):
@@ -156,8 +181,9 @@ def test_hold_and_ramp_to_zero_after_commands_stop(sim):
 
     assert sim.reset().success
     sim.forget()
-    assert sim.set_parameters({"on_command_timeout": "ramp_to_zero",
-                               "command_ramp_rate_n_per_s": 10_000.0})[0].successful
+    assert sim.set_parameters(
+        {"on_command_timeout": "ramp_to_zero", "command_ramp_rate_n_per_s": 10_000.0}
+    )[0].successful
     step(sim, steps=500)
     command_and_sync(sim, 1000.0, 800.0)
     step(sim, steps=10_000)
@@ -174,11 +200,19 @@ def test_every_kind_of_bad_command_is_rejected_and_counted(sim):
     step(sim, steps=500)
     command_and_sync(sim, 700.0, 700.0)
     before = sim.next_diagnostics()
-    for left, right in [(math.nan, 1.0), (1.0, math.inf), (-math.inf, 1.0), (-0.5, 1.0),
-                        (MAX_FORCE + 1.0, 1.0)]:
+    for left, right in [
+        (math.nan, 1.0),
+        (1.0, math.inf),
+        (-math.inf, 1.0),
+        (-0.5, 1.0),
+        (MAX_FORCE + 1.0, 1.0),
+    ]:
         sim.command(left, right)
-    sim.wait_for(lambda: int(sim.diagnostics()["commands_rejected"])
-                 == int(before["commands_rejected"]) + 5, 5.0, "5 rejections counted")
+    sim.wait_for(
+        lambda: int(sim.diagnostics()["commands_rejected"]) == int(before["commands_rejected"]) + 5,
+        5.0,
+        "5 rejections counted",
+    )
     diag = sim.diagnostics()
     assert int(diag["commands_accepted"]) == int(before["commands_accepted"])
     assert "exceeds max_actuation_force_n" in diag["last_command_rejection"]
@@ -201,18 +235,21 @@ def test_defect_change_at_run_time_changes_the_shoe_and_the_ground_truth(sim):
         assert truth.header.stamp.sec == 1 and truth.header.stamp.nanosec == 0
         step(sim, steps=5000)
         scenario = load_scenario("symmetric")
-        changed = dataclasses.replace(scenario.setup, defects=Defects(
-            left=ShoeDefect(pivot_radius_change_pct=3.0)))
+        changed = dataclasses.replace(
+            scenario.setup, defects=Defects(left=ShoeDefect(pivot_radius_change_pct=3.0))
+        )
         expected = offline([(25_000, None, None), (5000, None, changed)])
         assert_stream_equals(sim, expected)
         baseline = offline([(30_000, None, None)])
         got = sim.chunk_arrays()
-        left_before = np.hypot(baseline[25_000:, COL["left_pivot_fx_n"]],
-                               baseline[25_000:, COL["left_pivot_fy_n"]])
+        left_before = np.hypot(
+            baseline[25_000:, COL["left_pivot_fx_n"]], baseline[25_000:, COL["left_pivot_fy_n"]]
+        )
         left_change = np.abs(got["left_magnitude_n"][25_000:] - left_before)
         assert left_change.mean() > 100.0  # newtons: the left shoe's pivot force moved
-        right_before = np.hypot(baseline[25_000:, COL["right_pivot_fx_n"]],
-                                baseline[25_000:, COL["right_pivot_fy_n"]])
+        right_before = np.hypot(
+            baseline[25_000:, COL["right_pivot_fx_n"]], baseline[25_000:, COL["right_pivot_fy_n"]]
+        )
         np.testing.assert_allclose(got["right_magnitude_n"][25_000:], right_before, rtol=1e-6)
     finally:
         sim.set_parameter("defects.left.pivot_radius_change_pct", 0.0)
@@ -230,8 +267,11 @@ def test_initial_angle_and_a_lone_actuation_share_change(sim):
         values = sim.get_parameters(["defects.right.actuation_share"])
         assert values["defects.right.actuation_share"] == pytest.approx(0.45)
         assert sim.reset().success
-        sim.wait_for(lambda: sim.rx.defects[-1].left_initial_angle_rad != 0.0, 5.0,
-                     "ground truth after the reset")
+        sim.wait_for(
+            lambda: sim.rx.defects[-1].left_initial_angle_rad != 0.0,
+            5.0,
+            "ground truth after the reset",
+        )
         truth = sim.rx.defects[-1]
         assert truth.left_initial_angle_rad == pytest.approx(math.radians(-1.0))
         assert truth.left_actuation_share == 0.55
@@ -239,8 +279,9 @@ def test_initial_angle_and_a_lone_actuation_share_change(sim):
         step(sim, steps=100)
         assert sim.rx.states[0].left_shoe_angle_rad == pytest.approx(math.radians(-1.0))
     finally:
-        sim.set_parameters({"defects.left.initial_angle_deg": 0.0,
-                            "defects.left.actuation_share": 0.5})
+        sim.set_parameters(
+            {"defects.left.initial_angle_deg": 0.0, "defects.left.actuation_share": 0.5}
+        )
 
 
 def test_every_kind_of_bad_parameter_is_refused_and_counted(sim):
@@ -253,16 +294,20 @@ def test_every_kind_of_bad_parameter_is_refused_and_counted(sim):
         sim.set_parameter("scenario", "case1_left_pivot_out"),
         sim.set_parameter("on_command_timeout", "stop"),
         sim.set_parameter("duration_s", 0.0),
-        sim.set_parameters_atomically({"defects.left.actuation_share": 0.6,
-                                       "defects.right.actuation_share": 0.6}),
+        sim.set_parameters_atomically(
+            {"defects.left.actuation_share": 0.6, "defects.right.actuation_share": 0.6}
+        ),
     ]
     assert not any(r.successful for r in refusals)
     assert "allowed a sum of exactly 1" in refusals[-1].reason
-    assert "allowed \"hold\", \"ramp_to_zero\", \"profile\"" in refusals[5].reason
+    assert 'allowed "hold", "ramp_to_zero", "profile"' in refusals[5].reason
     refusals.append(sim.set_parameter("no.such.parameter", 1.0))
     assert not refusals[-1].successful
-    sim.wait_for(lambda: int(sim.diagnostics()["parameter_changes_refused"])
-                 == before + len(refusals), 5.0, "refusals counted")
+    sim.wait_for(
+        lambda: int(sim.diagnostics()["parameter_changes_refused"]) == before + len(refusals),
+        5.0,
+        "refusals counted",
+    )
     assert "no.such.parameter" in sim.diagnostics()["last_parameter_refusal"]
     step(sim, steps=2000)  # the model is unchanged
     assert_stream_equals(sim, offline([(2000, None, None)]))
@@ -270,8 +315,12 @@ def test_every_kind_of_bad_parameter_is_refused_and_counted(sim):
 
 def test_chunk_rate_state_rate_and_clock_are_configurable(sim):
     try:
-        assert sim.set_parameters({"chunk_rate_hz": 1000.0, "state_rate_hz": 100.0,
-                                   "publish_clock": False}) and sim.next_diagnostics()
+        assert (
+            sim.set_parameters(
+                {"chunk_rate_hz": 1000.0, "state_rate_hz": 100.0, "publish_clock": False}
+            )
+            and sim.next_diagnostics()
+        )
         clocks = len(sim.rx.clocks)
         step(sim, steps=500, state_stride=250)
         assert [len(c.left_fx_n) for c in sim.rx.chunks] == [25] * 20
@@ -279,14 +328,18 @@ def test_chunk_rate_state_rate_and_clock_are_configurable(sim):
         sim.spin_for(0.2)
         assert len(sim.rx.clocks) == clocks
     finally:
-        sim.set_parameters({"chunk_rate_hz": 100.0, "state_rate_hz": 1000.0,
-                            "publish_clock": True})
+        sim.set_parameters({"chunk_rate_hz": 100.0, "state_rate_hz": 1000.0, "publish_clock": True})
 
 
 def test_step_service_refusals(sim):
-    for request in ({"steps": 0, "duration_s": 0.0}, {"steps": 10, "duration_s": 0.1},
-                    {"duration_s": -1.0}, {"duration_s": math.nan}, {"duration_s": 1e-6},
-                    {"duration_s": 61.0}):
+    for request in (
+        {"steps": 0, "duration_s": 0.0},
+        {"steps": 10, "duration_s": 0.1},
+        {"duration_s": -1.0},
+        {"duration_s": math.nan},
+        {"duration_s": 1e-6},
+        {"duration_s": 61.0},
+    ):
         response = sim.step(**request)
         assert not response.success, request
         assert response.message
@@ -301,10 +354,15 @@ def test_reset_to_another_scenario_and_seed(sim):
     try:
         response = sim.reset(scenario="case1_left_pivot_out", seed=7)
         assert response.success, response.message
-        sim.wait_for(lambda: sim.rx.defects and sim.rx.defects[-1].scenario
-                     == "case1_left_pivot_out", 5.0, "new ground truth")
+        sim.wait_for(
+            lambda: sim.rx.defects and sim.rx.defects[-1].scenario == "case1_left_pivot_out",
+            5.0,
+            "new ground truth",
+        )
         assert sim.get_parameters(["defects.left.pivot_radius_change_pct", "scenario"]) == {
-            "defects.left.pivot_radius_change_pct": 3.0, "scenario": "case1_left_pivot_out"}
+            "defects.left.pivot_radius_change_pct": 3.0,
+            "scenario": "case1_left_pivot_out",
+        }
         step(sim, steps=3000)
         setup = load_scenario("case1_left_pivot_out").setup
         assert_stream_equals(sim, offline([(3000, None, None)], setup=setup))

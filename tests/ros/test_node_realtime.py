@@ -61,9 +61,19 @@ def run(tmp_path_factory):
     """Start the node, record its whole 3 s run, stop it; return (client, node process)."""
     log = tmp_path_factory.mktemp("node") / "node.log"
     # started paused: the stream is recorded from sample 0 once discovery is complete
-    node = NodeProcess.start(["--duration", str(RUN_S), "--ros-args", "-p", "paused:=true",
-                              "-p", "diagnostics_period_s:=0.2"],
-                             domain_id=DOMAIN, log_path=log)
+    node = NodeProcess.start(
+        [
+            "--duration",
+            str(RUN_S),
+            "--ros-args",
+            "-p",
+            "paused:=true",
+            "-p",
+            "diagnostics_period_s:=0.2",
+        ],
+        domain_id=DOMAIN,
+        log_path=log,
+    )
     client = SimClient(DOMAIN, stream_qos=LOSSLESS)
     try:
         client.wait_for_node(30.0)
@@ -74,8 +84,9 @@ def run(tmp_path_factory):
             client.command(left, right)
         for name, value in BAD_PARAMETERS.items():
             client.refusals[name] = client.set_parameter(name, value)
-        client.wait_for(lambda: client.diagnostics().get("state") == "finished",
-                        RUN_S + 15.0, "end of the run")
+        client.wait_for(
+            lambda: client.diagnostics().get("state") == "finished", RUN_S + 15.0, "end of the run"
+        )
         client.wait_for(lambda: client.sample_count >= N_SAMPLES, 5.0, "all samples")
         client.final = client.next_diagnostics()
         yield client, node
@@ -100,8 +111,9 @@ def test_topics_types_qos_and_services(run):
         assert topics.get(topic) == [type_name], topic
 
     def offered(topic):
-        infos = [i for i in client.node.get_publishers_info_by_topic(topic)
-                 if i.node_name == "brake_sim"]
+        infos = [
+            i for i in client.node.get_publishers_info_by_topic(topic) if i.node_name == "brake_sim"
+        ]
         assert len(infos) == 1, topic
         return infos[0].qos_profile
 
@@ -129,8 +141,14 @@ def test_chunks_are_contiguous_and_complete(run):
     assert {len(c.left_fx_n) for c in chunks} == {250}  # 100 chunks per simulated second
     assert {c.sample_rate_hz for c in chunks} == {25_000.0}
     for c in chunks:
-        for name in ("left_fx_n", "left_fy_n", "right_fx_n", "right_fy_n",
-                     "left_magnitude_n", "right_magnitude_n"):
+        for name in (
+            "left_fx_n",
+            "left_fy_n",
+            "right_fx_n",
+            "right_fy_n",
+            "left_magnitude_n",
+            "right_magnitude_n",
+        ):
             assert np.isfinite(np.asarray(getattr(c, name))).all()
 
 
@@ -149,8 +167,12 @@ def test_stamps_are_simulated_time(run):
         assert ns(s.header.stamp) == s.sample_index * 40_000 == ns(j.header.stamp)
         assert s.header.frame_id == j.header.frame_id == "brake_backing_plate"
         assert list(j.name) == ["flywheel", "drum", "left_shoe", "right_shoe"]
-        assert list(j.position) == [s.flywheel_angle_rad, s.drum_angle_rad,
-                                    s.left_shoe_angle_rad, s.right_shoe_angle_rad]
+        assert list(j.position) == [
+            s.flywheel_angle_rad,
+            s.drum_angle_rad,
+            s.left_shoe_angle_rad,
+            s.right_shoe_angle_rad,
+        ]
     clocks = [ns(c.clock) for c in rx.clocks]
     assert clocks == sorted(clocks) and clocks[-1] == N_SAMPLES * 40_000
     for array in rx.diagnostics + rx.defects:
@@ -161,21 +183,25 @@ def test_the_stream_equals_the_offline_stepper(run):
     """Sample for sample: the bad commands and parameters changed nothing."""
     client, _ = run
     scenario = load_scenario("symmetric")
-    stepper = FixedStepStepper(scenario.setup, scenario.solver.dt_s,
-                               max_actuation_n=float(client.final["max_actuation_force_n"]))
+    stepper = FixedStepStepper(
+        scenario.setup,
+        scenario.solver.dt_s,
+        max_actuation_n=float(client.final["max_actuation_force_n"]),
+    )
     block = stepper.advance(N_SAMPLES)
     got = client.chunk_arrays()
     np.testing.assert_array_equal(got["index"], np.arange(N_SAMPLES))
     for side in ("left", "right"):
         np.testing.assert_array_equal(got[f"{side}_fx_n"], block[f"{side}_pivot_fx_n"])
         np.testing.assert_array_equal(got[f"{side}_fy_n"], block[f"{side}_pivot_fy_n"])
-        np.testing.assert_array_equal(got[f"{side}_magnitude_n"],
-                                      block.pivot_force_magnitude(side))
+        np.testing.assert_array_equal(got[f"{side}_magnitude_n"], block.pivot_force_magnitude(side))
     states = client.rx.states
-    np.testing.assert_array_equal([s.left_normal_force_n for s in states],
-                                  block["left_normal_force_n"][::250])
-    np.testing.assert_array_equal([s.drum_speed_rad_s for s in states],
-                                  block["drum_speed_rad_s"][::250])
+    np.testing.assert_array_equal(
+        [s.left_normal_force_n for s in states], block["left_normal_force_n"][::250]
+    )
+    np.testing.assert_array_equal(
+        [s.drum_speed_rad_s for s in states], block["drum_speed_rad_s"][::250]
+    )
 
 
 def test_bad_commands_and_parameters_are_refused_and_counted(run):
@@ -219,9 +245,11 @@ def test_ground_truth_is_latched_for_late_subscribers(run):
 
 
 def test_exit_at_end_prints_a_summary_and_exits_0(tmp_path):
-    node = NodeProcess.start(["--duration", "0.5", "--exit-at-end", "--ros-args",
-                              "-p", "real_time_factor:=0.0"],
-                             domain_id=domain_id_for(3), log_path=tmp_path / "node.log")
+    node = NodeProcess.start(
+        ["--duration", "0.5", "--exit-at-end", "--ros-args", "-p", "real_time_factor:=0.0"],
+        domain_id=domain_id_for(3),
+        log_path=tmp_path / "node.log",
+    )
     try:
         assert node.wait(60.0) == 0, node.output()
     finally:
@@ -232,16 +260,23 @@ def test_exit_at_end_prints_a_summary_and_exits_0(tmp_path):
     assert "commands accepted 0, rejected 0" in out
 
 
-@pytest.mark.parametrize(("args", "message"), [
-    (["--ros-args", "-p", "max_actuation_force_n:=5000.0"], "exceeds the limit"),
-    (["--scenario", "no_such_scenario"], "unknown scenario 'no_such_scenario'"),
-    (["--ros-args", "-p", "defects.left.initial_angle_deg:=10.0"], "inside the drum"),
-])
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["--ros-args", "-p", "max_actuation_force_n:=5000.0"], "exceeds the limit"),
+        (["--scenario", "no_such_scenario"], "unknown scenario 'no_such_scenario'"),
+        (["--ros-args", "-p", "defects.left.initial_angle_deg:=10.0"], "inside the drum"),
+    ],
+)
 def test_refuses_to_start_with_a_one_line_reason(args, message, tmp_path):
     start = time.monotonic()
-    proc = subprocess.run([sys.executable, "-m", "brake_sim_ros.ros.node", *args],
-                          env=ros_environment(domain_id_for(4)), capture_output=True,
-                          text=True, timeout=60)
+    proc = subprocess.run(
+        [sys.executable, "-m", "brake_sim_ros.ros.node", *args],
+        env=ros_environment(domain_id_for(4)),
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
     assert proc.returncode == 1, proc.stderr
     lines = [line for line in proc.stderr.splitlines() if line.startswith("brake_sim:")]
     assert len(lines) == 1 and message in lines[0], proc.stderr
