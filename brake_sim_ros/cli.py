@@ -141,10 +141,11 @@ def cmd_bench(args: argparse.Namespace) -> int:
     raise BrakeSimError(f"unknown benchmark '{args.what}': allowed core, node")
 
 
-def cmd_node(args: argparse.Namespace) -> int:
+def run_node(argv: list[str]) -> int:
+    """``brake-sim node ...``: the node parses its own options and ``--ros-args``."""
     from brake_sim_ros.ros.node import main as node_main
 
-    return node_main(["brake-sim node", *args.rest]) or 0
+    return node_main(["brake-sim node", *argv]) or 0
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -174,13 +175,16 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("rest", nargs=argparse.REMAINDER)
     p.set_defaults(func=cmd_bench)
 
-    p = sub.add_parser("node", help="run the ROS 2 node (arguments are passed on)")
-    p.add_argument("rest", nargs=argparse.REMAINDER)
-    p.set_defaults(func=cmd_node)
+    # handled before parsing (see main), listed here for --help
+    sub.add_parser("node", help="run the ROS 2 node: brake-sim node [--scenario S] [--duration S]"
+                   " [--exit-at-end] [--ros-args ...]")
     return parser
 
 
 def main(argv: list[str] | None = None) -> int:
+    argv = list(sys.argv[1:] if argv is None else argv)
+    if argv[:1] == ["node"]:
+        return run_node(argv[1:])
     parser = build_parser()
     args = parser.parse_args(argv)
     try:

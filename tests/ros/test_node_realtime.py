@@ -260,6 +260,33 @@ def test_exit_at_end_prints_a_summary_and_exits_0(tmp_path):
     assert "commands accepted 0, rejected 0" in out
 
 
+def test_brake_sim_node_command_runs_a_scenario_to_the_end():
+    """The README's main command, through the ``brake-sim`` CLI, shortened."""
+    proc = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "brake_sim_ros.cli",
+            "node",
+            "--scenario",
+            "case1_left_pivot_out",
+            "--duration",
+            "0.3",
+            "--exit-at-end",
+            "--ros-args",
+            "-p",
+            "real_time_factor:=0.0",
+        ],
+        env=ros_environment(domain_id_for(5)),
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    out = proc.stdout + proc.stderr
+    assert "case1_left_pivot_out" in out and "ended at simulated time 0.3000 s" in out
+
+
 @pytest.mark.parametrize(
     ("args", "message"),
     [
