@@ -176,8 +176,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_bench)
 
     # handled before parsing (see main), listed here for --help
-    sub.add_parser("node", help="run the ROS 2 node: brake-sim node [--scenario S] [--duration S]"
-                   " [--exit-at-end] [--ros-args ...]")
+    sub.add_parser(
+        "node",
+        help="run the ROS 2 node: brake-sim node [--scenario S] [--duration S]"
+        " [--exit-at-end] [--ros-args ...]",
+    )
     return parser
 
 

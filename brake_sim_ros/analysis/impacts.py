@@ -21,7 +21,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from brake_sim_ros.model import layout as L
 from brake_sim_ros.model.trajectory import SampleBlock
 
 CONTACT_WINDOW_S = (1.0, 6.0)
@@ -140,12 +139,6 @@ def shoe_metrics(
         end_of_impacting_s=end_impacting,
         contact_regime_force_n=contact,
     )
-
-
-def stop_time_from_samples(block: SampleBlock) -> float | None:
-    """First sample in the stopped regime (for blocks without a located lock instant)."""
-    stopped = np.flatnonzero(block["regime"] == L.REGIME_STOPPED)
-    return float(block.time_s[stopped[0]]) if stopped.size else None
 
 
 def event_metrics(

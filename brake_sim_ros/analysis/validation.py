@@ -121,7 +121,7 @@ class Check:
     passed: bool
 
 
-def checks(fig: dict, base: EventMetrics) -> list[Check]:
+def checks(fig: dict) -> list[Check]:
     """Every calibration target with its published figure, model figure and verdict."""
     sym = fig["symmetric"]
     out = []
@@ -304,7 +304,7 @@ def write_report(
     out_dir.mkdir(parents=True, exist_ok=True)
     base, runs = run_all(progress)
     fig = figures(base.metrics, runs)
-    check_list = checks(fig, base.metrics)
+    check_list = checks(fig)
     (out_dir / "report.md").write_text(markdown(fig, check_list, base.metrics), encoding="utf-8")
     (out_dir / "figures.json").write_text(json.dumps(fig, indent=2), encoding="utf-8")
     if json_path is not None:

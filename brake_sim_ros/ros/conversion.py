@@ -34,6 +34,15 @@ _JOINT_SPEEDS = (
     "right_speed_rad_s",
 )
 _NS_PER_S = 1_000_000_000
+# the per-sample arrays of a PivotForceChunk, all of one length
+PIVOT_CHUNK_ARRAYS = (
+    "left_fx_n",
+    "left_fy_n",
+    "right_fx_n",
+    "right_fy_n",
+    "left_magnitude_n",
+    "right_magnitude_n",
+)
 
 
 def stamp_ns(sample_index: int, dt_s: float) -> int:

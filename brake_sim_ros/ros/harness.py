@@ -32,7 +32,7 @@ from rclpy.qos import QoSProfile
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 
-from brake_sim_ros.ros import qos
+from brake_sim_ros.ros import conversion, qos
 
 NODE = "/brake_sim"
 
@@ -290,14 +290,7 @@ class SimClient:
     # -- collected data ------------------------------------------------------------------------
     def chunk_arrays(self) -> dict[str, np.ndarray]:
         """Received chunks concatenated: first indices checked contiguous by the caller."""
-        names = (
-            "left_fx_n",
-            "left_fy_n",
-            "right_fx_n",
-            "right_fy_n",
-            "left_magnitude_n",
-            "right_magnitude_n",
-        )
+        names = conversion.PIVOT_CHUNK_ARRAYS
         out = {
             name: np.concatenate([np.asarray(getattr(c, name)) for c in self.rx.chunks])
             for name in names

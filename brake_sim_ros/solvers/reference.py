@@ -18,7 +18,7 @@ from scipy.integrate import solve_ivp
 from brake_sim_ros.errors import SimulationError
 from brake_sim_ros.model import kernel
 from brake_sim_ros.model import layout as L
-from brake_sim_ros.model.assembly import initial_state, pack
+from brake_sim_ros.model.assembly import indentation_at, initial_state, pack
 from brake_sim_ros.model.trajectory import BrakeSetup, SampleBlock
 
 SHOE_BASES = (L.P_SHOE_BASE, L.P_SHOE_BASE + L.SHOE_STRIDE)
@@ -38,7 +38,7 @@ class ReferenceResult:
         samples: recorded samples at ``sample_times`` (SampleBlock, non-uniform allowed).
         onsets_s / separations_s: located contact onsets and separations per shoe, s.
         stop_time_s: located lock instant (None if the drum did not stop).
-        n_rhs: right-hand-side evaluations. success / message: solver outcome.
+        n_rhs: right-hand-side evaluations.
     """
 
     samples: SampleBlock
@@ -46,8 +46,6 @@ class ReferenceResult:
     separations_s: dict[str, list[float]] = field(default_factory=dict)
     stop_time_s: float | None = None
     n_rhs: int = 0
-    success: bool = True
-    message: str = ""
 
 
 def default_sample_times(
@@ -82,7 +80,9 @@ def run_reference(
     atol = np.array([1e-10] * 4 + [1e-8] * 4 + [1e-6] * 4)
     modes = [L.CONTACT_OFF, L.CONTACT_OFF]
     for i, base in enumerate(SHOE_BASES):
-        modes[i] = L.CONTACT_ON if _eps(p, base, y[L.Y_LEFT_ANGLE + i]) > 0 else L.CONTACT_OFF
+        modes[i] = (
+            L.CONTACT_ON if indentation_at(p, base, y[L.Y_LEFT_ANGLE + i]) > 0 else L.CONTACT_OFF
+        )
     locked = 0
     lock_loss = 0.0
     result = ReferenceResult(
@@ -133,7 +133,6 @@ def run_reference(
             dense_output=True,
         )
         if sol.status == -1:
-            result.success, result.message = False, sol.message
             raise SimulationError(
                 f"reference solver failed at t = {sol.t[-1]:.6f} s: {sol.message}"
             )
@@ -170,7 +169,7 @@ def run_reference(
             # Simultaneous events (a symmetric brake's shoes touch at the same instant) may
             # be reported one at a time; re-sync every shoe with the geometry.
             for i, base in enumerate(SHOE_BASES):
-                eps = _eps(p, base, y[L.Y_LEFT_ANGLE + i])
+                eps = indentation_at(p, base, y[L.Y_LEFT_ANGLE + i])
                 if (modes[i] == L.CONTACT_OFF and eps > 0.0) or (
                     modes[i] == L.CONTACT_ON and eps < -SEPARATION_HYSTERESIS_M
                 ):
@@ -192,13 +191,9 @@ def _flip(modes: list[int], shoe: int, t: float, result: ReferenceResult) -> Non
         result.separations_s[side].append(t)
 
 
-def _eps(p: np.ndarray, base: int, theta: float) -> float:
-    return float(kernel.shoe_eval(p, base, theta, 0.0, 0.0, 0.0, L.CONTACT_AUTO)[2])
-
-
 def _shoe_event(p: np.ndarray, base: int, index: int, offset_m: float):
     def shoe_contact_event(_t: float, yy: np.ndarray) -> float:
-        return _eps(p, base, yy[L.Y_LEFT_ANGLE + index]) + offset_m
+        return indentation_at(p, base, yy[L.Y_LEFT_ANGLE + index]) + offset_m
 
     shoe_contact_event.shoe_index = index
     return shoe_contact_event

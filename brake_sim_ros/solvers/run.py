@@ -23,7 +23,8 @@ class RunResult:
         cpu_s: process CPU time spent integrating, s.
         n_steps: fixed steps taken (rk4) or right-hand-side evaluations (reference).
         method: "rk4" or "reference".
-        success / message: outcome, for callers that report rather than raise.
+
+    A run that fails raises (SimulationError, StepSizeError) instead of returning.
     """
 
     samples: SampleBlock
@@ -31,8 +32,6 @@ class RunResult:
     cpu_s: float
     n_steps: int
     method: str
-    success: bool = True
-    message: str = "finished"
 
     @property
     def stop_time_s(self) -> float | None:

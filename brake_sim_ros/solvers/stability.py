@@ -25,7 +25,7 @@ from scipy.optimize import brentq
 
 from brake_sim_ros.model import kernel
 from brake_sim_ros.model import layout as L
-from brake_sim_ros.model.assembly import pack
+from brake_sim_ros.model.assembly import indentation_at, pack
 
 STEPS_PER_PERIOD = 16
 STABILITY_MARGIN = 0.9
@@ -74,7 +74,7 @@ def _loaded_angle(p: np.ndarray, base: int, force_n: float, drum_speed: float) -
     """Shoe angle where actuation, contact and sliding friction balance (rad)."""
 
     def eps(theta: float) -> float:
-        return kernel.shoe_eval(p, base, theta, 0.0, drum_speed, 0.0, L.CONTACT_AUTO)[2]
+        return indentation_at(p, base, theta)
 
     hi = 0.5
     if eps(hi) <= 0.0:

@@ -31,7 +31,7 @@ from rclpy.qos import (  # noqa: E402
     ReliabilityPolicy,
 )
 
-from brake_sim_ros.ros import qos  # noqa: E402
+from brake_sim_ros.ros import conversion, qos  # noqa: E402
 from brake_sim_ros.ros.harness import (  # noqa: E402
     NodeProcess,
     SimClient,
@@ -141,14 +141,7 @@ def test_chunks_are_contiguous_and_complete(run):
     assert {len(c.left_fx_n) for c in chunks} == {250}  # 100 chunks per simulated second
     assert {c.sample_rate_hz for c in chunks} == {25_000.0}
     for c in chunks:
-        for name in (
-            "left_fx_n",
-            "left_fy_n",
-            "right_fx_n",
-            "right_fy_n",
-            "left_magnitude_n",
-            "right_magnitude_n",
-        ):
+        for name in conversion.PIVOT_CHUNK_ARRAYS:
             assert np.isfinite(np.asarray(getattr(c, name))).all()
 
 
