@@ -47,6 +47,7 @@ class RunStats:
     parameter_changes_refused: int = 0
     last_command_rejection: str = ""
     last_parameter_refusal: str = ""
+    sink_failures: int = 0  # recorders/viewers that failed and were dropped
     free_run_sim_s: float = 0.0  # simulated time advanced by the paced free run
     free_run_wall_s: float = 0.0  # wall time spent in the paced free run
 
@@ -124,6 +125,7 @@ def diagnostic_array(
         "parameter_changes_accepted": str(stats.parameter_changes_accepted),
         "parameter_changes_refused": str(stats.parameter_changes_refused),
         "last_parameter_refusal": stats.last_parameter_refusal,
+        "sink_failures": str(stats.sink_failures),
         "actuation_source": view.actuation_source,
         "stop_time_s": "" if view.stop_time_s is None else f"{view.stop_time_s:.6f}",
         "step_limit_s": f"{view.step_limit_s:.6g}",
@@ -153,6 +155,8 @@ def summary(view: RunView, stats: RunStats) -> str:
         else f"target {view.target_real_time_factor:g}"
     )
     failed = f" The simulation FAILED: {view.message}." if view.state == "failed" else ""
+    if stats.sink_failures:
+        failed += f" {stats.sink_failures} recorder/viewer failure(s): see the log."
     return (
         f"brake_sim: scenario '{view.scenario}' ended at simulated time"
         f" {view.sim_time_s:.4f} s ({view.sample_index} samples at {view.sample_rate_hz:g} Hz);"

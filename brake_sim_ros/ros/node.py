@@ -46,7 +46,7 @@ from sensor_msgs.msg import JointState
 
 from brake_sim_ros.errors import BrakeSimError, ParameterError
 from brake_sim_ros.model.trajectory import BrakeSetup, SampleBlock
-from brake_sim_ros.ros import conversion, qos
+from brake_sim_ros.ros import conversion, qos, stream
 from brake_sim_ros.ros import parameters as ros_params
 from brake_sim_ros.ros.commands import (
     ActuationPlanner,
@@ -56,6 +56,7 @@ from brake_sim_ros.ros.commands import (
 )
 from brake_sim_ros.ros.diagnostics import RunStats, RunView, diagnostic_array, summary
 from brake_sim_ros.ros.pacing import Pacer, PacingMode
+from brake_sim_ros.ros.stream import MessageSink, Topic
 from brake_sim_ros.scenarios import Scenario, load_scenario
 from brake_sim_ros.solvers.fixed_step import FixedStepStepper
 
@@ -143,13 +144,23 @@ class BrakeSimNode(Node):
         self.add_on_set_parameters_callback(self._on_set_parameters)
 
         # -- interfaces ----------------------------------------------------------------------
-        self._chunk_pub = self.create_publisher(PivotForceChunk, "~/pivot_forces", qos.STREAM)
-        self._state_pub = self.create_publisher(BrakeState, "~/state", qos.STREAM)
-        self._joint_pub = self.create_publisher(JointState, "~/joint_states", qos.STREAM)
-        self._defect_pub = self.create_publisher(DefectState, "~/defects", qos.LATCHED)
-        self._clock_pub = self.create_publisher(ClockMsg, "/clock", qos.CLOCK)
-        self._diag_pub = self.create_publisher(DiagnosticArray, "/diagnostics", qos.DIAGNOSTICS)
-        self.create_subscription(ActuationCommand, "~/actuation", self._on_actuation, qos.COMMANDS)
+        # canonical topic -> (publisher, the topic under the name this node resolved)
+        self._outputs: dict[Topic, tuple] = {}
+        for topic, msg_type, name, profile in (
+            (stream.PIVOT_FORCES, PivotForceChunk, "~/pivot_forces", qos.STREAM),
+            (stream.STATE, BrakeState, "~/state", qos.STREAM),
+            (stream.JOINT_STATES, JointState, "~/joint_states", qos.STREAM),
+            (stream.DEFECTS, DefectState, "~/defects", qos.LATCHED),
+            (stream.CLOCK, ClockMsg, "/clock", qos.CLOCK),
+            (stream.DIAGNOSTICS, DiagnosticArray, "/diagnostics", qos.DIAGNOSTICS),
+        ):
+            pub = self.create_publisher(msg_type, name, profile)
+            self._outputs[topic] = (pub, Topic(pub.topic_name, topic.type_name))
+        self._sinks: list[MessageSink] = []
+        sub = self.create_subscription(
+            ActuationCommand, "~/actuation", self._on_actuation, qos.COMMANDS
+        )
+        self._actuation_topic = Topic(sub.topic_name, stream.ACTUATION.type_name)
         self.create_service(StepSimulation, "~/step", self._on_step)
         self.create_service(ResetSimulation, "~/reset", self._on_reset)
         self._tick_timer = self.create_timer(
@@ -167,7 +178,7 @@ class BrakeSimNode(Node):
         self._measured_rtf = 0.0
         self._publish_defects()
         if self._publish_clock:
-            self._clock_pub.publish(conversion.clock(0))
+            self._emit(stream.CLOCK, conversion.clock(0), 0)
         limit = self._stepper.limit
         self.get_logger().info(
             f"scenario '{self.scenario.name}' ({self.scenario.source}): dt {self._stepper.dt_s:g}"
@@ -371,6 +382,11 @@ class BrakeSimNode(Node):
             )
             return
         self.stats.commands_accepted += 1
+        self._to_sinks(
+            self._actuation_topic,
+            msg,
+            conversion.stamp_ns(self._stepper.step_index, self._stepper.dt_s),
+        )
         if self._failure or (self._finished and not self._pacer.paused):
             self.stats.commands_dropped += 1  # no physics will run to use it
             return
@@ -452,17 +468,50 @@ class BrakeSimNode(Node):
         return True
 
     def _publish_block(self, block: SampleBlock) -> None:
-        self._chunk_pub.publish(conversion.pivot_force_chunk(block))
-        rows = conversion.state_rows(block, self._state_stride)
-        for row in rows:
-            self._state_pub.publish(conversion.brake_state(block, row))
-            self._joint_pub.publish(conversion.joint_state(block, row))
-        if self._publish_clock:
-            ns = conversion.stamp_ns(self._stepper.step_index, self._stepper.dt_s)
-            self._clock_pub.publish(conversion.clock(ns))
+        states = 0
+        messages = stream.block_messages(block, self._state_stride, with_clock=self._publish_clock)
+        for topic, msg, ns in messages:
+            self._emit(topic, msg, ns)
+            states += topic is stream.STATE
         self.stats.samples_published += len(block)
         self.stats.chunks_published += 1
-        self.stats.states_published += len(rows)
+        self.stats.states_published += states
+
+    def _emit(self, topic: Topic, msg, ns: int) -> None:
+        """Publish ``msg`` on ``topic`` and hand it to every sink, at simulated time ``ns``."""
+        pub, resolved = self._outputs[topic]
+        pub.publish(msg)
+        self._to_sinks(resolved, msg, ns)
+
+    def _to_sinks(self, topic: Topic, msg, ns: int) -> None:
+        for sink in list(self._sinks):
+            try:
+                sink.write(topic, msg, ns)
+            except Exception as exc:  # a sink's failure must not stop the simulation
+                self._drop_sink(sink, f"{type(exc).__name__}: {exc}")
+
+    def add_sink(self, sink: MessageSink) -> None:
+        """Receive every message from now on (what is published and accepted commands)."""
+        self._sinks.append(sink)
+
+    def _drop_sink(self, sink: MessageSink, reason: str) -> None:
+        self._sinks.remove(sink)
+        self.stats.sink_failures += 1
+        self.get_logger().error(f"{sink!r} stopped: {reason}; the simulation goes on")
+        try:
+            sink.close()
+        except Exception as exc:
+            self.get_logger().error(f"{sink!r} could not be closed: {exc}")
+
+    def close_sinks(self) -> None:
+        """Close every sink (flushes recordings); each failure is logged, none is raised."""
+        for sink in list(self._sinks):
+            self._sinks.remove(sink)
+            try:
+                sink.close()
+            except Exception as exc:
+                self.stats.sink_failures += 1
+                self.get_logger().error(f"{sink!r} could not be closed: {exc}")
 
     def _fail(self, message: str) -> None:
         self._failure = message
@@ -541,7 +590,7 @@ class BrakeSimNode(Node):
         self._pacer.restart(now, 0)
         self._publish_defects()
         if self._publish_clock:
-            self._clock_pub.publish(conversion.clock(0))
+            self._emit(stream.CLOCK, conversion.clock(0), 0)
         response.success = True
         response.message = (
             f"reset to t = 0 with scenario '{self.scenario.name}' (seed {self._seed})"
@@ -573,15 +622,15 @@ class BrakeSimNode(Node):
     # -- ground truth and diagnostics --------------------------------------------------------
     def _publish_defects(self) -> None:
         setup = self._stepper.setup
-        self._defect_pub.publish(
-            conversion.defect_state(
-                scenario=self.scenario.name,
-                params=setup.params,
-                defects=setup.defects,
-                initial_angles_deg=self._run_initial_angles,
-                ns=conversion.stamp_ns(self._stepper.step_index, self._stepper.dt_s),
-            )
+        ns = conversion.stamp_ns(self._stepper.step_index, self._stepper.dt_s)
+        msg = conversion.defect_state(
+            scenario=self.scenario.name,
+            params=setup.params,
+            defects=setup.defects,
+            initial_angles_deg=self._run_initial_angles,
+            ns=ns,
         )
+        self._emit(stream.DEFECTS, msg, ns)
 
     def run_view(self) -> RunView:
         if self._failure:
@@ -620,8 +669,10 @@ class BrakeSimNode(Node):
         new_misses = self.stats.deadline_misses - last_misses
         self._diag_last = (now, self.stats.steps_done, self.stats.deadline_misses)
         ns = conversion.stamp_ns(self._stepper.step_index, self._stepper.dt_s)
-        self._diag_pub.publish(
-            diagnostic_array(self.run_view(), self.stats, ns=ns, new_misses=new_misses)
+        self._emit(
+            stream.DIAGNOSTICS,
+            diagnostic_array(self.run_view(), self.stats, ns=ns, new_misses=new_misses),
+            ns,
         )
 
     def summary(self) -> str:
@@ -693,6 +744,7 @@ def main(args: list[str] | None = None) -> int:
         return 0
     finally:
         if node is not None:
+            node.close_sinks()
             node.destroy_node()
         rclpy.try_shutdown()
 
