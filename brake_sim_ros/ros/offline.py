@@ -1,0 +1,86 @@
+"""The node's message stream, produced offline: no DDS, no pacing, as fast as the CPU goes.
+
+:func:`offline_messages` steps a scenario exactly as :class:`~brake_sim_ros.ros.node.
+BrakeSimNode` does with its default run parameters and no actuation commands (same step,
+same chunking, same state decimation, same /clock), so the sequence it yields equals what
+the node publishes for the same scenario, message for message. /diagnostics is the one
+topic it does not produce: that is a wall-clock report of a live node.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from dataclasses import dataclass
+from typing import Any
+
+from brake_sim_ros.ros import conversion, stream
+from brake_sim_ros.ros import parameters as ros_params
+from brake_sim_ros.ros.stream import Topic
+from brake_sim_ros.scenarios import Scenario
+from brake_sim_ros.solvers.fixed_step import FixedStepStepper
+
+
+def _default(name: str):
+    return next(s.default for s in ros_params.run_parameter_specs() if s.name == name)
+
+
+@dataclass(frozen=True)
+class StreamSettings:
+    """The run parameters of the node that shape its stream (same names, same defaults)."""
+
+    chunk_rate_hz: float = _default("chunk_rate_hz")
+    state_rate_hz: float = _default("state_rate_hz")
+    publish_clock: bool = _default("publish_clock")
+
+    def steps_per(self, rate_hz: float, dt_s: float) -> int:
+        """Samples per ``rate_hz`` period, as the node rounds it (at least 1)."""
+        return max(1, round(conversion.sample_rate_hz(dt_s) / rate_hz))
+
+
+def offline_stepper(scenario: Scenario) -> FixedStepStepper:
+    """The stepper the node would build for ``scenario`` (same step, same force limit)."""
+    max_force, _note = ros_params.auto_max_actuation_force(scenario.setup, scenario.solver.dt_s)
+    return FixedStepStepper(scenario.setup, scenario.solver.dt_s, max_actuation_n=max_force)
+
+
+def offline_messages(
+    scenario: Scenario,
+    *,
+    duration_s: float | None = None,
+    settings: StreamSettings | None = None,
+    stepper: FixedStepStepper | None = None,
+) -> Iterator[tuple[Topic, Any, int]]:
+    """Every message the node would publish for ``scenario``, with its simulated time (ns).
+
+    Args:
+        scenario: the scenario, actuated by its own force profile.
+        duration_s: simulated seconds (default: the scenario's duration).
+        settings: chunk and state rates, /clock on or off (default: the node's defaults).
+        stepper: a stepper to use (default :func:`offline_stepper`); it is reset first.
+    """
+    settings = settings or StreamSettings()
+    stepper = stepper or offline_stepper(scenario)
+    stepper.reset()
+    dt = stepper.dt_s
+    duration = scenario.duration_s if duration_s is None else duration_s
+    end = round(duration / dt)
+    chunk = settings.steps_per(settings.chunk_rate_hz, dt)
+    stride = settings.steps_per(settings.state_rate_hz, dt)
+    setup = stepper.setup
+    initial_angles = (setup.defects.left.initial_angle_deg, setup.defects.right.initial_angle_deg)
+    yield (
+        stream.DEFECTS,
+        conversion.defect_state(
+            scenario=scenario.name,
+            params=setup.params,
+            defects=setup.defects,
+            initial_angles_deg=initial_angles,
+            ns=0,
+        ),
+        0,
+    )
+    if settings.publish_clock:
+        yield stream.CLOCK, conversion.clock(0), 0
+    while stepper.step_index < end:
+        block = stepper.advance(min(chunk, end - stepper.step_index))
+        yield from stream.block_messages(block, stride, with_clock=settings.publish_clock)
