@@ -85,9 +85,7 @@ def main(argv: list[str] | None = None) -> int:
         f" {STEPPER_SHARE * n * dt / overall.median_s:.3g}"
     )
     t0 = time.perf_counter()
-    cal = calibrate_chunk_cost(
-        scenario.setup, dt, n, max_actuation_n=stepper.max_actuation_n
-    )
+    cal = calibrate_chunk_cost(scenario.setup, dt, n, max_actuation_n=stepper.max_actuation_n)
     wall = time.perf_counter() - t0
     verdict = check_realtime(
         cal.median_s,
