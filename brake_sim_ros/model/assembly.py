@@ -6,6 +6,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.optimize import brentq
 
 from brake_sim_ros.errors import ParameterError
 from brake_sim_ros.model import kernel
@@ -140,6 +141,81 @@ def _check_shoe(
             " inside the drum: allowed only defects that leave the shoe clear of the drum at"
             f" the start (running clearance {params.shoe.running_clearance_m * 1e3:.2f} mm)"
         )
+    if p[base + L.S_ENABLED] <= 0.0:
+        return
+    arms = contact_arms(p, base, math.radians(defect.initial_angle_deg))
+    mu = params.friction.coefficient
+    if arms is not None and mu >= arms.self_locking_coefficient:
+        raise ParameterError(
+            f"friction coefficient {mu:g} self-locks the {side} shoe when it leads: at first"
+            f" contact the friction arm about its pivot is h = {arms.friction_arm_m * 1e3:.1f}"
+            f" mm and the normal-force arm d = {arms.normal_arm_m * 1e3:.1f} mm, so friction"
+            " alone holds the shoe on the drum and the normal force grows without bound:"
+            f" allowed a coefficient below the self-locking limit d/h ="
+            f" {arms.self_locking_coefficient:.4f}"
+        )
+
+
+# Largest shoe rotation searched for the first contact, rad (about 30 deg): far beyond any
+# running clearance the parameters allow (10 % of the drum radius at the pivot radius).
+_ONSET_SEARCH_RAD = 0.5
+
+
+@dataclass(frozen=True)
+class ContactArms:
+    """Moment arms about a shoe's pivot where its lining first touches the drum.
+
+    Attributes:
+        onset_angle_rad: shoe angle at first contact (indentation 0), rad.
+        normal_arm_m: ``d``, distance from the pivot to the line of the normal force, m.
+        friction_arm_m: ``h``, distance from the pivot to the line of the friction force
+            (the drum tangent at the contact point), m.
+        actuation_arm_m: ``q``, distance from the pivot to the line of the actuation force, m.
+    """
+
+    onset_angle_rad: float
+    normal_arm_m: float
+    friction_arm_m: float
+    actuation_arm_m: float
+
+    @property
+    def self_locking_coefficient(self) -> float:
+        """``d / h``: from this friction coefficient up, a leading shoe self-locks.
+
+        The leading shoe's moment balance ``Fn d - mu Fn h = Fe q`` gives
+        ``Fn = Fe q / (d - mu h)``, finite only for ``mu < d / h``.
+        """
+        return self.normal_arm_m / self.friction_arm_m if self.friction_arm_m > 0 else math.inf
+
+
+def contact_arms(p: np.ndarray, base: int, start_angle_rad: float) -> ContactArms | None:
+    """Moment arms of the shoe at ``base`` at its first contact when it turns outward from
+    ``start_angle_rad``; None if it cannot reach the drum within 0.5 rad."""
+
+    def eps(theta: float) -> float:
+        return indentation_at(p, base, theta)
+
+    hi = start_angle_rad + _ONSET_SEARCH_RAD
+    if eps(hi) <= 0.0 or eps(start_angle_rad) >= 0.0:
+        return None
+    onset = brentq(eps, start_angle_rad, hi, xtol=1e-14)
+    out = kernel.shoe_eval(p, base, onset, 0.0, 0.0, 0.0, L.CONTACT_ON)
+    x, y = float(out[7]), float(out[8])
+    px, py = p[base + L.S_PIVOT_X], p[base + L.S_PIVOT_Y]
+    dist = math.hypot(x, y)
+    nx, ny = x / dist, y / dist  # the drum's outward normal at the contact point
+    ax, ay = x - px, y - py
+    phi = p[base + L.S_SIGN] * onset
+    c, sn = math.cos(phi), math.sin(phi)
+    tdx, tdy = p[base + L.S_TIP_X] - px, p[base + L.S_TIP_Y] - py
+    tx, ty = c * tdx - sn * tdy, sn * tdx + c * tdy
+    ex, ey = p[base + L.S_ACTUATION_DIR_X], p[base + L.S_ACTUATION_DIR_Y]
+    return ContactArms(
+        onset_angle_rad=float(onset),
+        normal_arm_m=abs(ax * ny - ay * nx),
+        friction_arm_m=abs(ax * nx + ay * ny),
+        actuation_arm_m=abs(tx * ey - ty * ex),
+    )
 
 
 def indentation_at(p: np.ndarray, base: int, theta_rad: float) -> float:

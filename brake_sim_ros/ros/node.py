@@ -59,6 +59,7 @@ from brake_sim_ros.ros.pacing import Pacer, PacingMode
 from brake_sim_ros.ros.stream import MessageSink, Topic
 from brake_sim_ros.scenarios import Scenario, load_scenario
 from brake_sim_ros.solvers.fixed_step import FixedStepStepper
+from brake_sim_ros.solvers.realtime import calibrate_chunk_cost, check_realtime
 
 NODE_NAME = "brake_sim"
 MAX_LAG_S = 0.5  # wall seconds of backlog that are caught up (see pacing)
@@ -140,6 +141,7 @@ class BrakeSimNode(Node):
         self._publish_clock = bool(self._param("publish_clock"))
         self._chunk_steps = self._steps_per(self._param("chunk_rate_hz"))
         self._state_stride = self._steps_per(self._param("state_rate_hz"))
+        self._check_keeps_up()
         self.add_pre_set_parameters_callback(self._pre_set_parameters)
         self.add_on_set_parameters_callback(self._on_set_parameters)
 
@@ -186,6 +188,35 @@ class BrakeSimNode(Node):
             f" max_actuation_force_n {self._stepper.max_actuation_n:g} N, duration"
             f" {self._duration_s():g} s, {self._chunk_steps} samples per chunk"
         )
+
+    def _check_keeps_up(self) -> None:
+        """Refuse to start when this machine cannot step the chunks in real time.
+
+        A calibration of a few ms measures the stepper's per-chunk cost here; the budget
+        logic is :func:`brake_sim_ros.solvers.realtime.check_realtime`.
+        """
+        factor = self._pacer.real_time_factor
+        if factor == 0.0:
+            return  # as fast as possible: nothing to keep up with
+        cost = calibrate_chunk_cost(
+            self._stepper.setup,
+            self._stepper.dt_s,
+            self._chunk_steps,
+            max_actuation_n=self._stepper.max_actuation_n,
+        )
+        verdict = check_realtime(
+            cost.median_s,
+            dt_s=self._stepper.dt_s,
+            chunk_steps=self._chunk_steps,
+            real_time_factor=factor,
+            label=f"scenario '{self.scenario.name}'",
+        )
+        if not verdict.ok:
+            raise BrakeSimError(
+                f"cannot keep real time: {verdict.message} (real_time_factor:=0.0 runs as"
+                " fast as possible)"
+            )
+        self.get_logger().info(f"real-time check: {verdict.message}")
 
     # -- parameter plumbing ----------------------------------------------------------------------
     def _param(self, name: str):

@@ -286,6 +286,9 @@ def test_brake_sim_node_command_runs_a_scenario_to_the_end():
         (["--ros-args", "-p", "max_actuation_force_n:=5000.0"], "exceeds the limit"),
         (["--scenario", "no_such_scenario"], "unknown scenario 'no_such_scenario'"),
         (["--ros-args", "-p", "defects.left.initial_angle_deg:=10.0"], "inside the drum"),
+        # 25 kHz at 1000x real time: 10 us of wall time per 250-step chunk, far below the
+        # stepper's cost on any machine
+        (["--ros-args", "-p", "real_time_factor:=1000.0"], "cannot keep real time"),
     ],
 )
 def test_refuses_to_start_with_a_one_line_reason(args, message, tmp_path):

@@ -1,0 +1,183 @@
+"""Can the streaming stepper keep up with the wall clock? Measurement and budget check.
+
+Pure logic plus a short calibration run; no ROS. A real-time run publishes one chunk of
+``chunk_steps`` physics steps every ``chunk_steps * dt_s / real_time_factor`` seconds of
+wall time (the chunk's wall period). The stepper may spend at most
+:data:`STEPPER_SHARE` of that period on a chunk: the rest is for converting and
+publishing the chunk, the executor, and timer jitter.
+
+The check is stated in terms of (stepper cost, dt, chunk steps, real-time factor), so a
+caller that chooses among solver presets can name the preset in the message through
+``label``.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from brake_sim_ros.model.trajectory import BrakeSetup
+from brake_sim_ros.solvers.fixed_step import FixedStepStepper
+
+# Share of a chunk's wall period the stepper may use. Publishing a 250-sample chunk and
+# its state messages costs the same order as stepping it in rclpy, so half the period is
+# left for that, the executor and scheduling jitter.
+STEPPER_SHARE = 0.5
+# Wall time the start-up calibration may spend stepping, s (a few ms, not seconds).
+CALIBRATION_WALL_S = 0.005
+MIN_CALIBRATION_CHUNKS = 5
+
+
+@dataclass(frozen=True)
+class CostStats:
+    """Distribution of the wall cost of one chunk, s."""
+
+    n_chunks: int
+    median_s: float
+    p99_s: float
+    p999_s: float
+    max_s: float
+
+    @classmethod
+    def of(cls, costs_s: np.ndarray) -> CostStats:
+        c = np.asarray(costs_s, dtype=float)
+        if c.size == 0:
+            raise ValueError("no chunk costs to summarise")
+        return cls(
+            n_chunks=int(c.size),
+            median_s=float(np.median(c)),
+            p99_s=float(np.quantile(c, 0.99)),
+            p999_s=float(np.quantile(c, 0.999)),
+            max_s=float(c.max()),
+        )
+
+
+@dataclass(frozen=True)
+class RealtimeVerdict:
+    """Outcome of :func:`check_realtime`.
+
+    Attributes:
+        ok: the stepper fits its share of the chunk period.
+        chunk_cost_s: the measured (or estimated) wall cost of one chunk, s.
+        chunk_period_s: wall time one chunk spans at the requested factor, s.
+        budget_s: ``STEPPER_SHARE x chunk_period_s``, s.
+        max_real_time_factor: the largest factor this cost keeps within the share.
+        message: one line for the user: measured cost, budget, and what to change.
+    """
+
+    ok: bool
+    chunk_cost_s: float
+    chunk_period_s: float
+    budget_s: float
+    max_real_time_factor: float
+    message: str
+
+
+def check_realtime(
+    chunk_cost_s: float,
+    *,
+    dt_s: float,
+    chunk_steps: int,
+    real_time_factor: float,
+    label: str = "",
+    share: float = STEPPER_SHARE,
+) -> RealtimeVerdict:
+    """Whether a stepper costing ``chunk_cost_s`` per chunk keeps ``real_time_factor``.
+
+    Args:
+        chunk_cost_s: wall cost of stepping one chunk, s (> 0).
+        dt_s: physics step, s.
+        chunk_steps: steps per chunk (>= 1).
+        real_time_factor: simulated seconds per wall second; 0 (as fast as possible)
+            always passes.
+        label: what is being run (scenario, solver preset), named in the message.
+        share: share of the chunk period the stepper may use (0 < share <= 1).
+    """
+    if not (math.isfinite(chunk_cost_s) and chunk_cost_s > 0):
+        raise ValueError(f"chunk_cost_s={chunk_cost_s!r}: allowed a finite cost > 0 s")
+    if not (math.isfinite(dt_s) and dt_s > 0) or chunk_steps < 1:
+        raise ValueError(f"dt_s={dt_s!r}, chunk_steps={chunk_steps!r}: allowed > 0 and >= 1")
+    if not (math.isfinite(real_time_factor) and real_time_factor >= 0):
+        raise ValueError(f"real_time_factor={real_time_factor!r}: allowed a finite factor >= 0")
+    if not 0 < share <= 1:
+        raise ValueError(f"share={share!r}: allowed 0 < share <= 1")
+    sim_s = chunk_steps * dt_s
+    max_factor = share * sim_s / chunk_cost_s
+    what = f" for {label}" if label else ""
+    if real_time_factor == 0:
+        return RealtimeVerdict(True, chunk_cost_s, math.inf, math.inf, max_factor, "")
+    period = sim_s / real_time_factor
+    budget = share * period
+    ok = chunk_cost_s <= budget
+    message = (
+        f"one chunk of {chunk_steps} steps of {dt_s:g} s{what} costs {1e6 * chunk_cost_s:.0f} us"
+        f" of wall time on this machine; at real_time_factor {real_time_factor:g} a chunk spans"
+        f" {1e6 * period:.0f} us and the stepper may use {100 * share:.0f} % of it"
+        f" ({1e6 * budget:.0f} us)"
+    )
+    if ok:
+        message += f": fits (up to real_time_factor {max_factor:.3g})"
+    else:
+        message += (
+            f": too slow. Lower real_time_factor to at most {max_factor:.3g}, or use a larger"
+            " step (a faster solver preset), or a less loaded machine"
+        )
+    return RealtimeVerdict(ok, chunk_cost_s, period, budget, max_factor, message)
+
+
+def measure_chunk_costs(
+    stepper: FixedStepStepper,
+    chunk_steps: int,
+    *,
+    max_chunks: int,
+    wall_budget_s: float = math.inf,
+    min_chunks: int = 1,
+    actuation_n: tuple[float, float] | None = None,
+    clock: Callable[[], float] = time.perf_counter,
+) -> np.ndarray:
+    """Wall cost of successive ``stepper.advance(chunk_steps)`` calls, s.
+
+    Stops after ``max_chunks`` chunks, or once ``wall_budget_s`` is spent and at least
+    ``min_chunks`` were taken. The stepper is advanced: pass one made for the purpose.
+    """
+    costs = []
+    start = clock()
+    while len(costs) < max_chunks:
+        t0 = clock()
+        stepper.advance(chunk_steps, actuation_n=actuation_n)
+        costs.append(clock() - t0)
+        if len(costs) >= min_chunks and clock() - start >= wall_budget_s:
+            break
+    return np.asarray(costs)
+
+
+def calibrate_chunk_cost(
+    setup: BrakeSetup,
+    dt_s: float,
+    chunk_steps: int,
+    *,
+    max_actuation_n: float,
+    wall_budget_s: float = CALIBRATION_WALL_S,
+) -> CostStats:
+    """Short calibration: the per-chunk cost of a throwaway stepper on this machine.
+
+    The shoes are driven by ``max_actuation_n`` from t = 0, so the calibration steps
+    through the contact code (impacts, then contact), the costlier branch of the model.
+    Takes about ``wall_budget_s`` of wall time (at least MIN_CALIBRATION_CHUNKS chunks).
+    """
+    stepper = FixedStepStepper(setup, dt_s, max_actuation_n=max_actuation_n)
+    stepper.advance(1)  # the compiled kernel is loaded outside the timed chunks
+    force = (max_actuation_n, max_actuation_n)
+    costs = measure_chunk_costs(
+        stepper,
+        chunk_steps,
+        max_chunks=10_000,
+        wall_budget_s=wall_budget_s,
+        min_chunks=MIN_CALIBRATION_CHUNKS,
+        actuation_n=force,
+    )
+    return CostStats.of(costs)
