@@ -166,7 +166,7 @@ class Plan:
         level: the chosen level.
         shoes: shoes kept in the model (the others are removed: held retracted, no forces).
         columns: recorded columns kept (names as in ``layout.COLUMNS`` plus
-            :data:`DERIVED_COLUMNS`), ``time_s`` first.
+            :data:`DERIVED_COLUMNS`), ``time_s`` first; without needs, ``layout.COLUMNS``.
         accuracy: the accuracy preset passed through, or None.
         reason: one sentence saying why this level was chosen.
     """
@@ -264,7 +264,7 @@ def plan(needs: Needs | None, *, model_shoes: tuple[str, ...] = SIDES) -> Plan:
         return Plan(
             LEVEL_BY_NAME["full"],
             model_shoes,
-            L.COLUMNS + DERIVED_COLUMNS,
+            L.COLUMNS,
             None,
             "the scenario states no [needs]: the full model, every signal",
         )
