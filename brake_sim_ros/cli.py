@@ -69,17 +69,35 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         scenario, duration_s=args.duration, method=args.method, dt_s=args.dt, progress=progress
     )
     m = result.metrics
+    chosen = result.plan
     sim_s = result.samples.time_s[-1] if len(result.samples) else 0.0
     rtf = sim_s / result.cpu_s if result.cpu_s > 0 else float("inf")
-    stop = f"{m.stop_time_s:.4f} s" if m.stop_time_s is not None else "not stopped"
-    unit = "steps" if result.method == "rk4" else "f-evals"
+    if m.stop_time_s is not None:
+        stop = f"{m.stop_time_s:.4f} s"
+    elif "stop_time" in chosen.level.outputs and chosen.shoes == scenario.setup.options.shoes:
+        stop = "not stopped"
+    else:
+        stop = "not delivered by this level"
+    unit = {"rk4": "steps", "reference": "f-evals"}.get(result.method, "RK4 steps")
+    print(
+        f"level {chosen.level.name} ({chosen.level.description}; shoes"
+        f" {', '.join(chosen.shoes)}): {chosen.reason}"
+    )
     print(
         f"scenario {scenario.name} ({result.method}): drum stop {stop};"
         f" cost {result.cpu_s:.3f} s CPU for {sim_s:.3f} s simulated"
-        f" ({rtf:.0f}x real time, {result.n_steps} {unit})"
+        f" ({rtf:.0f}x real time, {result.n_steps} {unit}); kept"
+        f" {len(result.samples.columns)} columns, {result.memory_bytes / 1e6:.2f} MB"
     )
+    impacts = "impacts" in chosen.level.outputs
     for side in ("left", "right"):
         s = m.shoe(side)
+        if not any(c.startswith(f"{side}_") for c in result.samples.columns):
+            print(f"  {side:5s}: not asked for")
+            continue
+        if not impacts:
+            print(f"  {side:5s}: contact-regime |F_pivot| {s.contact_regime_force_n:.1f} N")
+            continue
         first = s.onsets_s[0] if s.n_impacts else float("nan")
         print(
             f"  {side:5s}: {s.n_impacts} impacts, first at {first:.4f} s"
@@ -138,7 +156,11 @@ def cmd_bench(args: argparse.Namespace) -> int:
         from brake_sim_ros.ros.benchmark import main as bench_node
 
         return bench_node(args.rest)
-    raise BrakeSimError(f"unknown benchmark '{args.what}': allowed core, node")
+    if args.what == "fidelity":
+        from brake_sim_ros.solvers.fidelity_study import main as bench_fidelity
+
+        return bench_fidelity(args.rest)
+    raise BrakeSimError(f"unknown benchmark '{args.what}': allowed core, node, fidelity")
 
 
 def run_node(argv: list[str]) -> int:
@@ -170,8 +192,8 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("scenarios", help="list the built-in scenarios")
     p.set_defaults(func=cmd_scenarios)
 
-    p = sub.add_parser("bench", help="benchmarks that print figures (core, node)")
-    p.add_argument("what", choices=("core", "node"))
+    p = sub.add_parser("bench", help="benchmarks that print figures (core, node, fidelity)")
+    p.add_argument("what", choices=("core", "node", "fidelity"))
     p.add_argument("rest", nargs=argparse.REMAINDER)
     p.set_defaults(func=cmd_bench)
 

@@ -36,6 +36,8 @@ class RunResult:
             steps including substeps (contact_regime).
         method: "rk4", "reference" or "contact_regime".
         plan: the fidelity level and signals chosen for the scenario's needs.
+        model_stop_time_s: the instant the model locked, s, even where the level does not
+            deliver the stop time (for the fidelity study).
 
     A run that fails raises (SimulationError, StepSizeError) instead of returning.
     """
@@ -46,6 +48,7 @@ class RunResult:
     n_steps: int
     method: str
     plan: Plan
+    model_stop_time_s: float | None = None
 
     @property
     def stop_time_s(self) -> float | None:
@@ -159,4 +162,5 @@ def run_scenario(
         n_steps=n,
         method=method,
         plan=chosen,
+        model_stop_time_s=stop,
     )
