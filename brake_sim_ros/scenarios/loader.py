@@ -238,13 +238,13 @@ def _solver(ctx: _Ctx, data: Any) -> SolverSettings:
     )
 
 
-def _needs(ctx: _Ctx, data: Any) -> Needs:
+def _needs(ctx: _Ctx, data: Any, model_shoes: tuple[str, ...]) -> Needs:
     data = ctx.table(data, "needs", {"outputs", "shoes", "accuracy", "level"})
     if "outputs" not in data:
         raise ctx.fail("needs.outputs", None, f"a list of outputs from {list(OUTPUTS)}")
     lists = {}
     for key, vocabulary in (("outputs", tuple(OUTPUTS)), ("shoes", SIDES)):
-        value = data.get(key, list(SIDES))
+        value = data.get(key, list(model_shoes))
         if (
             not isinstance(value, list)
             or not value
@@ -301,7 +301,7 @@ def parse_scenario(text: str, source: str = "<string>") -> Scenario:
         actuation=_actuation(ctx, top.get("actuation", {})),
         options=_options(ctx, top.get("model", {})),
     )
-    needs = _needs(ctx, top["needs"]) if "needs" in top else None
+    needs = _needs(ctx, top["needs"], setup.options.shoes) if "needs" in top else None
     try:
         pack(setup.params, setup.defects, setup.options)
         plan(needs, model_shoes=setup.options.shoes)  # refuse needs no level can serve
