@@ -1,9 +1,10 @@
 """Scenario files (TOML): strict loading into a BrakeSetup plus run settings.
 
 A scenario names any parameter override, the defects, the actuation, the duration, the
-stepper and its step. Loading is strict: an unknown key, a wrong type, or a non-finite
-or out-of-range value is an error that names the file, the key, the value and what is
-allowed. See ``builtin/symmetric.toml`` for a commented example.
+stepper and its step, and optionally what it needs (``[needs]``: outputs, shoes, accuracy,
+forced level; see :mod:`brake_sim_ros.model.fidelity`). Loading is strict: an unknown key,
+a wrong type, or a non-finite or out-of-range value is an error that names the file, the
+key, the value and what is allowed. See ``builtin/symmetric.toml`` for a commented example.
 """
 
 from __future__ import annotations
