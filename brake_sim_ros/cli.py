@@ -69,17 +69,35 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         scenario, duration_s=args.duration, method=args.method, dt_s=args.dt, progress=progress
     )
     m = result.metrics
+    chosen = result.plan
     sim_s = result.samples.time_s[-1] if len(result.samples) else 0.0
     rtf = sim_s / result.cpu_s if result.cpu_s > 0 else float("inf")
-    stop = f"{m.stop_time_s:.4f} s" if m.stop_time_s is not None else "not stopped"
-    unit = "steps" if result.method == "rk4" else "f-evals"
+    if m.stop_time_s is not None:
+        stop = f"{m.stop_time_s:.4f} s"
+    elif "stop_time" in chosen.level.outputs and chosen.shoes == scenario.setup.options.shoes:
+        stop = "not stopped"
+    else:
+        stop = "not delivered by this level"
+    unit = {"rk4": "steps", "reference": "f-evals"}.get(result.method, "RK4 steps")
+    print(
+        f"level {chosen.level.name} ({chosen.level.description}; shoes"
+        f" {', '.join(chosen.shoes)}): {chosen.reason}"
+    )
     print(
         f"scenario {scenario.name} ({result.method}): drum stop {stop};"
         f" cost {result.cpu_s:.3f} s CPU for {sim_s:.3f} s simulated"
-        f" ({rtf:.0f}x real time, {result.n_steps} {unit})"
+        f" ({rtf:.0f}x real time, {result.n_steps} {unit}); kept"
+        f" {len(result.samples.columns)} columns, {result.memory_bytes / 1e6:.2f} MB"
     )
+    impacts = "impacts" in chosen.level.outputs
     for side in ("left", "right"):
         s = m.shoe(side)
+        if not any(c.startswith(f"{side}_") for c in result.samples.columns):
+            print(f"  {side:5s}: not asked for")
+            continue
+        if not impacts:
+            print(f"  {side:5s}: contact-regime |F_pivot| {s.contact_regime_force_n:.1f} N")
+            continue
         first = s.onsets_s[0] if s.n_impacts else float("nan")
         print(
             f"  {side:5s}: {s.n_impacts} impacts, first at {first:.4f} s"
@@ -129,20 +147,26 @@ def cmd_scenarios(args: argparse.Namespace) -> int:
 
 
 # --- bench ---------------------------------------------------------------------------
+# benchmark name -> (module with main(argv), what it measures); imported only when run
+BENCHMARKS = {
+    "core": ("brake_sim_ros.solvers.benchmark", "cost and accuracy of the fixed-step stepper"),
+    "node": ("brake_sim_ros.ros.benchmark", "the ROS node's real-time figures"),
+    "realtime": (
+        "brake_sim_ros.solvers.realtime_benchmark",
+        "worst-case cost per streaming chunk, against the real-time budget",
+    ),
+    "fidelity": (
+        "brake_sim_ros.solvers.fidelity_study",
+        "cost and error of each fidelity level against the full model",
+    ),
+}
+
+
 def cmd_bench(args: argparse.Namespace) -> int:
-    if args.what == "core":
-        from brake_sim_ros.solvers.benchmark import main as bench_core
+    import importlib
 
-        return bench_core(args.rest)
-    if args.what == "node":
-        from brake_sim_ros.ros.benchmark import main as bench_node
-
-        return bench_node(args.rest)
-    if args.what == "realtime":
-        from brake_sim_ros.solvers.realtime_benchmark import main as bench_realtime
-
-        return bench_realtime(args.rest)
-    raise BrakeSimError(f"unknown benchmark '{args.what}': allowed core, node, realtime")
+    module, _what = BENCHMARKS[args.what]
+    return int(importlib.import_module(module).main(args.rest) or 0)
 
 
 def run_node(argv: list[str]) -> int:
@@ -174,8 +198,12 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("scenarios", help="list the built-in scenarios")
     p.set_defaults(func=cmd_scenarios)
 
-    p = sub.add_parser("bench", help="benchmarks that print figures (core, node, realtime)")
-    p.add_argument("what", choices=("core", "node", "realtime"))
+    p = sub.add_parser(
+        "bench",
+        help="benchmarks that print figures: "
+        + "; ".join(f"{name}: {what}" for name, (_m, what) in BENCHMARKS.items()),
+    )
+    p.add_argument("what", choices=tuple(BENCHMARKS))
     p.add_argument("rest", nargs=argparse.REMAINDER)
     p.set_defaults(func=cmd_bench)
 

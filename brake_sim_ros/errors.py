@@ -19,3 +19,7 @@ class ScenarioError(BrakeSimError, ValueError):
 
 class SimulationError(BrakeSimError, RuntimeError):
     """The integration failed (non-finite state, solver failure)."""
+
+
+class FidelityError(BrakeSimError, ValueError):
+    """Needs that no model level can serve, or a forced level that cannot deliver them."""

@@ -96,6 +96,40 @@ def time_weighted_mean(t: np.ndarray, y: np.ndarray, start: float, end: float) -
     return float(np.trapezoid(yy, tt) / (tt[-1] - tt[0]))
 
 
+def contact_regime_force(
+    t: np.ndarray,
+    pivot_force_n: np.ndarray,
+    *,
+    stop_time_s: float | None,
+    window_s: tuple[float, float] = CONTACT_WINDOW_S,
+) -> float:
+    """Contact-regime pivot force: time-weighted mean ``|F_pivot|`` (N) over ``window_s``,
+    cut at the stop if the drum stops earlier."""
+    end = window_s[1] if stop_time_s is None else min(window_s[1], stop_time_s)
+    return time_weighted_mean(t, pivot_force_n, window_s[0], end)
+
+
+def contact_only_metrics(
+    block: SampleBlock,
+    side: str,
+    *,
+    stop_time_s: float | None,
+    window_s: tuple[float, float] = CONTACT_WINDOW_S,
+) -> ShoeMetrics:
+    """Metrics of a model without impacts (or a run that kept no impact signals): only the
+    contact-regime force, when the pivot force was kept; everything else empty or nan."""
+    force = float("nan")
+    if block.has(f"{side}_pivot_fx_n", f"{side}_pivot_fy_n"):
+        force = contact_regime_force(
+            block.time_s,
+            block.pivot_force_magnitude(side),
+            stop_time_s=stop_time_s,
+            window_s=window_s,
+        )
+    empty = np.empty(0)
+    return ShoeMetrics(empty, empty, empty, float("nan"), float("nan"), force)
+
+
 def shoe_metrics(
     block: SampleBlock,
     side: str,
@@ -129,8 +163,7 @@ def shoe_metrics(
         if lasts >= settle_s:
             end_impacting = float(t_on)
             break
-    end = window_s[1] if stop_time_s is None else min(window_s[1], stop_time_s)
-    contact = time_weighted_mean(t, fr, window_s[0], end)
+    contact = contact_regime_force(t, fr, stop_time_s=stop_time_s, window_s=window_s)
     return ShoeMetrics(
         onsets_s=onsets,
         separations_s=seps,

@@ -25,24 +25,44 @@ class BrakeSetup:
 
 @dataclass(frozen=True)
 class SampleBlock:
-    """Consecutive samples, one row per sample, columns as in ``layout.COLUMNS``.
+    """Consecutive samples, one row per sample, one column per name in ``columns``.
 
     Attributes:
-        data: float64 array, shape (n_samples, len(COLUMNS)). Units are in the column
+        data: float64 array, shape (n_samples, len(columns)). Units are in the column
             names; vectors are in the backing-plate frame.
         first_index: running index of the first row since the start of the event.
         sample_period_s: time between rows, s.
+        columns: column names, ``layout.COLUMNS`` by default; a run restricted to what a
+            scenario needs keeps a subset (``time_s`` always first).
     """
 
     data: np.ndarray
     first_index: int
     sample_period_s: float
+    columns: tuple[str, ...] = L.COLUMNS
 
     def __len__(self) -> int:
         return int(self.data.shape[0])
 
     def __getitem__(self, name: str) -> np.ndarray:
-        return self.data[:, L.COL[name]]
+        try:
+            index = L.COL[name] if self.columns is L.COLUMNS else self.columns.index(name)
+        except (KeyError, ValueError):
+            raise KeyError(
+                f"column {name!r} is not in this sample block: it holds {list(self.columns)}"
+            ) from None
+        return self.data[:, index]
+
+    def has(self, *names: str) -> bool:
+        """Whether every column in ``names`` is recorded."""
+        return all(n in self.columns for n in names)
+
+    def select(self, columns: tuple[str, ...]) -> SampleBlock:
+        """A block with only ``columns`` (each must be present), as a compact copy."""
+        idx = [self.columns.index(c) for c in columns]
+        return SampleBlock(
+            np.ascontiguousarray(self.data[:, idx]), self.first_index, self.sample_period_s, columns
+        )
 
     @property
     def time_s(self) -> np.ndarray:
@@ -60,7 +80,8 @@ class SampleBlock:
             np.concatenate([b.data for b in blocks]),
             blocks[0].first_index,
             blocks[0].sample_period_s,
+            blocks[0].columns,
         )
 
     def as_dict(self) -> dict[str, np.ndarray]:
-        return {name: self.data[:, i] for i, name in enumerate(L.COLUMNS)}
+        return {name: self.data[:, i] for i, name in enumerate(self.columns)}

@@ -1,9 +1,10 @@
 """Scenario files (TOML): strict loading into a BrakeSetup plus run settings.
 
 A scenario names any parameter override, the defects, the actuation, the duration, the
-stepper and its step. Loading is strict: an unknown key, a wrong type, or a non-finite
-or out-of-range value is an error that names the file, the key, the value and what is
-allowed. See ``builtin/symmetric.toml`` for a commented example.
+stepper and its step, and optionally what it needs (``[needs]``: outputs, shoes, accuracy,
+forced level; see :mod:`brake_sim_ros.model.fidelity`). Loading is strict: an unknown key,
+a wrong type, or a non-finite or out-of-range value is an error that names the file, the
+key, the value and what is allowed. See ``builtin/symmetric.toml`` for a commented example.
 """
 
 from __future__ import annotations
@@ -26,6 +27,7 @@ from brake_sim_ros.model.actuation import (
 )
 from brake_sim_ros.model.assembly import SIDES, ModelOptions, pack
 from brake_sim_ros.model.defects import Defects, ShoeDefect
+from brake_sim_ros.model.fidelity import ACCURACY_PRESETS, LEVEL_BY_NAME, OUTPUTS, Needs, plan
 from brake_sim_ros.model.parameters import PARAMETER_GROUPS, BrakeParameters
 from brake_sim_ros.model.trajectory import BrakeSetup
 
@@ -62,6 +64,7 @@ class Scenario:
     solver: SolverSettings = field(default_factory=SolverSettings)
     source: str = "<built-in>"
     text: str = ""
+    needs: Needs | None = None  # None: the full model, every signal
 
     @property
     def digest(self) -> str:
@@ -236,6 +239,32 @@ def _solver(ctx: _Ctx, data: Any) -> SolverSettings:
     )
 
 
+def _needs(ctx: _Ctx, data: Any, model_shoes: tuple[str, ...]) -> Needs:
+    data = ctx.table(data, "needs", {"outputs", "shoes", "accuracy", "level"})
+    if "outputs" not in data:
+        raise ctx.fail("needs.outputs", None, f"a list of outputs from {list(OUTPUTS)}")
+    lists = {}
+    for key, vocabulary in (("outputs", tuple(OUTPUTS)), ("shoes", SIDES)):
+        value = data.get(key, list(model_shoes))
+        if (
+            not isinstance(value, list)
+            or not value
+            or len(set(map(str, value))) != len(value)
+            or any(v not in vocabulary for v in value)
+        ):
+            raise ctx.fail(
+                f"needs.{key}", value, f"a non-empty list of distinct names from {list(vocabulary)}"
+            )
+        lists[key] = tuple(value)
+    accuracy = data.get("accuracy")
+    if accuracy is not None:
+        accuracy = ctx.string(accuracy, "needs.accuracy", ACCURACY_PRESETS)
+    level = data.get("level")
+    if level is not None:
+        level = ctx.string(level, "needs.level", tuple(LEVEL_BY_NAME))
+    return Needs(outputs=lists["outputs"], shoes=lists["shoes"], accuracy=accuracy, level=level)
+
+
 def parse_scenario(text: str, source: str = "<string>") -> Scenario:
     """Parse scenario TOML text; errors name ``source``."""
     ctx = _Ctx(source)
@@ -256,6 +285,7 @@ def parse_scenario(text: str, source: str = "<string>") -> Scenario:
             "defects",
             "parameters",
             "model",
+            "needs",
         },
     )
     if "name" not in top:
@@ -272,8 +302,10 @@ def parse_scenario(text: str, source: str = "<string>") -> Scenario:
         actuation=_actuation(ctx, top.get("actuation", {})),
         options=_options(ctx, top.get("model", {})),
     )
+    needs = _needs(ctx, top["needs"], setup.options.shoes) if "needs" in top else None
     try:
         pack(setup.params, setup.defects, setup.options)
+        plan(needs, model_shoes=setup.options.shoes)  # refuse needs no level can serve
     except BrakeSimError as exc:
         raise ScenarioError(f"{source}: {exc}") from exc
     return Scenario(
@@ -287,6 +319,7 @@ def parse_scenario(text: str, source: str = "<string>") -> Scenario:
         solver=_solver(ctx, top.get("solver", {})),
         source=source,
         text=text,
+        needs=needs,
     )
 
 

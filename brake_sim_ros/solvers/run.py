@@ -1,16 +1,26 @@
-"""Run a scenario to the end with its chosen solver; one result type for both solvers."""
+"""Run a scenario to the end at the fidelity level its needs call for; one result type."""
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from brake_sim_ros.analysis.impacts import EventMetrics, event_metrics
-from brake_sim_ros.model.trajectory import SampleBlock
+import numpy as np
+
+from brake_sim_ros.analysis.impacts import EventMetrics, contact_only_metrics, shoe_metrics
+from brake_sim_ros.errors import FidelityError
+from brake_sim_ros.model.assembly import SIDES, ModelOptions
+from brake_sim_ros.model.fidelity import Plan, plan
+from brake_sim_ros.model.trajectory import BrakeSetup, SampleBlock
 from brake_sim_ros.scenarios.loader import Scenario
+from brake_sim_ros.solvers.contact_regime import run_contact_regime
 from brake_sim_ros.solvers.fixed_step import FixedStepStepper
 from brake_sim_ros.solvers.reference import run_reference
+
+CHUNK_STEPS = 100_000
+_IMPACT_COLUMNS = ("indentation_m", "pivot_fx_n", "pivot_fy_n", "actuation_force_n")
 
 
 @dataclass(frozen=True)
@@ -18,11 +28,16 @@ class RunResult:
     """A finished run.
 
     Attributes:
-        samples: the recorded time history.
-        metrics: impacts, periods, peak and contact-regime forces, stop time.
+        samples: the recorded time history (only the columns the plan keeps).
+        metrics: impacts, periods, peak and contact-regime forces, stop time; what the
+            level does not deliver is empty or nan (stop time None).
         cpu_s: process CPU time spent integrating, s.
-        n_steps: fixed steps taken (rk4) or right-hand-side evaluations (reference).
-        method: "rk4" or "reference".
+        n_steps: fixed steps taken (rk4), right-hand-side evaluations (reference) or RK4
+            steps including substeps (contact_regime).
+        method: "rk4", "reference" or "contact_regime".
+        plan: the fidelity level and signals chosen for the scenario's needs.
+        model_stop_time_s: the instant the model locked, s, even where the level does not
+            deliver the stop time (for the fidelity study).
 
     A run that fails raises (SimulationError, StepSizeError) instead of returning.
     """
@@ -32,10 +47,63 @@ class RunResult:
     cpu_s: float
     n_steps: int
     method: str
+    plan: Plan
+    model_stop_time_s: float | None = None
 
     @property
     def stop_time_s(self) -> float | None:
         return self.metrics.stop_time_s
+
+    @property
+    def memory_bytes(self) -> int:
+        """Bytes held by the recorded samples."""
+        return int(self.samples.data.nbytes)
+
+
+def planned_setup(setup: BrakeSetup, chosen: Plan) -> BrakeSetup:
+    """``setup`` with the plan's coupling and shoes (a scenario's own rigid coupling kept)."""
+    options = ModelOptions(
+        rigid_coupling=setup.options.rigid_coupling or chosen.level.rigid_coupling,
+        shoes=chosen.shoes,
+    )
+    return dataclasses.replace(setup, options=options)
+
+
+def with_braking_torque(block: SampleBlock) -> SampleBlock:
+    """Append ``braking_torque_n_m``: friction torque on the drum, N m (positive when it
+    decelerates a counter-clockwise drum), sum of each friction force times its arm."""
+    torque = np.zeros(len(block))
+    for side in SIDES:
+        arm = np.hypot(block[f"{side}_contact_x_m"], block[f"{side}_contact_y_m"])
+        torque += block[f"{side}_friction_force_n"] * arm
+    data = np.column_stack([block.data, torque])
+    return SampleBlock(
+        data, block.first_index, block.sample_period_s, (*block.columns, "braking_torque_n_m")
+    )
+
+
+def _keep(block: SampleBlock, columns: tuple[str, ...]) -> SampleBlock:
+    if columns == block.columns:
+        return block
+    if "braking_torque_n_m" in columns and not block.has("braking_torque_n_m"):
+        block = with_braking_torque(block)
+    return block.select(columns)
+
+
+def _metrics(
+    block: SampleBlock, stop: float | None, chosen: Plan, model_shoes: tuple[str, ...]
+) -> EventMetrics:
+    """Metrics of what the level delivers: impact metrics only from an impact level, the
+    stop time only from a level that delivers it with every shoe of the brake modelled."""
+    per_side = {}
+    for side in SIDES:
+        impact_cols = [f"{side}_{c}" for c in _IMPACT_COLUMNS]
+        if not chosen.level.quasi_static_shoes and block.has(*impact_cols):
+            per_side[side] = shoe_metrics(block, side, stop_time_s=stop)
+        else:
+            per_side[side] = contact_only_metrics(block, side, stop_time_s=stop)
+    delivers_stop = "stop_time" in chosen.level.outputs and chosen.shoes == model_shoes
+    return EventMetrics(per_side["left"], per_side["right"], stop if delivers_stop else None)
 
 
 def run_scenario(
@@ -46,23 +114,53 @@ def run_scenario(
     dt_s: float | None = None,
     progress: Callable[[float], None] | None = None,
 ) -> RunResult:
-    """Integrate ``scenario`` over its duration (or ``duration_s``) and analyse it."""
+    """Integrate ``scenario`` over its duration (or ``duration_s``) at the level its needs
+    call for (see :func:`brake_sim_ros.model.fidelity.plan`), and analyse it."""
     duration = scenario.duration_s if duration_s is None else duration_s
-    method = method or scenario.solver.method
-    start = time.process_time()
-    if method == "reference":
-        ref = run_reference(scenario.setup, duration, rtol=scenario.solver.rtol)
-        cpu = time.process_time() - start
-        samples, stop, n = ref.samples, ref.stop_time_s, ref.n_rhs
+    chosen = plan(scenario.needs, model_shoes=scenario.setup.options.shoes)
+    setup = planned_setup(scenario.setup, chosen)
+    if chosen.level.quasi_static_shoes:
+        if method == "reference":
+            raise FidelityError(
+                f"method 'reference' integrates the impact model; the scenario's needs chose"
+                f" the level {chosen.level.name!r} (no impact dynamics): drop --method or force"
+                " an impact level in [needs]"
+            )
+        method = "contact_regime"
     else:
-        stepper = FixedStepStepper(scenario.setup, dt_s or scenario.solver.dt_s)
-        samples = stepper.run(duration, progress=progress)
+        method = method or scenario.solver.method
+    start = time.process_time()
+    if method == "contact_regime":
+        qs = run_contact_regime(setup, duration, accuracy=chosen.accuracy)
         cpu = time.process_time() - start
+        samples, stop, n = _keep(qs.samples, chosen.columns), qs.stop_time_s, qs.n_substeps
+    elif method == "reference":
+        ref = run_reference(setup, duration, rtol=scenario.solver.rtol)
+        cpu = time.process_time() - start
+        samples, stop, n = _keep(ref.samples, chosen.columns), ref.stop_time_s, ref.n_rhs
+    else:
+        stepper = FixedStepStepper(setup, dt_s or scenario.solver.dt_s)
+        total = round(duration / stepper.dt_s)
+        blocks, done = [], 0
+        while done < total:  # keep only the planned columns, chunk by chunk
+            chunk = min(CHUNK_STEPS, total - done)
+            blocks.append(_keep(stepper.advance(chunk), chosen.columns))
+            done += chunk
+            if progress is not None:
+                progress(done / total)
+        cpu = time.process_time() - start
+        samples = (
+            SampleBlock.concatenate(blocks)
+            if blocks
+            else SampleBlock(np.empty((0, len(chosen.columns))), 0, stepper.dt_s, chosen.columns)
+        )
         stop, n = stepper.stop_time_s, stepper.step_index
     return RunResult(
         samples=samples,
-        metrics=event_metrics(samples, stop_time_s=stop),
+        metrics=_metrics(samples, stop, chosen, scenario.setup.options.shoes),
         cpu_s=cpu,
         n_steps=n,
         method=method,
+        plan=chosen,
+        model_stop_time_s=stop,
     )

@@ -1,0 +1,303 @@
+"""Fidelity levels: which model a scenario needs, chosen from what it asks for.
+
+A scenario states its needs (outputs from a fixed vocabulary, the shoes whose signals it
+wants, an accuracy preset, optionally a forced level). :func:`plan` picks the cheapest
+level that delivers every asked output, the shoes to keep in the model and the recorded
+columns to keep. A forced level that cannot deliver an asked output is refused, naming the
+output and the levels that can; nothing is silently approximated.
+
+Levels, cheapest first (degrees of freedom in brackets):
+
+* ``contact_regime_rigid`` (1): quasi-static shoes, flywheel and drum as one rigid body.
+* ``contact_regime`` (2): quasi-static shoes, flywheel and drum on the torsional coupling.
+* ``rigid`` (3): the impact model (dynamic shoes) with a rigid wheel-drum coupling.
+* ``full`` (4): the 4-DoF impact model.
+
+Why each level serves what it serves (the physics behind the capability table):
+
+* Quasi-static shoes have no impacts: the contact-regime levels cannot deliver impacts,
+  shoe motion or the force histories of the impacting regime. They deliver the forces of a
+  shoe riding steadily on the drum exactly (the same balance the full model settles to), the
+  braking torque (impact-averaged during the impacting regime) and the stopping time.
+* The wheel-drum coupling matters only near standstill, where the smoothed friction law
+  pins the drum and the twisted coupling unwinds through it before the brake locks (about
+  1 % of the stopping time). Elsewhere the drum speed reaches the shoes only through a
+  saturated friction law. So the rigid levels deliver impacts (the impacting regime ends
+  while the drum still turns fast) and the contact-regime forces, but not the stopping
+  time, the braking torque or any drum-side signal.
+* One shoe affects the other only through the drum speed, which enters the friction law
+  where it is saturated; so a shoe's impacts and contact-regime forces are the same with
+  the other shoe removed, and a scenario that asks only these, for one shoe, gets a
+  one-shoe model.
+
+Pure logic: no numerics, no files.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from brake_sim_ros.errors import FidelityError
+from brake_sim_ros.model import layout as L
+
+SIDES = ("left", "right")
+ACCURACY_PRESETS = ("fast", "balanced", "accurate")
+
+# output name -> what it is (units) and what the contact-regime levels give for it
+OUTPUTS: dict[str, str] = {
+    "stop_time": "instant the brake locks at standstill, s",
+    "braking_torque": (
+        "friction torque on the drum, N m (contact-regime levels: its impact-averaged,"
+        " quasi-static value during the impacting regime)"
+    ),
+    "contact_regime_forces": (
+        "normal, friction and pivot forces of a shoe riding steadily on the drum, N"
+        " (the contact-regime mean |F_pivot| over 1-6 s)"
+    ),
+    "friction_heat": "friction work into the linings, J",
+    "torsional_vibration": "flywheel and drum angles and speeds (their twist), rad, rad/s",
+    "impacts": "impact onsets, peaks and periods; indentation and regime histories",
+    "pivot_forces": "pivot-force history including impacts, N",
+    "contact_forces": "indentation, normal and friction force, contact point histories",
+    "shoe_motion": "shoe angle and speed histories, rad, rad/s",
+    "energy_balance": "every energy term of the balance (closes to rounding), J",
+}
+# outputs that belong to one shoe and do not depend on the other shoe (see module doc)
+SHOE_LOCAL_OUTPUTS = frozenset({"impacts", "contact_regime_forces"})
+
+
+@dataclass(frozen=True)
+class Level:
+    """One fidelity level.
+
+    Attributes:
+        name: level name used in scenario files and reports.
+        dof: mechanical degrees of freedom with both shoes.
+        rigid_coupling: flywheel and drum as one body.
+        quasi_static_shoes: shoes in static equilibrium on the drum (no impact dynamics).
+        outputs: the outputs this level delivers.
+        description: one line for reports.
+    """
+
+    name: str
+    dof: int
+    rigid_coupling: bool
+    quasi_static_shoes: bool
+    outputs: frozenset[str]
+    description: str
+
+
+_CONTACT = frozenset({"stop_time", "braking_torque", "contact_regime_forces", "friction_heat"})
+LEVELS: tuple[Level, ...] = (  # cheapest first: the planner takes the first that serves
+    Level(
+        "contact_regime_rigid",
+        1,
+        True,
+        True,
+        frozenset({"contact_regime_forces"}),
+        "quasi-static shoes, flywheel and drum as one rigid body",
+    ),
+    Level(
+        "contact_regime",
+        2,
+        False,
+        True,
+        _CONTACT,
+        "quasi-static shoes, flywheel and drum on the torsional coupling",
+    ),
+    Level(
+        "rigid",
+        3,
+        True,
+        False,
+        frozenset({"impacts", "contact_regime_forces"}),
+        "impact model (dynamic shoes) with a rigid wheel-drum coupling",
+    ),
+    Level("full", 4, False, False, frozenset(OUTPUTS), "the full 4-DoF impact model"),
+)
+LEVEL_BY_NAME = {lv.name: lv for lv in LEVELS}
+
+
+@dataclass(frozen=True)
+class Needs:
+    """What a scenario needs.
+
+    Attributes:
+        outputs: names from :data:`OUTPUTS`, at least one.
+        shoes: shoes whose signals are wanted (a subset of ``("left", "right")``).
+        accuracy: solver accuracy preset name (passed through to the solver), or None.
+        level: a forced level name, or None to let the planner choose.
+    """
+
+    outputs: tuple[str, ...]
+    shoes: tuple[str, ...] = SIDES
+    accuracy: str | None = None
+    level: str | None = None
+
+    def __post_init__(self) -> None:
+        unknown = [o for o in self.outputs if o not in OUTPUTS]
+        if not self.outputs or unknown or len(set(self.outputs)) != len(self.outputs):
+            raise FidelityError(
+                f"needs outputs {list(self.outputs)!r}: allowed a non-empty list of distinct"
+                f" names from {list(OUTPUTS)}" + (f" (unknown: {unknown})" if unknown else "")
+            )
+        if (
+            not self.shoes
+            or len(set(self.shoes)) != len(self.shoes)
+            or any(s not in SIDES for s in self.shoes)
+        ):
+            raise FidelityError(
+                f"needs shoes {list(self.shoes)!r}: allowed a non-empty list of distinct names"
+                f" from {list(SIDES)}"
+            )
+        if self.accuracy is not None and self.accuracy not in ACCURACY_PRESETS:
+            raise FidelityError(
+                f"needs accuracy {self.accuracy!r}: allowed one of {list(ACCURACY_PRESETS)}"
+            )
+        if self.level is not None and self.level not in LEVEL_BY_NAME:
+            raise FidelityError(f"needs level {self.level!r}: allowed one of {list(LEVEL_BY_NAME)}")
+
+
+@dataclass(frozen=True)
+class Plan:
+    """The model a scenario gets.
+
+    Attributes:
+        level: the chosen level.
+        shoes: shoes kept in the model (the others are removed: held retracted, no forces).
+        columns: recorded columns kept (names as in ``layout.COLUMNS`` plus
+            :data:`DERIVED_COLUMNS`), ``time_s`` first; without needs, ``layout.COLUMNS``.
+        accuracy: the accuracy preset passed through, or None.
+        reason: one sentence saying why this level was chosen.
+    """
+
+    level: Level
+    shoes: tuple[str, ...]
+    columns: tuple[str, ...]
+    accuracy: str | None
+    reason: str
+
+
+# columns computed from the recorded ones, appended after layout.COLUMNS
+DERIVED_COLUMNS: tuple[str, ...] = ("braking_torque_n_m",)
+
+_SHOE_COLUMNS: dict[str, tuple[str, ...]] = {
+    "contact_regime_forces": (
+        "{s}_normal_force_n",
+        "{s}_friction_force_n",
+        "{s}_actuation_force_n",
+        "{s}_pivot_fx_n",
+        "{s}_pivot_fy_n",
+        "{s}_regime",
+    ),
+    "impacts": (
+        "{s}_indentation_m",
+        "{s}_indentation_rate_m_s",
+        "{s}_actuation_force_n",
+        "{s}_pivot_fx_n",
+        "{s}_pivot_fy_n",
+        "{s}_regime",
+    ),
+    "pivot_forces": ("{s}_pivot_fx_n", "{s}_pivot_fy_n"),
+    "contact_forces": (
+        "{s}_indentation_m",
+        "{s}_indentation_rate_m_s",
+        "{s}_normal_force_n",
+        "{s}_friction_force_n",
+        "{s}_contact_x_m",
+        "{s}_contact_y_m",
+        "{s}_sliding_speed_m_s",
+    ),
+    "shoe_motion": ("{s}_angle_rad", "{s}_speed_rad_s"),
+    "energy_balance": ("{s}_speed_rad_s", "{s}_indentation_m"),
+}
+_EVENT_COLUMNS: dict[str, tuple[str, ...]] = {
+    "stop_time": ("regime",),
+    "braking_torque": ("braking_torque_n_m",),
+    "contact_regime_forces": ("regime",),
+    "friction_heat": ("friction_work_j",),
+    "torsional_vibration": (
+        "flywheel_angle_rad",
+        "drum_angle_rad",
+        "flywheel_speed_rad_s",
+        "drum_speed_rad_s",
+    ),
+    "impacts": ("regime",),
+    "energy_balance": (
+        "flywheel_angle_rad",
+        "drum_angle_rad",
+        "flywheel_speed_rad_s",
+        "drum_speed_rad_s",
+        "friction_work_j",
+        "coupling_damper_loss_j",
+        "contact_loss_j",
+        "actuation_work_j",
+        "lock_loss_j",
+    ),
+}
+
+
+def columns_for(outputs: tuple[str, ...], shoes: tuple[str, ...]) -> tuple[str, ...]:
+    """Recorded columns that ``outputs`` need for ``shoes``, ``time_s`` first, no repeats."""
+    names = ["time_s"]
+    for out in outputs:
+        names.extend(_EVENT_COLUMNS.get(out, ()))
+        for side in shoes:
+            names.extend(c.format(s=side) for c in _SHOE_COLUMNS.get(out, ()))
+    return tuple(dict.fromkeys(names))
+
+
+def levels_serving(output: str) -> list[str]:
+    """Names of the levels that deliver ``output``, cheapest first."""
+    return [lv.name for lv in LEVELS if output in lv.outputs]
+
+
+def plan(needs: Needs | None, *, model_shoes: tuple[str, ...] = SIDES) -> Plan:
+    """Choose the cheapest level serving ``needs`` (None: the full model, every signal).
+
+    Args:
+        needs: what the scenario asks for.
+        model_shoes: shoes the scenario's own ``[model]`` has (a one-shoe brake); asking
+            for a shoe the brake does not have is refused.
+    """
+    if needs is None:
+        return Plan(
+            LEVEL_BY_NAME["full"],
+            model_shoes,
+            L.COLUMNS,
+            None,
+            "the scenario states no [needs]: the full model, every signal",
+        )
+    missing = [s for s in needs.shoes if s not in model_shoes]
+    if missing:
+        raise FidelityError(
+            f"needs shoes {list(needs.shoes)}: the scenario's brake has only {list(model_shoes)}"
+            f" ([model] shoes), so {missing} cannot be delivered"
+        )
+    asked = set(needs.outputs)
+    if needs.level is not None:
+        level = LEVEL_BY_NAME[needs.level]
+        lacking = [o for o in needs.outputs if o not in level.outputs]
+        if lacking:
+            out = lacking[0]
+            raise FidelityError(
+                f"needs level {level.name!r} cannot deliver the output {out!r} ({OUTPUTS[out]}):"
+                f" allowed levels for it: {levels_serving(out)}"
+            )
+        reason = f"level {level.name!r} forced by the scenario's [needs]"
+    else:
+        level = next(lv for lv in LEVELS if asked <= lv.outputs)
+        cheaper = [lv for lv in LEVELS if lv.dof < level.dof]
+        if cheaper:
+            lacks = ", ".join(f"{lv.name} lacks {sorted(asked - lv.outputs)[0]}" for lv in cheaper)
+            reason = f"the cheapest level delivering {sorted(asked)} ({lacks})"
+        else:
+            reason = f"the cheapest level; it delivers {sorted(asked)}"
+    shoes = model_shoes
+    if len(needs.shoes) < len(model_shoes) and asked <= SHOE_LOCAL_OUTPUTS:
+        shoes = needs.shoes
+        reason += (
+            f"; only the {'/'.join(shoes)} shoe is modelled: {sorted(asked)} of one shoe do not"
+            " depend on the other"
+        )
+    return Plan(level, shoes, columns_for(needs.outputs, needs.shoes), needs.accuracy, reason)
