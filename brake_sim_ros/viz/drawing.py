@@ -89,17 +89,16 @@ class BrakeDrawing:
         self.drum_radius_m = params.shoe.drum_radius_m
         angles = np.linspace(0.0, 2.0 * math.pi, _DRUM_POINTS)
         self._drum = self.drum_radius_m * np.column_stack((np.cos(angles), np.sin(angles)))
-        self.shoes = tuple(
-            self._shoe_shape(params, side, getattr(defects, side)) for side in SIDES
-        )
+        self.shoes = tuple(self._shoe_shape(params, side, getattr(defects, side)) for side in SIDES)
 
     @staticmethod
     def _shoe_shape(params: BrakeParameters, side: str, defect) -> ShoeShape:
         s = place_shoe(params, side, defect)
         pivot = np.asarray(s.pivot_xy_m)
         centre = np.asarray(s.lining_centre_xy_m)
-        a = np.linspace(s.lining_mid_rad - s.lining_half_rad, s.lining_mid_rad + s.lining_half_rad,
-                        _ARC_POINTS)
+        a = np.linspace(
+            s.lining_mid_rad - s.lining_half_rad, s.lining_mid_rad + s.lining_half_rad, _ARC_POINTS
+        )
         unit = np.column_stack((np.cos(a), np.sin(a)))
         if np.hypot(*(unit[0] - pivot)) > np.hypot(*(unit[-1] - pivot)):
             unit = unit[::-1]  # heel (end next to the pivot) first

@@ -402,7 +402,8 @@ class RerunSink:
             angle = float(getattr(msg, f"{side}_shoe_angle_rad"))
             add(f"{E.SHOE_ANGLE}/{side}", t, one([math.degrees(angle)]))
             add(f"{E.INDENTATION}/{side}", t, one([1e6 * getattr(msg, f"{side}_indentation_m")]))
-            add(f"{E.CONTACT_FORCE}/{side}/normal", t, one([getattr(msg, f"{side}_normal_force_n")]))
+            normal = float(getattr(msg, f"{side}_normal_force_n"))
+            add(f"{E.CONTACT_FORCE}/{side}/normal", t, one([normal]))
             add(
                 f"{E.CONTACT_FORCE}/{side}/friction",
                 t,
@@ -416,7 +417,7 @@ class RerunSink:
             self._next_frame_ns = ns + round(_NS_PER_S / self.settings.drawing_rate_hz)
         self._last_state, self._last_state_index = msg, index
         # keep only the pivot samples after this state (the next impact's window)
-        while len(self._recent) > 1 and self._recent[0][0] + self._recent[0][1]["left"][2].size <= index:
+        while len(self._recent) > 1 and _chunk_end(self._recent[0]) <= index:
             self._recent.popleft()
         self.states_logged += 1
         self._seen(ns)
@@ -443,10 +444,11 @@ class RerunSink:
                 self._event(ns, text + ")")
 
     def _draw(self, msg: Any, ns: int, index: int) -> None:
+        actuation = (float(msg.left_actuation_force_n), float(msg.right_actuation_force_n))
         frame = self._drawing.frame(
             shoe_angles_rad=(float(msg.left_shoe_angle_rad), float(msg.right_shoe_angle_rad)),
             drum_angle_rad=float(msg.drum_angle_rad),
-            actuation_n=(float(msg.left_actuation_force_n), float(msg.right_actuation_force_n)),
+            actuation_n=actuation,
         )
         colors = [COLORS[s] for s in E.SIDES]
         self._set_time(ns)
@@ -457,7 +459,7 @@ class RerunSink:
         log(f"{d}/shoes", rr.LineStrips2D(list(frame.tables), colors=colors, radii=0.0008))
         log(
             f"{d}/pivots",
-            rr.Points2D(frame.pivots, radii=0.005, colors=colors, labels=["left pivot", "right pivot"]),
+            rr.Points2D(frame.pivots, radii=0.005, colors=colors, labels=["pivot L", "pivot R"]),
         )
         log(
             f"{d}/actuation",
@@ -465,7 +467,7 @@ class RerunSink:
                 origins=frame.actuation_origins,
                 vectors=frame.actuation_vectors,
                 colors=[(120, 120, 120)],
-                labels=[f"{msg.left_actuation_force_n:.0f} N", f"{msg.right_actuation_force_n:.0f} N"],
+                labels=[f"{f:.0f} N" for f in actuation],
             ),
         )
         pivot = self._pivot_at(index)
@@ -483,7 +485,10 @@ class RerunSink:
         points, origins, vectors, cols = [], [], [], []
         for side in E.SIDES:
             if bool(getattr(msg, f"{side}_in_contact")):
-                p = (float(getattr(msg, f"{side}_contact_x_m")), float(getattr(msg, f"{side}_contact_y_m")))
+                p = (
+                    float(getattr(msg, f"{side}_contact_x_m")),
+                    float(getattr(msg, f"{side}_contact_y_m")),
+                )
                 normal, friction = contact_force_vectors(
                     p,
                     float(getattr(msg, f"{side}_normal_force_n")),
@@ -493,8 +498,10 @@ class RerunSink:
                 origins += [p, p]
                 vectors += [normal, friction]
                 cols += [COLORS[side], (200, 40, 40)]
-        log(f"{d}/contact_points", rr.Points2D(np.array(points).reshape(-1, 2), radii=0.004,
-                                               colors=[(200, 40, 40)]))
+        log(
+            f"{d}/contact_points",
+            rr.Points2D(np.array(points).reshape(-1, 2), radii=0.004, colors=[(200, 40, 40)]),
+        )
         log(
             f"{d}/contact_forces",
             rr.Arrows2D(
@@ -532,7 +539,8 @@ class RerunSink:
             f" | {msg.right_pivot_radius_change_pct:+.2f} |",
             f"| initial angle (deg) | {math.degrees(msg.left_initial_angle_rad):+.3f}"
             f" | {math.degrees(msg.right_initial_angle_rad):+.3f} |",
-            f"| actuation share | {msg.left_actuation_share:.3f} | {msg.right_actuation_share:.3f} |",
+            f"| actuation share | {msg.left_actuation_share:.3f}"
+            f" | {msg.right_actuation_share:.3f} |",
             "",
             f"applies from t = {ns / _NS_PER_S:.6f} s",
         ]
@@ -563,14 +571,20 @@ class RerunSink:
     def _on_diagnostics(self, msg: Any, ns: int) -> None:
         self._set_time(ns)
         for status in msg.status:
-            level = _DIAG_LEVELS.get(int.from_bytes(status.level, "little")
-                                     if isinstance(status.level, bytes) else int(status.level),
-                                     "INFO")
-            self.rec.log(
-                f"{E.EVENTS}/diagnostics", rr.TextLog(f"{status.name}: {status.message}", level=level)
+            level = _DIAG_LEVELS.get(
+                int.from_bytes(status.level, "little")
+                if isinstance(status.level, bytes)
+                else int(status.level),
+                "INFO",
             )
+            text = f"{status.name}: {status.message}"
+            self.rec.log(f"{E.EVENTS}/diagnostics", rr.TextLog(text, level=level))
+
+
+def _chunk_end(entry: tuple[int, dict[str, tuple[np.ndarray, ...]]]) -> int:
+    first, sides = entry
+    return first + sides["left"][2].size
 
 
 def _regime_name(regime: int) -> str:
     return REGIME_NAMES[regime] if 0 <= regime < len(REGIME_NAMES) else f"unknown ({regime})"
-

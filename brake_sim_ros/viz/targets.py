@@ -80,6 +80,16 @@ def parse_target(tokens: list[str]) -> RerunTarget:
     return RerunTarget(kind)
 
 
+def check_target(target: RerunTarget) -> None:
+    """Refuse, before anything runs, a target that cannot work here (spawn, no display)."""
+    if target.kind == "spawn" and not has_display():
+        raise RerunTargetError(
+            "--rerun spawn: no display here (DISPLAY/WAYLAND_DISPLAY unset), a viewer"
+            " window cannot open; use --rerun save FILE.rrd and open the file elsewhere,"
+            " or --rerun serve and open the printed web-viewer address"
+        )
+
+
 def has_display() -> bool:
     """True where a native viewer window can open (Linux needs X11 or Wayland)."""
     if sys.platform != "linux":
@@ -101,12 +111,7 @@ def open_sink(
     Raises:
         RerunTargetError: ``spawn`` without a display, ``save`` to an unwritable place.
     """
-    if target.kind == "spawn" and not has_display():
-        raise RerunTargetError(
-            "--rerun spawn: no display here (DISPLAY/WAYLAND_DISPLAY unset), a viewer"
-            " window cannot open; use --rerun save FILE.rrd and open the file elsewhere,"
-            " or --rerun serve and open the printed web-viewer address"
-        )
+    check_target(target)
     rec = rr.RecordingStream(APPLICATION_ID, recording_id=str(uuid.uuid4()))
     blueprint = brake_blueprint()
     if target.kind == "save":
