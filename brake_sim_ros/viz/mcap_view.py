@@ -16,7 +16,7 @@ from pathlib import Path
 
 from mcap.exceptions import McapError
 from mcap.reader import make_reader
-from mcap_ros2.reader import read_ros2_messages
+from mcap_ros2.decoder import DecoderFactory
 
 from brake_sim_ros.errors import BrakeSimError
 from brake_sim_ros.model.defects import Defects
@@ -95,11 +95,15 @@ def replay(path: Path, sinks: list[RerunSink]) -> ViewSummary:
     """
     count = 0
     try:
-        for m in read_ros2_messages(str(path)):
-            topic = Topic(m.channel.topic, m.schema.name if m.schema else "")
-            for sink in sinks:
-                sink.write(topic, m.ros_msg, int(m.log_time_ns))
-            count += 1
+        with path.open("rb") as f:
+            reader = make_reader(f, decoder_factories=[DecoderFactory()])
+            for schema, channel, message, decoded in reader.iter_decoded_messages(
+                log_time_order=True
+            ):
+                topic = Topic(channel.topic, schema.name if schema else "")
+                for sink in sinks:
+                    sink.write(topic, decoded, int(message.log_time))
+                count += 1
     except (McapError, ValueError, KeyError, OSError) as exc:
         raise RecordingError(f"{path}: cannot read its messages ({exc})") from None
     finally:
