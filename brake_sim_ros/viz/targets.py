@@ -13,8 +13,8 @@ keeps every sample (``FILE_SETTINGS``), a viewer gets the decimated stream
   ``server_memory_limit`` (default 512 MiB), dropping the oldest data beyond it.
 * ``connect``: the SDK's gRPC client buffers without limit while it cannot reach the
   viewer (rerun issue #11519; 0.41 has no option for it). The decimated live stream is
-  about 100 kB per simulated second, so an hour without a viewer costs ~0.4 GB: start
-  the viewer first, or prefer ``serve``.
+  about 0.4 MB per simulated second (measured as a file, symmetric event), so an hour
+  without a viewer costs over 1 GB: start the viewer first, or prefer ``serve``.
 """
 
 from __future__ import annotations
