@@ -741,13 +741,13 @@ def main(args: list[str] | None = None) -> int:
     try:
         try:
             node = BrakeSimNode(parameter_overrides=overrides)
+            if cli.rerun:
+                from brake_sim_ros.viz.commands import attach_rerun
+
+                attach_rerun(node, cli.rerun)
         except BrakeSimError as exc:
             print(f"brake_sim: refused to start: {exc}", file=sys.stderr)
             return 1
-        if cli.rerun:
-            from brake_sim_ros.viz.commands import attach_rerun
-
-            attach_rerun(node, cli.rerun)
         executor = SingleThreadedExecutor()
         executor.add_node(node)
         while not node.done and rclpy.ok():
