@@ -64,6 +64,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     from brake_sim_ros.solvers.run import run_scenario
 
     scenario = load_scenario(args.scenario)
+    rerun_targets = _rerun_targets(args)
     progress = _progress(f"simulating {scenario.name}") if not args.quiet else None
     result = run_scenario(
         scenario, duration_s=args.duration, method=args.method, dt_s=args.dt, progress=progress
@@ -111,7 +112,31 @@ def cmd_simulate(args: argparse.Namespace) -> int:
             f"time history: {args.out} ({len(result.samples)} samples x"
             f" {result.samples.data.shape[1]} columns)"
         )
+    if rerun_targets:
+        from brake_sim_ros.viz.commands import simulate_to_rerun
+
+        print(simulate_to_rerun(scenario, rerun_targets, duration_s=args.duration, dt_s=args.dt))
     return 0
+
+
+def _rerun_targets(args: argparse.Namespace) -> list:
+    """``simulate --rerun ...`` targets, checked before the run (empty without the option)."""
+    if not args.rerun:
+        return []
+    if args.method == "reference":
+        raise BrakeSimError(
+            "--rerun logs the fixed-step stream the node publishes: it cannot be combined"
+            " with --method reference"
+        )
+    from brake_sim_ros.viz.commands import parse_targets
+
+    return parse_targets(args.rerun)
+
+
+def cmd_view(args: argparse.Namespace) -> int:
+    from brake_sim_ros.viz.commands import cmd_view as view
+
+    return view(args)
 
 
 # --- validate ------------------------------------------------------------------------------------
@@ -188,7 +213,20 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--method", choices=("rk4", "reference"), help="override the scenario's solver")
     p.add_argument("--dt", type=float, help="override the fixed step, s")
     p.add_argument("--quiet", action="store_true", help="no progress output")
+    p.add_argument(
+        "--rerun",
+        action="append",
+        nargs="+",
+        metavar="TARGET",
+        help="also log the node's stream to Rerun: spawn | connect [URL] | serve |"
+        " save FILE.rrd (repeatable)",
+    )
     p.set_defaults(func=cmd_simulate)
+
+    p = sub.add_parser("view", help="show an MCAP recording in Rerun, or convert it to .rrd")
+    p.add_argument("recording", help="MCAP file recorded from the simulator")
+    p.add_argument("--save", metavar="FILE.rrd", help="write a Rerun file instead of a viewer")
+    p.set_defaults(func=cmd_view)
 
     p = sub.add_parser("validate", help="run the study's cases and write the validation report")
     p.add_argument("--out", default="out/validation", help="report directory")

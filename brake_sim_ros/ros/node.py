@@ -729,7 +729,21 @@ def _parse_cli(argv: list[str]) -> argparse.Namespace:
         action="store_true",
         help="print a summary and exit 0 when the duration is reached",
     )
+    parser.add_argument(
+        "--rerun",
+        action="append",
+        nargs="+",
+        metavar="TARGET",
+        help="log to Rerun: spawn | connect [URL] | serve | save FILE.rrd (repeatable)",
+    )
     args = parser.parse_args(argv)
+    if args.rerun:
+        from brake_sim_ros.viz.commands import parse_targets
+
+        try:
+            args.rerun = parse_targets(args.rerun)
+        except BrakeSimError as exc:
+            parser.error(str(exc))
     if args.duration is not None and not (math.isfinite(args.duration) and args.duration > 0):
         parser.error(f"--duration {args.duration}: allowed a finite time > 0 s")
     return args
@@ -758,6 +772,10 @@ def main(args: list[str] | None = None) -> int:
     try:
         try:
             node = BrakeSimNode(parameter_overrides=overrides)
+            if cli.rerun:
+                from brake_sim_ros.viz.commands import attach_rerun
+
+                attach_rerun(node, cli.rerun)
         except BrakeSimError as exc:
             print(f"brake_sim: refused to start: {exc}", file=sys.stderr)
             return 1

@@ -1,0 +1,1 @@
+"""Rerun logging of the simulator stream: sink, drawing, blueprint, targets, MCAP viewing."""

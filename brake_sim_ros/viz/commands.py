@@ -1,0 +1,151 @@
+"""The Rerun parts of the command line: ``simulate --rerun ...``, ``view``, node ``--rerun``.
+
+Kept here so ``cli.py`` and the node's ``main`` only add an option and a call; imported
+lazily (Rerun is only loaded when it is used).
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import sys
+import time
+from pathlib import Path
+
+from brake_sim_ros.scenarios import Scenario
+from brake_sim_ros.viz.targets import (
+    RerunTarget,
+    RerunTargetError,
+    check_target,
+    has_display,
+    open_sink,
+    parse_target,
+)
+
+
+def parse_targets(option: list[list[str]] | None) -> list[RerunTarget]:
+    """The parsed ``--rerun`` options (RerunTargetError for a bad one)."""
+    targets = [parse_target(tokens) for tokens in option or []]
+    for target in targets:
+        check_target(target)
+    return targets
+
+
+def scenario_markdown(scenario: Scenario) -> str:
+    """The run's description for the recording: name, source, scenario file."""
+    text = [
+        f"### Scenario **{scenario.name}**",
+        "",
+        scenario.description,
+        f"source `{scenario.source}`",
+    ]
+    if scenario.text:
+        text += ["", "```toml", scenario.text.rstrip(), "```"]
+    return "\n".join(text)
+
+
+def serve_until_interrupted(targets: list[RerunTarget]) -> None:
+    """Keep a ``serve`` target's server up after the run, until Ctrl-C."""
+    if any(t.kind == "serve" for t in targets):
+        print("rerun: run logged; serving until Ctrl-C", file=sys.stderr)
+        try:
+            while True:
+                time.sleep(1.0)
+        except KeyboardInterrupt:
+            pass
+
+
+def simulate_to_rerun(
+    scenario: Scenario,
+    targets: list[RerunTarget],
+    *,
+    duration_s: float | None,
+    dt_s: float | None,
+) -> str:
+    """Log the node's stream of ``scenario`` (produced offline) to every target.
+
+    Returns:
+        One line saying what was logged where.
+    """
+    from brake_sim_ros.ros.offline import offline_messages
+
+    if dt_s is not None:
+        scenario = dataclasses.replace(
+            scenario, solver=dataclasses.replace(scenario.solver, dt_s=dt_s)
+        )
+    setup = scenario.setup
+    sinks = [
+        open_sink(
+            t, params=setup.params, defects=setup.defects, run_text=scenario_markdown(scenario)
+        )
+        for t in targets
+    ]
+    try:
+        for topic, msg, ns in offline_messages(scenario, duration_s=duration_s):
+            for sink in sinks:
+                sink.write(topic, msg, ns)
+    finally:
+        for sink in sinks:
+            sink.close()
+    serve_until_interrupted(targets)
+    where = ", ".join(t.kind + (f" {t.arg}" if t.arg else "") for t in targets)
+    first = sinks[0]
+    return (
+        f"rerun: {first.samples_logged} pivot-force samples, {first.states_logged} states,"
+        f" impacts seen left {first.impacts['left']} right {first.impacts['right']} -> {where}"
+    )
+
+
+def cmd_view(args: argparse.Namespace) -> int:
+    """``brake-sim view FILE.mcap [--save FILE.rrd]``."""
+    from brake_sim_ros.viz.mcap_view import read_info, replay
+
+    path = Path(args.recording)
+    info = read_info(path)
+    if not args.save and not has_display():
+        raise RerunTargetError(
+            f"view {path}: no display here (DISPLAY/WAYLAND_DISPLAY unset) to open a viewer;"
+            f" use --save FILE.rrd and open the file where there is one (rerun FILE.rrd)"
+        )
+    target = parse_target(["save", args.save] if args.save else ["spawn"])
+    sink = open_sink(target, params=info.params, defects=info.defects, run_text=info.run_text)
+    summary = replay(path, [sink])
+    span = (
+        f"{summary.first_s:.3f} s to {summary.last_s:.3f} s"
+        if summary.first_s is not None and summary.last_s is not None
+        else "no timed messages"
+    )
+    where = args.save or "a spawned viewer"
+    print(
+        f"{path}: {summary.messages} messages, {summary.samples} pivot-force samples,"
+        f" {summary.states} states, {span} -> {where}"
+    )
+    return 0
+
+
+def attach_rerun(node, targets: list[RerunTarget]) -> None:
+    """Give a started :class:`~brake_sim_ros.ros.node.BrakeSimNode` one Rerun sink per target.
+
+    The drawing uses the model in force (the node's model parameters, overrides
+    included). The node published its first DefectState while it was being built, before
+    any sink could be attached, so that same ground truth (at t = 0) is written first.
+    """
+    from brake_sim_ros.ros import conversion, stream
+    from brake_sim_ros.ros import parameters as ros_params
+
+    base = ros_params.model_values(node.scenario.setup.params, node.scenario.setup.defects)
+    values = {name: node.get_parameter(name).value for name in base}
+    params, defects = ros_params.build_model(values)
+    first = conversion.defect_state(
+        scenario=node.scenario.name,
+        params=params,
+        defects=defects,
+        initial_angles_deg=(defects.left.initial_angle_deg, defects.right.initial_angle_deg),
+        ns=0,
+    )
+    for target in targets:
+        sink = open_sink(
+            target, params=params, defects=defects, run_text=scenario_markdown(node.scenario)
+        )
+        sink.write(stream.DEFECTS, first, 0)
+        node.add_sink(sink)

@@ -1,0 +1,249 @@
+"""The Rerun adapter: real .rrd files, checked by ``rerun rrd verify`` and read back.
+
+Offline runs (``brake-sim simulate --rerun save``), a live-style envelope, impacts against
+the analysis module's onsets, and ``brake-sim view FILE.mcap --save FILE.rrd`` of an MCAP
+written here from the node's offline stream.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from tests.rerun_helpers import read, verify
+
+pytestmark = pytest.mark.filterwarnings("ignore:module 'sre_(parse|constants)' is deprecated")
+
+rr = pytest.importorskip("rerun")
+pytest.importorskip("brake_sim_msgs", reason="ROS interfaces not built (run scripts/setup.sh)")
+
+from brake_sim_ros.cli import main  # noqa: E402
+from brake_sim_ros.ros import parameters as ros_params  # noqa: E402
+from brake_sim_ros.ros import stream  # noqa: E402
+from brake_sim_ros.ros.offline import StreamSettings, offline_messages  # noqa: E402
+from brake_sim_ros.scenarios import load_scenario  # noqa: E402
+from brake_sim_ros.solvers.run import run_scenario  # noqa: E402
+from brake_sim_ros.viz import entities as E  # noqa: E402
+from brake_sim_ros.viz.rerun_sink import (  # noqa: E402
+    LIVE_SETTINGS,
+    RerunSink,
+    SinkSettings,
+    envelope_positions,
+)
+from brake_sim_ros.viz.targets import RerunTargetError, parse_target  # noqa: E402
+
+DT_NS = 40_000  # the built-in scenarios' 40 us step
+RUN_S = 1.0
+N_SAMPLES = round(RUN_S * 1e9 / DT_NS)
+DRAWING = [
+    f"{E.DRAWING}/{p}"
+    for p in ("drum", "linings", "shoes", "pivots", "actuation", "pivot_forces", "contact_points")
+]
+
+
+def expected_paths() -> set[str]:
+    pivot = {E.pivot_path(s, c) for s in E.SIDES for c in E.PIVOT_SERIES}
+    return pivot | set(E.state_paths()) | set(DRAWING) | {E.EVENTS, f"{E.DEFECTS}/ground_truth"}
+
+
+def check_run(path: Path, *, n_samples: int, n_states: int) -> None:
+    """A verified file holding the whole run at full rate, plus states and the rest."""
+    verify(path)
+    c = read(path)
+    assert c.blueprints == 1, "the default blueprint travels with the file"
+    missing = expected_paths() - c.timed_paths
+    assert not missing, f"entities missing: {sorted(missing)}"
+    assert f"{E.RUN}/scenario" in c.static
+    for side in E.SIDES:
+        for series in E.PIVOT_SERIES:
+            t = c.times(E.pivot_path(side, series))
+            # every simulated sample, once, at its own time
+            assert t.size == n_samples
+            np.testing.assert_array_equal(t, np.arange(n_samples) * DT_NS)
+    speed = c.times(f"{E.SPEED}/drum")
+    assert speed.size == n_states
+    assert speed[0] == 0 and speed[-1] == (n_samples - n_samples // n_states) * DT_NS
+    assert c.texts[f"{E.DEFECTS}/ground_truth"], "the ground truth is shown"
+
+
+def test_simulate_rerun_save_holds_every_sample(tmp_path: Path, capsys):
+    out = tmp_path / "sub" / "symmetric.rrd"
+    code = main(
+        ["simulate", "symmetric", "--duration", str(RUN_S), "--quiet", "--rerun", "save", str(out)]
+    )
+    assert code == 0
+    assert f"rerun: {N_SAMPLES} pivot-force samples, 100 states" in capsys.readouterr().out
+    check_run(out, n_samples=N_SAMPLES, n_states=100)
+    assert "**healthy**" in read(out).texts[f"{E.DEFECTS}/ground_truth"][0]
+
+
+def test_bad_targets_are_refused_before_the_run(tmp_path: Path, capsys, monkeypatch):
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    for argv, reason in (
+        (["--rerun", "save", str(tmp_path / "x.txt")], "ending in .rrd"),
+        (["--rerun", "spawn"], "no display here"),
+        (["--rerun", "connect", "http://x"], "rerun+http://"),
+        (["--rerun", "show"], "allowed --rerun spawn"),
+        (["--rerun", "save", "a.rrd", "--method", "reference"], "--method reference"),
+    ):
+        assert main(["simulate", "symmetric", "--quiet", *argv]) == 2
+        err = capsys.readouterr()
+        assert reason in err.err
+        assert "scenario symmetric" not in err.out, "refused before simulating"
+    with pytest.raises(RerunTargetError, match="at most one URL"):
+        parse_target(["connect", "rerun://a", "rerun://b"])
+
+
+def test_envelope_keeps_every_extreme():
+    rng = np.random.default_rng(3)
+    values = rng.normal(size=1003)
+    keep = envelope_positions(values, 50)
+    assert np.all(np.diff(keep) > 0)
+    for start in range(0, values.size, 50):
+        seg = values[start : start + 50]
+        picked = values[keep[(keep >= start) & (keep < start + 50)]]
+        assert seg.max() in picked and seg.min() in picked
+        assert picked.size <= 2
+
+
+def test_live_settings_decimate_and_keep_peaks(tmp_path: Path):
+    """The viewer stream: about 2 points per 2 ms bucket, the largest force still there."""
+    scenario = load_scenario("symmetric")
+    full_path, live_path = tmp_path / "full.rrd", tmp_path / "live.rrd"
+    sinks = []
+    for path, settings in ((full_path, SinkSettings()), (live_path, LIVE_SETTINGS)):
+        rec = rr.RecordingStream("brake_sim_test")
+        rec.save(path)
+        sinks.append(RerunSink(rec, params=scenario.setup.params, settings=settings))
+    for topic, msg, ns in offline_messages(scenario, duration_s=0.5):
+        for sink in sinks:
+            sink.write(topic, msg, ns)
+    for sink in sinks:
+        sink.close()
+    verify(live_path)
+    full, live = read(full_path), read(live_path)
+    path = E.pivot_path("left", "magnitude")
+    n_full, n_live = full.times(path).size, live.times(path).size
+    buckets = math.ceil(n_full / round(25_000 / LIVE_SETTINGS.force_envelope_hz))
+    assert buckets <= n_live <= 2 * buckets
+    assert live.values(path).max() == full.values(path).max()
+    assert live.values(path).min() == full.values(path).min()
+    # frames every 40 ms of simulated time in [0, 0.5 s)
+    assert live.times(f"{E.DRAWING}/drum").size == math.ceil(0.5 * LIVE_SETTINGS.drawing_rate_hz)
+
+
+def test_impacts_match_the_analysis_at_full_state_rate(tmp_path: Path):
+    """With a BrakeState per sample, every contact onset of the analysis is an event."""
+    scenario = load_scenario("symmetric")
+    duration = 0.3  # the impacting regime of the symmetric event ends at 0.27 s
+    rec = rr.RecordingStream("brake_sim_test")
+    rec.save(tmp_path / "impacts.rrd")
+    sink = RerunSink(rec, params=scenario.setup.params)
+    every_sample = StreamSettings(state_rate_hz=25_000.0)
+    for topic, msg, ns in offline_messages(scenario, duration_s=duration, settings=every_sample):
+        sink.write(topic, msg, ns)
+    sink.close()
+    metrics = run_scenario(scenario, duration_s=duration).metrics
+    for side in E.SIDES:
+        assert metrics.shoe(side).n_impacts >= 8
+        assert sink.impacts[side] == metrics.shoe(side).n_impacts
+    c = read(tmp_path / "impacts.rrd")
+    for side in E.SIDES:
+        onsets_ns = np.asarray(metrics.shoe(side).onsets_s) * 1e9
+        marks = c.times(f"{E.IMPACTS}/{side}")
+        assert marks.size == onsets_ns.size
+        # each marker sits at the sample where the onset is first seen (the next sample)
+        assert np.all((marks >= onsets_ns) & (marks - onsets_ns <= DT_NS))
+
+
+# -- brake-sim view FILE.mcap --------------------------------------------------------------
+def _schema_text(type_name: str) -> str:
+    """ros2msg schema: the message's definition and those it uses (Header, Time)."""
+    package, _, name = type_name.split("/")
+    root = Path(__file__).resolve().parents[1] / "msg_defs" / "msg"
+    if package == "brake_sim_msgs":
+        text = (root / f"{name}.msg").read_text()
+    else:
+        raise AssertionError(type_name)
+    sep = "=" * 80
+    return (
+        f"{text}\n{sep}\nMSG: std_msgs/Header\nbuiltin_interfaces/Time stamp\nstring frame_id\n"
+        f"{sep}\nMSG: builtin_interfaces/Time\nint32 sec\nuint32 nanosec\n"
+    )
+
+
+def write_mcap(path: Path, scenario_name: str, duration_s: float, *, with_model: bool) -> None:
+    """An MCAP of the node's stream as the recorder writes it (cdr, ros2msg, metadata)."""
+    from mcap.writer import Writer
+    from rclpy.serialization import serialize_message
+
+    scenario = load_scenario(scenario_name)
+    kept = (stream.PIVOT_FORCES, stream.STATE, stream.DEFECTS)
+    with path.open("wb") as f:
+        writer = Writer(f)
+        writer.start(profile="ros2", library="brake-sim-ros tests")
+        channels = {}
+        for topic in kept:
+            schema = writer.register_schema(
+                name=topic.type_name,
+                encoding="ros2msg",
+                data=_schema_text(topic.type_name).encode(),
+            )
+            channels[topic] = writer.register_channel(
+                topic=topic.name, message_encoding="cdr", schema_id=schema
+            )
+        if with_model:
+            values = ros_params.model_values(scenario.setup.params, scenario.setup.defects)
+            writer.add_metadata("brake_sim_model", {k: repr(v) for k, v in values.items()})
+        writer.add_metadata(
+            "brake_sim_scenario",
+            {"name": scenario.name, "source": scenario.source, "toml": scenario.text},
+        )
+        for seq, (topic, msg, ns) in enumerate(offline_messages(scenario, duration_s=duration_s)):
+            if topic in channels:
+                writer.add_message(
+                    channel_id=channels[topic],
+                    log_time=ns,
+                    publish_time=ns,
+                    sequence=seq,
+                    data=serialize_message(msg),
+                )
+        writer.finish()
+
+
+def test_view_mcap_save_rrd(tmp_path: Path, capsys):
+    mcap_path, rrd = tmp_path / "case5.mcap", tmp_path / "case5.rrd"
+    write_mcap(mcap_path, "case5_left_tilted", RUN_S, with_model=True)
+    assert main(["view", str(mcap_path), "--save", str(rrd)]) == 0
+    assert f"{N_SAMPLES} pivot-force samples, 100 states" in capsys.readouterr().out
+    check_run(rrd, n_samples=N_SAMPLES, n_states=100)
+    c = read(rrd)
+    truth = c.texts[f"{E.DEFECTS}/ground_truth"][0]
+    assert "case5_left_tilted" in truth and "-2.000" in truth
+    assert not any("built-in brake geometry" in t for t in c.texts[E.EVENTS])
+    assert c.values(f"{E.DEFECTS}/left/initial_angle_deg")[0] == pytest.approx(-2.0)
+
+
+def test_view_without_model_metadata_says_so(tmp_path: Path):
+    mcap_path, rrd = tmp_path / "bare.mcap", tmp_path / "bare.rrd"
+    write_mcap(mcap_path, "symmetric", 0.05, with_model=False)
+    assert main(["view", str(mcap_path), "--save", str(rrd)]) == 0
+    verify(rrd)
+    assert any("built-in brake geometry" in t for t in read(rrd).texts[E.EVENTS])
+
+
+def test_view_refuses_what_it_cannot_show(tmp_path: Path, capsys, monkeypatch):
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    not_mcap = tmp_path / "junk.mcap"
+    not_mcap.write_bytes(b"not an mcap file at all")
+    assert main(["view", str(not_mcap), "--save", str(tmp_path / "j.rrd")]) == 2
+    assert "not a readable MCAP file" in capsys.readouterr().err
+    good = tmp_path / "ok.mcap"
+    write_mcap(good, "symmetric", 0.01, with_model=True)
+    assert main(["view", str(good)]) == 2
+    assert "use --save FILE.rrd" in capsys.readouterr().err
