@@ -134,11 +134,15 @@ def cmd_bench(args: argparse.Namespace) -> int:
         from brake_sim_ros.solvers.benchmark import main as bench_core
 
         return bench_core(args.rest)
+    if args.what == "accuracy":
+        from brake_sim_ros.solvers.work_precision import main as bench_accuracy
+
+        return bench_accuracy(args.rest)
     if args.what == "node":
         from brake_sim_ros.ros.benchmark import main as bench_node
 
         return bench_node(args.rest)
-    raise BrakeSimError(f"unknown benchmark '{args.what}': allowed core, node")
+    raise BrakeSimError(f"unknown benchmark '{args.what}': allowed core, accuracy, node")
 
 
 def run_node(argv: list[str]) -> int:
@@ -170,8 +174,8 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("scenarios", help="list the built-in scenarios")
     p.set_defaults(func=cmd_scenarios)
 
-    p = sub.add_parser("bench", help="benchmarks that print figures (core, node)")
-    p.add_argument("what", choices=("core", "node"))
+    p = sub.add_parser("bench", help="benchmarks that print figures (core, accuracy, node)")
+    p.add_argument("what", choices=("core", "accuracy", "node"))
     p.add_argument("rest", nargs=argparse.REMAINDER)
     p.set_defaults(func=cmd_bench)
 

@@ -8,6 +8,7 @@ import math
 import numpy as np
 import pytest
 
+from brake_sim_ros.analysis.energy import energy_residual
 from brake_sim_ros.model import layout as L
 from brake_sim_ros.model.actuation import Actuation, ForceProfile
 from brake_sim_ros.model.defects import Defects, ShoeDefect
@@ -63,37 +64,10 @@ def test_torsional_mode_matches_closed_form_with_shoes_held_off():
     assert np.all(block["left_normal_force_n"] == 0) and np.all(block["right_normal_force_n"] == 0)
 
 
-def _energy_residual(block, params: BrakeParameters) -> tuple[float, float]:
-    d = params.driveline
-    r = block.data[-1]
-    c = L.COL
-    e0 = 0.5 * (d.flywheel_inertia_kg_m2 + d.drum_inertia_kg_m2) * d.initial_speed_rad_s**2
-    i_s = params.shoe.inertia_about_pivot_kg_m2
-    kinetic = (
-        0.5 * d.flywheel_inertia_kg_m2 * r[c["flywheel_speed_rad_s"]] ** 2
-        + 0.5 * d.drum_inertia_kg_m2 * r[c["drum_speed_rad_s"]] ** 2
-        + 0.5 * i_s * (r[c["left_speed_rad_s"]] ** 2 + r[c["right_speed_rad_s"]] ** 2)
-    )
-    k_c = params.contact_stiffness_n_per_m
-    potential = 0.5 * d.coupling_stiffness_n_m_per_rad * (
-        r[c["flywheel_angle_rad"]] - r[c["drum_angle_rad"]]
-    ) ** 2 + sum(0.5 * k_c * max(r[c[f"{s}_indentation_m"]], 0.0) ** 2 for s in ("left", "right"))
-    supplied = e0 + r[c["actuation_work_j"]]
-    spent = (
-        r[c["friction_work_j"]]
-        + r[c["coupling_damper_loss_j"]]
-        + r[c["contact_loss_j"]]
-        + r[c["lock_loss_j"]]
-        + kinetic
-        + potential
-    )
-    return supplied - spent, e0
-
-
 def test_energy_balance_over_a_whole_event(symmetric_rk4):
     # initial kinetic energy + actuator work = friction work + damper and contact losses
     # + energy absorbed when the brake locks + what remains (kinetic and elastic)
-    residual, e0 = _energy_residual(symmetric_rk4.samples, BrakeParameters())
+    residual, e0 = energy_residual(symmetric_rk4.samples, BrakeParameters())
     assert symmetric_rk4.stop_time_s is not None
     assert abs(residual) < 1e-6 * e0
 
