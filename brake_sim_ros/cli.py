@@ -15,6 +15,7 @@ import numpy as np
 
 from brake_sim_ros import __version__
 from brake_sim_ros.errors import BrakeSimError
+from brake_sim_ros.scenarios.loader import SOLVER_METHODS
 
 EXIT_ERROR = 2
 
@@ -72,7 +73,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     sim_s = result.samples.time_s[-1] if len(result.samples) else 0.0
     rtf = sim_s / result.cpu_s if result.cpu_s > 0 else float("inf")
     stop = f"{m.stop_time_s:.4f} s" if m.stop_time_s is not None else "not stopped"
-    unit = "steps" if result.method == "rk4" else "f-evals"
+    unit = "f-evals" if result.method == "reference" else "steps"
     print(
         f"scenario {scenario.name} ({result.method}): drum stop {stop};"
         f" cost {result.cpu_s:.3f} s CPU for {sim_s:.3f} s simulated"
@@ -161,7 +162,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("scenario", help="built-in scenario name or path to a .toml file")
     p.add_argument("--out", help="write the full time history (.npz or .csv)")
     p.add_argument("--duration", type=float, help="simulated seconds (default: the scenario's)")
-    p.add_argument("--method", choices=("rk4", "reference"), help="override the scenario's solver")
+    p.add_argument("--method", choices=SOLVER_METHODS, help="override the scenario's solver")
     p.add_argument("--dt", type=float, help="override the fixed step, s")
     p.add_argument("--quiet", action="store_true", help="no progress output")
     p.set_defaults(func=cmd_simulate)

@@ -21,8 +21,9 @@ class RunResult:
         samples: the recorded time history.
         metrics: impacts, periods, peak and contact-regime forces, stop time.
         cpu_s: process CPU time spent integrating, s.
-        n_steps: fixed steps taken (rk4) or right-hand-side evaluations (reference).
-        method: "rk4" or "reference".
+        n_steps: fixed steps taken (fixed-step schemes) or right-hand-side evaluations
+            (reference).
+        method: the fixed-step scheme or "reference".
 
     A run that fails raises (SimulationError, StepSizeError) instead of returning.
     """
@@ -55,7 +56,7 @@ def run_scenario(
         cpu = time.process_time() - start
         samples, stop, n = ref.samples, ref.stop_time_s, ref.n_rhs
     else:
-        stepper = FixedStepStepper(scenario.setup, dt_s or scenario.solver.dt_s)
+        stepper = FixedStepStepper(scenario.setup, dt_s or scenario.solver.dt_s, scheme=method)
         samples = stepper.run(duration, progress=progress)
         cpu = time.process_time() - start
         stop, n = stepper.stop_time_s, stepper.step_index
