@@ -15,6 +15,7 @@ import numpy as np
 
 from brake_sim_ros import __version__
 from brake_sim_ros.errors import BrakeSimError
+from brake_sim_ros.scenarios.loader import SOLVER_METHODS
 
 EXIT_ERROR = 2
 
@@ -79,7 +80,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         stop = "not stopped"
     else:
         stop = "not delivered by this level"
-    unit = {"rk4": "steps", "reference": "f-evals"}.get(result.method, "RK4 steps")
+    unit = {"reference": "f-evals", "contact_regime": "RK4 steps"}.get(result.method, "steps")
     print(
         f"level {chosen.level.name} ({chosen.level.description}; shoes"
         f" {', '.join(chosen.shoes)}): {chosen.reason}"
@@ -175,6 +176,10 @@ def cmd_scenarios(args: argparse.Namespace) -> int:
 # benchmark name -> (module with main(argv), what it measures); imported only when run
 BENCHMARKS = {
     "core": ("brake_sim_ros.solvers.benchmark", "cost and accuracy of the fixed-step stepper"),
+    "accuracy": (
+        "brake_sim_ros.solvers.work_precision",
+        "work-precision study of every solver and preset (table and plot)",
+    ),
     "node": ("brake_sim_ros.ros.benchmark", "the ROS node's real-time figures"),
     "realtime": (
         "brake_sim_ros.solvers.realtime_benchmark",
@@ -210,7 +215,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("scenario", help="built-in scenario name or path to a .toml file")
     p.add_argument("--out", help="write the full time history (.npz or .csv)")
     p.add_argument("--duration", type=float, help="simulated seconds (default: the scenario's)")
-    p.add_argument("--method", choices=("rk4", "reference"), help="override the scenario's solver")
+    p.add_argument("--method", choices=SOLVER_METHODS, help="override the scenario's solver")
     p.add_argument("--dt", type=float, help="override the fixed step, s")
     p.add_argument("--quiet", action="store_true", help="no progress output")
     p.add_argument(

@@ -11,8 +11,15 @@ from brake_sim_ros.solvers.run import RunResult, run_scenario
 
 
 @functools.cache
-def cached_run(name: str, method: str = "rk4") -> RunResult:
+def cached_run(name: str, method: str | None = "rk4") -> RunResult:
+    """A run of a built-in scenario; ``method`` None = the scenario's own solver settings."""
     return run_scenario(load_scenario(name), method=method)
+
+
+@pytest.fixture(scope="session")
+def symmetric_run() -> RunResult:
+    """The symmetric scenario with its own solver settings (what a user gets)."""
+    return cached_run("symmetric", None)
 
 
 @pytest.fixture(scope="session")

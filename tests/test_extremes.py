@@ -46,8 +46,15 @@ def _setup(overrides: dict | None = None, force_n: float = NOMINAL_FORCE_N, **kw
     return BrakeSetup(params=params, actuation=Actuation(profile, profile), **kw)
 
 
-def _run(setup: BrakeSetup, dt: float, duration_s: float) -> tuple[FixedStepStepper, object]:
-    stepper = FixedStepStepper(setup, dt)
+def _run(
+    setup: BrakeSetup, dt: float, duration_s: float, scheme: str | None = None
+) -> tuple[FixedStepStepper, object]:
+    """Run with ``scheme`` (default: the stepper's default scheme)."""
+    stepper = (
+        FixedStepStepper(setup, dt)
+        if scheme is None
+        else FixedStepStepper(setup, dt, scheme=scheme)
+    )
     return stepper, stepper.run(duration_s)
 
 
@@ -186,14 +193,35 @@ def test_zero_contact_damping_runs_correctly():
     setup = _setup({"contact": {"damping_n_s_per_m": 0.0}})
     stepper, block = _run(setup, DEFAULT_DT, 0.15)
     _assert_physical(setup, stepper, block, NOMINAL_FORCE_N)
-    assert block["contact_loss_j"][-1] == 0.0
+    # no contact loss: the force law is conservative. Not exactly 0 J: the located scheme
+    # switches a shoe's contact off within 1e-10 dt of the true separation, and the sliver
+    # of elastic energy k eps^2 / 2 left at the switch is booked as a contact loss; it
+    # must stay within the books' own requirement.
+    books = energy_balance(block, setup.params)
+    assert abs(block["contact_loss_j"][-1]) < ENERGY_REL * books.turnover_j
     _assert_impacts_converged(setup, DEFAULT_DT, 0.1)
 
 
 HIGH_DAMPING = {"contact": {"damping_n_s_per_m": 1e5}}  # about 5x critical for the shoe
 
 
-def test_very_high_contact_damping_converges_under_step_refinement():
+@pytest.mark.parametrize(
+    "scheme",
+    [
+        "rk4",
+        pytest.param(
+            "rk4-located",
+            marks=pytest.mark.xfail(
+                strict=True,
+                reason="measured residual/turnover at limit/1, /2, /4, /8, /16: 4.8e-6, 3.2e-6,"
+                " 3.7e-6, 1.6e-6, 5.8e-7 (plain rk4: 1.5e-5, 1.7e-6, 5.0e-7, 9.4e-8, 1.9e-8):"
+                " the located scheme has an energy floor near 1e-6 with over-damped contacts;"
+                " cause not found (suspected: more switches per step than the 8 it locates)",
+            ),
+        ),
+    ],
+)
+def test_very_high_contact_damping_converges_under_step_refinement(scheme: str):
     """Damping far above critical: the Kelvin-Voigt force jumps by c v at onset. The energy
     residual must shrink as the step shrinks and meet the requirement at 1/8 of the limit;
     indentation stays below its bound."""
@@ -201,7 +229,7 @@ def test_very_high_contact_damping_converges_under_step_refinement():
     limit = step_limit(setup, NOMINAL_FORCE_N).max_step_s
     residuals = []
     for k in (1, 2, 4, 8):
-        stepper, block = _run(setup, limit / k, 0.1)
+        stepper, block = _run(setup, limit / k, 0.1, scheme)
         books = energy_balance(block, setup.params)
         residuals.append(abs(books.residual_j) / books.turnover_j)
     assert residuals[-1] < ENERGY_REL
@@ -211,10 +239,11 @@ def test_very_high_contact_damping_converges_under_step_refinement():
 
 @pytest.mark.xfail(
     strict=True,
-    reason="kernel: a contact onset inside an RK4 step is not located, so with damping far"
-    " above critical the c*v force jump at onset costs O(c v dt) J per impact; the books miss"
-    " the 1e-6 requirement by about 15x at the step limit (fix: locate the onset and split"
-    " the step there, the kernel rewrite)",
+    reason="with damping 5x critical the default scheme (rk4-located) leaves an energy residual"
+    " of about 5e-6 of the turnover at the step limit (plain rk4: 1.5e-5), against 1e-6"
+    " required. Unresolved: the residual falls slowly and not monotonically under refinement"
+    " (see the refinement test); suspected cause: over-damped contact chatter with more"
+    " switches in a step than the 8 the kernel locates",
 )
 def test_very_high_contact_damping_energy_at_the_step_limit():
     """At its own step limit, the high-damping model must keep the energy requirement."""
@@ -344,14 +373,6 @@ def test_very_long_run_stays_exact():
         assert np.ptp(block[name][late]) < 1e-12, name
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="the step limit (stability.step_limit: RK4 stability and 16 steps per period) admits"
-    " 64 us, where the first impact's peak pivot force is 1.1 % off the converged value (1 %"
-    " required): the kernel does not locate contact onsets, so the force jump at onset lands"
-    " anywhere in a step. Fix: onset location in the kernel (being rewritten); otherwise an"
-    " accuracy term in step_limit",
-)
 def test_step_at_the_limit_gives_the_converged_event():
     """At exactly the step limit the symmetric event (published ramp) keeps the accuracy
     requirements against a 4x finer step: first impacts and periods 1 %, stop time 0.1 %."""

@@ -120,11 +120,11 @@ def _run(outputs, level=None, shoes=("left", "right"), name="symmetric"):
     )
 
 
-def test_contact_regime_model_within_one_percent_of_the_full_model(symmetric_rk4):
+def test_contact_regime_model_within_one_percent_of_the_full_model(symmetric_run):
     """Issue 5 item 3: stop time and contact-regime mean pivot force within 1 %."""
     r = _run(("stop_time", "contact_regime_forces", "braking_torque"))
     assert r.plan.level.name == "contact_regime" and r.method == "contact_regime"
-    full = symmetric_rk4.metrics
+    full = symmetric_run.metrics
     assert r.stop_time_s == pytest.approx(full.stop_time_s, rel=0.01)
     for side in ("left", "right"):
         assert r.metrics.shoe(side).contact_regime_force_n == pytest.approx(
@@ -133,14 +133,14 @@ def test_contact_regime_model_within_one_percent_of_the_full_model(symmetric_rk4
         assert r.metrics.shoe(side).n_impacts == 0  # no impacts invented
     # only the asked signals are kept
     assert "left_angle_rad" not in r.samples.columns
-    assert r.memory_bytes < symmetric_rk4.memory_bytes / 20
+    assert r.memory_bytes < symmetric_run.memory_bytes / 20
 
 
-def test_contact_regime_braking_torque_matches_full_model_while_riding(symmetric_rk4):
+def test_contact_regime_braking_torque_matches_full_model_while_riding(symmetric_run):
     """In steady contact both models satisfy the same shoe balance; over the impacting
     regime the torque impulse (what decelerates the drum) must agree too."""
     r = _run(("braking_torque",), level="contact_regime")
-    fb = symmetric_rk4.samples
+    fb = symmetric_run.samples
     arm = {s: np.hypot(fb[f"{s}_contact_x_m"], fb[f"{s}_contact_y_m"]) for s in ("left", "right")}
     full_torque = sum(fb[f"{s}_friction_force_n"] * arm[s] for s in ("left", "right"))
     t_full, t_qs = fb.time_s, r.samples.time_s
@@ -157,12 +157,12 @@ def test_contact_regime_braking_torque_matches_full_model_while_riding(symmetric
     assert imp_qs == pytest.approx(imp_full, rel=0.01)
 
 
-def test_rigid_coupling_keeps_impacts_and_contact_forces(symmetric_rk4):
+def test_rigid_coupling_keeps_impacts_and_contact_forces(symmetric_run):
     """The drum speed reaches the shoes only through friction saturated at these speeds,
     so removing the torsional mode leaves the impacts and the riding forces unchanged."""
     r = _run(("impacts", "contact_regime_forces"))
     assert r.plan.level.name == "rigid" and r.stop_time_s is None  # stop not delivered
-    full = symmetric_rk4.metrics
+    full = symmetric_run.metrics
     for side in ("left", "right"):
         a, b = r.metrics.shoe(side), full.shoe(side)
         assert a.n_impacts == b.n_impacts
@@ -174,17 +174,20 @@ def test_rigid_coupling_keeps_impacts_and_contact_forces(symmetric_rk4):
     assert not math.isclose(r.model_stop_time_s, full.stop_time_s, rel_tol=1e-3)
 
 
-def test_one_shoe_model_gives_that_shoes_impacts_exactly(symmetric_rk4):
+def test_one_shoe_model_gives_that_shoes_impacts_exactly(symmetric_run):
     r = _run(("impacts",), shoes=("left",))
     assert r.plan.shoes == ("left",)
     assert all(not c.startswith("right_") for c in r.samples.columns)
-    a, b = r.metrics.left, symmetric_rk4.metrics.left
-    np.testing.assert_allclose(a.onsets_s, b.onsets_s, rtol=1e-9)
-    np.testing.assert_allclose(a.impact_peaks_n, b.impact_peaks_n, rtol=1e-9)
-    assert a.period_s == pytest.approx(b.period_s, rel=1e-9)
+    a, b = r.metrics.left, symmetric_run.metrics.left
+    # Not bit-equal: the located scheme also cuts a step at the other shoe's contact
+    # switches, so the two runs differ by RK4 truncation error (below the scheme's own
+    # 1e-5 error against the reference at this step; measured 1.2e-8 of an onset time).
+    np.testing.assert_allclose(a.onsets_s, b.onsets_s, rtol=1e-6)
+    np.testing.assert_allclose(a.impact_peaks_n, b.impact_peaks_n, rtol=1e-6)
+    assert a.period_s == pytest.approx(b.period_s, rel=1e-6)
 
 
-def test_one_shoe_brake_stops_as_its_torque_predicts(symmetric_rk4):
+def test_one_shoe_brake_stops_as_its_torque_predicts(symmetric_run):
     """A brake with only the left shoe: momentum I w0 is removed by the left shoe's torque
     alone, which is the same as in the two-shoe brake while the drum turns fast."""
     s = load_scenario("symmetric")
@@ -200,7 +203,7 @@ def test_one_shoe_brake_stops_as_its_torque_predicts(symmetric_rk4):
         )
     )
     assert one.stop_time_s is not None
-    b = symmetric_rk4.samples
+    b = symmetric_run.samples
     d = s.setup.params.driveline
     arm = np.hypot(b["left_contact_x_m"], b["left_contact_y_m"])
     torque = b["left_friction_force_n"] * arm

@@ -1,4 +1,4 @@
-"""Compiled (numba) right-hand side, sample evaluation and fixed-step RK4 stepping.
+"""Compiled (numba) right-hand side, sample evaluation and fixed-step stepping.
 
 Everything here takes plain floats and float64/int64 arrays laid out as in
 :mod:`brake_sim_ros.model.layout`; dataclasses are unpacked at the boundary
@@ -141,8 +141,10 @@ def shoe_eval(p, base, theta, omega, drum_speed, actuation, mode, locked=0):
     drum_torque = -ff * dist
     p_fric = ff * v_slide
     p_contact = 0.0
-    if in_contact and enabled and eps > 0.0:
-        # Kelvin-Voigt loss: power into the contact minus the rate of elastic energy
+    if enabled and eps > 0.0:
+        # Kelvin-Voigt loss: power into the contact minus the rate of the elastic energy
+        # k eps^2 / 2 (booked whenever eps > 0, also while the force is off: with fn = 0
+        # the elastic energy the balance counts is lost, not returned)
         p_contact = (fn - p[L.P_CONTACT_STIFFNESS] * eps) * eps_dot
     p_act = fex * (-w * ty) + fey * (w * tx)
     return (
@@ -305,8 +307,257 @@ def _update_regime(kstate, k_regime, k_flag, k_change, touching, step, settle_st
     kstate[k_regime] = regime
 
 
+@njit(cache=True, inline="always")
+def _contact_switch(p, base, theta, omega):
+    """Indentation ``eps`` and switching function ``h`` of one shoe, both in m.
+
+    ``h = min(eps, eps + (c_c / k_c) eps_dot)``: the Kelvin-Voigt force of
+    :func:`shoe_eval` is on exactly when ``h > 0`` (the lining penetrates and the force
+    would push). Both arguments of the min are lengths, so ``h`` is continuous in the state
+    and its zero is the switching instant: ``eps = 0`` at an onset (where the force jumps
+    from 0 to ``c_c eps_dot``), ``k_c eps + c_c eps_dot = 0`` at a separation (where it
+    reaches 0 continuously, with a kink). A removed shoe returns (-1, -1): never on.
+    """
+    if p[base + L.S_ENABLED] <= 0.0:
+        return -1.0, -1.0
+    s = p[base + L.S_SIGN]
+    px = p[base + L.S_PIVOT_X]
+    py = p[base + L.S_PIVOT_Y]
+    phi = s * theta
+    xx, xy, dist, nx, ny = _contact_point(p, base, math.cos(phi), math.sin(phi))
+    eps = dist - p[L.P_DRUM_RADIUS]
+    w = s * omega
+    eps_dot = nx * (-w * (xy - py)) + ny * (w * (xx - px))
+    g = eps + p[L.P_CONTACT_DAMPING] / p[L.P_CONTACT_STIFFNESS] * eps_dot
+    return eps, min(eps, g)
+
+
+@njit(cache=True, inline="always")
+def _shoe_switch(p, shoe, y):
+    """:func:`_contact_switch` of shoe 0 (left) or 1 (right) for the state ``y``."""
+    return _contact_switch(
+        p, L.P_SHOE_BASE + shoe * L.SHOE_STRIDE, y[L.Y_LEFT_ANGLE + shoe], y[L.Y_LEFT_SPEED + shoe]
+    )
+
+
+@njit(cache=True, inline="always")
+def _rk4_sub(y, k1, t0, h, p, gl, tl, fl, gr, tr, fr, locked, ml, mr, k2, k3, k4, tmp, out, y_out):
+    """One classical RK4 step of ``h`` s from ``y`` at ``t0`` (``k1 = f(t0, y)`` given) with
+    the contact modes ``ml``/``mr`` into ``y_out`` (may be ``y`` itself)."""
+    n = y.shape[0]
+    th = t0 + 0.5 * h
+    fel = gl * _pwl(th, tl, fl)
+    fer = gr * _pwl(th, tr, fr)
+    for j in range(n):
+        tmp[j] = y[j] + 0.5 * h * k1[j]
+    evaluate(tmp, p, fel, fer, locked, ml, mr, k2, out, -1, t0)
+    for j in range(n):
+        tmp[j] = y[j] + 0.5 * h * k2[j]
+    evaluate(tmp, p, fel, fer, locked, ml, mr, k3, out, -1, t0)
+    t1 = t0 + h
+    fel = gl * _pwl(t1, tl, fl)
+    fer = gr * _pwl(t1, tr, fr)
+    for j in range(n):
+        tmp[j] = y[j] + h * k3[j]
+    evaluate(tmp, p, fel, fer, locked, ml, mr, k4, out, -1, t0)
+    for j in range(n):
+        y_out[j] = y[j] + h / 6.0 * (k1[j] + 2.0 * k2[j] + 2.0 * k3[j] + k4[j])
+
+
 @njit(cache=True)
-def rk4_advance(
+def _locate_switch(
+    shoe, on, ya, ka, t0, rem, f_end, p, gl, tl, fl, gr, tr, fr, locked, ml, mr, work, out, tol
+):
+    """Instant (s after ``t0``) where ``shoe`` leaves its contact mode ``on``.
+
+    The RK4 step from ``ya`` (with ``ka = f(ya)``) of length ``s`` and frozen modes is a
+    smooth function of ``s``, and so is the shoe's switching function along it. Its sign
+    change in ``(0, rem]`` (``f_end``: the mode-signed value at ``rem``, <= 0) is
+    bracketed by the Illinois variant of regula falsi to a width ``tol``; the right end of
+    the bracket (the first instant at or past the switch) is returned.
+    """
+    sign = 1.0 if on else -1.0
+    k2 = work[0]
+    k3 = work[1]
+    k4 = work[2]
+    tmp = work[3]
+    yb = work[4]
+    a = 0.0
+    fa = max(sign * _shoe_switch(p, shoe, ya)[1], 0.0)
+    b = rem
+    fb = f_end
+    side = 0
+    for _ in range(80):
+        if b - a <= tol:
+            break
+        s = 0.5 * (a + b)
+        if fa > 0.0 and fb < 0.0:
+            s = b - fb * (b - a) / (fb - fa)
+            if not (a < s < b):
+                s = 0.5 * (a + b)
+        _rk4_sub(ya, ka, t0, s, p, gl, tl, fl, gr, tr, fr, locked, ml, mr, k2, k3, k4, tmp, out, yb)
+        fs = sign * _shoe_switch(p, shoe, yb)[1]
+        if fs > 0.0:
+            a = s
+            fa = fs
+            if side == 1:
+                fb *= 0.5
+            side = 1
+        else:
+            b = s
+            fb = fs
+            if side == -1:
+                fa *= 0.5
+            side = -1
+    return b
+
+
+@njit(cache=True)
+def _located_step(y, k1, t, dt, p, gl, tl, fl, gr, tr, fr, locked, h_start, work, out, h_end):
+    """RK4 step of ``dt`` from ``y`` (in place) with contact switches located in the step.
+
+    The step runs with each shoe's contact mode frozen (the force law is then smooth); a
+    trial step whose end has a shoe on the wrong side of its switching function is cut at
+    the located switch, the mode flipped there, and the rest of the step taken with the new
+    mode: the Kelvin-Voigt jump at onset and the kink at separation never fall inside an RK4
+    stage, so RK4 keeps its fourth order. At most ``MAX_SWITCHES_PER_STEP`` switches are
+    located per step (a Zeno bounce sequence); beyond that the step finishes with the last
+    modes. ``h_start`` (2,) holds the switching functions at ``y``; ``h_end`` (4,) receives
+    (eps left, h left, eps right, h right) at the end of the step.
+    """
+    n = y.shape[0]
+    k2 = work[0]
+    k3 = work[1]
+    k4 = work[2]
+    tmp = work[3]
+    ya = work[5]
+    yb = work[6]
+    ka = work[7]
+    on_l = h_start[0] > 0.0
+    on_r = h_start[1] > 0.0
+    for j in range(n):
+        ya[j] = y[j]
+        ka[j] = k1[j]
+    tol = 1e-10 * dt
+    tau = 0.0
+    switches = 0
+    while True:
+        rem = dt - tau
+        ml = L.CONTACT_ON if on_l else L.CONTACT_OFF
+        mr = L.CONTACT_ON if on_r else L.CONTACT_OFF
+        _rk4_sub(
+            ya,
+            ka,
+            t + tau,
+            rem,
+            p,
+            gl,
+            tl,
+            fl,
+            gr,
+            tr,
+            fr,
+            locked,
+            ml,
+            mr,
+            k2,
+            k3,
+            k4,
+            tmp,
+            out,
+            yb,
+        )
+        el, hl = _shoe_switch(p, 0, yb)
+        er, hr = _shoe_switch(p, 1, yb)
+        bad_l = (hl > 0.0) != on_l
+        bad_r = (hr > 0.0) != on_r
+        if not (bad_l or bad_r) or switches >= L.MAX_SWITCHES_PER_STEP:
+            break
+        s_l = 2.0 * rem
+        s_r = 2.0 * rem
+        if bad_l:
+            f_end = hl if on_l else -hl
+            s_l = _locate_switch(
+                0,
+                on_l,
+                ya,
+                ka,
+                t + tau,
+                rem,
+                f_end,
+                p,
+                gl,
+                tl,
+                fl,
+                gr,
+                tr,
+                fr,
+                locked,
+                ml,
+                mr,
+                work,
+                out,
+                tol,
+            )
+        if bad_r:
+            f_end = hr if on_r else -hr
+            s_r = _locate_switch(
+                1,
+                on_r,
+                ya,
+                ka,
+                t + tau,
+                rem,
+                f_end,
+                p,
+                gl,
+                tl,
+                fl,
+                gr,
+                tr,
+                fr,
+                locked,
+                ml,
+                mr,
+                work,
+                out,
+                tol,
+            )
+        s = min(s_l, s_r)
+        # shoes switching together (a symmetric brake's) flip together
+        flip_l = bad_l and s_l <= s + 2.0 * tol
+        flip_r = bad_r and s_r <= s + 2.0 * tol
+        _rk4_sub(
+            ya, ka, t + tau, s, p, gl, tl, fl, gr, tr, fr, locked, ml, mr, k2, k3, k4, tmp, out, ya
+        )
+        tau += s
+        if flip_l:
+            on_l = not on_l
+        if flip_r:
+            on_r = not on_r
+        switches += 1
+        if dt - tau <= tol:
+            for j in range(n):
+                yb[j] = ya[j]
+            el, hl = _shoe_switch(p, 0, yb)
+            er, hr = _shoe_switch(p, 1, yb)
+            break
+        ml = L.CONTACT_ON if on_l else L.CONTACT_OFF
+        mr = L.CONTACT_ON if on_r else L.CONTACT_OFF
+        fel = gl * _pwl(t + tau, tl, fl)
+        fer = gr * _pwl(t + tau, tr, fr)
+        evaluate(ya, p, fel, fer, locked, ml, mr, ka, out, -1, t)
+    for j in range(n):
+        y[j] = yb[j]
+    h_end[0] = el
+    h_end[1] = hl
+    h_end[2] = er
+    h_end[3] = hr
+    return switches
+
+
+@njit(cache=True)
+def fixed_step_advance(
     y,
     step0,
     dt,
@@ -322,8 +573,14 @@ def rk4_advance(
     settle_steps,
     record_every,
     out,
+    scheme,
 ):
-    """Advance ``y`` in place by ``n_steps`` classical RK4 steps of ``dt`` seconds.
+    """Advance ``y`` in place by ``n_steps`` fixed steps of ``dt`` seconds.
+
+    ``scheme`` (layout.SCHEME_*): classical RK4; RK4 with contact switches located inside
+    the step (:func:`_located_step`); or symplectic (semi-implicit) Euler, which updates the
+    speeds with the accelerations at the step start and the angles with the new speeds
+    (one evaluation per step, first order, the energy quadratures by explicit Euler).
 
     Time is ``(step0 + i) * dt`` exactly, so runs are reproducible bit for bit.
     Actuation: piecewise-linear knots (tl, fl) and (tr, fr), times in s; they are
@@ -331,9 +588,10 @@ def rk4_advance(
     unless ``gain_override`` is 0.
 
     One sample (layout.COLUMNS) is written to ``out`` every ``record_every`` steps, at
-    the start of the step, from the same evaluation RK4 needs for its first stage.
-    ``kstate`` (int64, layout.K_*) and ``fstate`` (float64: [lock time s, lock loss J])
-    carry lock and regime bookkeeping between calls.
+    the start of the step, from the same evaluation the scheme needs for its first stage,
+    so the output stays on the uniform grid whatever happens inside a step.
+    ``kstate`` (int64, layout.K_*) and ``fstate`` (float64: [lock time s, lock loss J,
+    located switches]) carry lock and regime bookkeeping between calls.
 
     Returns the number of rows written. Stops early (status in kstate) on a non-finite state.
     """
@@ -343,6 +601,10 @@ def rk4_advance(
     k3 = np.empty(n)
     k4 = np.empty(n)
     tmp = np.empty(n)
+    y_new = np.empty(n)
+    work = np.empty((8, n))
+    h_start = np.empty(2)
+    h_end = np.empty(4)
     gl = p[L.P_SHOE_BASE + L.S_ACTUATION_GAIN]
     gr = p[L.P_SHOE_BASE + L.SHOE_STRIDE + L.S_ACTUATION_GAIN]
     if gain_override != 0:
@@ -352,6 +614,10 @@ def rk4_advance(
     radius = p[L.P_DRUM_RADIUS]
     rows = 0
     auto = L.CONTACT_AUTO
+    located = scheme == L.SCHEME_RK4_LOCATED
+    if located:
+        h_end[0], h_end[1] = _shoe_switch(p, 0, y)
+        h_end[2], h_end[3] = _shoe_switch(p, 1, y)
     for i in range(n_steps):
         step = step0 + i
         t = step * dt
@@ -360,7 +626,12 @@ def rk4_advance(
         fer = gr * _pwl(t, tr, fr)
         record = i % record_every == 0
         evaluate(y, p, fel, fer, locked, auto, auto, k1, out, rows if record else -1, t)
-        if record:
+        if located:
+            touching_l = 1 if h_end[0] > 0.0 else 0
+            touching_r = 1 if h_end[2] > 0.0 else 0
+            h_start[0] = h_end[1]
+            h_start[1] = h_end[3]
+        elif record:
             touching_l = 1 if out[rows, 9] > 0.0 and p[L.P_SHOE_BASE + L.S_ENABLED] > 0.0 else 0
             touching_r = (
                 1
@@ -405,24 +676,56 @@ def rk4_advance(
                 o[30] = L.REGIME_FREE
             o[29] = fstate[1]
             rows += 1
-        th = t + 0.5 * dt
-        fel = gl * _pwl(th, tl, fl)
-        fer = gr * _pwl(th, tr, fr)
-        for j in range(n):
-            tmp[j] = y[j] + 0.5 * dt * k1[j]
-        evaluate(tmp, p, fel, fer, locked, auto, auto, k2, out, -1, t)
-        for j in range(n):
-            tmp[j] = y[j] + 0.5 * dt * k2[j]
-        evaluate(tmp, p, fel, fer, locked, auto, auto, k3, out, -1, t)
-        t1 = (step + 1) * dt
-        fel = gl * _pwl(t1, tl, fl)
-        fer = gr * _pwl(t1, tr, fr)
-        for j in range(n):
-            tmp[j] = y[j] + dt * k3[j]
-        evaluate(tmp, p, fel, fer, locked, auto, auto, k4, out, -1, t)
         speed_before = y[L.Y_DRUM_SPEED]
-        for j in range(n):
-            y[j] += dt / 6.0 * (k1[j] + 2.0 * k2[j] + 2.0 * k3[j] + k4[j])
+        if scheme == L.SCHEME_SEMI_IMPLICIT_EULER:
+            for j in range(4, 8):
+                y[j] += dt * k1[j]
+            for j in range(4):
+                y[j] += dt * y[j + 4]
+            for j in range(8, n):
+                y[j] += dt * k1[j]
+        else:
+            ml = auto
+            mr = auto
+            if located:
+                # modes frozen for the step; k1 (auto) equals k1 with these modes
+                ml = L.CONTACT_ON if h_start[0] > 0.0 else L.CONTACT_OFF
+                mr = L.CONTACT_ON if h_start[1] > 0.0 else L.CONTACT_OFF
+            th = t + 0.5 * dt
+            fel = gl * _pwl(th, tl, fl)
+            fer = gr * _pwl(th, tr, fr)
+            for j in range(n):
+                tmp[j] = y[j] + 0.5 * dt * k1[j]
+            evaluate(tmp, p, fel, fer, locked, ml, mr, k2, out, -1, t)
+            for j in range(n):
+                tmp[j] = y[j] + 0.5 * dt * k2[j]
+            evaluate(tmp, p, fel, fer, locked, ml, mr, k3, out, -1, t)
+            t1 = (step + 1) * dt
+            fel = gl * _pwl(t1, tl, fl)
+            fer = gr * _pwl(t1, tr, fr)
+            for j in range(n):
+                tmp[j] = y[j] + dt * k3[j]
+            evaluate(tmp, p, fel, fer, locked, ml, mr, k4, out, -1, t)
+            for j in range(n):
+                y_new[j] = y[j] + dt / 6.0 * (k1[j] + 2.0 * k2[j] + 2.0 * k3[j] + k4[j])
+            accept = True
+            if located:
+                el, hl = _shoe_switch(p, 0, y_new)
+                er, hr = _shoe_switch(p, 1, y_new)
+                if (hl > 0.0) != (h_start[0] > 0.0) or (hr > 0.0) != (h_start[1] > 0.0):
+                    # a contact switches inside this step: redo it split at the switches
+                    fstate[2] += _located_step(
+                        y, k1, t, dt, p, gl, tl, fl, gr, tr, fr, locked, h_start, work, out, h_end
+                    )
+                    accept = False
+                else:
+                    h_end[0] = el
+                    h_end[1] = hl
+                    h_end[2] = er
+                    h_end[3] = hr
+            if accept:
+                for j in range(n):
+                    y[j] = y_new[j]
         if not locked:
             surface = abs(y[L.Y_DRUM_SPEED]) * radius
             if surface <= v_lock and (kstate[L.K_LEFT_IN_CONTACT] or kstate[L.K_RIGHT_IN_CONTACT]):

@@ -58,6 +58,7 @@ from brake_sim_ros.ros.diagnostics import RunStats, RunView, diagnostic_array, s
 from brake_sim_ros.ros.pacing import Pacer, PacingMode
 from brake_sim_ros.ros.stream import MessageSink, Topic
 from brake_sim_ros.scenarios import Scenario, load_scenario
+from brake_sim_ros.scenarios.loader import SolverSettings
 from brake_sim_ros.solvers.fixed_step import FixedStepStepper
 from brake_sim_ros.solvers.realtime import calibrate_chunk_cost, check_realtime
 
@@ -112,7 +113,7 @@ class BrakeSimNode(Node):
         }
         params, defects = ros_params.build_model({**values, **implied})
         setup = dataclasses.replace(self.scenario.setup, params=params, defects=defects)
-        self._stepper = self._make_stepper(setup, self.scenario.solver.dt_s)
+        self._stepper = self._make_stepper(setup, self.scenario.solver)
         self._run_initial_angles = self._initial_angles(setup)
         self._double_names = {
             name
@@ -247,14 +248,17 @@ class BrakeSimNode(Node):
         finally:
             self._internal_update = False
 
-    def _make_stepper(self, setup: BrakeSetup, dt_s: float) -> FixedStepStepper:
+    def _make_stepper(self, setup: BrakeSetup, solver: SolverSettings) -> FixedStepStepper:
+        dt_s = solver.dt_s
         if self._max_force_explicit:
             max_force = float(self._param("max_actuation_force_n"))
         else:
             max_force, note = ros_params.auto_max_actuation_force(setup, dt_s)
             if note:
                 self.get_logger().warning(note)
-        stepper = FixedStepStepper(setup, dt_s, max_actuation_n=max_force)
+        stepper = FixedStepStepper(
+            setup, dt_s, max_actuation_n=max_force, scheme=solver.fixed_step_scheme
+        )
         stepper.advance(0)  # loads the compiled kernel now (ms), not during the first chunk
         return stepper
 
@@ -630,7 +634,7 @@ class BrakeSimNode(Node):
 
     def _switch_scenario(self, scenario: Scenario, name_or_path: str) -> None:
         """Replace scenario, stepper and timing; on error nothing changes."""
-        stepper = self._make_stepper(scenario.setup, scenario.solver.dt_s)
+        stepper = self._make_stepper(scenario.setup, scenario.solver)
         self.scenario, self._stepper, self._seed = scenario, stepper, scenario.seed
         values = ros_params.model_values(scenario.setup.params, scenario.setup.defects)
         values["scenario"] = name_or_path

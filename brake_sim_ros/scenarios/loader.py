@@ -30,10 +30,12 @@ from brake_sim_ros.model.defects import Defects, ShoeDefect
 from brake_sim_ros.model.fidelity import ACCURACY_PRESETS, LEVEL_BY_NAME, OUTPUTS, Needs, plan
 from brake_sim_ros.model.parameters import PARAMETER_GROUPS, BrakeParameters
 from brake_sim_ros.model.trajectory import BrakeSetup
+from brake_sim_ros.solvers.presets import DEFAULT_PRESET, PRESETS
+from brake_sim_ros.solvers.stability import step_limit
 
 BUILTIN_PACKAGE = "brake_sim_ros.scenarios.builtin"
-SOLVER_METHODS = ("rk4", "reference")
-DEFAULT_STEP_S = 4e-5
+FIXED_STEP_METHODS = ("rk4", "rk4-located", "semi-implicit-euler")
+SOLVER_METHODS = (*FIXED_STEP_METHODS, "reference")
 
 
 @dataclass(frozen=True)
@@ -41,15 +43,25 @@ class SolverSettings:
     """How a scenario is integrated.
 
     Attributes:
-        method: "rk4" (fixed-step, compiled, real-time capable) or "reference" (adaptive
-            DOP853 with contact onsets and the lock located as events).
-        dt_s: fixed step for rk4, s.
+        method: a fixed-step scheme ("rk4-located", "rk4", "semi-implicit-euler": compiled,
+            real-time capable) or "reference" (adaptive DOP853 with contact onsets and the
+            lock located as events).
+        dt_s: fixed step, s.
         rtol: relative tolerance of the reference solver.
+        preset: the preset (``solvers.presets``) that gave the method and step where the
+            scenario did not set them explicitly.
     """
 
-    method: str = "rk4"
-    dt_s: float = DEFAULT_STEP_S
+    method: str = PRESETS[DEFAULT_PRESET].scheme
+    dt_s: float = PRESETS[DEFAULT_PRESET].dt_s
     rtol: float = 1e-9
+    preset: str = DEFAULT_PRESET
+
+    @property
+    def fixed_step_scheme(self) -> str:
+        """The scheme a fixed-step stepper (the ROS node) uses: the method, or the preset's
+        scheme when the method is the reference solver."""
+        return self.method if self.method in FIXED_STEP_METHODS else PRESETS[self.preset].scheme
 
 
 @dataclass(frozen=True)
@@ -230,12 +242,35 @@ def _options(ctx: _Ctx, data: Any) -> ModelOptions:
     return ModelOptions(rigid_coupling=rigid, shoes=tuple(s for s in SIDES if s in shoes))
 
 
-def _solver(ctx: _Ctx, data: Any) -> SolverSettings:
-    data = ctx.table(data, "solver", {"method", "dt_s", "rtol"})
+def _solver(ctx: _Ctx, data: Any, setup: BrakeSetup) -> SolverSettings:
+    """Solver settings: a preset (default "balanced") gives the method and the step; an
+    explicit ``method`` or ``dt_s`` overrides it. A step taken from the preset that exceeds
+    this scenario's step limit is refused here, naming the limit: it is never shrunk
+    silently, since the step is also the published sample period."""
+    data = ctx.table(data, "solver", {"preset", "method", "dt_s", "rtol"})
+    name = ctx.string(data.get("preset", DEFAULT_PRESET), "solver.preset", tuple(PRESETS))
+    preset = PRESETS[name]
+    method = ctx.string(data.get("method", preset.scheme), "solver.method", SOLVER_METHODS)
+    if "dt_s" in data:
+        dt = ctx.number(data["dt_s"], "solver.dt_s", 0.0, 1e-2, lo_open=True)
+    else:
+        dt = preset.dt_s
+        scheme = method if method in FIXED_STEP_METHODS else preset.scheme
+        peak = max(setup.actuation.left.peak_n, setup.actuation.right.peak_n)
+        limit = step_limit(setup, peak, scheme=scheme)
+        if dt > limit.max_step_s:
+            raise ctx.fail(
+                "solver.preset",
+                name,
+                f"a preset whose step ({dt:g} s) is within this scenario's step limit"
+                f" {limit.max_step_s:.3g} s for {scheme} ({limit.reason}); set [solver]"
+                f" dt_s <= {limit.max_step_s:.3g} explicitly",
+            )
     return SolverSettings(
-        method=ctx.string(data.get("method", "rk4"), "solver.method", SOLVER_METHODS),
-        dt_s=ctx.number(data.get("dt_s", DEFAULT_STEP_S), "solver.dt_s", 0.0, 1e-2, lo_open=True),
+        method=method,
+        dt_s=dt,
         rtol=ctx.number(data.get("rtol", 1e-9), "solver.rtol", 1e-13, 1e-3),
+        preset=name,
     )
 
 
@@ -316,7 +351,7 @@ def parse_scenario(text: str, source: str = "<string>") -> Scenario:
             top.get("duration_s", 7.5), "duration_s", 0.0, 86_400.0, lo_open=True
         ),
         seed=seed,
-        solver=_solver(ctx, top.get("solver", {})),
+        solver=_solver(ctx, top.get("solver", {}), setup),
         source=source,
         text=text,
         needs=needs,

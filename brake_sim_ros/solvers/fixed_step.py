@@ -1,4 +1,13 @@
-"""Fixed-step RK4 stepper for real-time streaming: compiled, constant cost per step.
+"""Fixed-step stepper for real-time streaming: compiled, uniform output grid.
+
+Schemes (:data:`FIXED_STEP_SCHEMES`):
+
+* ``rk4``: classical RK4; the Kelvin-Voigt force jumps when a contact starts inside a step,
+  which limits it to first order through an impact.
+* ``rk4-located``: RK4 with each contact onset and separation located inside the step and
+  the step split there (the sampled output stays on the uniform grid); fourth order
+  through impacts, at a few per cent more cost per step.
+* ``semi-implicit-euler``: symplectic Euler, one evaluation per step, first order.
 
 The stepper owns the state between calls, so a caller (the ROS node, the offline
 simulator) advances it in chunks and may change the actuation between any two calls.
@@ -25,18 +34,27 @@ from brake_sim_ros.solvers.stability import StepLimit, step_limit
 SETTLE_TIME_S = 0.05
 
 
+FIXED_STEP_SCHEMES: dict[str, int] = {
+    "rk4": L.SCHEME_RK4,
+    "rk4-located": L.SCHEME_RK4_LOCATED,
+    "semi-implicit-euler": L.SCHEME_SEMI_IMPLICIT_EULER,
+}
+DEFAULT_SCHEME = "rk4-located"
+
+
 class StepperStatus(enum.Enum):
     RUNNING = "running"
     FAILED = "failed"
 
 
 class FixedStepStepper:
-    """Classical RK4 at a fixed step ``dt_s``; state carried between :meth:`advance` calls.
+    """A fixed-step scheme at step ``dt_s``; state carried between :meth:`advance` calls.
 
     Args:
         setup: parameters, defects, actuation profile and model options.
         dt_s: physics step, s. Refused (StepSizeError) above the limit that the stiffest
-            mode of the current parameters allows; see :func:`step_limit`.
+            mode of the current parameters allows for this scheme; see :func:`step_limit`.
+        scheme: one of :data:`FIXED_STEP_SCHEMES` (default :data:`DEFAULT_SCHEME`).
         max_actuation_n: the largest actuation force this stepper will ever be given
             (the profile's peak by default); the step limit is computed for it, since
             friction stiffness near standstill grows with the normal force.
@@ -49,7 +67,14 @@ class FixedStepStepper:
         *,
         max_actuation_n: float | None = None,
         check_step: bool = True,
+        scheme: str = DEFAULT_SCHEME,
     ) -> None:
+        if scheme not in FIXED_STEP_SCHEMES:
+            raise ParameterError(
+                f"fixed-step scheme {scheme!r}: allowed one of {list(FIXED_STEP_SCHEMES)}"
+            )
+        self.scheme = scheme
+        self._scheme_id = FIXED_STEP_SCHEMES[scheme]
         if not (isinstance(dt_s, float | int) and math.isfinite(dt_s) and dt_s > 0):
             raise StepSizeError(f"step dt_s={dt_s!r} is invalid: allowed a finite step > 0 s")
         self.setup = setup
@@ -61,7 +86,9 @@ class FixedStepStepper:
                 f"max_actuation_n={self.max_actuation_n}: allowed 0 to {MAX_ACTUATION_FORCE_N} N"
             )
         self._p = pack(setup.params, setup.defects, setup.options)
-        self.limit: StepLimit = step_limit(setup, self.max_actuation_n, packed=self._p)
+        self.limit: StepLimit = step_limit(
+            setup, self.max_actuation_n, packed=self._p, scheme=scheme
+        )
         if check_step and self.dt_s > self.limit.max_step_s:
             raise StepSizeError(
                 f"step {self.dt_s:.3g} s exceeds the limit {self.limit.max_step_s:.3g} s for these"
@@ -76,7 +103,8 @@ class FixedStepStepper:
         self._y = initial_state(self.setup.params, self.setup.defects)
         self._step = 0
         self._kstate = np.zeros(L.N_KSTATE, np.int64)
-        self._fstate = np.zeros(2)  # lock time s (0 = not locked), lock loss J
+        # lock time s (0 = not locked), lock loss J, located contact switches
+        self._fstate = np.zeros(3)
         self.status = StepperStatus.RUNNING
 
     # -- state ------------------------------------------------------------------------------
@@ -111,6 +139,11 @@ class FixedStepStepper:
         return float(self._fstate[0]) if self.locked else None
 
     @property
+    def located_switches(self) -> int:
+        """Contact onsets and separations located inside steps so far (rk4-located only)."""
+        return int(self._fstate[2])
+
+    @property
     def packed_parameters(self) -> np.ndarray:
         return self._p.copy()
 
@@ -120,7 +153,7 @@ class FixedStepStepper:
         Validity and the step limit are checked first; on error nothing changes.
         """
         p = pack(setup.params, setup.defects, setup.options)
-        limit = step_limit(setup, self.max_actuation_n, packed=p)
+        limit = step_limit(setup, self.max_actuation_n, packed=p, scheme=self.scheme)
         if self.dt_s > limit.max_step_s:
             raise StepSizeError(
                 f"the new parameters allow at most {limit.max_step_s:.3g} s per step, the"
@@ -169,7 +202,7 @@ class FixedStepStepper:
         rows = -(-n_steps // record_every)
         out = np.empty((rows, L.N_COLUMNS))
         first = self._step
-        written = kernel.rk4_advance(
+        written = kernel.fixed_step_advance(
             self._y,
             self._step,
             self.dt_s,
@@ -185,12 +218,13 @@ class FixedStepStepper:
             self._settle_steps,
             record_every,
             out,
+            self._scheme_id,
         )
         if self._kstate[L.K_STATUS]:
             self.status = StepperStatus.FAILED
             raise SimulationError(
                 f"non-finite state at t = {(first + written * record_every) * self.dt_s:.6f} s"
-                f" with step {self.dt_s:g} s"
+                f" with step {self.dt_s:g} s ({self.scheme})"
             )
         self._step += n_steps
         return SampleBlock(out[:written], first, self.dt_s * record_every)

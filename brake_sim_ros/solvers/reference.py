@@ -10,6 +10,7 @@ so the right-hand side is smooth there and DOP853 keeps its order.
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -64,8 +65,19 @@ def run_reference(
     *,
     rtol: float = 1e-9,
     sample_times: np.ndarray | None = None,
+    method: str = "DOP853",
+    cpu_budget_s: float | None = None,
 ) -> ReferenceResult:
-    """Integrate ``setup`` over ``[0, duration_s]`` and sample it at ``sample_times``."""
+    """Integrate ``setup`` over ``[0, duration_s]`` and sample it at ``sample_times``.
+
+    Args:
+        rtol: relative tolerance; the absolute tolerances (1e-10 rad, 1e-8 rad/s, 1e-6 J
+            at rtol 1e-9) scale with it.
+        method: any :func:`scipy.integrate.solve_ivp` method (DOP853 for the reference;
+            RK45, Radau, BDF, LSODA for the work-precision study), always with the contact
+            switches and the lock located as events.
+        cpu_budget_s: give up (SimulationError) after this much process CPU time, s.
+    """
     p = pack(setup.params, setup.defects, setup.options)
     y = initial_state(setup.params, setup.defects)
     tl, fl, tr, fr = setup.actuation.as_arrays()
@@ -77,7 +89,8 @@ def run_reference(
     knots = sorted({float(k) for k in np.concatenate([tl, tr]) if 0.0 < k < duration_s})
     bounds = [*knots, duration_s]
     # absolute tolerances per component: angles rad, speeds rad/s, energies J
-    atol = np.array([1e-10] * 4 + [1e-8] * 4 + [1e-6] * 4)
+    atol = np.array([1e-10] * 4 + [1e-8] * 4 + [1e-6] * 4) * (rtol / 1e-9)
+    deadline = None if cpu_budget_s is None else time.process_time() + cpu_budget_s
     modes = [L.CONTACT_OFF, L.CONTACT_OFF]
     for i, base in enumerate(SHOE_BASES):
         modes[i] = (
@@ -96,6 +109,11 @@ def run_reference(
 
     def fun(t: float, yy: np.ndarray) -> np.ndarray:
         counter[0] += 1
+        if deadline is not None and counter[0] % 1000 == 0 and time.process_time() > deadline:
+            raise SimulationError(
+                f"{method} at rtol {rtol:g} gave up at t = {t:.4f} s: over its CPU budget"
+                f" of {cpu_budget_s:g} s"
+            )
         fe = forces(t)
         kernel.rhs(yy, p, fe[0], fe[1], locked, modes[0], modes[1], dydt)
         return dydt.copy()
@@ -126,7 +144,7 @@ def run_reference(
             fun,
             (t, segment_end),
             y,
-            method="DOP853",
+            method=method,
             rtol=rtol,
             atol=atol,
             events=events,

@@ -32,9 +32,9 @@ class RunResult:
         metrics: impacts, periods, peak and contact-regime forces, stop time; what the
             level does not deliver is empty or nan (stop time None).
         cpu_s: process CPU time spent integrating, s.
-        n_steps: fixed steps taken (rk4), right-hand-side evaluations (reference) or RK4
-            steps including substeps (contact_regime).
-        method: "rk4", "reference" or "contact_regime".
+        n_steps: fixed steps taken (fixed-step schemes), right-hand-side evaluations
+            (reference) or RK4 steps including substeps (contact_regime).
+        method: the fixed-step scheme, "reference" or "contact_regime".
         plan: the fidelity level and signals chosen for the scenario's needs.
         model_stop_time_s: the instant the model locked, s, even where the level does not
             deliver the stop time (for the fidelity study).
@@ -139,7 +139,7 @@ def run_scenario(
         cpu = time.process_time() - start
         samples, stop, n = _keep(ref.samples, chosen.columns), ref.stop_time_s, ref.n_rhs
     else:
-        stepper = FixedStepStepper(setup, dt_s or scenario.solver.dt_s)
+        stepper = FixedStepStepper(setup, dt_s or scenario.solver.dt_s, scheme=method)
         total = round(duration / stepper.dt_s)
         blocks, done = [], 0
         while done < total:  # keep only the planned columns, chunk by chunk
