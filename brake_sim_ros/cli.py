@@ -93,6 +93,32 @@ def cmd_simulate(args: argparse.Namespace) -> int:
             f"time history: {args.out} ({len(result.samples)} samples x"
             f" {result.samples.data.shape[1]} columns)"
         )
+    if args.mcap:
+        _write_mcap(args, scenario)
+    return 0
+
+
+def _write_mcap(args: argparse.Namespace, scenario) -> None:
+    """The node's stream offline into an MCAP file (what ``node --record`` writes)."""
+    import dataclasses
+
+    from brake_sim_ros.recording.record import record_offline
+    from brake_sim_ros.recording.writer import RecordingOptions
+
+    if args.method == "reference":
+        raise BrakeSimError("--mcap records the node's fixed-step stream: drop --method reference")
+    if args.dt is not None:
+        solver = dataclasses.replace(scenario.solver, dt_s=args.dt)
+        scenario = dataclasses.replace(scenario, solver=solver)
+    options = RecordingOptions(compression=args.mcap_compression, durable=False)
+    print(record_offline(scenario, args.mcap, duration_s=args.duration, options=options).describe())
+
+
+# --- recover ---------------------------------------------------------------------------------
+def cmd_recover(args: argparse.Namespace) -> int:
+    from brake_sim_ros.recording.recover import recover
+
+    print(recover(args.broken, args.fixed).describe())
     return 0
 
 
@@ -138,7 +164,11 @@ def cmd_bench(args: argparse.Namespace) -> int:
         from brake_sim_ros.ros.benchmark import main as bench_node
 
         return bench_node(args.rest)
-    raise BrakeSimError(f"unknown benchmark '{args.what}': allowed core, node")
+    if args.what == "recording":
+        from brake_sim_ros.recording.benchmark import main as bench_recording
+
+        return bench_recording(args.rest)
+    raise BrakeSimError(f"unknown benchmark '{args.what}': allowed core, node, recording")
 
 
 def run_node(argv: list[str]) -> int:
@@ -160,7 +190,14 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--method", choices=("rk4", "reference"), help="override the scenario's solver")
     p.add_argument("--dt", type=float, help="override the fixed step, s")
     p.add_argument("--quiet", action="store_true", help="no progress output")
+    p.add_argument("--mcap", help="also write the node's message stream to this MCAP file")
+    p.add_argument("--mcap-compression", choices=("zstd", "none"), default="zstd")
     p.set_defaults(func=cmd_simulate)
+
+    p = sub.add_parser("recover", help="make a truncated MCAP recording whole again")
+    p.add_argument("broken", help="the truncated .mcap file")
+    p.add_argument("fixed", help="the valid .mcap file to write")
+    p.set_defaults(func=cmd_recover)
 
     p = sub.add_parser("validate", help="run the study's cases and write the validation report")
     p.add_argument("--out", default="out/validation", help="report directory")
@@ -170,8 +207,8 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("scenarios", help="list the built-in scenarios")
     p.set_defaults(func=cmd_scenarios)
 
-    p = sub.add_parser("bench", help="benchmarks that print figures (core, node)")
-    p.add_argument("what", choices=("core", "node"))
+    p = sub.add_parser("bench", help="benchmarks that print figures (core, node, recording)")
+    p.add_argument("what", choices=("core", "node", "recording"))
     p.add_argument("rest", nargs=argparse.REMAINDER)
     p.set_defaults(func=cmd_bench)
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import os
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -116,7 +117,11 @@ def record_offline(
 
 
 def node_recorder(
-    node: BrakeSimNode, path: str | os.PathLike[str], options: RecordingOptions | None = None
+    node: BrakeSimNode,
+    path: str | os.PathLike[str],
+    options: RecordingOptions | None = None,
+    *,
+    recorder_class: type[McapRecorder] = McapRecorder,
 ) -> McapRecorder:
     """A recorder for ``node``'s stream, its metadata taken from the node as it is now.
 
@@ -150,9 +155,34 @@ def node_recorder(
         ),
         metadata.ROS_PARAMETERS: {k: repr(v) for k, v in sorted(values.items())},
     }
-    return McapRecorder(
+    return recorder_class(
         path,
         records=records,
         options=options,
         custom_data=_custom_data(scenario, view.seed, "live"),
     )
+
+
+class _NodeRecorder(McapRecorder):
+    """A node's recorder: says what it wrote when it is closed (stdout, after the summary)."""
+
+    def close(self) -> None:
+        was_open = not self._closed
+        super().close()
+        if was_open:
+            print(f"brake_sim: recorded {self.describe()}", flush=True)
+
+
+def open_node_recorder(
+    path: str | os.PathLike[str], compression: str = "zstd", flush_interval_s: float = 1.0
+) -> Callable[[BrakeSimNode], McapRecorder]:
+    """A ``sink_openers`` entry for :class:`~brake_sim_ros.ros.node.BrakeSimNode` (``--record``).
+
+    Bad options raise RecordingError at once; the file is opened when the node calls it.
+    """
+    options = RecordingOptions(compression=compression, flush_interval_s=flush_interval_s)
+
+    def open_for(node: BrakeSimNode) -> McapRecorder:
+        return node_recorder(node, path, options, recorder_class=_NodeRecorder)
+
+    return open_for

@@ -35,12 +35,12 @@ class RecoverError(BrakeSimError, ValueError):
     """An input that is not an MCAP file, or an output that cannot be written."""
 
 
-class _Truncated(McapError):
-    pass
+class _TruncatedError(McapError):
+    """Fewer bytes left than a record needs."""
 
 
 class _StrictReader:
-    """A binary reader whose ``read(n)`` returns exactly ``n`` bytes or raises _Truncated."""
+    """A binary reader whose ``read(n)`` returns exactly ``n`` bytes or raises _TruncatedError."""
 
     def __init__(self, raw: IO[bytes]) -> None:
         self._raw = raw
@@ -48,7 +48,7 @@ class _StrictReader:
     def read(self, n: int = -1) -> bytes:
         data = self._raw.read(n)
         if n >= 0 and len(data) < n:
-            raise _Truncated(f"{n} bytes wanted, {len(data)} left")
+            raise _TruncatedError(f"{n} bytes wanted, {len(data)} left")
         return data
 
     def tell(self) -> int:
@@ -101,8 +101,7 @@ def _check_magic(path: Path) -> None:
         raise RecoverError(f"cannot read {path}: {exc.strerror}") from None
     if head != MAGIC:
         raise RecoverError(
-            f"{path} is not an MCAP file: it starts with {head[:8]!r}, an MCAP file with"
-            f" {MAGIC!r}"
+            f"{path} is not an MCAP file: it starts with {head[:8]!r}, an MCAP file with {MAGIC!r}"
         )
 
 
@@ -131,13 +130,12 @@ def recover(broken: str | os.PathLike[str], fixed: str | os.PathLike[str]) -> Re
         while True:
             try:
                 record = next(iterator)
-                inner = breakup_chunk(record, validate_crc=True) if isinstance(record, Chunk) else []
+                is_chunk = isinstance(record, Chunk)
+                inner = breakup_chunk(record, validate_crc=True) if is_chunk else []
             except StopIteration:
                 break
             except (McapError, ValueError, EOFError) as exc:  # incl. CRC, zstd, truncation
-                result.stop_reason = f"{type(exc).__name__}: {exc}" if str(exc) else type(
-                    exc
-                ).__name__
+                result.stop_reason = f"{type(exc).__name__}: {exc}".rstrip(": ")
                 break
             result.used_bytes = reader.tell()
             if isinstance(record, Chunk):
@@ -206,11 +204,11 @@ def _write(
                     channel_ids[m.channel_id], m.log_time, m.data, m.publish_time, m.sequence
                 )
                 counts[m.channel_id] += 1
-                result.first_ns = m.log_time if result.first_ns is None else min(
-                    result.first_ns, m.log_time
+                result.first_ns = (
+                    m.log_time if result.first_ns is None else min(result.first_ns, m.log_time)
                 )
-                result.last_ns = m.log_time if result.last_ns is None else max(
-                    result.last_ns, m.log_time
+                result.last_ns = (
+                    m.log_time if result.last_ns is None else max(result.last_ns, m.log_time)
                 )
             result.messages = sum(counts.values())
             result.per_topic = Counter({channels[k].topic: v for k, v in counts.items()})

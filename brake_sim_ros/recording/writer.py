@@ -36,6 +36,7 @@ simulates on). Time is never taken from the wall clock here.
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
 from collections.abc import Iterable, Mapping
@@ -355,10 +356,8 @@ class McapRecorder:
 
     def _release(self) -> None:
         if self._file is not None:
-            try:
+            with contextlib.suppress(OSError):  # the failure that got us here was reported
                 self._file.close()
-            except OSError:
-                pass  # the failure that brought us here was reported already
             self._file = None
 
     def __enter__(self) -> McapRecorder:
