@@ -349,3 +349,35 @@ def test_disk_full_while_writing_stops_the_recorder_and_keeps_the_chunks(tmp_pat
 def test_bad_options_are_refused(options, message):
     with pytest.raises(RecordingError, match=message):
         RecordingOptions(**options)
+
+
+def test_diagnostics_and_commands_round_trip(tmp_path):
+    """The live-only topics: DiagnosticArray (a ``byte`` field) and ActuationCommand."""
+    from brake_sim_msgs.msg import ActuationCommand
+    from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+
+    status = [
+        DiagnosticStatus(
+            level=bytes([level]), name="brake_sim", message=f"level {level}", hardware_id="b",
+            values=[KeyValue(key="k", value=str(level))],
+        )
+        for level in range(4)
+    ]  # fmt: skip
+    messages = [
+        (stream.DIAGNOSTICS, DiagnosticArray(status=status), 5),
+        (stream.ACTUATION, ActuationCommand(left_force_n=123.25, right_force_n=-0.0), 7),
+    ]
+    path = tmp_path / "live_topics.mcap"
+    with McapRecorder(path, records=RECORDS) as recorder:
+        for topic, msg, ns in messages:
+            recorder.write(topic, msg, ns)
+    with path.open("rb") as f:
+        payloads = [m.data for _s, _c, m in make_reader(f).iter_messages(log_time_order=False)]
+    for data, (_topic, msg, _ns) in zip(payloads, messages, strict=True):
+        assert deserialize_message(data, type(msg)) == msg
+    _connections, decoded = _rosbags_messages(path)
+    levels = [s.level for s in decoded[0][3].status]
+    assert levels == [0, 1, 2, 3]
+    assert [kv.value for s in decoded[0][3].status for kv in s.values] == ["0", "1", "2", "3"]
+    command = decoded[1][3]
+    assert (command.left_force_n, command.right_force_n) == (123.25, -0.0)

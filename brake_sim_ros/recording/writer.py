@@ -39,6 +39,7 @@ from __future__ import annotations
 import contextlib
 import math
 import os
+import re
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -69,6 +70,42 @@ TYPE_QOS = {
     stream.DIAGNOSTICS.type_name: qos.DIAGNOSTICS,
     stream.ACTUATION.type_name: qos.STREAM,
 }
+
+
+_BYTE_FIELD = re.compile(r"^\s*byte(\[[^\]]*\])?\s", re.MULTILINE)
+
+
+class _ByteFieldsAsInts:
+    """A read-only view of an rclpy message with ``byte`` values (``b"\x01"``) as ints.
+
+    rclpy holds a ``byte`` field as a one-byte ``bytes``; mcap_ros2's encoder wants an
+    int. Used only for types with a ``byte`` field somewhere (DiagnosticStatus.level).
+    """
+
+    __slots__ = ("_msg",)
+
+    def __init__(self, msg: Any) -> None:
+        self._msg = msg
+
+    def __getattr__(self, name: str) -> Any:
+        return _as_encodable(getattr(self._msg, name))
+
+
+def _as_encodable(value: Any) -> Any:
+    if isinstance(value, bytes) and len(value) == 1:
+        return value[0]
+    if isinstance(value, list):
+        return [_as_encodable(v) for v in value]
+    if hasattr(value, "get_fields_and_field_types"):  # a nested rclpy message
+        return _ByteFieldsAsInts(value)
+    return value
+
+
+def _encoder(type_name: str, definition: str) -> EncoderFunction:
+    encode = serialize_dynamic(type_name, definition)[type_name]
+    if _BYTE_FIELD.search(definition) is None:
+        return encode
+    return lambda msg: encode(_ByteFieldsAsInts(msg))
 
 
 class RecordingError(BrakeSimError):
@@ -233,9 +270,7 @@ class McapRecorder:
         schema_id = self._schemas.get(topic.type_name)
         if schema_id is None:
             definition = schemas.full_definition(topic.type_name)
-            self._encoders[topic.type_name] = serialize_dynamic(topic.type_name, definition)[
-                topic.type_name
-            ]
+            self._encoders[topic.type_name] = _encoder(topic.type_name, definition)
             schema_id = self._writer.register_schema(
                 name=topic.type_name, encoding=SCHEMA_ENCODING, data=definition.encode()
             )
