@@ -117,6 +117,32 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         from brake_sim_ros.viz.commands import simulate_to_rerun
 
         print(simulate_to_rerun(scenario, rerun_targets, duration_s=args.duration, dt_s=args.dt))
+    if args.mcap:
+        _write_mcap(args, scenario)
+    return 0
+
+
+def _write_mcap(args: argparse.Namespace, scenario) -> None:
+    """The node's stream offline into an MCAP file (what ``node --record`` writes)."""
+    import dataclasses
+
+    from brake_sim_ros.recording.record import record_offline
+    from brake_sim_ros.recording.writer import RecordingOptions
+
+    if args.method == "reference":
+        raise BrakeSimError("--mcap records the node's fixed-step stream: drop --method reference")
+    if args.dt is not None:
+        solver = dataclasses.replace(scenario.solver, dt_s=args.dt)
+        scenario = dataclasses.replace(scenario, solver=solver)
+    options = RecordingOptions(compression=args.mcap_compression, durable=False)
+    print(record_offline(scenario, args.mcap, duration_s=args.duration, options=options).describe())
+
+
+# --- recover ---------------------------------------------------------------------------------
+def cmd_recover(args: argparse.Namespace) -> int:
+    from brake_sim_ros.recording.recover import recover
+
+    print(recover(args.broken, args.fixed).describe())
     return 0
 
 
@@ -181,6 +207,10 @@ BENCHMARKS = {
         "work-precision study of every solver and preset (table and plot)",
     ),
     "node": ("brake_sim_ros.ros.benchmark", "the ROS node's real-time figures"),
+    "recording": (
+        "brake_sim_ros.recording.benchmark",
+        "MCAP recording throughput, CPU at real time and size per simulated second",
+    ),
     "realtime": (
         "brake_sim_ros.solvers.realtime_benchmark",
         "worst-case cost per streaming chunk, against the real-time budget",
@@ -226,12 +256,19 @@ def build_parser() -> argparse.ArgumentParser:
         help="also log the node's stream to Rerun: spawn | connect [URL] | serve |"
         " save FILE.rrd (repeatable)",
     )
+    p.add_argument("--mcap", help="also write the node's message stream to this MCAP file")
+    p.add_argument("--mcap-compression", choices=("zstd", "none"), default="zstd")
     p.set_defaults(func=cmd_simulate)
 
     p = sub.add_parser("view", help="show an MCAP recording in Rerun, or convert it to .rrd")
     p.add_argument("recording", help="MCAP file recorded from the simulator")
     p.add_argument("--save", metavar="FILE.rrd", help="write a Rerun file instead of a viewer")
     p.set_defaults(func=cmd_view)
+
+    p = sub.add_parser("recover", help="make a truncated MCAP recording whole again")
+    p.add_argument("broken", help="the truncated .mcap file")
+    p.add_argument("fixed", help="the valid .mcap file to write")
+    p.set_defaults(func=cmd_recover)
 
     p = sub.add_parser("validate", help="run the study's cases and write the validation report")
     p.add_argument("--out", default="out/validation", help="report directory")

@@ -4,6 +4,11 @@ Options (they override ``--ros-args -p`` values of the same parameters):
     --scenario NAME_OR_PATH   built-in scenario name or .toml path (default "symmetric")
     --duration S              simulated seconds of the free run (default: the scenario's)
     --exit-at-end             print a summary and exit 0 when the duration is reached
+    --record PATH             record the stream and accepted commands to an MCAP file
+                              (see brake_sim_ros.recording; --record-compression,
+                              --record-flush-s tune it)
+
+SIGINT and SIGTERM end the node cleanly: recordings are closed with every message.
 
 Topics (node name ``brake_sim``; ``~`` = ``/brake_sim``; QoS in :mod:`.qos`):
     ~/pivot_forces   brake_sim_msgs/PivotForceChunk   every physics sample, in chunks
@@ -27,8 +32,10 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import math
+import signal
 import sys
 import time
+from collections.abc import Callable, Iterable
 
 import rclpy
 from brake_sim_msgs.msg import ActuationCommand, BrakeState, DefectState, PivotForceChunk
@@ -40,6 +47,7 @@ from rclpy.exceptions import ParameterException, ParameterNotDeclaredException
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
+from rclpy.signals import SignalHandlerOptions
 from rclpy.utilities import remove_ros_args
 from rosgraph_msgs.msg import Clock as ClockMsg
 from sensor_msgs.msg import JointState
@@ -74,6 +82,9 @@ class BrakeSimNode(Node):
 
     Args:
         node_name: ROS node name.
+        sink_openers: called with the node once it is set up, before its first message;
+            each returns a sink that then receives everything (a recorder). One that
+            raises BrakeSimError is reported and the node runs on without it.
         **kwargs: forwarded to :class:`rclpy.node.Node` (context, parameter_overrides, ...).
 
     Raises:
@@ -82,7 +93,13 @@ class BrakeSimNode(Node):
             (StepSizeError). The message is one line, fit to show the user.
     """
 
-    def __init__(self, node_name: str = NODE_NAME, **kwargs) -> None:
+    def __init__(
+        self,
+        node_name: str = NODE_NAME,
+        *,
+        sink_openers: Iterable[Callable[[BrakeSimNode], MessageSink]] = (),
+        **kwargs,
+    ) -> None:
         super().__init__(node_name, **kwargs)
         self.done = False  # set when exit_at_end and the run ended
         self.stats = RunStats()
@@ -179,6 +196,12 @@ class BrakeSimNode(Node):
         self._ticking = False
         self._diag_last = (now, 0, 0)  # wall, steps_done, deadline misses
         self._measured_rtf = 0.0
+        for open_sink in sink_openers:
+            try:
+                self.add_sink(open_sink(self))
+            except BrakeSimError as exc:
+                self.stats.sink_failures += 1
+                self.get_logger().error(f"{exc}; the node runs on without it")
         self._publish_defects()
         if self._publish_clock:
             self._emit(stream.CLOCK, conversion.clock(0), 0)
@@ -740,6 +763,15 @@ def _parse_cli(argv: list[str]) -> argparse.Namespace:
         metavar="TARGET",
         help="log to Rerun: spawn | connect [URL] | serve | save FILE.rrd (repeatable)",
     )
+    parser.add_argument("--record", metavar="PATH", help="record to this MCAP file")
+    parser.add_argument("--record-compression", choices=("zstd", "none"), default="zstd")
+    parser.add_argument(
+        "--record-flush-s",
+        type=float,
+        default=1.0,
+        metavar="S",
+        help="simulated seconds between chunk writes: bounds a crash's loss (default 1)",
+    )
     args = parser.parse_args(argv)
     if args.rerun:
         from brake_sim_ros.viz.commands import parse_targets
@@ -750,7 +782,32 @@ def _parse_cli(argv: list[str]) -> argparse.Namespace:
             parser.error(str(exc))
     if args.duration is not None and not (math.isfinite(args.duration) and args.duration > 0):
         parser.error(f"--duration {args.duration}: allowed a finite time > 0 s")
+    if not (math.isfinite(args.record_flush_s) and args.record_flush_s > 0):
+        parser.error(f"--record-flush-s {args.record_flush_s}: allowed a finite time > 0 s")
     return args
+
+
+class _StopRequest:
+    """SIGINT/SIGTERM set a flag the spin loop checks (a second one interrupts at once).
+
+    rclpy's own handlers would raise KeyboardInterrupt wherever the node is, also inside a
+    recorder's write; a flag lets the loop end between callbacks and close the sinks.
+    """
+
+    def __init__(self) -> None:
+        self.requested = False
+        self._previous = {
+            sig: signal.signal(sig, self._handle) for sig in (signal.SIGINT, signal.SIGTERM)
+        }
+
+    def _handle(self, signum: int, _frame) -> None:
+        if self.requested:
+            raise KeyboardInterrupt
+        self.requested = True
+
+    def restore(self) -> None:
+        for sig, handler in self._previous.items():
+            signal.signal(sig, handler)
 
 
 def main(args: list[str] | None = None) -> int:
@@ -771,26 +828,33 @@ def main(args: list[str] | None = None) -> int:
         overrides.append(Parameter("duration_s", value=float(cli.duration)))
     if cli.exit_at_end:
         overrides.append(Parameter("exit_at_end", value=True))
-    rclpy.init(args=argv)
+    openers = []
+    if cli.record:
+        from brake_sim_ros.recording.record import open_node_recorder
+
+        openers.append(open_node_recorder(cli.record, cli.record_compression, cli.record_flush_s))
+    if cli.rerun:
+        from brake_sim_ros.viz.commands import rerun_openers
+
+        openers.extend(rerun_openers(cli.rerun))
+    rclpy.init(args=argv, signal_handler_options=SignalHandlerOptions.NO)
+    stop = _StopRequest()
     node = None
     try:
         try:
-            node = BrakeSimNode(parameter_overrides=overrides)
-            if cli.rerun:
-                from brake_sim_ros.viz.commands import attach_rerun
-
-                attach_rerun(node, cli.rerun)
+            node = BrakeSimNode(parameter_overrides=overrides, sink_openers=openers)
         except BrakeSimError as exc:
             print(f"brake_sim: refused to start: {exc}", file=sys.stderr)
             return 1
         executor = SingleThreadedExecutor()
         executor.add_node(node)
-        while not node.done and rclpy.ok():
+        while not node.done and rclpy.ok() and not stop.requested:
             executor.spin_once(timeout_sec=0.1)
         if node.done:
             linger_end = time.monotonic() + EXIT_LINGER_S
             while time.monotonic() < linger_end and rclpy.ok():
                 executor.spin_once(timeout_sec=0.05)
+        if node.done or stop.requested:
             print(node.summary(), flush=True)
         return 0
     except (KeyboardInterrupt, ExternalShutdownException):
@@ -800,6 +864,7 @@ def main(args: list[str] | None = None) -> int:
             node.close_sinks()
             node.destroy_node()
         rclpy.try_shutdown()
+        stop.restore()
 
 
 if __name__ == "__main__":

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import functools
 import sys
 import time
 from pathlib import Path
@@ -123,29 +124,21 @@ def cmd_view(args: argparse.Namespace) -> int:
     return 0
 
 
-def attach_rerun(node, targets: list[RerunTarget]) -> None:
-    """Give a started :class:`~brake_sim_ros.ros.node.BrakeSimNode` one Rerun sink per target.
+def rerun_openers(targets: list[RerunTarget]) -> list:
+    """Sink openers for :class:`~brake_sim_ros.ros.node.BrakeSimNode` (``sink_openers``),
+    one Rerun sink per target.
 
-    The drawing uses the model in force (the node's model parameters, overrides
-    included). The node published its first DefectState while it was being built, before
-    any sink could be attached, so that same ground truth (at t = 0) is written first.
+    Each is called with the node once it is set up, before its first message; the drawing
+    uses the model in force (the node's model parameters, ``--ros-args`` overrides included).
     """
-    from brake_sim_ros.ros import conversion, stream
     from brake_sim_ros.ros import parameters as ros_params
 
-    base = ros_params.model_values(node.scenario.setup.params, node.scenario.setup.defects)
-    values = {name: node.get_parameter(name).value for name in base}
-    params, defects = ros_params.build_model(values)
-    first = conversion.defect_state(
-        scenario=node.scenario.name,
-        params=params,
-        defects=defects,
-        initial_angles_deg=(defects.left.initial_angle_deg, defects.right.initial_angle_deg),
-        ns=0,
-    )
-    for target in targets:
-        sink = open_sink(
+    def opener(node, target: RerunTarget):
+        base = ros_params.model_values(node.scenario.setup.params, node.scenario.setup.defects)
+        values = {name: node.get_parameter(name).value for name in base}
+        params, defects = ros_params.build_model(values)
+        return open_sink(
             target, params=params, defects=defects, run_text=scenario_markdown(node.scenario)
         )
-        sink.write(stream.DEFECTS, first, 0)
-        node.add_sink(sink)
+
+    return [functools.partial(opener, target=target) for target in targets]

@@ -1,0 +1,254 @@
+"""What a recording says about itself: MCAP metadata records and rosbag2's QoS text.
+
+Metadata records (MCAP ``Metadata``; every value a string):
+
+``brake_sim_model``
+    ``ros_params.model_values(params, defects)``: every model parameter and defect under
+    its ROS parameter name, each value the ``repr()`` of the Python value, so
+    ``ros_params.build_model({k: ast.literal_eval(v) for k, v in record.items()})``
+    rebuilds the ``BrakeParameters`` and ``Defects`` of the run (:func:`model_from_record`).
+``brake_sim_scenario``
+    ``name``, ``source`` (file path or ``<built-in NAME>``), ``toml`` (the scenario file's
+    text), ``sha256`` (of that text), ``description``.
+``brake_sim_run``
+    ``seed``, ``software_version``, ``dt_s``, ``sample_rate_hz``, ``mode`` (``live`` or
+    ``offline``), ``duration_s``, the stream settings (``chunk_rate_hz``,
+    ``state_rate_hz``, ``publish_clock``), ``time_base`` and ``model_note``; a live run
+    adds its node name and ``real_time_factor``; values are ``repr()`` of the Python value
+    except strings, which are given as they are.
+``brake_sim_ros_parameters`` (live runs)
+    every ROS parameter of the node at the start of the recording, ``repr()`` of its value.
+``rosbag2`` (written when the file is closed)
+    ``serialized_metadata``: the bag's ``BagMetadata`` (version 9) in the YAML that
+    rosbag2's MCAP storage plugin writes and reads (``ros2 bag info`` shows it).
+
+Channel metadata (rosbag2 Jazzy, ``mcap_storage.cpp``): ``offered_qos_profiles``, a YAML
+list of the offered profiles in the version 9 form (policy names as strings, durations as
+``{sec, nsec}``), and ``topic_type_hash`` (``RIHS01_...``).
+"""
+
+from __future__ import annotations
+
+import ast
+import functools
+import json
+import subprocess
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from brake_sim_ros import __version__
+from brake_sim_ros.model.defects import Defects
+from brake_sim_ros.model.parameters import BrakeParameters
+from brake_sim_ros.ros import parameters as ros_params
+from brake_sim_ros.scenarios import Scenario
+
+MODEL = "brake_sim_model"
+SCENARIO = "brake_sim_scenario"
+RUN = "brake_sim_run"
+ROS_PARAMETERS = "brake_sim_ros_parameters"
+ROSBAG2 = "rosbag2"
+ROS_DISTRO = "jazzy"
+BAG_METADATA_VERSION = 9  # rosbag2 Jazzy's BagMetadata::version
+TIME_BASE = "simulated time, ns since the start (or last ~/reset) of the run"
+
+
+@functools.cache
+def software_version() -> str:
+    """``brake-sim-ros <version>``, plus ``git <commit>[-dirty]`` when run from a checkout.
+
+    Never fails: without git, outside a checkout or on any git error, only the version.
+    """
+    version = f"brake-sim-ros {__version__}"
+    root = Path(__file__).resolve().parents[2]
+    try:
+        out = subprocess.run(
+            ["git", "-C", str(root), "describe", "--always", "--dirty", "--abbrev=12"],
+            capture_output=True,
+            text=True,
+            timeout=5.0,
+            check=True,
+        )
+    except (OSError, subprocess.SubprocessError):
+        return version
+    commit = out.stdout.strip()
+    return f"{version} (git {commit})" if commit else version
+
+
+def model_record(params: BrakeParameters, defects: Defects) -> dict[str, str]:
+    """The ``brake_sim_model`` record: every model value as its ``repr()``."""
+    return {k: repr(v) for k, v in ros_params.model_values(params, defects).items()}
+
+
+def model_from_record(record: Mapping[str, str]) -> tuple[BrakeParameters, Defects]:
+    """``BrakeParameters`` and ``Defects`` back from a ``brake_sim_model`` record."""
+    return ros_params.build_model({k: ast.literal_eval(v) for k, v in record.items()})
+
+
+def scenario_record(scenario: Scenario) -> dict[str, str]:
+    """The ``brake_sim_scenario`` record."""
+    return {
+        "name": scenario.name,
+        "source": scenario.source,
+        "toml": scenario.text,
+        "sha256": scenario.digest,
+        "description": scenario.description,
+    }
+
+
+def run_record(
+    *,
+    mode: str,
+    seed: int,
+    dt_s: float,
+    duration_s: float,
+    chunk_rate_hz: float,
+    state_rate_hz: float,
+    publish_clock: bool,
+    extra: Mapping[str, Any] | None = None,
+) -> dict[str, str]:
+    """The ``brake_sim_run`` record (see the module doc)."""
+    if mode not in ("live", "offline"):
+        raise ValueError(f"mode={mode!r}: allowed 'live' or 'offline'")
+    values: dict[str, Any] = {
+        "mode": mode,
+        "seed": seed,
+        "software_version": software_version(),
+        "dt_s": dt_s,
+        "sample_rate_hz": 1.0 / dt_s,
+        "duration_s": duration_s,
+        "chunk_rate_hz": chunk_rate_hz,
+        "state_rate_hz": state_rate_hz,
+        "publish_clock": publish_clock,
+        "time_base": TIME_BASE,
+        "model_note": (
+            "brake_sim_model holds the model at the start of the recording; changes made"
+            " while it ran are on /brake_sim/defects (DefectState)"
+        ),
+        **(extra or {}),
+    }
+    return {k: v if isinstance(v, str) else repr(v) for k, v in values.items()}
+
+
+# -- rosbag2's YAML ---------------------------------------------------------------------------
+def _scalar(value: Any) -> str:
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, int):
+        return str(value)
+    return json.dumps(str(value))  # a double-quoted YAML scalar
+
+
+@dataclass(frozen=True)
+class RawYaml:
+    """Block YAML text already rendered (e.g. a channel's ``offered_qos_profiles``)."""
+
+    text: str
+
+
+def _yaml(value: Any, indent: int) -> list[str]:
+    """Block-style YAML lines of nested dicts, lists and scalars (what yaml-cpp emits)."""
+    pad = " " * indent
+    lines: list[str] = []
+    if isinstance(value, dict):
+        for key, item in value.items():
+            if isinstance(item, RawYaml):
+                lines.append(f"{pad}{key}:")
+                lines.extend(f"{pad}  {line}" for line in item.text.splitlines())
+            elif isinstance(item, dict | list) and item:
+                lines.append(f"{pad}{key}:")
+                lines.extend(_yaml(item, indent + 2))
+            else:
+                empty = "{}" if isinstance(item, dict) else "[]"
+                lines.append(f"{pad}{key}: {empty if item in ({}, []) else _scalar(item)}")
+    else:
+        for item in value:
+            sub = _yaml(item, indent + 2) if isinstance(item, dict | list) else None
+            if sub:
+                lines.append(f"{pad}- {sub[0].lstrip()}")
+                lines.extend(sub[1:])
+            else:
+                lines.append(f"{pad}- {_scalar(item)}")
+    return lines
+
+
+def _duration(ns: int) -> dict[str, int]:
+    return {"sec": ns // 1_000_000_000, "nsec": ns % 1_000_000_000}
+
+
+def qos_dict(profile) -> dict[str, Any]:
+    """One rclpy ``QoSProfile`` as rosbag2 (version 9) serializes it."""
+    return {
+        "history": profile.history.name.lower(),
+        "depth": int(profile.depth),
+        "reliability": profile.reliability.name.lower(),
+        "durability": profile.durability.name.lower(),
+        "deadline": _duration(profile.deadline.nanoseconds),
+        "lifespan": _duration(profile.lifespan.nanoseconds),
+        "liveliness": profile.liveliness.name.lower(),
+        "liveliness_lease_duration": _duration(profile.liveliness_lease_duration.nanoseconds),
+        "avoid_ros_namespace_conventions": bool(profile.avoid_ros_namespace_conventions),
+    }
+
+
+def qos_yaml(profiles: list) -> str:
+    """``offered_qos_profiles`` channel metadata: a YAML list of :func:`qos_dict`."""
+    return "\n".join(_yaml([qos_dict(p) for p in profiles], 0))
+
+
+def rosbag2_record(
+    *,
+    file_name: str,
+    topics: list[dict[str, Any]],
+    message_count: int,
+    start_ns: int,
+    end_ns: int,
+    custom_data: Mapping[str, str],
+) -> dict[str, str]:
+    """The ``rosbag2`` record: ``{"serialized_metadata": <BagMetadata YAML>}``.
+
+    Args:
+        file_name: the MCAP file's name (rosbag2's ``relative_file_paths``).
+        topics: per topic ``name``, ``type``, ``qos_yaml`` (its ``offered_qos_profiles``
+            channel metadata), ``type_hash`` and ``message_count``.
+        message_count: messages in the file.
+        start_ns, end_ns: first and last log time, ns (simulated).
+        custom_data: free key-values (rosbag2's ``custom_data``).
+    """
+    duration = max(0, end_ns - start_ns) if message_count else 0
+    start = start_ns if message_count else 0
+    bag = {
+        "version": BAG_METADATA_VERSION,
+        "storage_identifier": "mcap",
+        "duration": {"nanoseconds": duration},
+        "starting_time": {"nanoseconds_since_epoch": start},
+        "message_count": message_count,
+        "topics_with_message_count": [
+            {
+                "topic_metadata": {
+                    "name": t["name"],
+                    "type": t["type"],
+                    "serialization_format": "cdr",
+                    "offered_qos_profiles": RawYaml(t["qos_yaml"]),
+                    "type_description_hash": t["type_hash"],
+                },
+                "message_count": t["message_count"],
+            }
+            for t in topics
+        ],
+        "compression_format": "",  # rosbag2 file/message compression: none (MCAP chunks are)
+        "compression_mode": "",
+        "relative_file_paths": [file_name],
+        "files": [
+            {
+                "path": file_name,
+                "starting_time": {"nanoseconds_since_epoch": start},
+                "duration": {"nanoseconds": duration},
+                "message_count": message_count,
+            }
+        ],
+        "custom_data": dict(custom_data),
+        "ros_distro": ROS_DISTRO,
+    }
+    return {"serialized_metadata": "\n".join(_yaml(bag, 0)) + "\n"}
