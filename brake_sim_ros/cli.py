@@ -236,6 +236,13 @@ def run_node(argv: list[str]) -> int:
     return node_main(["brake-sim node", *argv]) or 0
 
 
+def run_replay(argv: list[str]) -> int:
+    """``brake-sim replay FILE.mcap ...``: publishes a recording on ROS 2 (own options)."""
+    from brake_sim_ros.ros.replay import main as replay_main
+
+    return replay_main(["brake-sim replay", *argv]) or 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="brake-sim", description=__doc__.splitlines()[0])
     parser.add_argument("--version", action="version", version=f"brake-sim-ros {__version__}")
@@ -293,6 +300,11 @@ def build_parser() -> argparse.ArgumentParser:
         help="run the ROS 2 node: brake-sim node [--scenario S] [--duration S]"
         " [--exit-at-end] [--ros-args ...]",
     )
+    sub.add_parser(
+        "replay",
+        help="publish an MCAP recording on ROS 2 with its original timing: brake-sim replay"
+        " FILE.mcap [--rate R] [--start-offset S] [--loop] [--topics T ...] [--ros-args ...]",
+    )
     return parser
 
 
@@ -300,6 +312,8 @@ def main(argv: list[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     if argv[:1] == ["node"]:
         return run_node(argv[1:])
+    if argv[:1] == ["replay"]:
+        return run_replay(argv[1:])
     parser = build_parser()
     args = parser.parse_args(argv)
     try:

@@ -1,0 +1,224 @@
+"""``brake-sim replay``: a subscriber receives what was recorded, in order and in time.
+
+A recording is made offline, replayed by ``brake-sim replay`` in its own process over
+real DDS, and received by raw (CDR bytes) subscriptions in this process.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import time
+from collections import defaultdict
+from pathlib import Path
+
+import numpy as np
+import pytest
+import rclpy
+from mcap.reader import make_reader
+from rclpy.context import Context
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from rclpy.serialization import deserialize_message
+
+from brake_sim_ros.ros import qos, stream
+from brake_sim_ros.ros.harness import domain_id_for, ros_environment
+from brake_sim_ros.ros.replay import message_class
+
+pytestmark = pytest.mark.ros
+
+DURATION_S = 1.5
+# Timing tolerance of a replayed message against its recorded log time (wall s at rate 1).
+# The replay sleeps to each message's due time (sub-ms on Linux) and loopback DDS adds
+# about a millisecond; on a loaded 2-core CI machine a wake-up can be late by a few tens
+# of ms, so single messages get a generous bound and the typical one a tight bound.
+TYPICAL_LATE_S = 0.010  # median |arrival - due|
+WORST_LATE_S = 0.150  # any message
+LOSSLESS = QoSProfile(depth=10_000, reliability=ReliabilityPolicy.RELIABLE)
+
+
+def _record(path: Path, duration_s: float) -> None:
+    subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "brake_sim_ros.cli",
+            "simulate",
+            "symmetric",
+            "--duration",
+            str(duration_s),
+            "--mcap",
+            str(path),
+            "--quiet",
+        ],
+        check=True,
+    )
+
+
+def _recorded(path: Path) -> list[tuple[str, bytes, int]]:
+    with path.open("rb") as f:
+        return [
+            (channel.topic, bytes(message.data), message.log_time)
+            for _s, channel, message in make_reader(f).iter_messages(log_time_order=True)
+        ]
+
+
+@pytest.fixture(scope="module")
+def recording(tmp_path_factory) -> Path:
+    path = tmp_path_factory.mktemp("replay") / "symmetric.mcap"
+    _record(path, DURATION_S)
+    return path
+
+
+class RawListener:
+    """Raw subscriptions on every recorded topic; keeps (topic, bytes, wall time)."""
+
+    def __init__(self, domain_id: int, topics: dict[str, str]) -> None:
+        self.context = Context()
+        rclpy.init(context=self.context, domain_id=domain_id)
+        self.node = rclpy.create_node("replay_listener", context=self.context)
+        self.executor = SingleThreadedExecutor(context=self.context)
+        self.executor.add_node(self.node)
+        self.received: list[tuple[str, bytes, float]] = []
+        for name, type_name in topics.items():
+            if name == stream.DEFECTS.name:
+                profile = qos.LATCHED
+            elif name == stream.CLOCK.name:
+                profile = qos.CLOCK
+            else:
+                profile = LOSSLESS
+            self.node.create_subscription(
+                message_class(type_name),
+                name,
+                lambda data, name=name: self.received.append((name, data, time.monotonic())),
+                profile,
+                raw=True,
+            )
+
+    def spin_until(self, done, timeout_s: float) -> None:
+        end = time.monotonic() + timeout_s
+        while not done() and time.monotonic() < end:
+            self.executor.spin_once(timeout_sec=0.01)
+
+    def close(self) -> None:
+        self.executor.shutdown(timeout_sec=1.0)
+        self.node.destroy_node()
+        rclpy.try_shutdown(context=self.context)
+
+
+def _replay(path: Path, domain: int, *args: str) -> subprocess.Popen:
+    return subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "brake_sim_ros.cli",
+            "replay",
+            str(path),
+            "--wait-for-subscribers",
+            "1",
+            *args,
+        ],
+        env=ros_environment(domain),
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+    )
+
+
+def _listen(path: Path, offset: int, *args: str) -> tuple[list, list]:
+    recorded = _recorded(path)
+    topics = {}
+    with path.open("rb") as f:
+        summary = make_reader(f).get_summary()
+        for channel in summary.channels.values():
+            topics[channel.topic] = summary.schemas[channel.schema_id].name
+    domain = domain_id_for(offset)
+    listener = RawListener(domain, topics)
+    proc = _replay(path, domain, *args)
+    try:
+        listener.spin_until(lambda: proc.poll() is not None, 60.0)
+        listener.spin_until(lambda: False, 0.3)  # what is still in flight
+    finally:
+        out = proc.communicate(timeout=10)[0] if proc.poll() is not None else ""
+        if proc.poll() is None:
+            proc.kill()
+        listener.close()
+    assert proc.returncode == 0, out
+    return recorded, listener.received
+
+
+def _decoded_by_topic(messages) -> dict[str, list]:
+    """Messages per topic, deserialized.
+
+    Compared as messages, not bytes: DDS may append CDR alignment padding to a payload
+    (flagged in the encapsulation header), so equal messages can differ by trailing bytes.
+    """
+    types = {t.name: t.type_name for t in stream.TOPICS}
+    out: dict[str, list] = defaultdict(list)
+    for topic, data, _t in messages:
+        out[topic].append(deserialize_message(data, message_class(types[topic])))
+    return out
+
+
+def test_replay_delivers_the_recording_in_order_and_in_time(recording: Path):
+    recorded, received = _listen(recording, 1)
+
+    by_topic_rec = _decoded_by_topic(recorded)
+    by_topic_rx = _decoded_by_topic(received)
+    # reliable topics: every message, every field equal, in order
+    for topic in (stream.PIVOT_FORCES.name, stream.STATE.name, stream.JOINT_STATES.name):
+        assert by_topic_rx[topic] == by_topic_rec[topic], topic
+    assert by_topic_rx[stream.DEFECTS.name] == by_topic_rec[stream.DEFECTS.name]
+    # /clock is best effort (as live): what arrives is recorded clock, in order
+    clocks = by_topic_rx[stream.CLOCK.name]
+    rec_clocks = by_topic_rec[stream.CLOCK.name]
+    assert clocks, "no /clock received"
+    positions = [rec_clocks.index(c) for c in clocks]
+    assert positions == sorted(positions)
+
+    # timing: arrival - first arrival against (log time - first log time), per chunk
+    log_times = [t for topic, _d, t in recorded if topic == stream.PIVOT_FORCES.name]
+    arrivals = [t for topic, _d, t in received if topic == stream.PIVOT_FORCES.name]
+    pairs = list(zip(log_times, arrivals, strict=True))  # same chunks, in order (above)
+    log0, wall0 = pairs[0]
+    late = np.array([(t - wall0) - (lt - log0) * 1e-9 for lt, t in pairs])
+    late -= np.median(late)  # the first message's own delay is not a timing error
+    assert np.median(np.abs(late)) <= TYPICAL_LATE_S, late
+    assert np.max(np.abs(late)) <= WORST_LATE_S, late
+    span = pairs[-1][1] - wall0
+    assert span == pytest.approx(DURATION_S - 0.01, abs=0.1)
+
+
+def test_rate_and_start_offset(recording: Path):
+    """At 2x from 0.5 s: half the wall time, messages from 0.5 s on, ground truth first."""
+    recorded, received = _listen(recording, 2, "--rate", "2", "--start-offset", "0.5")
+    start_ns = recorded[0][2] + 500_000_000
+    rec = _decoded_by_topic(recorded)
+    rx = _decoded_by_topic(received)
+    first = next(
+        i
+        for i, (topic, _d, t) in enumerate(m for m in recorded if m[0] == stream.PIVOT_FORCES.name)
+        if t >= start_ns
+    )
+    assert rx[stream.PIVOT_FORCES.name] == rec[stream.PIVOT_FORCES.name][first:]
+    assert first > 0
+    times = [t for topic, _d, t in received if topic == stream.PIVOT_FORCES.name]
+    span = times[-1] - times[0]
+    expected = (DURATION_S - 0.5 - 0.01) / 2.0
+    assert span == pytest.approx(expected, abs=0.1)
+    # the defect ground truth recorded at t = 0 is published at the start
+    assert rx[stream.DEFECTS.name] == rec[stream.DEFECTS.name]
+
+
+def test_refuses_a_broken_recording_with_the_fix(tmp_path: Path, recording: Path):
+    broken = tmp_path / "cut.mcap"
+    broken.write_bytes(recording.read_bytes()[: recording.stat().st_size // 2])
+    proc = subprocess.run(
+        [sys.executable, "-m", "brake_sim_ros.cli", "replay", str(broken)],
+        capture_output=True,
+        text=True,
+        env=ros_environment(domain_id_for(3)),
+        timeout=60,
+    )
+    assert proc.returncode == 1
+    assert "brake-sim recover" in proc.stderr, proc.stderr
