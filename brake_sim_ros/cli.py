@@ -236,6 +236,56 @@ def run_node(argv: list[str]) -> int:
     return node_main(["brake-sim node", *argv]) or 0
 
 
+LIVE_OUT_DIR = Path("bags/live")
+
+
+def run_live(argv: list[str]) -> int:
+    """``brake-sim live [SCENARIO]``: the main job. The node streams the scenario in real time
+    over ROS 2, records what it publishes to MCAP and writes a Rerun recording beside it
+    (and opens a viewer where a display exists); then it says where both are."""
+    from brake_sim_ros.ros.node import main as node_main
+    from brake_sim_ros.viz.targets import has_display
+
+    parser = argparse.ArgumentParser(
+        prog="brake-sim live",
+        description="Stream a scenario through the ROS 2 node in real time, recording it to"
+        " MCAP and Rerun. Other options (--ros-args ...) go to the node.",
+    )
+    parser.add_argument("scenario", nargs="?", default="symmetric", help="default: symmetric")
+    parser.add_argument(
+        "--out-dir", type=Path, default=LIVE_OUT_DIR, help=f"default: {LIVE_OUT_DIR}/"
+    )
+    parser.add_argument("--no-viewer", action="store_true", help="do not open a Rerun viewer")
+    parser.add_argument("--duration", metavar="S", help="simulated seconds (node option)")
+    args, node_args = parser.parse_known_args(argv)
+    if args.duration is not None:
+        node_args = ["--duration", args.duration, *node_args]
+    stem = Path(args.scenario).stem if args.scenario.endswith(".toml") else args.scenario
+    base = args.out_dir / f"{stem}-{time.strftime('%Y%m%d-%H%M%S')}"
+    mcap, rrd = base.with_suffix(".mcap"), base.with_suffix(".rrd")
+    args.out_dir.mkdir(parents=True, exist_ok=True)
+    options = ["--scenario", args.scenario, "--exit-at-end", "--record", str(mcap)]
+    options += ["--rerun", "save", str(rrd)]
+    viewer = has_display() and not args.no_viewer
+    if viewer:
+        options += ["--rerun", "spawn"]
+    code = node_main(["brake-sim live", *options, *node_args]) or 0
+    written = [f for f in (mcap, rrd) if f.is_file()]
+    for f in written:
+        print(f"wrote {f} ({f.stat().st_size / 1e6:.1f} MB)")
+    if mcap in written:
+        print(
+            f"  replay on ROS 2:   .venv/bin/brake-sim replay {mcap}\n"
+            f"  view in Rerun:     .venv/bin/brake-sim view {mcap}\n"
+            f"  ros2 bag / Foxglove: ros2 bag info {mcap}; or open the file in Foxglove"
+        )
+    if rrd in written:
+        print(f"  open the Rerun recording: .venv/bin/rerun {rrd}")
+    if not viewer:
+        print("  (no display here, so no viewer was opened)" if not args.no_viewer else "")
+    return code
+
+
 def run_replay(argv: list[str]) -> int:
     """``brake-sim replay FILE.mcap ...``: publishes a recording on ROS 2 (own options)."""
     from brake_sim_ros.ros.replay import main as replay_main
@@ -301,6 +351,11 @@ def build_parser() -> argparse.ArgumentParser:
         " [--exit-at-end] [--ros-args ...]",
     )
     sub.add_parser(
+        "live",
+        help="the main job: stream a scenario through the node in real time, recording MCAP"
+        " and Rerun under bags/live/: brake-sim live [SCENARIO] [--duration S] [--no-viewer]",
+    )
+    sub.add_parser(
         "replay",
         help="publish an MCAP recording on ROS 2 with its original timing: brake-sim replay"
         " FILE.mcap [--rate R] [--start-offset S] [--loop] [--topics T ...] [--ros-args ...]",
@@ -314,6 +369,8 @@ def main(argv: list[str] | None = None) -> int:
         return run_node(argv[1:])
     if argv[:1] == ["replay"]:
         return run_replay(argv[1:])
+    if argv[:1] == ["live"]:
+        return run_live(argv[1:])
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
