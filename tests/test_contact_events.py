@@ -96,7 +96,8 @@ def test_episode_spanning_blocks_and_contact_at_the_first_sample():
     block = SampleBlock(data, 0, dt)
     for sizes in ([n], [1], [3, 2], [5, 4, 3]):
         events = detect(cut(block, sizes))
-        assert [(e.sample_index, e.kind) for e in events] == [(0, 0), (2, 1), (4, 0), (9, 1), (11, 0)]
+        found = [(e.sample_index, e.kind) for e in events]
+        assert found == [(0, 0), (2, 1), (4, 0), (9, 1), (11, 0)]
         assert all(e.shoe == ce.SHOE_LEFT for e in events)
         first_sep, second_sep = events[1], events[3]
         assert (first_sep.peak_pivot_force_n, first_sep.peak_sample_index) == (9.0, 1)
