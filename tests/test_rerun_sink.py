@@ -136,16 +136,55 @@ def test_live_settings_decimate_and_keep_peaks(tmp_path: Path):
     assert live.times(f"{E.DRAWING}/drum").size == math.ceil(0.5 * LIVE_SETTINGS.drawing_rate_hz)
 
 
-def test_impacts_match_the_analysis_at_full_state_rate(tmp_path: Path):
-    """With a BrakeState per sample, every contact onset of the analysis is an event."""
+IMPACTING_S = 0.3  # the impacting regime of the symmetric event ends at 0.27 s
+
+
+def test_impacts_match_the_analysis_at_the_default_state_rate(tmp_path: Path):
+    """From the ContactEvents: every onset of the analysis, at its exact sample; the peaks."""
     scenario = load_scenario("symmetric")
-    duration = 0.3  # the impacting regime of the symmetric event ends at 0.27 s
+    rec = rr.RecordingStream("brake_sim_test")
+    rec.save(tmp_path / "impacts.rrd")
+    sink = RerunSink(rec, params=scenario.setup.params)
+    messages = list(offline_messages(scenario, duration_s=IMPACTING_S))
+    assert sum(topic is stream.STATE for topic, _, _ in messages) == 30  # 100 Hz
+    for topic, msg, ns in messages:
+        sink.write(topic, msg, ns)
+    sink.close()
+    verify(tmp_path / "impacts.rrd")
+    run = run_scenario(scenario, duration_s=IMPACTING_S)
+    t_ns = np.rint(run.samples.time_s * 1e9).astype(np.int64)
+    c = read(tmp_path / "impacts.rrd")
+    for side in E.SIDES:
+        metrics = run.metrics.shoe(side)
+        assert metrics.n_impacts >= 8, "more bounces than 100 Hz states can resolve"
+        assert sink.impacts[side] == metrics.n_impacts
+        # the onset sample is the first one after the interpolated crossing
+        onset_ns = t_ns[np.searchsorted(run.samples.time_s, metrics.onsets_s, side="right")]
+        np.testing.assert_array_equal(c.times(f"{E.IMPACTS}/{side}"), onset_ns)
+        # one peak per finished episode (the last contact lasts past the end of the run)
+        n_closed = metrics.separations_s.size
+        assert n_closed == metrics.n_impacts - 1
+        peaks = c.values(E.impact_peak_path(side))
+        assert c.times(E.impact_peak_path(side)).size == n_closed
+        np.testing.assert_allclose(
+            np.sort(peaks), np.sort(metrics.impact_peaks_n[:n_closed]), rtol=0.01
+        )
+        onset_texts = [t for t in c.texts[E.EVENTS] if t.startswith(f"impact: {side}")]
+        assert len(onset_texts) == metrics.n_impacts
+
+
+def test_impacts_without_contact_events_at_full_state_rate(tmp_path: Path):
+    """A stream without ContactEvents (older recordings) falls back to the states: with a
+    BrakeState per sample, every contact onset of the analysis is an event."""
+    scenario = load_scenario("symmetric")
+    duration = IMPACTING_S
     rec = rr.RecordingStream("brake_sim_test")
     rec.save(tmp_path / "impacts.rrd")
     sink = RerunSink(rec, params=scenario.setup.params)
     every_sample = StreamSettings(state_rate_hz=25_000.0)
     for topic, msg, ns in offline_messages(scenario, duration_s=duration, settings=every_sample):
-        sink.write(topic, msg, ns)
+        if topic is not stream.CONTACT_EVENTS:
+            sink.write(topic, msg, ns)
     sink.close()
     metrics = run_scenario(scenario, duration_s=duration).metrics
     for side in E.SIDES:
@@ -182,7 +221,7 @@ def write_mcap(path: Path, scenario_name: str, duration_s: float, *, with_model:
     from rclpy.serialization import serialize_message
 
     scenario = load_scenario(scenario_name)
-    kept = (stream.PIVOT_FORCES, stream.STATE, stream.DEFECTS)
+    kept = (stream.PIVOT_FORCES, stream.STATE, stream.DEFECTS, stream.CONTACT_EVENTS)
     with path.open("wb") as f:
         writer = Writer(f)
         writer.start(profile="ros2", library="brake-sim-ros tests")

@@ -13,12 +13,13 @@ import dataclasses
 import math
 
 import numpy as np
-from brake_sim_msgs.msg import BrakeState, DefectState, PivotForceChunk
+from brake_sim_msgs.msg import BrakeState, ContactEvent, DefectState, PivotForceChunk
 from builtin_interfaces.msg import Time
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Header
 
+from brake_sim_ros.analysis import contact_events
 from brake_sim_ros.model.defects import Defects
 from brake_sim_ros.model.layout import COL
 from brake_sim_ros.model.parameters import BrakeParameters
@@ -153,6 +154,19 @@ def joint_state(block: SampleBlock, row: int) -> JointState:
         name=list(JOINT_NAMES),
         position=_doubles(np.array([r[COL[n]] for n in _JOINT_ANGLES])),
         velocity=_doubles(np.array([r[COL[n]] for n in _JOINT_SPEEDS])),
+    )
+
+
+def contact_event(event: contact_events.ContactEvent, dt_s: float) -> ContactEvent:
+    """``event`` as a ContactEvent message; header stamp = time of its sample (``dt_s``, s)."""
+    return ContactEvent(
+        header=header(stamp_ns(event.sample_index, dt_s)),
+        sample_index=int(event.sample_index),
+        shoe=int(event.shoe),
+        kind=int(event.kind),
+        peak_pivot_force_n=float(event.peak_pivot_force_n),
+        peak_sample_index=int(event.peak_sample_index),
+        duration_s=float(event.duration_s),
     )
 
 

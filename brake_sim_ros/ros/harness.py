@@ -20,7 +20,13 @@ from pathlib import Path
 
 import numpy as np
 import rclpy
-from brake_sim_msgs.msg import ActuationCommand, BrakeState, DefectState, PivotForceChunk
+from brake_sim_msgs.msg import (
+    ActuationCommand,
+    BrakeState,
+    ContactEvent,
+    DefectState,
+    PivotForceChunk,
+)
 from brake_sim_msgs.srv import ResetSimulation, StepSimulation
 from diagnostic_msgs.msg import DiagnosticArray
 from rcl_interfaces.msg import SetParametersResult
@@ -106,6 +112,7 @@ class Received:
     states: list[BrakeState] = field(default_factory=list)
     state_times: list[float] = field(default_factory=list)
     joints: list[JointState] = field(default_factory=list)
+    contact_events: list[ContactEvent] = field(default_factory=list)
     defects: list[DefectState] = field(default_factory=list)
     clocks: list[Clock] = field(default_factory=list)
     diagnostics: list[DiagnosticArray] = field(default_factory=list)
@@ -145,10 +152,19 @@ class SimClient:
         self.gaps = 0
         self._next_index: int | None = None
         n = self.node
-        self._stream_topics = (f"{node}/pivot_forces", f"{node}/state", f"{node}/joint_states")
+        self._stream_topics = (
+            f"{node}/pivot_forces",
+            f"{node}/state",
+            f"{node}/joint_states",
+            f"{node}/contact_events",
+        )
         n.create_subscription(PivotForceChunk, f"{node}/pivot_forces", self._on_chunk, stream_qos)
         n.create_subscription(BrakeState, f"{node}/state", self._on_state, stream_qos)
         n.create_subscription(JointState, f"{node}/joint_states", self.rx.joints.append, stream_qos)
+        # reliable like the node's publisher: every label matters (see qos.EVENTS)
+        n.create_subscription(
+            ContactEvent, f"{node}/contact_events", self.rx.contact_events.append, qos.EVENTS
+        )
         n.create_subscription(DefectState, f"{node}/defects", self.rx.defects.append, qos.LATCHED)
         n.create_subscription(Clock, "/clock", self.rx.clocks.append, qos.CLOCK)
         n.create_subscription(

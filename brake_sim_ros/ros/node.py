@@ -14,6 +14,10 @@ Topics (node name ``brake_sim``; ``~`` = ``/brake_sim``; QoS in :mod:`.qos`):
     ~/pivot_forces   brake_sim_msgs/PivotForceChunk   every physics sample, in chunks
     ~/state          brake_sim_msgs/BrakeState        at state_rate_hz (simulated)
     ~/joint_states   sensor_msgs/JointState           flywheel, drum, left_shoe, right_shoe
+    ~/contact_events brake_sim_msgs/ContactEvent      every contact onset and separation of
+                                                      either shoe, at full sample rate: the
+                                                      onset at its sample, the separation
+                                                      with the episode's peak pivot force
     ~/defects        brake_sim_msgs/DefectState       ground truth, transient local
     /clock           rosgraph_msgs/Clock              simulated time (publish_clock)
     /diagnostics     diagnostic_msgs/DiagnosticArray  every diagnostics_period_s (wall)
@@ -38,7 +42,13 @@ import time
 from collections.abc import Callable, Iterable
 
 import rclpy
-from brake_sim_msgs.msg import ActuationCommand, BrakeState, DefectState, PivotForceChunk
+from brake_sim_msgs.msg import (
+    ActuationCommand,
+    BrakeState,
+    ContactEvent,
+    DefectState,
+    PivotForceChunk,
+)
 from brake_sim_msgs.srv import ResetSimulation, StepSimulation
 from diagnostic_msgs.msg import DiagnosticArray
 from rcl_interfaces.msg import SetParametersResult
@@ -52,6 +62,7 @@ from rclpy.utilities import remove_ros_args
 from rosgraph_msgs.msg import Clock as ClockMsg
 from sensor_msgs.msg import JointState
 
+from brake_sim_ros.analysis.contact_events import ContactEventDetector
 from brake_sim_ros.errors import BrakeSimError, ParameterError
 from brake_sim_ros.model.trajectory import BrakeSetup, SampleBlock
 from brake_sim_ros.ros import conversion, qos, stream
@@ -160,6 +171,8 @@ class BrakeSimNode(Node):
         self._chunk_steps = self._steps_per(self._param("chunk_rate_hz"))
         self._state_stride = self._steps_per(self._param("state_rate_hz"))
         self._check_keeps_up()
+        # open contact episodes carried between published blocks; reset with the stepper
+        self._contact_events = ContactEventDetector()
         self.add_pre_set_parameters_callback(self._pre_set_parameters)
         self.add_on_set_parameters_callback(self._on_set_parameters)
 
@@ -170,6 +183,7 @@ class BrakeSimNode(Node):
             (stream.PIVOT_FORCES, PivotForceChunk, "~/pivot_forces", qos.STREAM),
             (stream.STATE, BrakeState, "~/state", qos.STREAM),
             (stream.JOINT_STATES, JointState, "~/joint_states", qos.STREAM),
+            (stream.CONTACT_EVENTS, ContactEvent, "~/contact_events", qos.EVENTS),
             (stream.DEFECTS, DefectState, "~/defects", qos.LATCHED),
             (stream.CLOCK, ClockMsg, "/clock", qos.CLOCK),
             (stream.DIAGNOSTICS, DiagnosticArray, "/diagnostics", qos.DIAGNOSTICS),
@@ -527,7 +541,12 @@ class BrakeSimNode(Node):
 
     def _publish_block(self, block: SampleBlock) -> None:
         states = 0
-        messages = stream.block_messages(block, self._state_stride, with_clock=self._publish_clock)
+        messages = stream.block_messages(
+            block,
+            self._state_stride,
+            with_clock=self._publish_clock,
+            contact_events=self._contact_events,
+        )
         for topic, msg, ns in messages:
             self._emit(topic, msg, ns)
             states += topic is stream.STATE
@@ -636,6 +655,7 @@ class BrakeSimNode(Node):
         except BrakeSimError as exc:
             response.success, response.message = False, f"reset refused: {exc}"
             return response
+        self._contact_events.reset()
         if seed >= 0:
             self._seed = seed
         if self._planner.clear():

@@ -13,6 +13,7 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import Any
 
+from brake_sim_ros.analysis.contact_events import ContactEventDetector
 from brake_sim_ros.ros import conversion, stream
 from brake_sim_ros.ros import parameters as ros_params
 from brake_sim_ros.ros.stream import Topic
@@ -81,6 +82,9 @@ def offline_messages(
     )
     if settings.publish_clock:
         yield stream.CLOCK, conversion.clock(0), 0
+    detector = ContactEventDetector()
     while stepper.step_index < end:
         block = stepper.advance(min(chunk, end - stepper.step_index))
-        yield from stream.block_messages(block, stride, with_clock=settings.publish_clock)
+        yield from stream.block_messages(
+            block, stride, with_clock=settings.publish_clock, contact_events=detector
+        )

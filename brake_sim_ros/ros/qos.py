@@ -13,6 +13,11 @@ such a driver, so:
   (= ``qos_profile_sensor_data``, best effort), the REP 2003 consumer profile: a slow
   consumer then loses samples (visible as a jump of ``first_sample_index``) instead of
   slowing anything down.
+* ``~/contact_events`` (:data:`EVENTS`): reliable, volatile, keep last 100. Like
+  :data:`STREAM`, but each message is a labelled event, not one sample of a signal a
+  consumer can afford to thin out, and a chunk of a bouncing shoe can carry dozens at
+  once; the deeper history keeps a burst whole for a reliable subscriber that is briefly
+  slow. Consumers that need every label should subscribe reliable too.
 * ``~/defects`` (:data:`LATCHED`): reliable, transient local, keep last 1, like a map in
   REP 2003: a late subscriber gets the ground truth in force at once.
 * ``/clock`` (:data:`CLOCK`): best effort, volatile, keep last 1, rclcpp's ``ClockQoS``
@@ -43,6 +48,12 @@ STREAM = QoSProfile(
     durability=DurabilityPolicy.VOLATILE,
 )
 STREAM_CONSUMER = qos_profile_sensor_data
+EVENTS = QoSProfile(
+    history=HistoryPolicy.KEEP_LAST,
+    depth=100,
+    reliability=ReliabilityPolicy.RELIABLE,
+    durability=DurabilityPolicy.VOLATILE,
+)
 LATCHED = QoSProfile(
     history=HistoryPolicy.KEEP_LAST,
     depth=1,

@@ -15,6 +15,7 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import Any, Protocol
 
+from brake_sim_ros.analysis.contact_events import ContactEventDetector
 from brake_sim_ros.model.trajectory import SampleBlock
 from brake_sim_ros.ros import conversion
 
@@ -34,8 +35,18 @@ DEFECTS = Topic("/brake_sim/defects", "brake_sim_msgs/msg/DefectState")
 CLOCK = Topic("/clock", "rosgraph_msgs/msg/Clock")
 DIAGNOSTICS = Topic("/diagnostics", "diagnostic_msgs/msg/DiagnosticArray")
 ACTUATION = Topic("/brake_sim/actuation", "brake_sim_msgs/msg/ActuationCommand")
+CONTACT_EVENTS = Topic("/brake_sim/contact_events", "brake_sim_msgs/msg/ContactEvent")
 
-TOPICS = (PIVOT_FORCES, STATE, JOINT_STATES, DEFECTS, CLOCK, DIAGNOSTICS, ACTUATION)
+TOPICS = (
+    PIVOT_FORCES,
+    STATE,
+    JOINT_STATES,
+    DEFECTS,
+    CLOCK,
+    DIAGNOSTICS,
+    ACTUATION,
+    CONTACT_EVENTS,
+)
 
 
 class MessageSink(Protocol):
@@ -52,13 +63,23 @@ class MessageSink(Protocol):
 
 
 def block_messages(
-    block: SampleBlock, state_stride: int, *, with_clock: bool
+    block: SampleBlock,
+    state_stride: int,
+    *,
+    with_clock: bool,
+    contact_events: ContactEventDetector,
 ) -> Iterator[tuple[Topic, Any, int]]:
     """The messages one published block produces, in publishing order.
 
-    A PivotForceChunk (stamped with its first sample), one BrakeState and one JointState
-    per sample index that is a multiple of ``state_stride``, and with ``with_clock`` a
-    Clock at the time just after the block's last sample (the next sample's time).
+    A PivotForceChunk (stamped with its first sample), the ContactEvents whose sample lies
+    in the block (from ``contact_events``, which is fed the block and carries open contact
+    episodes to the next one; each stamped with its own sample), one BrakeState and one
+    JointState per sample index that is a multiple of ``state_stride``, and with
+    ``with_clock`` a Clock at the time just after the block's last sample (the next
+    sample's time).
+
+    The detector is fed when the generator reaches the events, so consume the whole
+    generator once per block, in order.
     """
     dt = block.sample_period_s
     yield (
@@ -66,6 +87,9 @@ def block_messages(
         conversion.pivot_force_chunk(block),
         conversion.stamp_ns(block.first_index, dt),
     )
+    for event in contact_events.feed(block):
+        msg = conversion.contact_event(event, dt)
+        yield CONTACT_EVENTS, msg, conversion.stamp_ns(event.sample_index, dt)
     for row in conversion.state_rows(block, state_stride):
         ns = conversion.stamp_ns(block.first_index + row, dt)
         yield STATE, conversion.brake_state(block, row), ns

@@ -19,7 +19,14 @@ def pivot_path(side: str, series: str) -> str:
     return f"{PIVOT_FORCE}/{side}/{series}"
 
 
-IMPACTS = "pivot_force/impacts"  # markers at the largest |F_pivot| around each contact onset
+# impacts/<side>: a marker per contact onset at its sample, valued |F_pivot| there (N);
+# impacts/<side>/peak: a marker per contact episode at its largest |F_pivot| (N)
+IMPACTS = "pivot_force/impacts"
+
+
+def impact_peak_path(side: str) -> str:
+    return f"{IMPACTS}/{side}/peak"
+
 
 # at the state rate (BrakeState)
 SPEED = "speed"  # speed/flywheel, speed/drum, rad/s

@@ -12,9 +12,14 @@ timeline taken from the messages' stamps):
   ``1 / force_envelope_hz`` bucket, at their own times, so every peak stays visible;
 * BrakeState at the state rate: speeds, shoe angles, indentations, contact and
   actuation forces, contact flags and regime (also as columns);
-* impacts: a contact flag rising between two BrakeStates (so seen at the state rate;
-  raise ``state_rate_hz`` to resolve every bounce) gives an event and a marker at the
-  largest |F_pivot| of that shoe since the previous state; regime changes are events;
+* impacts, from ContactEvent messages (ground truth at the full sample rate): each onset
+  is an event and a marker at its exact sample, valued |F_pivot| of that sample (when
+  the chunk holding it was received); each separation is an event and a marker at the
+  episode's peak |F_pivot| (``pivot_force/impacts/<side>/peak``). A stream without
+  ContactEvents (an older recording) falls back to the state rate: a contact flag rising
+  between two BrakeStates gives an event and a marker at the largest |F_pivot| of that
+  shoe since the previous state (raise ``state_rate_hz`` to resolve every bounce).
+  Regime changes are events;
 * the defect ground truth (markdown and scalars) when a DefectState arrives;
 * the 2-D drawing (:mod:`.drawing`) at ``drawing_rate_hz`` of simulated time.
 
@@ -48,6 +53,8 @@ _TYPE_STATE = "brake_sim_msgs/msg/BrakeState"
 _TYPE_DEFECTS = "brake_sim_msgs/msg/DefectState"
 _TYPE_ACTUATION = "brake_sim_msgs/msg/ActuationCommand"
 _TYPE_DIAGNOSTICS = "diagnostic_msgs/msg/DiagnosticArray"
+_TYPE_CONTACT_EVENT = "brake_sim_msgs/msg/ContactEvent"
+_KIND_ONSET = 0  # ContactEvent.KIND_ONSET; SHOE_LEFT = 0, SHOE_RIGHT = 1 index E.SIDES
 _DIAG_LEVELS = {0: "INFO", 1: "WARN", 2: "ERROR", 3: "WARN"}
 
 
@@ -171,7 +178,9 @@ class RerunSink:
         self._next_frame_ns = 0
         self.samples_logged = 0  # pivot-force samples received (all of them are in files)
         self.states_logged = 0
-        self.impacts = {side: 0 for side in E.SIDES}
+        self.impacts = {side: 0 for side in E.SIDES}  # contact onsets seen
+        # True once a ContactEvent arrived: impacts come from them, not from the states
+        self._contact_events_seen = False
         self.first_ns: int | None = None
         self.last_ns: int | None = None
         self.closed = False
@@ -204,6 +213,16 @@ class RerunSink:
                 f"{E.IMPACTS}/{side}",
                 rr.SeriesPoints(
                     colors=[color], names=[f"{side} impact"], markers=["Cross"], marker_sizes=[6]
+                ),
+                static=True,
+            )
+            log(
+                E.impact_peak_path(side),
+                rr.SeriesPoints(
+                    colors=[color],
+                    names=[f"{side} impact peak"],
+                    markers=["Diamond"],
+                    marker_sizes=[5],
                 ),
                 static=True,
             )
@@ -247,6 +266,8 @@ class RerunSink:
             self._on_chunk(msg)
         elif kind == _TYPE_STATE:
             self._on_state(msg)
+        elif kind == _TYPE_CONTACT_EVENT:
+            self._on_contact_event(msg)
         elif kind == _TYPE_DEFECTS:
             self._on_defects(msg)
         elif kind == _TYPE_ACTUATION:
@@ -423,12 +444,52 @@ class RerunSink:
         self._seen(ns)
         self._due(ns)
 
+    def _sample_ns(self, index: int, msg: Any) -> int:
+        """Time (ns) of sample ``index``, as the pivot-force series times it; without a
+        chunk seen yet, scaled from the stamp of ``msg`` (a ContactEvent)."""
+        if self._rate_hz is not None:
+            return round(index * (_NS_PER_S / self._rate_hz))
+        event_index = int(msg.sample_index)
+        return _stamp_ns(msg) if event_index == 0 else _stamp_ns(msg) * index // event_index
+
+    def _on_contact_event(self, msg: Any) -> None:
+        self._contact_events_seen = True
+        ns = _stamp_ns(msg)
+        index = int(msg.sample_index)
+        shoe = int(msg.shoe)
+        side = E.SIDES[shoe] if 0 <= shoe < len(E.SIDES) else None
+        if side is None:
+            self._event(ns, f"contact event of an unknown shoe {shoe} ignored", "WARN")
+            return
+        if int(msg.kind) == _KIND_ONSET:
+            self.impacts[side] += 1
+            pivot = self._pivot_at(index)
+            if pivot is not None:
+                self._set_time(ns)
+                self.rec.log(f"{E.IMPACTS}/{side}", rr.Scalars(float(np.hypot(*pivot[side]))))
+            self._event(ns, f"impact: {side} shoe touches the drum (sample {index})")
+        else:
+            peak = float(msg.peak_pivot_force_n)
+            peak_index = int(msg.peak_sample_index)
+            peak_ns = self._sample_ns(peak_index, msg)
+            self._set_time(peak_ns)
+            self.rec.log(E.impact_peak_path(side), rr.Scalars(peak))
+            self._event(
+                ns,
+                f"separation: {side} shoe leaves the drum after"
+                f" {1e3 * float(msg.duration_s):.3f} ms; peak |F_pivot| {peak:.0f} N at"
+                f" t = {peak_ns / _NS_PER_S:.6f} s",
+            )
+        self._seen(ns)
+
     def _events_at(self, msg: Any, ns: int, index: int) -> None:
         prev = self._last_state
         regime = int(msg.regime)
         if prev is None or int(prev.regime) != regime:
             before = "start" if prev is None else _regime_name(int(prev.regime))
             self._event(ns, f"regime: {before} -> {_regime_name(regime)}")
+        if self._contact_events_seen:
+            return  # impacts come from the ContactEvents, at their exact samples
         for side in E.SIDES:
             now_in = bool(getattr(msg, f"{side}_in_contact"))
             was_in = prev is not None and bool(getattr(prev, f"{side}_in_contact"))

@@ -1,0 +1,123 @@
+"""~/contact_events of the node, over real DDS, against the offline stream.
+
+One node process, started paused, is stepped with step sizes unlike the offline stream's
+10 ms chunks, reset in the middle of a contact episode and switched to another scenario:
+each time the ContactEvents received equal those of :func:`offline_messages`, field for
+field, so the node's detector state follows resets and does not depend on the chunking.
+"""
+
+from __future__ import annotations
+
+import pytest
+
+pytestmark = [
+    pytest.mark.ros,
+    pytest.mark.filterwarnings("ignore:module 'sre_(parse|constants)' is deprecated"),
+]
+
+rclpy = pytest.importorskip("rclpy", reason="rclpy not installed (run scripts/setup.sh)")
+
+from rclpy.qos import QoSProfile, ReliabilityPolicy  # noqa: E402
+
+from brake_sim_ros.analysis import contact_events as ce  # noqa: E402
+from brake_sim_ros.ros import stream  # noqa: E402
+from brake_sim_ros.ros.harness import NodeProcess, SimClient, domain_id_for  # noqa: E402
+from brake_sim_ros.ros.offline import offline_messages  # noqa: E402
+from brake_sim_ros.scenarios import load_scenario  # noqa: E402
+from brake_sim_ros.solvers.fixed_step import FixedStepStepper  # noqa: E402
+
+DOMAIN = domain_id_for(8)
+DT = 4e-5
+MAX_FORCE = 1600.0
+N_STEPS = 7500  # 0.3 s: every bounce of the symmetric run and the start of its contact
+LOSSLESS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
+FIELDS = (
+    "sample_index",
+    "shoe",
+    "kind",
+    "peak_pivot_force_n",
+    "peak_sample_index",
+    "duration_s",
+)
+
+
+def as_tuple(msg) -> tuple:
+    stamp = (msg.header.stamp.sec, msg.header.stamp.nanosec, msg.header.frame_id)
+    return (stamp, *(getattr(msg, f) for f in FIELDS))
+
+
+def offline_events(scenario_name: str, n_steps: int) -> list[tuple]:
+    scenario = load_scenario(scenario_name)
+    stepper = FixedStepStepper(scenario.setup, DT, max_actuation_n=MAX_FORCE)
+    messages = offline_messages(scenario, duration_s=n_steps * DT, stepper=stepper)
+    return [as_tuple(msg) for topic, msg, _ in messages if topic is stream.CONTACT_EVENTS]
+
+
+@pytest.fixture(scope="module")
+def sim(tmp_path_factory):
+    log = tmp_path_factory.mktemp("node") / "node.log"
+    node = NodeProcess.start(
+        ["--ros-args", "-p", "paused:=true", "-p", f"max_actuation_force_n:={MAX_FORCE}"],
+        domain_id=DOMAIN,
+        log_path=log,
+    )
+    client = SimClient(DOMAIN, stream_qos=LOSSLESS)
+    try:
+        client.wait_for_node(30.0)
+        yield client
+    finally:
+        client.close()
+        assert node.stop() == 0, node.output()
+
+
+def step_all(sim: SimClient, sizes: list[int], total: int) -> None:
+    """Step ``total`` steps in ``sizes`` (cycled) and wait until every sample arrived."""
+    done, k = 0, 0
+    while done < total:
+        n = min(sizes[k % len(sizes)], total - done)
+        response = sim.step(steps=n)
+        assert response.success, response.message
+        done, k = done + n, k + 1
+    sim.wait_for(lambda: sim.next_sample_index == total, 20.0, "the stepped samples")
+    sim.spin_for(0.2)  # events of the last chunk travel on their own topic
+
+
+def received(sim: SimClient) -> list[tuple]:
+    return [as_tuple(m) for m in sim.rx.contact_events]
+
+
+def test_node_publishes_the_offline_events_whatever_the_steps_and_resets(sim):
+    expected = offline_events("symmetric", N_STEPS)
+    assert len(expected) >= 30
+    step_all(sim, [1234, 1, 77, 5000], N_STEPS)
+    assert received(sim) == expected
+
+    # reset in the middle of a contact episode: nothing of it may leak into the next run
+    onset, sep = expected[0][1], expected[2][1]
+    assert sep - onset > 2 and expected[0][3] == ce.KIND_ONSET
+    assert sim.reset().success
+    sim.forget()
+    step_all(sim, [onset + 2], onset + 2)
+    assert [e[1] for e in received(sim)] == [onset, onset]  # both shoes touch at once
+    assert sim.reset().success
+    sim.forget()
+    step_all(sim, [250], N_STEPS)  # the offline chunking
+    assert received(sim) == expected
+
+
+def test_scenario_switch_resets_the_events(sim):
+    try:
+        assert sim.reset().success
+        sim.forget()
+        in_contact = offline_events("symmetric", N_STEPS)[0][1] + 2  # inside the first episode
+        step_all(sim, [333], in_contact)
+        assert len(sim.rx.contact_events) == 2  # both onsets, no separation yet
+        response = sim.reset(scenario="case5_left_tilted")
+        assert response.success, response.message
+        sim.forget()
+        step_all(sim, [999, 4321], N_STEPS)
+        expected = offline_events("case5_left_tilted", N_STEPS)
+        assert expected
+        assert received(sim) == expected
+    finally:
+        assert sim.reset(scenario="symmetric").success
