@@ -54,6 +54,7 @@ _KNOWN_QOS = {
     stream.CLOCK.name: qos.CLOCK,
     stream.DIAGNOSTICS.name: qos.DIAGNOSTICS,
     stream.ACTUATION.name: qos.COMMANDS,
+    stream.CONTACT_EVENTS.name: qos.EVENTS,
 }
 _DEFAULT_QOS = qos.STREAM
 
