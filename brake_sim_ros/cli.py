@@ -113,29 +113,45 @@ def cmd_simulate(args: argparse.Namespace) -> int:
             f"time history: {args.out} ({len(result.samples)} samples x"
             f" {result.samples.data.shape[1]} columns)"
         )
-    if rerun_targets:
-        from brake_sim_ros.viz.commands import simulate_to_rerun
-
-        print(simulate_to_rerun(scenario, rerun_targets, duration_s=args.duration, dt_s=args.dt))
-    if args.mcap:
-        _write_mcap(args, scenario)
+    if args.mcap or rerun_targets:
+        _write_stream(args, scenario, rerun_targets)
     return 0
 
 
-def _write_mcap(args: argparse.Namespace, scenario) -> None:
-    """The node's stream offline into an MCAP file (what ``node --record`` writes)."""
+def _write_stream(args: argparse.Namespace, scenario, rerun_targets: list) -> None:
+    """The node's stream, produced offline once, into the MCAP file and the Rerun targets."""
     import dataclasses
 
+    if args.dt is not None:
+        solver = dataclasses.replace(scenario.solver, dt_s=args.dt)
+        scenario = dataclasses.replace(scenario, solver=solver)
+    if not args.mcap:
+        from brake_sim_ros.viz.commands import simulate_to_rerun
+
+        print(simulate_to_rerun(scenario, rerun_targets, duration_s=args.duration))
+        return
     from brake_sim_ros.recording.record import record_offline
     from brake_sim_ros.recording.writer import RecordingOptions
 
     if args.method == "reference":
         raise BrakeSimError("--mcap records the node's fixed-step stream: drop --method reference")
-    if args.dt is not None:
-        solver = dataclasses.replace(scenario.solver, dt_s=args.dt)
-        scenario = dataclasses.replace(scenario, solver=solver)
+    sinks = []
+    if rerun_targets:
+        from brake_sim_ros.viz.commands import finish_simulation_sinks, open_simulation_sinks
+
+        sinks = open_simulation_sinks(scenario, rerun_targets)
     options = RecordingOptions(compression=args.mcap_compression, durable=False)
-    print(record_offline(scenario, args.mcap, duration_s=args.duration, options=options).describe())
+    try:
+        recording = record_offline(
+            scenario, args.mcap, duration_s=args.duration, options=options, also=sinks
+        )
+    except BaseException:
+        for sink in sinks:
+            sink.close()
+        raise
+    print(recording.describe())
+    if sinks:
+        print(finish_simulation_sinks(sinks, rerun_targets))
 
 
 # --- recover ---------------------------------------------------------------------------------

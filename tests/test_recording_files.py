@@ -381,3 +381,27 @@ def test_diagnostics_and_commands_round_trip(tmp_path):
     assert [kv.value for s in decoded[0][3].status for kv in s.values] == ["0", "1", "2", "3"]
     command = decoded[1][3]
     assert (command.left_force_n, command.right_force_n) == (123.25, -0.0)
+
+
+def test_record_offline_feeds_other_sinks_the_same_stream(tmp_path: Path):
+    """``also=`` sinks (Rerun in ``simulate --mcap --rerun``) get exactly what is recorded,
+    from the same single simulation."""
+
+    class Collect:
+        def __init__(self) -> None:
+            self.seen: list[tuple[str, int]] = []
+
+        def write(self, topic, msg, time_ns: int) -> None:
+            self.seen.append((topic.name, time_ns))
+
+        def close(self) -> None:
+            pass
+
+    sink = Collect()
+    path = tmp_path / "both.mcap"
+    record_offline(load_scenario("symmetric"), path, duration_s=0.3, also=[sink])
+    with path.open("rb") as f:
+        recorded = [
+            (c.topic, m.log_time) for _s, c, m in make_reader(f).iter_messages(log_time_order=False)
+        ]
+    assert sink.seen == recorded

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import os
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -18,6 +18,7 @@ from brake_sim_ros.recording.writer import McapRecorder, RecordingOptions
 from brake_sim_ros.ros import parameters as ros_params
 from brake_sim_ros.ros import stream
 from brake_sim_ros.ros.offline import StreamSettings, offline_messages
+from brake_sim_ros.ros.stream import MessageSink
 from brake_sim_ros.scenarios import Scenario
 
 if TYPE_CHECKING:
@@ -62,6 +63,7 @@ def record_offline(
     duration_s: float | None = None,
     options: RecordingOptions | None = None,
     settings: StreamSettings | None = None,
+    also: Sequence[MessageSink] = (),
 ) -> OfflineRecording:
     """Write the node's stream for ``scenario`` (minus /diagnostics) to ``path``, as fast as
     the CPU goes.
@@ -100,6 +102,8 @@ def record_offline(
     try:
         for topic, msg, ns in offline_messages(scenario, duration_s=duration, settings=settings):
             recorder.write(topic, msg, ns)
+            for sink in also:  # e.g. Rerun: one simulation feeds every output
+                sink.write(topic, msg, ns)
             if topic is stream.PIVOT_FORCES:
                 samples += len(msg.left_fx_n)
     finally:

@@ -7,7 +7,6 @@ lazily (Rerun is only loaded when it is used).
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import functools
 import sys
 import time
@@ -56,12 +55,32 @@ def serve_until_interrupted(targets: list[RerunTarget]) -> None:
             pass
 
 
+def open_simulation_sinks(scenario: Scenario, targets: list[RerunTarget]) -> list:
+    """One Rerun sink per target for the offline stream of ``scenario``."""
+    setup = scenario.setup
+    return [
+        open_sink(
+            t, params=setup.params, defects=setup.defects, run_text=scenario_markdown(scenario)
+        )
+        for t in targets
+    ]
+
+
+def finish_simulation_sinks(sinks: list, targets: list[RerunTarget]) -> str:
+    """Close ``sinks`` (serving until Ctrl-C for ``serve``); one line on what was logged where."""
+    for sink in sinks:
+        sink.close()
+    serve_until_interrupted(targets)
+    where = ", ".join(t.kind + (f" {t.arg}" if t.arg else "") for t in targets)
+    first = sinks[0]
+    return (
+        f"rerun: {first.samples_logged} pivot-force samples, {first.states_logged} states,"
+        f" impacts seen left {first.impacts['left']} right {first.impacts['right']} -> {where}"
+    )
+
+
 def simulate_to_rerun(
-    scenario: Scenario,
-    targets: list[RerunTarget],
-    *,
-    duration_s: float | None,
-    dt_s: float | None,
+    scenario: Scenario, targets: list[RerunTarget], *, duration_s: float | None
 ) -> str:
     """Log the node's stream of ``scenario`` (produced offline) to every target.
 
@@ -70,31 +89,16 @@ def simulate_to_rerun(
     """
     from brake_sim_ros.ros.offline import offline_messages
 
-    if dt_s is not None:
-        scenario = dataclasses.replace(
-            scenario, solver=dataclasses.replace(scenario.solver, dt_s=dt_s)
-        )
-    setup = scenario.setup
-    sinks = [
-        open_sink(
-            t, params=setup.params, defects=setup.defects, run_text=scenario_markdown(scenario)
-        )
-        for t in targets
-    ]
+    sinks = open_simulation_sinks(scenario, targets)
     try:
         for topic, msg, ns in offline_messages(scenario, duration_s=duration_s):
             for sink in sinks:
                 sink.write(topic, msg, ns)
-    finally:
+    except BaseException:
         for sink in sinks:
             sink.close()
-    serve_until_interrupted(targets)
-    where = ", ".join(t.kind + (f" {t.arg}" if t.arg else "") for t in targets)
-    first = sinks[0]
-    return (
-        f"rerun: {first.samples_logged} pivot-force samples, {first.states_logged} states,"
-        f" impacts seen left {first.impacts['left']} right {first.impacts['right']} -> {where}"
-    )
+        raise
+    return finish_simulation_sinks(sinks, targets)
 
 
 def cmd_view(args: argparse.Namespace) -> int:
