@@ -2,14 +2,10 @@
 
 Everything here takes plain floats and float64/int64 arrays laid out as in
 :mod:`brake_sim_ros.model.layout`; dataclasses are unpacked at the boundary
-(:mod:`brake_sim_ros.model.assembly`).
-
-Contact geometry. A shoe is rigid and turns by ``phi = sign * theta`` about its pivot
-``P``. Its lining is an arc of radius ``r`` around the point ``C`` (the drum centre when
-the shoe is at rest, so the running clearance is ``R_d - r``). The lining point farthest
-from the drum centre is on the ray from the origin through ``C`` when that ray crosses
-the arc, otherwise at the arc end angularly nearest to it; its distance from the centre
-minus ``R_d`` is the indentation ``eps``. The normal is the drum's outward normal there.
+(:mod:`brake_sim_ros.model.assembly`). The contact law and geometry live in
+:mod:`brake_sim_ros.model.contact`, the stick/slip rule at standstill in
+:mod:`brake_sim_ros.model.standstill`; this module assembles the equations of motion
+from them and steps them.
 """
 
 from __future__ import annotations
@@ -19,6 +15,7 @@ import math
 import numpy as np
 from numba import njit
 
+from brake_sim_ros.model import contact, standstill
 from brake_sim_ros.model import layout as L
 
 
@@ -42,206 +39,110 @@ def _pwl(t, ts, fs):
     return fs[lo] + w * (fs[hi] - fs[lo])
 
 
-@njit(cache=True, inline="always")
-def _contact_point(p, base, c, sn):
-    """Lining point farthest from the drum centre for a shoe turned by phi (cos c, sin sn).
-
-    Returns (x, y, distance from the drum centre, unit normal x, unit normal y), m.
-    """
-    px = p[base + L.S_PIVOT_X]
-    py = p[base + L.S_PIVOT_Y]
-    dx = p[base + L.S_LINING_CENTRE_X] - px
-    dy = p[base + L.S_LINING_CENTRE_Y] - py
-    cx = px + c * dx - sn * dy
-    cy = py + sn * dx + c * dy
-    m0x = p[base + L.S_LINING_MID_COS]
-    m0y = p[base + L.S_LINING_MID_SIN]
-    mx = c * m0x - sn * m0y
-    my = sn * m0x + c * m0y
-    r = p[base + L.S_LINING_RADIUS]
-    ce = math.sqrt(cx * cx + cy * cy)
-    if ce > 1e-300:
-        ux = cx / ce
-        uy = cy / ce
-    else:
-        ux = mx
-        uy = my
-    if ux * mx + uy * my >= p[base + L.S_LINING_HALF_COS]:
-        # the ray from the drum centre through the arc centre crosses the lining
-        return cx + r * ux, cy + r * uy, ce + r, ux, uy
-    hc = p[base + L.S_LINING_HALF_COS]
-    hs = p[base + L.S_LINING_HALF_SIN]
-    if mx * uy - my * ux < 0.0:
-        hs = -hs
-    ex = hc * mx - hs * my
-    ey = hs * mx + hc * my
-    xx = cx + r * ex
-    xy = cy + r * ey
-    dist = math.sqrt(xx * xx + xy * xy)
-    return xx, xy, dist, xx / dist, xy / dist
-
-
-@njit(cache=True, inline="always")
-def shoe_eval(p, base, theta, omega, drum_speed, actuation, mode, locked=0):
-    """Forces on one shoe and what they do.
-
-    Args:
-        p: packed parameters. base: index of this shoe's block.
-        theta, omega: shoe angle (rad) and speed (rad/s), positive outward.
-        drum_speed: drum angular speed about +z, rad/s.
-        actuation: actuation force on the tip, N (gain already applied).
-        mode: CONTACT_AUTO (contact while eps > 0), CONTACT_OFF or CONTACT_ON.
-        locked: != 0 when the brake holds the drum at standstill. The drum is held and the
-            coupling twist frozen, so no tangential load passes through the linings:
-            friction is zero and each shoe settles where Fn d = Fe q.
-
-    Returns:
-        (theta_ddot rad/s^2, drum torque N m, eps m, eps_dot m/s, Fn N, Ff N,
-         sliding speed m/s, contact x m, contact y m, net applied force x N,
-         net applied force y N, friction power W, contact loss power W,
-         actuation power W)
-        The net applied force is contact + friction + actuation on the shoe.
-    """
-    s = p[base + L.S_SIGN]
-    px = p[base + L.S_PIVOT_X]
-    py = p[base + L.S_PIVOT_Y]
-    phi = s * theta
-    c = math.cos(phi)
-    sn = math.sin(phi)
-    xx, xy, dist, nx, ny = _contact_point(p, base, c, sn)
-    eps = dist - p[L.P_DRUM_RADIUS]
-    w = s * omega
-    # velocity of the shoe's material point at the contact
-    vx = -w * (xy - py)
-    vy = w * (xx - px)
-    eps_dot = nx * vx + ny * vy
-    vt = -ny * vx + nx * vy  # along the counter-clockwise tangent (-ny, nx)
-    v_slide = drum_speed * dist - vt  # drum surface relative to the shoe
-    in_contact = eps > 0.0 if mode == L.CONTACT_AUTO else mode == L.CONTACT_ON
-    enabled = p[base + L.S_ENABLED] > 0.0
-    fn = 0.0
-    if in_contact and enabled:
-        fn = p[L.P_CONTACT_STIFFNESS] * eps + p[L.P_CONTACT_DAMPING] * eps_dot
-        if fn < 0.0:
-            fn = 0.0  # a contact never pulls
-    ff = 0.0
-    if fn > 0.0 and not locked:
-        ff = p[L.P_FRICTION_COEFFICIENT] * fn * math.tanh(v_slide / p[L.P_FRICTION_SMOOTHING_SPEED])
-    fcx = -fn * nx - ff * ny
-    fcy = -fn * ny + ff * nx
-    # actuation on the tip, fixed world direction
-    tdx = p[base + L.S_TIP_X] - px
-    tdy = p[base + L.S_TIP_Y] - py
-    tx = c * tdx - sn * tdy
-    ty = sn * tdx + c * tdy
-    fex = actuation * p[base + L.S_ACTUATION_DIR_X]
-    fey = actuation * p[base + L.S_ACTUATION_DIR_Y]
-    moment = (xx - px) * fcy - (xy - py) * fcx + tx * fey - ty * fex
-    theta_ddot = s * moment / p[base + L.S_INERTIA] if enabled else 0.0
-    drum_torque = -ff * dist
-    p_fric = ff * v_slide
-    p_contact = 0.0
-    if enabled and eps > 0.0:
-        # Kelvin-Voigt loss: power into the contact minus the rate of the elastic energy
-        # k eps^2 / 2 (booked whenever eps > 0, also while the force is off: with fn = 0
-        # the elastic energy the balance counts is lost, not returned)
-        p_contact = (fn - p[L.P_CONTACT_STIFFNESS] * eps) * eps_dot
-    p_act = fex * (-w * ty) + fey * (w * tx)
-    return (
-        theta_ddot,
-        drum_torque,
-        eps,
-        eps_dot,
-        fn,
-        ff,
-        v_slide,
-        xx,
-        xy,
-        fcx + fex,
-        fcy + fey,
-        p_fric,
-        p_contact,
-        p_act,
-    )
-
-
 @njit(cache=True)
-def evaluate(y, p, fe_left, fe_right, locked, mode_left, mode_right, dydt, out, row, t):
+def evaluate(y, p, fe_left, fe_right, stuck, mode_left, mode_right, dydt, out, row, t):
     """Time derivative of the state ``y`` (layout.Y_*) into ``dydt``; if ``row >= 0``, also
     every recorded quantity at time ``t`` into ``out[row]`` (layout.COLUMNS).
 
     ``fe_left``/``fe_right`` are the actuation forces after the share gain, N.
-    ``locked`` != 0 holds flywheel and drum at rest (brake locked at standstill).
+    ``stuck`` != 0 while static friction holds the drum (model/standstill.py): the drum is
+    at rest, the shoes' friction carries the coupling torque, and the flywheel moves on.
     """
-    wd = 0.0 if locked else y[L.Y_DRUM_SPEED]
+    wd = 0.0 if stuck else y[L.Y_DRUM_SPEED]
     bl = L.P_SHOE_BASE
     br = L.P_SHOE_BASE + L.SHOE_STRIDE
-    sl = shoe_eval(p, bl, y[L.Y_LEFT_ANGLE], y[L.Y_LEFT_SPEED], wd, fe_left, mode_left, locked)
-    sr = shoe_eval(p, br, y[L.Y_RIGHT_ANGLE], y[L.Y_RIGHT_SPEED], wd, fe_right, mode_right, locked)
+    kl = contact.kinematics(p, bl, y[L.Y_LEFT_ANGLE], y[L.Y_LEFT_SPEED])
+    kr = contact.kinematics(p, br, y[L.Y_RIGHT_ANGLE], y[L.Y_RIGHT_SPEED])
+    fnl = contact.normal_force(p, bl, kl[0], kl[1], mode_left)
+    fnr = contact.normal_force(p, br, kr[0], kr[1], mode_right)
+    vl = contact.sliding_speed(kl, wd)
+    vr = contact.sliding_speed(kr, wd)
+    coupling = standstill.coupling_torque(
+        p, y[L.Y_FLYWHEEL_ANGLE], y[L.Y_DRUM_ANGLE], y[L.Y_FLYWHEEL_SPEED], wd
+    )
+    if stuck:
+        share = standstill.stuck_share(
+            coupling, standstill.static_capacity(p, fnl, kl[5], fnr, kr[5])
+        )
+        mu = p[L.P_FRICTION_COEFFICIENT]
+        ffl = share * mu * fnl
+        ffr = share * mu * fnr
+    else:
+        ffl = contact.sliding_friction(p, fnl, vl)
+        ffr = contact.sliding_friction(p, fnr, vr)
+    sl = contact.shoe_forces(p, bl, y[L.Y_LEFT_SPEED], fe_left, kl, fnl, ffl, vl)
+    sr = contact.shoe_forces(p, br, y[L.Y_RIGHT_SPEED], fe_right, kr, fnr, ffr, vr)
     dydt[L.Y_LEFT_ANGLE] = y[L.Y_LEFT_SPEED]
     dydt[L.Y_RIGHT_ANGLE] = y[L.Y_RIGHT_SPEED]
-    dydt[L.Y_LEFT_SPEED] = sl[0]
-    dydt[L.Y_RIGHT_SPEED] = sr[0]
-    dydt[L.Y_FRICTION_WORK] = sl[11] + sr[11]
-    dydt[L.Y_CONTACT_LOSS] = sl[12] + sr[12]
-    dydt[L.Y_ACTUATION_WORK] = sl[13] + sr[13]
-    if locked:
-        dydt[L.Y_FLYWHEEL_ANGLE] = 0.0
-        dydt[L.Y_DRUM_ANGLE] = 0.0
-        dydt[L.Y_FLYWHEEL_SPEED] = 0.0
-        dydt[L.Y_DRUM_SPEED] = 0.0
-        dydt[L.Y_COUPLING_DAMPER_LOSS] = 0.0
-    elif p[L.P_RIGID_COUPLING] > 0.0:
-        acc = (sl[1] + sr[1]) / (p[L.P_FLYWHEEL_INERTIA] + p[L.P_DRUM_INERTIA])
-        dydt[L.Y_FLYWHEEL_ANGLE] = y[L.Y_DRUM_SPEED]
-        dydt[L.Y_DRUM_ANGLE] = y[L.Y_DRUM_SPEED]
+    dydt[L.Y_LEFT_SPEED] = sl[contact.E_THETA_DDOT]
+    dydt[L.Y_RIGHT_SPEED] = sr[contact.E_THETA_DDOT]
+    dydt[L.Y_FRICTION_WORK] = sl[contact.E_FRICTION_POWER] + sr[contact.E_FRICTION_POWER]
+    dydt[L.Y_CONTACT_LOSS] = sl[contact.E_CONTACT_POWER] + sr[contact.E_CONTACT_POWER]
+    dydt[L.Y_ACTUATION_WORK] = sl[contact.E_ACTUATION_POWER] + sr[contact.E_ACTUATION_POWER]
+    drum_torque = sl[contact.E_DRUM_TORQUE] + sr[contact.E_DRUM_TORQUE]
+    rigid = p[L.P_RIGID_COUPLING] > 0.0
+    if rigid:
+        # one rotor body: held as a whole while stuck (its friction share is then 0)
+        acc = 0.0 if stuck else drum_torque / (p[L.P_FLYWHEEL_INERTIA] + p[L.P_DRUM_INERTIA])
+        dydt[L.Y_FLYWHEEL_ANGLE] = wd
+        dydt[L.Y_DRUM_ANGLE] = wd
         dydt[L.Y_FLYWHEEL_SPEED] = acc
         dydt[L.Y_DRUM_SPEED] = acc
         dydt[L.Y_COUPLING_DAMPER_LOSS] = 0.0
     else:
-        twist = y[L.Y_FLYWHEEL_ANGLE] - y[L.Y_DRUM_ANGLE]
-        slip = y[L.Y_FLYWHEEL_SPEED] - y[L.Y_DRUM_SPEED]
-        coupling = p[L.P_COUPLING_STIFFNESS] * twist + p[L.P_COUPLING_DAMPING] * slip
+        slip = y[L.Y_FLYWHEEL_SPEED] - wd
         dydt[L.Y_FLYWHEEL_ANGLE] = y[L.Y_FLYWHEEL_SPEED]
-        dydt[L.Y_DRUM_ANGLE] = y[L.Y_DRUM_SPEED]
         dydt[L.Y_FLYWHEEL_SPEED] = -coupling / p[L.P_FLYWHEEL_INERTIA]
-        dydt[L.Y_DRUM_SPEED] = (coupling + sl[1] + sr[1]) / p[L.P_DRUM_INERTIA]
+        dydt[L.Y_DRUM_ANGLE] = wd
+        dydt[L.Y_DRUM_SPEED] = 0.0 if stuck else (coupling + drum_torque) / p[L.P_DRUM_INERTIA]
         dydt[L.Y_COUPLING_DAMPER_LOSS] = p[L.P_COUPLING_DAMPING] * slip * slip
     if row < 0:
         return
     o = out[row]
-    o[0] = t
+    o[L.C_TIME] = t
     for i in range(8):
-        o[1 + i] = y[i]
-    o[9] = sl[2]
-    o[10] = sr[2]
-    o[11] = sl[4]
-    o[12] = sr[4]
-    o[13] = sl[5]
-    o[14] = sr[5]
-    o[15] = fe_left
-    o[16] = fe_right
-    rlx, rly = _pivot_force(p, bl, y[L.Y_LEFT_ANGLE], y[L.Y_LEFT_SPEED], sl[0], sl[9], sl[10])
-    rrx, rry = _pivot_force(p, br, y[L.Y_RIGHT_ANGLE], y[L.Y_RIGHT_SPEED], sr[0], sr[9], sr[10])
-    o[17] = rlx
-    o[18] = rly
-    o[19] = rrx
-    o[20] = rry
-    o[21] = sl[7]
-    o[22] = sl[8]
-    o[23] = sr[7]
-    o[24] = sr[8]
+        o[L.C_STATE + i] = y[i]
+    for i, sh in enumerate((sl, sr)):
+        o[L.C_INDENTATION + i] = sh[contact.E_EPS]
+        o[L.C_NORMAL_FORCE + i] = sh[contact.E_FN]
+        o[L.C_FRICTION_FORCE + i] = sh[contact.E_FF]
+        o[L.C_INDENTATION_RATE + i] = sh[contact.E_EPS_DOT]
+        o[L.C_SLIDING_SPEED + i] = sh[contact.E_V_SLIDE]
+        o[L.C_CONTACT_X + 2 * i] = sh[contact.E_CONTACT_X]
+        o[L.C_CONTACT_Y + 2 * i] = sh[contact.E_CONTACT_Y]
+    o[L.C_ACTUATION_FORCE] = fe_left
+    o[L.C_ACTUATION_FORCE + 1] = fe_right
+    rlx, rly = _pivot_force(
+        p,
+        bl,
+        y[L.Y_LEFT_ANGLE],
+        y[L.Y_LEFT_SPEED],
+        sl[contact.E_THETA_DDOT],
+        sl[contact.E_APPLIED_X],
+        sl[contact.E_APPLIED_Y],
+    )
+    rrx, rry = _pivot_force(
+        p,
+        br,
+        y[L.Y_RIGHT_ANGLE],
+        y[L.Y_RIGHT_SPEED],
+        sr[contact.E_THETA_DDOT],
+        sr[contact.E_APPLIED_X],
+        sr[contact.E_APPLIED_Y],
+    )
+    o[L.C_PIVOT_FX] = rlx
+    o[L.C_PIVOT_FY] = rly
+    o[L.C_PIVOT_FX + 2] = rrx
+    o[L.C_PIVOT_FY + 2] = rry
     for i in range(4):
-        o[25 + i] = y[L.Y_FRICTION_WORK + i]
-    o[33] = sl[3]
-    o[34] = sr[3]
-    o[35] = sl[6]
-    o[36] = sr[6]
+        o[L.C_ENERGY + i] = y[L.Y_FRICTION_WORK + i]
+    o[L.C_DRUM_STICKING] = 1.0 if stuck else 0.0
 
 
 @njit(cache=True)
-def evaluate_rows(ys, times, p, fe_left, fe_right, locked, out):
-    """Recorded quantities for many states: ``ys`` (n, N_STATE) at ``times`` into ``out``."""
+def evaluate_rows(ys, times, p, fe_left, fe_right, stuck, out):
+    """Recorded quantities for many states: ``ys`` (n, N_STATE) at ``times`` into ``out``
+    (``stuck``: the drum's stick state for all of them)."""
     dydt = np.empty(ys.shape[1])
     for i in range(ys.shape[0]):
         evaluate(
@@ -249,7 +150,7 @@ def evaluate_rows(ys, times, p, fe_left, fe_right, locked, out):
             p,
             fe_left[i],
             fe_right[i],
-            locked,
+            stuck,
             L.CONTACT_AUTO,
             L.CONTACT_AUTO,
             dydt,
@@ -260,10 +161,10 @@ def evaluate_rows(ys, times, p, fe_left, fe_right, locked, out):
 
 
 @njit(cache=True)
-def rhs(y, p, fe_left, fe_right, locked, mode_left, mode_right, dydt):
+def rhs(y, p, fe_left, fe_right, stuck, mode_left, mode_right, dydt):
     """Time derivative only (see :func:`evaluate`)."""
     no_out = np.empty((0, L.N_COLUMNS))
-    evaluate(y, p, fe_left, fe_right, locked, mode_left, mode_right, dydt, no_out, -1, 0.0)
+    evaluate(y, p, fe_left, fe_right, stuck, mode_left, mode_right, dydt, no_out, -1, 0.0)
 
 
 @njit(cache=True, inline="always")
@@ -308,40 +209,15 @@ def _update_regime(kstate, k_regime, k_flag, k_change, touching, step, settle_st
 
 
 @njit(cache=True, inline="always")
-def _contact_switch(p, base, theta, omega):
-    """Indentation ``eps`` and switching function ``h`` of one shoe, both in m.
-
-    ``h = min(eps, eps + (c_c / k_c) eps_dot)``: the Kelvin-Voigt force of
-    :func:`shoe_eval` is on exactly when ``h > 0`` (the lining penetrates and the force
-    would push). Both arguments of the min are lengths, so ``h`` is continuous in the state
-    and its zero is the switching instant: ``eps = 0`` at an onset (where the force jumps
-    from 0 to ``c_c eps_dot``), ``k_c eps + c_c eps_dot = 0`` at a separation (where it
-    reaches 0 continuously, with a kink). A removed shoe returns (-1, -1): never on.
-    """
-    if p[base + L.S_ENABLED] <= 0.0:
-        return -1.0, -1.0
-    s = p[base + L.S_SIGN]
-    px = p[base + L.S_PIVOT_X]
-    py = p[base + L.S_PIVOT_Y]
-    phi = s * theta
-    xx, xy, dist, nx, ny = _contact_point(p, base, math.cos(phi), math.sin(phi))
-    eps = dist - p[L.P_DRUM_RADIUS]
-    w = s * omega
-    eps_dot = nx * (-w * (xy - py)) + ny * (w * (xx - px))
-    g = eps + p[L.P_CONTACT_DAMPING] / p[L.P_CONTACT_STIFFNESS] * eps_dot
-    return eps, min(eps, g)
-
-
-@njit(cache=True, inline="always")
 def _shoe_switch(p, shoe, y):
-    """:func:`_contact_switch` of shoe 0 (left) or 1 (right) for the state ``y``."""
-    return _contact_switch(
+    """:func:`contact.switching_function` of shoe 0 (left) or 1 (right) for the state ``y``."""
+    return contact.switching_function(
         p, L.P_SHOE_BASE + shoe * L.SHOE_STRIDE, y[L.Y_LEFT_ANGLE + shoe], y[L.Y_LEFT_SPEED + shoe]
     )
 
 
 @njit(cache=True, inline="always")
-def _rk4_sub(y, k1, t0, h, p, gl, tl, fl, gr, tr, fr, locked, ml, mr, k2, k3, k4, tmp, out, y_out):
+def rk4_step(y, k1, t0, h, p, gl, tl, fl, gr, tr, fr, stuck, ml, mr, k2, k3, k4, tmp, out, y_out):
     """One classical RK4 step of ``h`` s from ``y`` at ``t0`` (``k1 = f(t0, y)`` given) with
     the contact modes ``ml``/``mr`` into ``y_out`` (may be ``y`` itself)."""
     n = y.shape[0]
@@ -350,23 +226,23 @@ def _rk4_sub(y, k1, t0, h, p, gl, tl, fl, gr, tr, fr, locked, ml, mr, k2, k3, k4
     fer = gr * _pwl(th, tr, fr)
     for j in range(n):
         tmp[j] = y[j] + 0.5 * h * k1[j]
-    evaluate(tmp, p, fel, fer, locked, ml, mr, k2, out, -1, t0)
+    evaluate(tmp, p, fel, fer, stuck, ml, mr, k2, out, -1, t0)
     for j in range(n):
         tmp[j] = y[j] + 0.5 * h * k2[j]
-    evaluate(tmp, p, fel, fer, locked, ml, mr, k3, out, -1, t0)
+    evaluate(tmp, p, fel, fer, stuck, ml, mr, k3, out, -1, t0)
     t1 = t0 + h
     fel = gl * _pwl(t1, tl, fl)
     fer = gr * _pwl(t1, tr, fr)
     for j in range(n):
         tmp[j] = y[j] + h * k3[j]
-    evaluate(tmp, p, fel, fer, locked, ml, mr, k4, out, -1, t0)
+    evaluate(tmp, p, fel, fer, stuck, ml, mr, k4, out, -1, t0)
     for j in range(n):
         y_out[j] = y[j] + h / 6.0 * (k1[j] + 2.0 * k2[j] + 2.0 * k3[j] + k4[j])
 
 
 @njit(cache=True)
 def _locate_switch(
-    shoe, on, ya, ka, t0, rem, f_end, p, gl, tl, fl, gr, tr, fr, locked, ml, mr, work, out, tol
+    shoe, on, ya, ka, t0, rem, f_end, p, gl, tl, fl, gr, tr, fr, stuck, ml, mr, work, out, tol
 ):
     """Instant (s after ``t0``) where ``shoe`` leaves its contact mode ``on``.
 
@@ -395,7 +271,7 @@ def _locate_switch(
             s = b - fb * (b - a) / (fb - fa)
             if not (a < s < b):
                 s = 0.5 * (a + b)
-        _rk4_sub(ya, ka, t0, s, p, gl, tl, fl, gr, tr, fr, locked, ml, mr, k2, k3, k4, tmp, out, yb)
+        rk4_step(ya, ka, t0, s, p, gl, tl, fl, gr, tr, fr, stuck, ml, mr, k2, k3, k4, tmp, out, yb)
         fs = sign * _shoe_switch(p, shoe, yb)[1]
         if fs > 0.0:
             a = s
@@ -413,7 +289,7 @@ def _locate_switch(
 
 
 @njit(cache=True)
-def _located_step(y, k1, t, dt, p, gl, tl, fl, gr, tr, fr, locked, h_start, work, out, h_end):
+def _located_step(y, k1, t, dt, p, gl, tl, fl, gr, tr, fr, stuck, h_start, work, out, h_end):
     """RK4 step of ``dt`` from ``y`` (in place) with contact switches located in the step.
 
     The step runs with each shoe's contact mode frozen (the force law is then smooth); a
@@ -445,7 +321,7 @@ def _located_step(y, k1, t, dt, p, gl, tl, fl, gr, tr, fr, locked, h_start, work
         rem = dt - tau
         ml = L.CONTACT_ON if on_l else L.CONTACT_OFF
         mr = L.CONTACT_ON if on_r else L.CONTACT_OFF
-        _rk4_sub(
+        rk4_step(
             ya,
             ka,
             t + tau,
@@ -457,7 +333,7 @@ def _located_step(y, k1, t, dt, p, gl, tl, fl, gr, tr, fr, locked, h_start, work
             gr,
             tr,
             fr,
-            locked,
+            stuck,
             ml,
             mr,
             k2,
@@ -492,7 +368,7 @@ def _located_step(y, k1, t, dt, p, gl, tl, fl, gr, tr, fr, locked, h_start, work
                 gr,
                 tr,
                 fr,
-                locked,
+                stuck,
                 ml,
                 mr,
                 work,
@@ -516,7 +392,7 @@ def _located_step(y, k1, t, dt, p, gl, tl, fl, gr, tr, fr, locked, h_start, work
                 gr,
                 tr,
                 fr,
-                locked,
+                stuck,
                 ml,
                 mr,
                 work,
@@ -527,8 +403,8 @@ def _located_step(y, k1, t, dt, p, gl, tl, fl, gr, tr, fr, locked, h_start, work
         # shoes switching together (a symmetric brake's) flip together
         flip_l = bad_l and s_l <= s + 2.0 * tol
         flip_r = bad_r and s_r <= s + 2.0 * tol
-        _rk4_sub(
-            ya, ka, t + tau, s, p, gl, tl, fl, gr, tr, fr, locked, ml, mr, k2, k3, k4, tmp, out, ya
+        rk4_step(
+            ya, ka, t + tau, s, p, gl, tl, fl, gr, tr, fr, stuck, ml, mr, k2, k3, k4, tmp, out, ya
         )
         tau += s
         if flip_l:
@@ -546,7 +422,7 @@ def _located_step(y, k1, t, dt, p, gl, tl, fl, gr, tr, fr, locked, h_start, work
         mr = L.CONTACT_ON if on_r else L.CONTACT_OFF
         fel = gl * _pwl(t + tau, tl, fl)
         fer = gr * _pwl(t + tau, tr, fr)
-        evaluate(ya, p, fel, fer, locked, ml, mr, ka, out, -1, t)
+        evaluate(ya, p, fel, fer, stuck, ml, mr, ka, out, -1, t)
     for j in range(n):
         y[j] = yb[j]
     h_end[0] = el
@@ -590,8 +466,10 @@ def fixed_step_advance(
     One sample (layout.COLUMNS) is written to ``out`` every ``record_every`` steps, at
     the start of the step, from the same evaluation the scheme needs for its first stage,
     so the output stays on the uniform grid whatever happens inside a step.
-    ``kstate`` (int64, layout.K_*) and ``fstate`` (float64: [lock time s, lock loss J,
-    located switches]) carry lock and regime bookkeeping between calls.
+    ``kstate`` (int64, layout.K_*) and ``fstate`` (float64, layout.F_*; F_STOP_TIME < 0
+    until the drum first sticks) carry the stick state and the regime bookkeeping between
+    calls. At the end of every step the drum's stick/slip rule
+    (:mod:`brake_sim_ros.model.standstill`) is applied.
 
     Returns the number of rows written. Stops early (status in kstate) on a non-finite state.
     """
@@ -610,7 +488,6 @@ def fixed_step_advance(
     if gain_override != 0:
         gl = 1.0
         gr = 1.0
-    v_lock = p[L.P_FRICTION_SMOOTHING_SPEED]
     radius = p[L.P_DRUM_RADIUS]
     rows = 0
     auto = L.CONTACT_AUTO
@@ -621,27 +498,19 @@ def fixed_step_advance(
     for i in range(n_steps):
         step = step0 + i
         t = step * dt
-        locked = kstate[L.K_LOCKED]
+        stuck = kstate[L.K_STUCK]
         fel = gl * _pwl(t, tl, fl)
         fer = gr * _pwl(t, tr, fr)
         record = i % record_every == 0
-        evaluate(y, p, fel, fer, locked, auto, auto, k1, out, rows if record else -1, t)
+        evaluate(y, p, fel, fer, stuck, auto, auto, k1, out, rows if record else -1, t)
         if located:
             touching_l = 1 if h_end[0] > 0.0 else 0
             touching_r = 1 if h_end[2] > 0.0 else 0
             h_start[0] = h_end[1]
             h_start[1] = h_end[3]
-        elif record:
-            touching_l = 1 if out[rows, 9] > 0.0 and p[L.P_SHOE_BASE + L.S_ENABLED] > 0.0 else 0
-            touching_r = (
-                1
-                if (out[rows, 10] > 0.0 and p[L.P_SHOE_BASE + L.SHOE_STRIDE + L.S_ENABLED] > 0.0)
-                else 0
-            )
         else:
-            # contact flags still drive the regime bookkeeping on unrecorded steps
-            touching_l = 1 if _touching(p, L.P_SHOE_BASE, y[L.Y_LEFT_ANGLE]) else 0
-            touching_r = 1 if _touching(p, L.P_SHOE_BASE + L.SHOE_STRIDE, y[L.Y_RIGHT_ANGLE]) else 0
+            touching_l = 1 if _shoe_switch(p, 0, y)[0] > 0.0 else 0
+            touching_r = 1 if _shoe_switch(p, 1, y)[0] > 0.0 else 0
         _update_regime(
             kstate,
             L.K_LEFT_REGIME,
@@ -664,19 +533,19 @@ def fixed_step_advance(
             o = out[rows]
             rl = kstate[L.K_LEFT_REGIME]
             rr = kstate[L.K_RIGHT_REGIME]
-            o[31] = rl
-            o[32] = rr
-            if locked:
-                o[30] = L.REGIME_STOPPED
+            o[L.C_SHOE_REGIME] = rl
+            o[L.C_SHOE_REGIME + 1] = rr
+            if stuck:
+                o[L.C_REGIME] = L.REGIME_STOPPED
             elif rl == L.REGIME_IMPACTING or rr == L.REGIME_IMPACTING:
-                o[30] = L.REGIME_IMPACTING
+                o[L.C_REGIME] = L.REGIME_IMPACTING
             elif rl == L.REGIME_CONTACT or rr == L.REGIME_CONTACT:
-                o[30] = L.REGIME_CONTACT
+                o[L.C_REGIME] = L.REGIME_CONTACT
             else:
-                o[30] = L.REGIME_FREE
-            o[29] = fstate[1]
+                o[L.C_REGIME] = L.REGIME_FREE
+            o[L.C_LOCK_LOSS] = fstate[L.F_LOCK_LOSS]
             rows += 1
-        speed_before = y[L.Y_DRUM_SPEED]
+        surface_before = abs(y[L.Y_DRUM_SPEED]) * radius
         if scheme == L.SCHEME_SEMI_IMPLICIT_EULER:
             for j in range(4, 8):
                 y[j] += dt * k1[j]
@@ -691,31 +560,15 @@ def fixed_step_advance(
                 # modes frozen for the step; k1 (auto) equals k1 with these modes
                 ml = L.CONTACT_ON if h_start[0] > 0.0 else L.CONTACT_OFF
                 mr = L.CONTACT_ON if h_start[1] > 0.0 else L.CONTACT_OFF
-            th = t + 0.5 * dt
-            fel = gl * _pwl(th, tl, fl)
-            fer = gr * _pwl(th, tr, fr)
-            for j in range(n):
-                tmp[j] = y[j] + 0.5 * dt * k1[j]
-            evaluate(tmp, p, fel, fer, locked, ml, mr, k2, out, -1, t)
-            for j in range(n):
-                tmp[j] = y[j] + 0.5 * dt * k2[j]
-            evaluate(tmp, p, fel, fer, locked, ml, mr, k3, out, -1, t)
-            t1 = (step + 1) * dt
-            fel = gl * _pwl(t1, tl, fl)
-            fer = gr * _pwl(t1, tr, fr)
-            for j in range(n):
-                tmp[j] = y[j] + dt * k3[j]
-            evaluate(tmp, p, fel, fer, locked, ml, mr, k4, out, -1, t)
-            for j in range(n):
-                y_new[j] = y[j] + dt / 6.0 * (k1[j] + 2.0 * k2[j] + 2.0 * k3[j] + k4[j])
+            rk4_step(y, k1, t, dt, p, gl, tl, fl, gr, tr, fr, stuck, ml, mr, k2, k3, k4, tmp, out, y_new)
             accept = True
             if located:
                 el, hl = _shoe_switch(p, 0, y_new)
                 er, hr = _shoe_switch(p, 1, y_new)
                 if (hl > 0.0) != (h_start[0] > 0.0) or (hr > 0.0) != (h_start[1] > 0.0):
                     # a contact switches inside this step: redo it split at the switches
-                    fstate[2] += _located_step(
-                        y, k1, t, dt, p, gl, tl, fl, gr, tr, fr, locked, h_start, work, out, h_end
+                    fstate[L.F_SWITCHES] += _located_step(
+                        y, k1, t, dt, p, gl, tl, fl, gr, tr, fr, stuck, h_start, work, out, h_end
                     )
                     accept = False
                 else:
@@ -726,34 +579,33 @@ def fixed_step_advance(
             if accept:
                 for j in range(n):
                     y[j] = y_new[j]
-        if not locked:
-            surface = abs(y[L.Y_DRUM_SPEED]) * radius
-            if surface <= v_lock and (kstate[L.K_LEFT_IN_CONTACT] or kstate[L.K_RIGHT_IN_CONTACT]):
-                # standstill: the brake locks; interpolate the instant |v| reached v_lock
-                before = abs(speed_before) * radius
-                frac = 1.0
-                if before > surface:
-                    frac = (before - v_lock) / (before - surface)
-                    frac = min(max(frac, 0.0), 1.0)
-                fstate[0] = (step + frac) * dt
-                fstate[1] += 0.5 * p[L.P_FLYWHEEL_INERTIA] * y[L.Y_FLYWHEEL_SPEED] ** 2
-                fstate[1] += 0.5 * p[L.P_DRUM_INERTIA] * y[L.Y_DRUM_SPEED] ** 2
-                y[L.Y_FLYWHEEL_SPEED] = 0.0
-                y[L.Y_DRUM_SPEED] = 0.0
-                kstate[L.K_LOCKED] = 1
-        finite = True
+        if stuck:
+            if standstill.slips(p, y):
+                kstate[L.K_STUCK] = 0
+                kstate[L.K_BREAKAWAYS] += 1
+        elif standstill.sticks(p, y, surface_before):
+            t_stick = standstill.interpolated_stick_time(
+                t,
+                dt,
+                surface_before,
+                abs(y[L.Y_DRUM_SPEED]) * radius,
+                p[L.P_FRICTION_SMOOTHING_SPEED],
+            )
+            if fstate[L.F_WHEEL_LOCK_TIME] < 0.0:
+                fstate[L.F_WHEEL_LOCK_TIME] = t_stick
+            fstate[L.F_LOCK_LOSS] += standstill.stick(p, y)
+            kstate[L.K_STUCK] = 1
+            if fstate[L.F_STOP_TIME] < 0.0 and standstill.at_rest(p, y):
+                fstate[L.F_STOP_TIME] = t_stick
+        if kstate[L.K_STUCK] and fstate[L.F_STOP_TIME] < 0.0 and standstill.at_rest(p, y):
+            fstate[L.F_STOP_TIME] = t + dt
         for j in range(8):
             if not math.isfinite(y[j]):
-                finite = False
-        if not finite:
-            kstate[L.K_STATUS] = 1
-            return rows
+                kstate[L.K_STATUS] = 1
+                return rows
     return rows
 
 
-@njit(cache=True, inline="always")
-def _touching(p, base, theta):
-    """Whether the shoe's lining penetrates the drum at angle ``theta`` (geometry only)."""
-    phi = p[base + L.S_SIGN] * theta
-    dist = _contact_point(p, base, math.cos(phi), math.sin(phi))[2]
-    return dist > p[L.P_DRUM_RADIUS] and p[base + L.S_ENABLED] > 0.0
+# The shoe's force law is defined once, in model/contact.py; callers that evaluate a single
+# shoe (assembly checks, step limits, the quasi-static level) reach it through here too.
+shoe_eval = contact.shoe_eval

@@ -101,19 +101,43 @@ COLUMNS: tuple[str, ...] = (
     "right_indentation_rate_m_s",
     "left_sliding_speed_m_s",
     "right_sliding_speed_m_s",
+    "drum_sticking",  # 1.0 while static friction holds the drum at standstill, else 0.0
 )
 COL = {name: i for i, name in enumerate(COLUMNS)}
 N_COLUMNS = len(COLUMNS)
+
+# Column indices for the compiled kernels, which cannot look names up (numba reads these
+# module constants at compile time). Left-shoe columns; the right shoe's follow at the
+# offsets given by RIGHT_OF (each per-shoe pair is written left, right).
+C_TIME = COL["time_s"]
+C_STATE = COL["flywheel_angle_rad"]  # first of the 8 state columns, in layout.Y_* order
+C_INDENTATION = COL["left_indentation_m"]
+C_NORMAL_FORCE = COL["left_normal_force_n"]
+C_FRICTION_FORCE = COL["left_friction_force_n"]
+C_ACTUATION_FORCE = COL["left_actuation_force_n"]
+C_PIVOT_FX = COL["left_pivot_fx_n"]  # fx, fy of the left shoe, then of the right
+C_PIVOT_FY = COL["left_pivot_fy_n"]
+C_CONTACT_X = COL["left_contact_x_m"]  # x, y of the left shoe, then of the right
+C_CONTACT_Y = COL["left_contact_y_m"]
+C_ENERGY = COL["friction_work_j"]  # first of the 4 energy quadratures, in Y_* order
+C_LOCK_LOSS = COL["lock_loss_j"]
+C_REGIME = COL["regime"]
+C_SHOE_REGIME = COL["left_regime"]
+C_INDENTATION_RATE = COL["left_indentation_rate_m_s"]
+C_SLIDING_SPEED = COL["left_sliding_speed_m_s"]
+C_DRUM_STICKING = COL["drum_sticking"]
+RIGHT_OF_SCALAR = 1  # right-shoe column = left-shoe column + 1 for scalar per-shoe pairs
+RIGHT_OF_VECTOR = 2  # right-shoe (x, y) columns = left-shoe ones + 2
 
 # --- regimes ---------------------------------------------------------------------------
 REGIME_FREE = 0  # not touching the drum (not yet, or released)
 REGIME_IMPACTING = 1  # striking and bouncing off the drum
 REGIME_CONTACT = 2  # riding steadily on the drum
-REGIME_STOPPED = 3  # drum at standstill, brake locked
+REGIME_STOPPED = 3  # drum at standstill, held by static friction (model/standstill.py)
 REGIME_NAMES = ("free", "impacting", "contact", "stopped")
 
 # --- kernel bookkeeping (int64 array carried between calls) -------------------------------
-K_LOCKED = 0
+K_STUCK = 0  # 1 while static friction holds the drum (model/standstill.py)
 K_LEFT_REGIME = 1
 K_RIGHT_REGIME = 2
 K_LEFT_IN_CONTACT = 3
@@ -121,7 +145,15 @@ K_RIGHT_IN_CONTACT = 4
 K_LEFT_LAST_CHANGE_STEP = 5  # step index at which the contact flag last changed
 K_RIGHT_LAST_CHANGE_STEP = 6
 K_STATUS = 7  # 0 running, 1 non-finite state
-N_KSTATE = 8
+K_BREAKAWAYS = 8  # stick -> slip transitions so far
+N_KSTATE = 9
+
+# float bookkeeping carried between calls (fstate)
+F_STOP_TIME = 0  # instant the vehicle came to rest (standstill.at_rest), s; < 0 until then
+F_LOCK_LOSS = 1  # kinetic energy removed at stick instants, J
+F_SWITCHES = 2  # contact switches located inside steps (rk4-located)
+F_WHEEL_LOCK_TIME = 3  # instant the drum first stuck, s; < 0 until then
+N_FSTATE = 4
 
 # contact modes of the right-hand side (the adaptive reference forces them per segment)
 CONTACT_AUTO = -1

@@ -13,8 +13,10 @@ The rotor (flywheel and drum on the torsional coupling, or one rigid body) is in
 with classical RK4 at a macro step that resolves the torsional mode. Near standstill the
 smoothed friction law acts on the drum as a viscous damper of slope
 ``mu Fn R^2 (1 - s^2) / v_s`` (``s = tanh(v / v_s)``): the macro step is then split into
-substeps short enough for that rate (``SUBSTEP_RATE_PRODUCT / lambda``). The brake locks
-at standstill by the full model's rule (drum surface speed down to ``v_s``).
+substeps short enough for that rate (``SUBSTEP_RATE_PRODUCT / lambda``). At standstill the
+drum sticks and slips by the full model's rule (:mod:`brake_sim_ros.model.standstill`); while
+it sticks the shoes' static friction share and their balances are solved together and the
+flywheel moves on.
 
 Arrays: parameters packed as in :mod:`layout`; rotor state ``y`` = [flywheel angle rad,
 drum angle rad, flywheel speed rad/s, drum speed rad/s, friction work J, coupling-damper
@@ -28,7 +30,7 @@ import math
 import numpy as np
 from numba import njit
 
-from brake_sim_ros.model import kernel
+from brake_sim_ros.model import contact, kernel, standstill
 from brake_sim_ros.model import layout as L
 
 N_ROTOR = 6
@@ -50,13 +52,14 @@ STATUS_NON_FINITE = 3
 
 
 @njit(cache=True)
-def shoe_equilibrium(p, base, fe, drum_speed, locked, touch, guess, slope):
+def shoe_equilibrium(p, base, fe, drum_speed, stuck, share, touch, guess, slope):
     """Shoe angle where the moments about the pivot balance.
 
     Args:
         p: packed parameters; base: the shoe's block.
         fe: actuation force after the share gain, N. drum_speed: rad/s.
-        locked: != 0 when the brake holds the drum (no friction).
+        stuck, share: != 0 while static friction holds the drum; the friction force is then
+            ``share`` (in [-1, 1]) of the shoe's capacity ``mu Fn`` (model/standstill.py).
         touch: angle at which the lining just touches the drum, rad.
         guess: starting angle, rad; slope: last known d(theta_ddot)/d(theta), 1/s^2
             (>= 0 for none).
@@ -70,16 +73,16 @@ def shoe_equilibrium(p, base, fe, drum_speed, locked, touch, guess, slope):
             th,
             slope,
             STATUS_OK,
-            kernel.shoe_eval(p, base, th, 0.0, drum_speed, 0.0, L.CONTACT_AUTO, locked),
+            contact.shoe_eval(p, base, th, 0.0, drum_speed, 0.0, L.CONTACT_AUTO, stuck, share),
         )
     th = max(guess, touch)
     status = STATUS_NO_CONVERGENCE
-    out = kernel.shoe_eval(p, base, th, 0.0, drum_speed, fe, L.CONTACT_AUTO, locked)
+    out = contact.shoe_eval(p, base, th, 0.0, drum_speed, fe, L.CONTACT_AUTO, stuck, share)
     for it in range(MAX_ITERATIONS):
         f = out[0]
         if slope >= 0.0 or it >= 2:
-            fp = kernel.shoe_eval(
-                p, base, th + FD_STEP_RAD, 0.0, drum_speed, fe, L.CONTACT_AUTO, locked
+            fp = contact.shoe_eval(
+                p, base, th + FD_STEP_RAD, 0.0, drum_speed, fe, L.CONTACT_AUTO, stuck, share
             )[0]
             slope = (fp - f) / FD_STEP_RAD
             if slope >= 0.0:
@@ -94,7 +97,7 @@ def shoe_equilibrium(p, base, fe, drum_speed, locked, touch, guess, slope):
         if new < touch:
             new = 0.5 * (th + touch)  # stay on the contact branch
         th = new
-        out = kernel.shoe_eval(p, base, th, 0.0, drum_speed, fe, L.CONTACT_AUTO, locked)
+        out = contact.shoe_eval(p, base, th, 0.0, drum_speed, fe, L.CONTACT_AUTO, stuck, share)
     return th, slope, status, out
 
 
@@ -102,86 +105,145 @@ def shoe_equilibrium(p, base, fe, drum_speed, locked, touch, guess, slope):
 # balance no longer depends on the drum speed, and a solved balance is reused as long as the
 # actuation force is bitwise unchanged (the hold phase of an event).
 SATURATED_SLIP = 20.0
-# per-shoe cache row: [valid, actuation N, locked, theta rad, contact point's distance from
-# the drum centre m, the 14 shoe_eval outputs]. Indexed in 2-D, without row views: a view
-# costs a reference count per call, more than the arithmetic it serves.
-C_VALID, C_FE, C_LOCKED, C_THETA, C_DIST, C_OUT = 0, 1, 2, 3, 4, 5
-N_CACHE = C_OUT + 14
+# per-shoe cache row: [valid, actuation N, theta rad, contact point's distance from the drum
+# centre m, the 14 shoe_eval outputs]. Indexed in 2-D, without row views: a view costs a
+# reference count per call, more than the arithmetic it serves.
+C_VALID, C_FE, C_THETA, C_DIST, C_OUT = 0, 1, 2, 3, 4
+N_CACHE = C_OUT + contact.N_EVAL
+# Static-friction share while the drum sticks: fixed-point iteration between the shoes'
+# balances and the share, to this tolerance (the map contracts by about mu h / d < 0.5).
+SHARE_TOL = 1e-13
+MAX_SHARE_ITERATIONS = 60
 
 
 @njit(cache=True)
-def _solve_shoe(p, i, fe, wd, locked, touch, shoes, cache):
-    """Balance shoe ``i`` for actuation ``fe`` (N) and drum speed ``wd`` (rad/s) into
-    ``cache[i]``; returns the status."""
+def _solve_shoe(p, i, fe, wd, stuck, share, touch, shoes, cache):
+    """Balance shoe ``i`` for actuation ``fe`` (N), drum speed ``wd`` (rad/s) and stick state
+    into ``cache[i]``; returns the status. A sliding balance with saturated friction is
+    marked reusable."""
     vs = p[L.P_FRICTION_SMOOTHING_SPEED]
     base = L.P_SHOE_BASE + i * L.SHOE_STRIDE
-    th, slope, st, out = shoe_equilibrium(p, base, fe, wd, locked, touch[i], shoes[i], shoes[2 + i])
+    th, slope, st, out = shoe_equilibrium(
+        p, base, fe, wd, stuck, share, touch[i], shoes[i], shoes[2 + i]
+    )
     shoes[i] = th
     shoes[2 + i] = slope
-    valid = st == STATUS_OK and (locked or abs(out[6]) > SATURATED_SLIP * vs)
+    valid = st == STATUS_OK and not stuck and abs(out[contact.E_V_SLIDE]) > SATURATED_SLIP * vs
     cache[i, C_VALID] = 1.0 if valid else 0.0
     cache[i, C_FE] = fe
-    cache[i, C_LOCKED] = locked
     cache[i, C_THETA] = th
-    cache[i, C_DIST] = math.hypot(out[7], out[8])
-    for j in range(14):
+    cache[i, C_DIST] = math.hypot(out[contact.E_CONTACT_X], out[contact.E_CONTACT_Y])
+    for j in range(contact.N_EVAL):
         cache[i, C_OUT + j] = out[j]
     return st
 
 
 @njit(cache=True)
-def _record(o, t, y, p, fel, fer, touch, shoes, cache, locked, fstate):
-    """One sample row (layout.COLUMNS + braking torque) of the current state."""
-    wd = y[R_DRUM_SPEED]
+def _balance(p, y, fel, fer, stuck, touch, shoes, cache):
+    """Balance both shoes for the rotor state ``y`` into ``cache``; returns the status.
+
+    Sliding: each shoe alone (a saturated balance from the cache is reused while the
+    actuation is unchanged). Sticking: the static share of the coupling torque and the
+    shoes' normal forces are solved together by fixed-point iteration.
+    """
+    wd = 0.0 if stuck else y[R_DRUM_SPEED]
     vs = p[L.P_FRICTION_SMOOTHING_SPEED]
+    if not stuck:
+        for i in range(2):
+            fe = fel if i == 0 else fer
+            if cache[i, C_VALID] > 0.0 and cache[i, C_FE] == fe:
+                v_new = wd * cache[i, C_DIST]
+                if abs(v_new) > SATURATED_SLIP * vs and v_new * cache[i, C_OUT + contact.E_V_SLIDE] > 0:
+                    cache[i, C_OUT + contact.E_V_SLIDE] = v_new
+                    cache[i, C_OUT + contact.E_FRICTION_POWER] = (
+                        cache[i, C_OUT + contact.E_FF] * v_new
+                    )
+                    continue
+            st = _solve_shoe(p, i, fe, wd, 0, 0.0, touch, shoes, cache)
+            if st != STATUS_OK:
+                return st
+        return STATUS_OK
+    coupling = _coupling(p, y, 0.0)
+    share = 0.0
+    for _ in range(MAX_SHARE_ITERATIONS):
+        for i in range(2):
+            st = _solve_shoe(p, i, fel if i == 0 else fer, 0.0, 1, share, touch, shoes, cache)
+            if st != STATUS_OK:
+                return st
+        capacity = standstill.static_capacity(
+            p,
+            cache[0, C_OUT + contact.E_FN],
+            cache[0, C_DIST],
+            cache[1, C_OUT + contact.E_FN],
+            cache[1, C_DIST],
+        )
+        new = standstill.stuck_share(coupling, capacity)
+        if abs(new - share) <= SHARE_TOL:
+            return STATUS_OK
+        share = new
+    return STATUS_NO_CONVERGENCE
+
+
+@njit(cache=True, inline="always")
+def _coupling(p, y, drum_speed):
+    """Coupling torque on the drum (model/standstill.py) of the rotor state ``y``, N m."""
+    return standstill.coupling_torque(
+        p, y[R_FLY_ANGLE], y[R_DRUM_ANGLE], y[R_FLY_SPEED], drum_speed
+    )
+
+
+@njit(cache=True)
+def _full_state(y, shoes, out):
+    """The full model's state (layout.Y_*) of the rotor state ``y`` and the shoe angles
+    (shoes at rest), so that the stick/slip rule of model/standstill.py applies as is."""
+    out[:] = 0.0
+    out[L.Y_FLYWHEEL_ANGLE] = y[R_FLY_ANGLE]
+    out[L.Y_DRUM_ANGLE] = y[R_DRUM_ANGLE]
+    out[L.Y_FLYWHEEL_SPEED] = y[R_FLY_SPEED]
+    out[L.Y_DRUM_SPEED] = y[R_DRUM_SPEED]
+    out[L.Y_LEFT_ANGLE] = shoes[0]
+    out[L.Y_RIGHT_ANGLE] = shoes[1]
+
+
+@njit(cache=True)
+def _record(o, t, y, p, fel, fer, stuck, cache, fstate):
+    """One sample row (layout.COLUMNS + braking torque) of the balanced state in ``cache``."""
     o[:] = 0.0
-    o[0] = t
-    o[1] = y[R_FLY_ANGLE]
-    o[2] = y[R_DRUM_ANGLE]
-    o[5] = y[R_FLY_SPEED]
-    o[6] = wd
+    o[L.C_TIME] = t
+    o[L.C_STATE + L.Y_FLYWHEEL_ANGLE] = y[R_FLY_ANGLE]
+    o[L.C_STATE + L.Y_DRUM_ANGLE] = y[R_DRUM_ANGLE]
+    o[L.C_STATE + L.Y_FLYWHEEL_SPEED] = y[R_FLY_SPEED]
+    o[L.C_STATE + L.Y_DRUM_SPEED] = y[R_DRUM_SPEED]
     torque = 0.0
     any_contact = False
     for i in range(2):
-        fe = fel if i == 0 else fer
-        reused = False
-        if cache[i, C_VALID] > 0.0 and cache[i, C_FE] == fe and cache[i, C_LOCKED] == locked:
-            if locked:
-                reused = True
-            else:
-                v_new = wd * cache[i, C_DIST]
-                if abs(v_new) > SATURATED_SLIP * vs and v_new * cache[i, C_OUT + 6] > 0.0:
-                    cache[i, C_OUT + 6] = v_new
-                    cache[i, C_OUT + 11] = cache[i, C_OUT + 5] * v_new
-                    reused = True
-        if not reused:
-            _solve_shoe(p, i, fe, wd, locked, touch, shoes, cache)
-        o[3 + i] = cache[i, C_THETA]
-        o[9 + i] = cache[i, C_OUT + 2]
-        o[11 + i] = cache[i, C_OUT + 4]
-        o[13 + i] = cache[i, C_OUT + 5]
-        o[15 + i] = fe
+        o[L.C_STATE + L.Y_LEFT_ANGLE + i] = cache[i, C_THETA]
+        o[L.C_INDENTATION + i] = cache[i, C_OUT + contact.E_EPS]
+        o[L.C_NORMAL_FORCE + i] = cache[i, C_OUT + contact.E_FN]
+        o[L.C_FRICTION_FORCE + i] = cache[i, C_OUT + contact.E_FF]
+        o[L.C_ACTUATION_FORCE + i] = fel if i == 0 else fer
         # a shoe at rest: the pin holds it against contact, friction and actuation
-        o[17 + 2 * i] = -cache[i, C_OUT + 9]
-        o[18 + 2 * i] = -cache[i, C_OUT + 10]
-        o[21 + 2 * i] = cache[i, C_OUT + 7]
-        o[22 + 2 * i] = cache[i, C_OUT + 8]
-        o[35 + i] = cache[i, C_OUT + 6]
-        torque += cache[i, C_OUT + 1]
+        o[L.C_PIVOT_FX + 2 * i] = -cache[i, C_OUT + contact.E_APPLIED_X]
+        o[L.C_PIVOT_FY + 2 * i] = -cache[i, C_OUT + contact.E_APPLIED_Y]
+        o[L.C_CONTACT_X + 2 * i] = cache[i, C_OUT + contact.E_CONTACT_X]
+        o[L.C_CONTACT_Y + 2 * i] = cache[i, C_OUT + contact.E_CONTACT_Y]
+        o[L.C_SLIDING_SPEED + i] = cache[i, C_OUT + contact.E_V_SLIDE]
+        torque += cache[i, C_OUT + contact.E_DRUM_TORQUE]
         regime = L.REGIME_FREE
-        if cache[i, C_OUT + 4] > 0.0:
+        if cache[i, C_OUT + contact.E_FN] > 0.0:
             regime = L.REGIME_CONTACT
             any_contact = True
-        o[31 + i] = regime
-    o[25] = y[R_FRICTION]
-    o[26] = y[R_DAMPER]
-    o[29] = fstate[1]
-    if locked:
-        o[30] = L.REGIME_STOPPED
+        o[L.C_SHOE_REGIME + i] = regime
+    o[L.C_ENERGY + L.Y_FRICTION_WORK - L.Y_FRICTION_WORK] = y[R_FRICTION]
+    o[L.C_ENERGY + L.Y_COUPLING_DAMPER_LOSS - L.Y_FRICTION_WORK] = y[R_DAMPER]
+    o[L.C_LOCK_LOSS] = fstate[L.F_LOCK_LOSS]
+    if stuck:
+        o[L.C_REGIME] = L.REGIME_STOPPED
     elif any_contact:
-        o[30] = L.REGIME_CONTACT
+        o[L.C_REGIME] = L.REGIME_CONTACT
     else:
-        o[30] = L.REGIME_FREE
+        o[L.C_REGIME] = L.REGIME_FREE
+    o[L.C_DRUM_STICKING] = 1.0 if stuck else 0.0
     o[COL_BRAKING_TORQUE] = -torque
 
 
@@ -190,10 +252,12 @@ def advance(y, step0, h, n_steps, p, tl, fl, tr, fr, touch, shoes, cache, kstate
     """Advance the rotor ``n_steps`` macro steps of ``h`` seconds, one sample per step.
 
     Time of macro step ``k`` is ``(step0 + k) h`` exactly. Samples are taken at the start of
-    each step (as the full model's stepper does). ``kstate`` (int64): [locked, status,
-    substeps taken]; ``fstate`` (float64): [lock time s, lock loss J]; ``cache`` (float64,
-    (2, N_CACHE)): the shoes' last balances, zeros to start. Returns the rows
-    written; stops early with a status (module constants) on failure.
+    each step (as the full model's stepper does). ``kstate`` (int64): [stuck, status,
+    substeps taken, breakaways]; ``fstate`` (float64, layout.F_*; F_STOP_TIME < 0 until the
+    drum first sticks); ``cache`` (float64, (2, N_CACHE)): the shoes' last balances, zeros
+    to start. Returns the rows written; stops early with a status (module constants) on
+    failure. The drum sticks and slips by the full model's rule (model/standstill.py),
+    applied after every substep; while it sticks the flywheel moves on.
 
     The RK4 stages and the rotor's right-hand side are written out in this one loop: a
     call per stage passing a dozen arrays costs more than the arithmetic of a stage.
@@ -201,12 +265,12 @@ def advance(y, step0, h, n_steps, p, tl, fl, tr, fr, touch, shoes, cache, kstate
     n = y.shape[0]
     ks = np.empty((4, n))
     tmp = np.empty(n)
+    full = np.zeros(L.N_STATE)
     radius = p[L.P_DRUM_RADIUS]
     v_lock = p[L.P_FRICTION_SMOOTHING_SPEED]
     mu = p[L.P_FRICTION_COEFFICIENT]
     i_f = p[L.P_FLYWHEEL_INERTIA]
     i_d = p[L.P_DRUM_INERTIA]
-    k_s = p[L.P_COUPLING_STIFFNESS]
     c_s = p[L.P_COUPLING_DAMPING]
     rigid = p[L.P_RIGID_COUPLING] > 0.0
     gl = p[L.P_SHOE_BASE + L.S_ACTUATION_GAIN]
@@ -217,13 +281,16 @@ def advance(y, step0, h, n_steps, p, tl, fl, tr, fr, touch, shoes, cache, kstate
         t_end = (step0 + k + 1) * h
         fel = gl * kernel._pwl(t0, tl, fl)
         fer = gr * kernel._pwl(t0, tr, fr)
-        _record(out[k], t0, y, p, fel, fer, touch, shoes, cache, kstate[0], fstate)
-        if kstate[0]:
-            continue  # locked: flywheel and drum held, the shoes follow the actuation
+        st = _balance(p, y, fel, fer, kstate[0], touch, shoes, cache)
+        if st != STATUS_OK:
+            kstate[1] = st
+            return k
+        _record(out[k], t0, y, p, fel, fer, kstate[0], cache, fstate)
         t = t0
         for _ in range(MAX_SUBSTEPS):
-            if t >= t_end or kstate[0]:
+            if t >= t_end:
                 break
+            stuck = kstate[0]
             hs = t_end - t
             last = True
             for stage in range(4):
@@ -231,36 +298,27 @@ def advance(y, step0, h, n_steps, p, tl, fl, tr, fr, touch, shoes, cache, kstate
                 for j in range(n):
                     tmp[j] = y[j] if stage == 0 else y[j] + stage_c[stage] * hs * ks[stage - 1, j]
                 # --- rotor right-hand side at (ts, tmp) ---
-                wd = tmp[R_DRUM_SPEED]
+                fe_l = gl * kernel._pwl(ts, tl, fl)
+                fe_r = gr * kernel._pwl(ts, tr, fr)
+                st = _balance(p, tmp, fe_l, fe_r, stuck, touch, shoes, cache)
+                if st != STATUS_OK:
+                    kstate[1] = st
+                    return k + 1
+                wd = 0.0 if stuck else tmp[R_DRUM_SPEED]
                 torque = 0.0
                 power = 0.0
                 damper_rate = 0.0  # d(friction torque)/d(drum speed), N m s
-                fe_l = gl * kernel._pwl(ts, tl, fl)
-                fe_r = gr * kernel._pwl(ts, tr, fr)
                 for i in range(2):
-                    fe = fe_l if i == 0 else fe_r
-                    reused = False
-                    if cache[i, C_VALID] > 0.0 and cache[i, C_FE] == fe and cache[i, C_LOCKED] == 0:
-                        v_new = wd * cache[i, C_DIST]
-                        if abs(v_new) > SATURATED_SLIP * v_lock and v_new * cache[i, C_OUT + 6] > 0:
-                            cache[i, C_OUT + 6] = v_new
-                            cache[i, C_OUT + 11] = cache[i, C_OUT + 5] * v_new
-                            reused = True
-                    if not reused:
-                        st = _solve_shoe(p, i, fe, wd, 0, touch, shoes, cache)
-                        if st != STATUS_OK:
-                            kstate[1] = st
-                            return k + 1
-                    torque += cache[i, C_OUT + 1]
-                    power += cache[i, C_OUT + 11]
-                    fn = cache[i, C_OUT + 4]
-                    if stage == 0 and fn > 0.0 and not reused:
+                    torque += cache[i, C_OUT + contact.E_DRUM_TORQUE]
+                    power += cache[i, C_OUT + contact.E_FRICTION_POWER]
+                    fn = cache[i, C_OUT + contact.E_FN]
+                    if stage == 0 and fn > 0.0 and not stuck:
                         dist = cache[i, C_DIST]
-                        sf = math.tanh(cache[i, C_OUT + 6] / v_lock)
+                        sf = math.tanh(cache[i, C_OUT + contact.E_V_SLIDE] / v_lock)
                         damper_rate += mu * fn * dist * dist * (1.0 - sf * sf) / v_lock
                 ks[stage, R_FRICTION] = power
                 if rigid:
-                    acc = torque / (i_f + i_d)
+                    acc = 0.0 if stuck else torque / (i_f + i_d)
                     ks[stage, R_FLY_ANGLE] = wd
                     ks[stage, R_DRUM_ANGLE] = wd
                     ks[stage, R_FLY_SPEED] = acc
@@ -268,12 +326,12 @@ def advance(y, step0, h, n_steps, p, tl, fl, tr, fr, touch, shoes, cache, kstate
                     ks[stage, R_DAMPER] = 0.0
                     rate = damper_rate / (i_f + i_d)
                 else:
+                    coupling = _coupling(p, tmp, wd)
                     slip = tmp[R_FLY_SPEED] - wd
-                    coupling = k_s * (tmp[R_FLY_ANGLE] - tmp[R_DRUM_ANGLE]) + c_s * slip
                     ks[stage, R_FLY_ANGLE] = tmp[R_FLY_SPEED]
                     ks[stage, R_DRUM_ANGLE] = wd
                     ks[stage, R_FLY_SPEED] = -coupling / i_f
-                    ks[stage, R_DRUM_SPEED] = (coupling + torque) / i_d
+                    ks[stage, R_DRUM_SPEED] = 0.0 if stuck else (coupling + torque) / i_d
                     ks[stage, R_DAMPER] = c_s * slip * slip
                     rate = (damper_rate + c_s) / i_d
                 if stage == 0 and rate * hs > SUBSTEP_RATE_PRODUCT:
@@ -287,18 +345,28 @@ def advance(y, step0, h, n_steps, p, tl, fl, tr, fr, touch, shoes, cache, kstate
             for j in range(n):
                 y[j] += hs / 6.0 * (ks[0, j] + 2.0 * ks[1, j] + 2.0 * ks[2, j] + ks[3, j])
             kstate[2] += 1
-            surface = abs(y[R_DRUM_SPEED]) * radius
-            engaged = cache[0, C_OUT + 4] > 0.0 or cache[1, C_OUT + 4] > 0.0
-            if surface <= v_lock and engaged:
-                # standstill: the brake locks; interpolate the instant |v| reached v_lock
-                frac = 1.0
-                if before > surface:
-                    frac = min(max((before - v_lock) / (before - surface), 0.0), 1.0)
-                fstate[0] = t + frac * hs
-                fstate[1] += 0.5 * i_f * y[R_FLY_SPEED] ** 2 + 0.5 * i_d * y[R_DRUM_SPEED] ** 2
-                y[R_FLY_SPEED] = 0.0
-                y[R_DRUM_SPEED] = 0.0
+            # the stick/slip rule of the full model, on the balanced shoes
+            _full_state(y, shoes, full)
+            if stuck:
+                if standstill.slips(p, full):
+                    kstate[0] = 0
+                    kstate[3] += 1
+            elif standstill.sticks(p, full, before):
+                t_stick = standstill.interpolated_stick_time(
+                    t, hs, before, abs(y[R_DRUM_SPEED]) * radius, v_lock
+                )
+                if fstate[L.F_WHEEL_LOCK_TIME] < 0.0:
+                    fstate[L.F_WHEEL_LOCK_TIME] = t_stick
+                fstate[L.F_LOCK_LOSS] += standstill.stick(p, full)
+                y[R_FLY_SPEED] = full[L.Y_FLYWHEEL_SPEED]
+                y[R_DRUM_SPEED] = full[L.Y_DRUM_SPEED]
                 kstate[0] = 1
+                if fstate[L.F_STOP_TIME] < 0.0 and standstill.at_rest(p, full):
+                    fstate[L.F_STOP_TIME] = t_stick
+            if kstate[0] and fstate[L.F_STOP_TIME] < 0.0:
+                _full_state(y, shoes, full)
+                if standstill.at_rest(p, full):
+                    fstate[L.F_STOP_TIME] = t + hs
             t = t_end if last else t + hs
             for j in range(4):
                 if not math.isfinite(y[j]):

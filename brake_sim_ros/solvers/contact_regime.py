@@ -86,8 +86,10 @@ def run_contact_regime(
     shoes = np.array([starts[0], starts[1], 0.0, 0.0])  # angles, then slopes (none yet)
     y = np.zeros(Q.N_ROTOR)
     y[Q.R_FLY_SPEED] = y[Q.R_DRUM_SPEED] = setup.params.driveline.initial_speed_rad_s
-    kstate = np.zeros(3, np.int64)
-    fstate = np.zeros(2)
+    kstate = np.zeros(4, np.int64)  # stuck, status, substeps, breakaways
+    fstate = np.zeros(L.N_FSTATE)
+    fstate[L.F_STOP_TIME] = -1.0
+    fstate[L.F_WHEEL_LOCK_TIME] = -1.0
     out = np.empty((n, Q.N_SAMPLE_COLUMNS))
     tl, fl, tr, fr = setup.actuation.as_arrays()
     cache = np.zeros((2, Q.N_CACHE))
@@ -99,7 +101,7 @@ def run_contact_regime(
         )
     return ContactRegimeResult(
         samples=SampleBlock(out, 0, h, SAMPLE_COLUMNS),
-        stop_time_s=float(fstate[0]) if kstate[0] else None,
+        stop_time_s=float(fstate[L.F_STOP_TIME]) if fstate[L.F_STOP_TIME] >= 0.0 else None,
         n_steps=n,
         n_substeps=int(kstate[2]),
         step_s=h,

@@ -103,8 +103,9 @@ class FixedStepStepper:
         self._y = initial_state(self.setup.params, self.setup.defects)
         self._step = 0
         self._kstate = np.zeros(L.N_KSTATE, np.int64)
-        # lock time s (0 = not locked), lock loss J, located contact switches
-        self._fstate = np.zeros(3)
+        self._fstate = np.zeros(L.N_FSTATE)
+        self._fstate[L.F_STOP_TIME] = -1.0  # the vehicle has not stopped yet
+        self._fstate[L.F_WHEEL_LOCK_TIME] = -1.0  # the drum has not stuck yet
         self.status = StepperStatus.RUNNING
 
     # -- state ------------------------------------------------------------------------------
@@ -131,17 +132,31 @@ class FixedStepStepper:
 
     @property
     def locked(self) -> bool:
-        """The drum reached standstill and the brake holds it."""
-        return bool(self._kstate[L.K_LOCKED])
+        """Static friction holds the drum at standstill now (model/standstill.py)."""
+        return bool(self._kstate[L.K_STUCK])
 
     @property
     def stop_time_s(self) -> float | None:
-        return float(self._fstate[0]) if self.locked else None
+        """Instant the vehicle came to rest, s (None until it has): the drum held and the
+        rotor's remaining energy within what the brake holds (model/standstill.py)."""
+        stop = float(self._fstate[L.F_STOP_TIME])
+        return stop if stop >= 0.0 else None
+
+    @property
+    def wheel_lock_time_s(self) -> float | None:
+        """Instant the drum first stuck, s (None until it has); the stop time or earlier."""
+        lock = float(self._fstate[L.F_WHEEL_LOCK_TIME])
+        return lock if lock >= 0.0 else None
+
+    @property
+    def breakaways(self) -> int:
+        """Times the held drum broke away again (coupling torque above the capacity)."""
+        return int(self._kstate[L.K_BREAKAWAYS])
 
     @property
     def located_switches(self) -> int:
         """Contact onsets and separations located inside steps so far (rk4-located only)."""
-        return int(self._fstate[2])
+        return int(self._fstate[L.F_SWITCHES])
 
     @property
     def packed_parameters(self) -> np.ndarray:

@@ -1,11 +1,13 @@
 """Adaptive high-accuracy reference: scipy DOP853 with every discontinuity located.
 
 The Kelvin-Voigt force jumps when a lining touches the drum (the damping term), the
-actuation profile has kinks at its knots, and the brake locks at standstill. The
-integration is split at each of these instants so that no step straddles one: contact
-onsets and separations and the lock are located as events (root-finding on the dense
-output), knots are segment ends. Within a segment each shoe's contact state is fixed,
-so the right-hand side is smooth there and DOP853 keeps its order.
+actuation profile has kinks at its knots, and the drum sticks and breaks away at
+standstill (:mod:`brake_sim_ros.model.standstill`, the same rule as the fixed-step kernel).
+The integration is split at each of these instants so that no step straddles one: contact
+onsets and separations, the stick and the breakaway are located as events (root-finding
+on the dense output), knots are segment ends. Within a segment each shoe's contact state
+and the drum's stick state are fixed, so the right-hand side is smooth there and DOP853
+keeps its order.
 """
 
 from __future__ import annotations
@@ -17,7 +19,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from brake_sim_ros.errors import SimulationError
-from brake_sim_ros.model import kernel
+from brake_sim_ros.model import kernel, standstill
 from brake_sim_ros.model import layout as L
 from brake_sim_ros.model.assembly import indentation_at, initial_state, pack
 from brake_sim_ros.model.trajectory import BrakeSetup, SampleBlock
@@ -38,7 +40,10 @@ class ReferenceResult:
     Attributes:
         samples: recorded samples at ``sample_times`` (SampleBlock, non-uniform allowed).
         onsets_s / separations_s: located contact onsets and separations per shoe, s.
-        stop_time_s: located lock instant (None if the drum did not stop).
+        stop_time_s: located instant the vehicle came to rest (model/standstill.py; None
+            if it did not).
+        wheel_lock_time_s: located instant the drum first stuck (None if it did not).
+        breakaways_s: located instants the held drum broke away again.
         n_rhs: right-hand-side evaluations.
     """
 
@@ -46,6 +51,8 @@ class ReferenceResult:
     onsets_s: dict[str, list[float]] = field(default_factory=dict)
     separations_s: dict[str, list[float]] = field(default_factory=dict)
     stop_time_s: float | None = None
+    wheel_lock_time_s: float | None = None
+    breakaways_s: list[float] = field(default_factory=list)
     n_rhs: int = 0
 
 
@@ -96,7 +103,7 @@ def run_reference(
         modes[i] = (
             L.CONTACT_ON if indentation_at(p, base, y[L.Y_LEFT_ANGLE + i]) > 0 else L.CONTACT_OFF
         )
-    locked = 0
+    stuck = 0
     lock_loss = 0.0
     result = ReferenceResult(
         SampleBlock(out, 0, 0.0), {"left": [], "right": []}, {"left": [], "right": []}
@@ -115,7 +122,7 @@ def run_reference(
                 f" of {cpu_budget_s:g} s"
             )
         fe = forces(t)
-        kernel.rhs(yy, p, fe[0], fe[1], locked, modes[0], modes[1], dydt)
+        kernel.rhs(yy, p, fe[0], fe[1], stuck, modes[0], modes[1], dydt)
         return dydt.copy()
 
     t = 0.0
@@ -132,14 +139,33 @@ def run_reference(
             ev.terminal = True
             ev.direction = 1.0 if modes[i] == L.CONTACT_OFF else -1.0
             events.append(ev)
-        if not locked and L.CONTACT_ON in modes:
+        if stuck:
 
-            def lock_event(_t: float, yy: np.ndarray) -> float:
+            def breakaway_event(_t: float, yy: np.ndarray) -> float:
+                coupling, capacity = standstill.hold_torques(p, yy)
+                if p[L.P_RIGID_COUPLING] > 0.0:
+                    return -capacity
+                return abs(coupling) - capacity
+
+            breakaway_event.terminal = True
+            breakaway_event.direction = 1.0
+            events.append(breakaway_event)
+            if result.stop_time_s is None:
+
+                def rest_event(_t: float, yy: np.ndarray) -> float:
+                    return 0.5 if standstill.at_rest(p, yy) else -0.5
+
+                rest_event.terminal = True
+                rest_event.direction = 1.0
+                events.append(rest_event)
+        elif L.CONTACT_ON in modes:
+
+            def stick_event(_t: float, yy: np.ndarray) -> float:
                 return abs(yy[L.Y_DRUM_SPEED]) * radius - v_lock
 
-            lock_event.terminal = True
-            lock_event.direction = -1.0
-            events.append(lock_event)
+            stick_event.terminal = True
+            stick_event.direction = -1.0
+            events.append(stick_event)
         sol = solve_ivp(
             fun,
             (t, segment_end),
@@ -164,9 +190,9 @@ def run_reference(
             yk = np.ascontiguousarray(sol.sol(np.minimum(tk, t_end)).T)
             fel = gains[0] * np.interp(tk, tl, fl)
             fer = gains[1] * np.interp(tk, tr, fr)
-            kernel.evaluate_rows(yk, tk, p, fel, fer, locked, out[sample_pos:stop])
-            out[sample_pos:stop, L.COL["lock_loss_j"]] = lock_loss
-            out[sample_pos:stop, L.COL["regime"]] = L.REGIME_STOPPED if locked else -1
+            kernel.evaluate_rows(yk, tk, p, fel, fer, stuck, out[sample_pos:stop])
+            out[sample_pos:stop, L.C_LOCK_LOSS] = lock_loss
+            out[sample_pos:stop, L.C_REGIME] = L.REGIME_STOPPED if stuck else -1
         sample_pos = stop
         y = sol.y[:, -1].copy()
         t = t_end
@@ -175,13 +201,24 @@ def run_reference(
                 if ev_times.size == 0:
                     continue
                 ev = events[ev_index]
-                if ev.__name__ == "lock_event":
-                    locked = 1
-                    lock_loss += 0.5 * p[L.P_FLYWHEEL_INERTIA] * y[L.Y_FLYWHEEL_SPEED] ** 2
-                    lock_loss += 0.5 * p[L.P_DRUM_INERTIA] * y[L.Y_DRUM_SPEED] ** 2
-                    y[L.Y_FLYWHEEL_SPEED] = 0.0
-                    y[L.Y_DRUM_SPEED] = 0.0
+                if ev.__name__ == "stick_event":
+                    # the crossing of v_s is where the fixed-step rule sticks, if it holds
+                    coupling, capacity = standstill.hold_torques(p, y)
+                    rigid = p[L.P_RIGID_COUPLING] > 0.0
+                    if capacity > 0.0 and (rigid or abs(coupling) <= capacity):
+                        stuck = 1
+                        lock_loss += standstill.stick(p, y)
+                        if result.wheel_lock_time_s is None:
+                            result.wheel_lock_time_s = t
+                        if result.stop_time_s is None and standstill.at_rest(p, y):
+                            result.stop_time_s = t
+                    continue
+                if ev.__name__ == "rest_event":
                     result.stop_time_s = t
+                    continue
+                if ev.__name__ == "breakaway_event":
+                    stuck = 0
+                    result.breakaways_s.append(t)
                     continue
                 _flip(modes, ev.shoe_index, t, result)
             # Simultaneous events (a symmetric brake's shoes touch at the same instant) may

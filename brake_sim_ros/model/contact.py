@@ -1,0 +1,236 @@
+"""Shoe-drum contact, compiled (numba): geometry, the contact law, friction and the shoe's
+moment balance. Each rule is written here once; the fixed-step kernel, the reference
+solver (through :mod:`brake_sim_ros.model.kernel`), the quasi-static contact-regime model,
+the step-limit analysis and the assembly checks all call these functions.
+
+Contact geometry. A shoe is rigid and turns by ``phi = sign * theta`` about its pivot
+``P``. Its lining is an arc of radius ``r`` around the point ``C`` (see
+:func:`brake_sim_ros.model.assembly.place_shoe` for where ``C`` sits in the assembled
+brake). The lining point farthest from the drum centre is on the ray from the origin
+through ``C`` when that ray crosses the arc, otherwise at the arc end angularly nearest to
+it; its distance from the centre minus ``R_d`` is the indentation ``eps`` (m, positive =
+penetration). The normal is the drum's outward normal there.
+
+Contact law. Kelvin-Voigt, ``Fn = k_c eps + c_c eps_dot`` while in contact, never
+negative (a contact never pulls). Friction: Coulomb, smoothed ``Ff = mu Fn tanh(v / v_s)``
+while the drum slides; while the drum sticks at standstill, the static friction that holds
+it (see :mod:`brake_sim_ros.model.standstill`), a share ``lambda`` in [-1, 1] of each shoe's
+capacity ``mu Fn``.
+
+Frames and signs: the backing-plate frame (x right, y up, z out of the wheel); forces in N
+on the shoe; the friction force acts along the drum's counter-clockwise tangent
+``(-ny, nx)`` and its torque on the drum is ``-Ff * dist``.
+"""
+
+from __future__ import annotations
+
+import math
+
+from numba import njit
+
+from brake_sim_ros.model import layout as L
+
+# shoe_eval result slots (named so that callers never write a bare index)
+E_THETA_DDOT = 0  # shoe angular acceleration, rad/s^2 (positive outward)
+E_DRUM_TORQUE = 1  # torque of this shoe's friction on the drum, N m
+E_EPS = 2  # indentation, m
+E_EPS_DOT = 3  # indentation rate, m/s
+E_FN = 4  # normal force, N
+E_FF = 5  # friction force, N
+E_V_SLIDE = 6  # sliding speed of the drum surface relative to the shoe, m/s
+E_CONTACT_X = 7  # contact point, m
+E_CONTACT_Y = 8
+E_APPLIED_X = 9  # contact + friction + actuation force on the shoe, N
+E_APPLIED_Y = 10
+E_FRICTION_POWER = 11  # W, dissipated by friction
+E_CONTACT_POWER = 12  # W, dissipated by the Kelvin-Voigt damper
+E_ACTUATION_POWER = 13  # W, supplied by the actuator
+N_EVAL = 14
+
+
+@njit(cache=True, inline="always")
+def contact_point(p, base, c, sn):
+    """Lining point farthest from the drum centre for a shoe turned by phi (cos c, sin sn).
+
+    Returns (x, y, distance from the drum centre, unit normal x, unit normal y), m.
+    """
+    px = p[base + L.S_PIVOT_X]
+    py = p[base + L.S_PIVOT_Y]
+    dx = p[base + L.S_LINING_CENTRE_X] - px
+    dy = p[base + L.S_LINING_CENTRE_Y] - py
+    cx = px + c * dx - sn * dy
+    cy = py + sn * dx + c * dy
+    m0x = p[base + L.S_LINING_MID_COS]
+    m0y = p[base + L.S_LINING_MID_SIN]
+    mx = c * m0x - sn * m0y
+    my = sn * m0x + c * m0y
+    r = p[base + L.S_LINING_RADIUS]
+    ce = math.sqrt(cx * cx + cy * cy)
+    if ce > 1e-300:
+        ux = cx / ce
+        uy = cy / ce
+    else:
+        ux = mx
+        uy = my
+    if ux * mx + uy * my >= p[base + L.S_LINING_HALF_COS]:
+        # the ray from the drum centre through the arc centre crosses the lining
+        return cx + r * ux, cy + r * uy, ce + r, ux, uy
+    hc = p[base + L.S_LINING_HALF_COS]
+    hs = p[base + L.S_LINING_HALF_SIN]
+    if mx * uy - my * ux < 0.0:
+        hs = -hs
+    ex = hc * mx - hs * my
+    ey = hs * mx + hc * my
+    xx = cx + r * ex
+    xy = cy + r * ey
+    dist = math.sqrt(xx * xx + xy * xy)
+    return xx, xy, dist, xx / dist, xy / dist
+
+
+@njit(cache=True, inline="always")
+def kinematics(p, base, theta, omega):
+    """Contact kinematics of a shoe at angle ``theta`` (rad) turning at ``omega`` (rad/s).
+
+    Returns (eps m, eps_dot m/s, tangential speed of the shoe's material point at the
+    contact along (-ny, nx) m/s, contact x m, contact y m, distance from the drum centre m,
+    normal x, normal y, cos phi, sin phi).
+    """
+    s = p[base + L.S_SIGN]
+    px = p[base + L.S_PIVOT_X]
+    py = p[base + L.S_PIVOT_Y]
+    phi = s * theta
+    c = math.cos(phi)
+    sn = math.sin(phi)
+    xx, xy, dist, nx, ny = contact_point(p, base, c, sn)
+    eps = dist - p[L.P_DRUM_RADIUS]
+    w = s * omega
+    # velocity of the shoe's material point at the contact
+    vx = -w * (xy - py)
+    vy = w * (xx - px)
+    eps_dot = nx * vx + ny * vy
+    vt = -ny * vx + nx * vy
+    return eps, eps_dot, vt, xx, xy, dist, nx, ny, c, sn
+
+
+@njit(cache=True, inline="always")
+def normal_force(p, base, eps, eps_dot, mode):
+    """Kelvin-Voigt normal force, N: on while ``eps > 0`` (``CONTACT_AUTO``) or as forced by
+    ``mode``; never negative; zero for a shoe removed from the model."""
+    in_contact = eps > 0.0 if mode == L.CONTACT_AUTO else mode == L.CONTACT_ON
+    if not (in_contact and p[base + L.S_ENABLED] > 0.0):
+        return 0.0
+    fn = p[L.P_CONTACT_STIFFNESS] * eps + p[L.P_CONTACT_DAMPING] * eps_dot
+    return fn if fn > 0.0 else 0.0
+
+
+@njit(cache=True, inline="always")
+def switching_function(p, base, theta, omega):
+    """Indentation ``eps`` and switching function ``h`` of one shoe, both in m.
+
+    ``h = min(eps, eps + (c_c / k_c) eps_dot)``: the Kelvin-Voigt force of
+    :func:`normal_force` is on exactly when ``h > 0`` (the lining penetrates and the force
+    would push). Both arguments of the min are lengths, so ``h`` is continuous in the state
+    and its zero is the switching instant: ``eps = 0`` at an onset (where the force jumps
+    from 0 to ``c_c eps_dot``), ``k_c eps + c_c eps_dot = 0`` at a separation (where it
+    reaches 0 continuously, with a kink). A removed shoe returns (-1, -1): never on.
+    """
+    if p[base + L.S_ENABLED] <= 0.0:
+        return -1.0, -1.0
+    k = kinematics(p, base, theta, omega)
+    eps = k[0]
+    g = eps + p[L.P_CONTACT_DAMPING] / p[L.P_CONTACT_STIFFNESS] * k[1]
+    return eps, min(eps, g)
+
+
+@njit(cache=True, inline="always")
+def sliding_friction(p, fn, v_slide):
+    """Smoothed Coulomb friction force while the drum slides, N: ``mu Fn tanh(v / v_s)``."""
+    if fn <= 0.0:
+        return 0.0
+    return p[L.P_FRICTION_COEFFICIENT] * fn * math.tanh(v_slide / p[L.P_FRICTION_SMOOTHING_SPEED])
+
+
+@njit(cache=True, inline="always")
+def shoe_forces(p, base, omega, actuation, kin, fn, ff, v_slide):
+    """Moment balance of one shoe given its contact kinematics ``kin`` (from
+    :func:`kinematics`), normal force ``fn`` and friction force ``ff`` (N), and the
+    sliding speed ``v_slide`` (m/s) against which friction works.
+
+    Returns the :data:`N_EVAL` slots of :func:`shoe_eval`.
+    """
+    eps, eps_dot, vt, xx, xy, dist, nx, ny, c, sn = kin
+    s = p[base + L.S_SIGN]
+    px = p[base + L.S_PIVOT_X]
+    py = p[base + L.S_PIVOT_Y]
+    enabled = p[base + L.S_ENABLED] > 0.0
+    w = s * omega
+    fcx = -fn * nx - ff * ny
+    fcy = -fn * ny + ff * nx
+    # actuation on the tip, fixed world direction
+    tdx = p[base + L.S_TIP_X] - px
+    tdy = p[base + L.S_TIP_Y] - py
+    tx = c * tdx - sn * tdy
+    ty = sn * tdx + c * tdy
+    fex = actuation * p[base + L.S_ACTUATION_DIR_X]
+    fey = actuation * p[base + L.S_ACTUATION_DIR_Y]
+    moment = (xx - px) * fcy - (xy - py) * fcx + tx * fey - ty * fex
+    theta_ddot = s * moment / p[base + L.S_INERTIA] if enabled else 0.0
+    p_contact = 0.0
+    if enabled and eps > 0.0:
+        # Kelvin-Voigt loss: power into the contact minus the rate of the elastic energy
+        # k eps^2 / 2 (booked whenever eps > 0, also while the force is off: with fn = 0
+        # the elastic energy the balance counts is lost, not returned)
+        p_contact = (fn - p[L.P_CONTACT_STIFFNESS] * eps) * eps_dot
+    p_act = fex * (-w * ty) + fey * (w * tx)
+    return (
+        theta_ddot,
+        -ff * dist,
+        eps,
+        eps_dot,
+        fn,
+        ff,
+        v_slide,
+        xx,
+        xy,
+        fcx + fex,
+        fcy + fey,
+        ff * v_slide,
+        p_contact,
+        p_act,
+    )
+
+
+@njit(cache=True, inline="always")
+def sliding_speed(kin, drum_speed):
+    """Sliding speed of the drum surface relative to the shoe at the contact, m/s."""
+    return drum_speed * kin[5] - kin[2]
+
+
+@njit(cache=True, inline="always")
+def shoe_eval(p, base, theta, omega, drum_speed, actuation, mode, stuck=0, share=0.0):
+    """Forces on one shoe and what they do.
+
+    Args:
+        p: packed parameters. base: index of this shoe's block.
+        theta, omega: shoe angle (rad) and speed (rad/s), positive outward.
+        drum_speed: drum angular speed about +z, rad/s (0 while the drum sticks).
+        actuation: actuation force on the tip, N (gain already applied).
+        mode: CONTACT_AUTO (contact while eps > 0), CONTACT_OFF or CONTACT_ON.
+        stuck: != 0 while the drum sticks at standstill: the friction force is the static
+            share ``share`` (in [-1, 1]) of this shoe's capacity ``mu Fn``
+            (:func:`brake_sim_ros.model.standstill.stuck_share`), not the sliding law.
+
+    Returns:
+        The :data:`N_EVAL` slots ``E_*``: (theta_ddot rad/s^2, drum torque N m, eps m,
+        eps_dot m/s, Fn N, Ff N, sliding speed m/s, contact x m, contact y m, net applied
+        force x N, net applied force y N, friction power W, contact loss power W,
+        actuation power W). The net applied force is contact + friction + actuation.
+    """
+    kin = kinematics(p, base, theta, omega)
+    fn = normal_force(p, base, kin[0], kin[1], mode)
+    v_slide = sliding_speed(kin, drum_speed)
+    if stuck:
+        ff = share * p[L.P_FRICTION_COEFFICIENT] * fn
+    else:
+        ff = sliding_friction(p, fn, v_slide)
+    return shoe_forces(p, base, omega, actuation, kin, fn, ff, v_slide)
