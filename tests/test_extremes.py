@@ -272,16 +272,40 @@ def test_huge_actuation_force_runs_correctly_at_its_limit():
     _assert_physical(setup, stepper, block, force)
 
 
+def _near_self_locking_setup() -> BrakeSetup:
+    p = pack(BrakeParameters(), Defects())
+    mu = 0.95 * contact_arms(p, L.P_SHOE_BASE, 0.0).self_locking_coefficient
+    return _setup({"friction": {"coefficient": mu}})
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="mu at 95 % of self-locking grabs the drum at 21 ms; the vehicle then winds the"
+    " coupling up against the held wheel, it breaks away twice and the contact reaches 2.8 mm"
+    " (100 kN), far stiffer than the operating points the step limit is computed at: residual"
+    " / turnover 1.6e-5 at the limit, 2.4e-6 at limit/2, 2.3e-8 at limit/4 (converging: the"
+    " books are exact, the limit is optimistic for stick-slip of a near-self-locking brake)",
+)
 def test_friction_near_self_locking_runs_correctly():
     """mu = 95 % of the self-locking limit d/h: the leading shoe's normal force is
     amplified 1/(1 - 0.95) = 20x; at its step limit the run still closes its books and the
     indentation stays below its bound."""
-    p = pack(BrakeParameters(), Defects())
-    mu = 0.95 * contact_arms(p, L.P_SHOE_BASE, 0.0).self_locking_coefficient
-    setup = _setup({"friction": {"coefficient": mu}})
+    setup = _near_self_locking_setup()
     dt = step_limit(setup, NOMINAL_FORCE_N).max_step_s
     stepper, block = _run(setup, dt, 0.05)
     _assert_physical(setup, stepper, block, NOMINAL_FORCE_N)
+
+
+def test_friction_near_self_locking_converges_through_stick_slip():
+    """The same run at a quarter of the limit: the books close, the indentation stays below
+    its bound, and the wheel locks and breaks away as at half that step."""
+    setup = _near_self_locking_setup()
+    dt = step_limit(setup, NOMINAL_FORCE_N).max_step_s / 4
+    stepper, block = _run(setup, dt, 0.05)
+    _assert_physical(setup, stepper, block, NOMINAL_FORCE_N)
+    finer, _ = _run(setup, dt / 2, 0.05)
+    assert stepper.breakaways == finer.breakaways >= 1
+    assert stepper.wheel_lock_time_s == pytest.approx(finer.wheel_lock_time_s, rel=1e-3)
 
 
 def test_narrow_friction_smoothing_runs_correctly_at_its_limit():
@@ -309,55 +333,43 @@ def _momentum_stop_bound_s(setup: BrakeSetup, block) -> float:
 
 def test_drum_stops_and_stands_still(symmetric_rk4):
     """The published event: the stop respects the impulse-momentum bound, and after it the
-    drum stays exactly at rest with no friction, the shoes settle (no chatter, no creep)
-    and the books still close. (Stop time under step refinement: see
-    test_step_at_the_limit_gives_the_converged_event.)"""
+    drum stays exactly at rest, held by static friction (no creep, no breakaway) while the
+    books still close. (The flywheel's motion after it: tests/test_standstill.py. Stop time
+    under step refinement: test_step_at_the_limit_gives_the_converged_event.)"""
     block = symmetric_rk4.samples
     stop = symmetric_rk4.stop_time_s
     assert stop is not None and stop >= _momentum_stop_bound_s(BrakeSetup(), block)
     books = energy_balance(block, BrakeParameters())
     assert abs(books.residual_j) < ENERGY_REL * books.turnover_j
-    after = block.time_s > stop + 0.3  # contact damping settles the shoes in ~0.1 s
+    after = block.time_s > stop
     assert after.sum() > 100
     assert np.all(block["regime"][after] == L.REGIME_STOPPED)
+    assert np.all(block["drum_sticking"][after] == 1.0)
     assert np.all(block["drum_speed_rad_s"][after] == 0.0)
-    assert np.all(block["flywheel_speed_rad_s"][after] == 0.0)
-    assert np.all(block["left_friction_force_n"][after] == 0.0)
-    # settled: the shoes' speed has decayed to rounding level
-    assert np.abs(block["left_speed_rad_s"][after]).max() < 1e-9
-    assert np.abs(block["right_speed_rad_s"][after]).max() < 1e-9
+    assert np.ptp(block["drum_angle_rad"][after]) == 0.0
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="kernel: rk4_advance locks the brake as soon as the DRUM's surface speed falls to"
-    " v_s, and zeroes the FLYWHEEL's speed with it, booking its kinetic energy as lock_loss."
-    " A hard stop (huge force, or a slow drum) brings the light drum to rest in"
-    " milliseconds while the flywheel still turns, so the vehicle 'stops' faster than the"
-    " friction torque allows (50 kN: 18 ms against a bound of 0.18 s). Fix: lock only the"
-    " drum, and only while the coupling torque stays below the static capacity mu Fn R;"
-    " keep integrating the flywheel; end the event when both are at rest",
-)
 @pytest.mark.parametrize(
     ("overrides", "force_n"),
     [({}, MAX_ACTUATION_FORCE_N), ({"driveline": {"initial_speed_rad_s": 10.0}}, 3000.0)],
     ids=["force-50kN", "slow-drum"],
 )
 def test_hard_stop_respects_the_momentum_bound(overrides, force_n):
-    """A hard stop must still take at least the impulse-momentum bound."""
+    """A hard stop locks the light drum at once (wheel lock), but the vehicle's stop must
+    still take at least the impulse-momentum bound."""
     setup = _setup(overrides, force_n)
     dt = min(DEFAULT_DT, step_limit(setup, force_n).max_step_s)
-    stepper, block = _run(setup, dt, 0.3)
-    assert stepper.stop_time_s is None or stepper.stop_time_s >= _momentum_stop_bound_s(
-        setup, block
-    )
+    stepper, block = _run(setup, dt, 1.5)
+    assert stepper.wheel_lock_time_s is not None and stepper.stop_time_s is not None
+    assert stepper.wheel_lock_time_s <= stepper.stop_time_s
+    assert stepper.stop_time_s >= _momentum_stop_bound_s(setup, block)
 
 
 def test_very_long_run_stays_exact():
     """60 s of simulated time (1.5 million steps, 8x the published event), most of it at
     standstill: sample times are exactly index x dt (no accumulated drift), the books
-    still close to the requirement, nothing becomes non-finite and nothing moves after
-    the stop."""
+    still close to the requirement, nothing becomes non-finite, the drum stays held and
+    the vehicle's rocking on the coupling dies away (damped, never growing)."""
     setup = BrakeSetup()
     stepper = FixedStepStepper(setup, DEFAULT_DT)
     block = stepper.run(60.0, record_every=250)  # 100 Hz samples, physics at 25 kHz
@@ -368,9 +380,13 @@ def test_very_long_run_stays_exact():
     books = energy_balance(block, setup.params)
     assert abs(books.residual_j) < ENERGY_REL * books.turnover_j
     assert stepper.stop_time_s is not None
-    late = block.time_s > stepper.stop_time_s + 1.0
-    for name in ("left_angle_rad", "right_angle_rad", "drum_angle_rad", "flywheel_angle_rad"):
-        assert np.ptp(block[name][late]) < 1e-12, name
+    after = block.time_s > stepper.stop_time_s
+    assert np.ptp(block["drum_angle_rad"][after]) == 0.0
+    assert stepper.breakaways == 0
+    w = np.abs(block["flywheel_speed_rad_s"])
+    first = w[after & (block.time_s < stepper.stop_time_s + 5.0)].max()
+    last = w[block.time_s > 55.0].max()
+    assert last < 0.01 * first  # zeta w_n = 0.146 1/s: exp(-0.146 x 48) = 9e-4
 
 
 def test_step_at_the_limit_gives_the_converged_event():

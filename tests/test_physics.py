@@ -81,19 +81,6 @@ def test_contact_never_pulls_and_leading_shoe_carries_more(symmetric_rk4):
     )
 
 
-def test_pivot_forces_equal_and_nothing_moves_after_standstill(symmetric_rk4):
-    b = symmetric_rk4.samples
-    after = b.time_s > symmetric_rk4.stop_time_s + 0.3  # shoes settled on the locked drum
-    assert after.sum() > 1000
-    assert np.all(b["regime"][after] == L.REGIME_STOPPED)
-    assert np.all(b["drum_speed_rad_s"][after] == 0.0)
-    assert np.all(b["left_friction_force_n"][after] == 0.0)
-    fl, fr = b.pivot_force_magnitude("left")[after], b.pivot_force_magnitude("right")[after]
-    np.testing.assert_allclose(fl, fr, rtol=1e-6)
-    # no chatter or creep: the pivot forces are steady once settled
-    assert np.ptp(fl) < 1e-6 * fl.mean()
-
-
 def _mirror_run(defects: Defects, speed: float):
     params = BrakeParameters().with_overrides({"driveline": {"initial_speed_rad_s": speed}})
     stepper = FixedStepStepper(BrakeSetup(params=params, defects=defects), 4e-5)

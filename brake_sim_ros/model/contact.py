@@ -158,7 +158,7 @@ def shoe_forces(p, base, omega, actuation, kin, fn, ff, v_slide):
 
     Returns the :data:`N_EVAL` slots of :func:`shoe_eval`.
     """
-    eps, eps_dot, vt, xx, xy, dist, nx, ny, c, sn = kin
+    eps, eps_dot, _vt, xx, xy, dist, nx, ny, c, sn = kin
     s = p[base + L.S_SIGN]
     px = p[base + L.S_PIVOT_X]
     py = p[base + L.S_PIVOT_Y]
@@ -229,8 +229,5 @@ def shoe_eval(p, base, theta, omega, drum_speed, actuation, mode, stuck=0, share
     kin = kinematics(p, base, theta, omega)
     fn = normal_force(p, base, kin[0], kin[1], mode)
     v_slide = sliding_speed(kin, drum_speed)
-    if stuck:
-        ff = share * p[L.P_FRICTION_COEFFICIENT] * fn
-    else:
-        ff = sliding_friction(p, fn, v_slide)
+    ff = share * p[L.P_FRICTION_COEFFICIENT] * fn if stuck else sliding_friction(p, fn, v_slide)
     return shoe_forces(p, base, omega, actuation, kin, fn, ff, v_slide)

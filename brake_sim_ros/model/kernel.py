@@ -560,7 +560,9 @@ def fixed_step_advance(
                 # modes frozen for the step; k1 (auto) equals k1 with these modes
                 ml = L.CONTACT_ON if h_start[0] > 0.0 else L.CONTACT_OFF
                 mr = L.CONTACT_ON if h_start[1] > 0.0 else L.CONTACT_OFF
-            rk4_step(y, k1, t, dt, p, gl, tl, fl, gr, tr, fr, stuck, ml, mr, k2, k3, k4, tmp, out, y_new)
+            rk4_step(
+                y, k1, t, dt, p, gl, tl, fl, gr, tr, fr, stuck, ml, mr, k2, k3, k4, tmp, out, y_new
+            )
             accept = True
             if located:
                 el, hl = _shoe_switch(p, 0, y_new)

@@ -153,7 +153,10 @@ def _balance(p, y, fel, fer, stuck, touch, shoes, cache):
             fe = fel if i == 0 else fer
             if cache[i, C_VALID] > 0.0 and cache[i, C_FE] == fe:
                 v_new = wd * cache[i, C_DIST]
-                if abs(v_new) > SATURATED_SLIP * vs and v_new * cache[i, C_OUT + contact.E_V_SLIDE] > 0:
+                if (
+                    abs(v_new) > SATURATED_SLIP * vs
+                    and v_new * cache[i, C_OUT + contact.E_V_SLIDE] > 0
+                ):
                     cache[i, C_OUT + contact.E_V_SLIDE] = v_new
                     cache[i, C_OUT + contact.E_FRICTION_POWER] = (
                         cache[i, C_OUT + contact.E_FF] * v_new

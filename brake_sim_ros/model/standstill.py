@@ -120,7 +120,7 @@ def slips(p, y):
 def at_rest(p, y):
     """Whether the vehicle has come to rest in the state ``y`` of a held drum: the rotor's
     remaining energy fits in the coupling below the static capacity (see the module notes)."""
-    coupling, capacity = hold_torques(p, y)
+    _coupling, capacity = hold_torques(p, y)
     if p[L.P_RIGID_COUPLING] > 0.0:
         return capacity > 0.0
     k_s = p[L.P_COUPLING_STIFFNESS]
