@@ -176,11 +176,12 @@ def shoe_forces(p, base, omega, actuation, kin, fn, ff, v_slide):
     moment = (xx - px) * fcy - (xy - py) * fcx + tx * fey - ty * fex
     theta_ddot = s * moment / p[base + L.S_INERTIA] if enabled else 0.0
     p_contact = 0.0
-    if enabled and eps > 0.0:
+    if enabled:
         # Kelvin-Voigt loss: power into the contact minus the rate of the elastic energy
-        # k eps^2 / 2 (booked whenever eps > 0, also while the force is off: with fn = 0
-        # the elastic energy the balance counts is lost, not returned)
-        p_contact = (fn - p[L.P_CONTACT_STIFFNESS] * eps) * eps_dot
+        # k max(eps, 0)^2 / 2 that the balance counts (also while the force is off: with
+        # fn = 0 that elastic energy is lost, not returned). Not gated on eps > 0: a located
+        # onset sits at eps == 0.0 exactly, where the force already pushes with c eps_dot.
+        p_contact = (fn - p[L.P_CONTACT_STIFFNESS] * max(eps, 0.0)) * eps_dot
     p_act = fex * (-w * ty) + fey * (w * tx)
     return (
         theta_ddot,
