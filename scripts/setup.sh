@@ -64,6 +64,15 @@ fi
 py_ok() {  # $1: interpreter; true if it runs and is Python >= 3.11
   "$1" -c 'import sys; sys.exit(sys.version_info < (3, 11))' 2>/dev/null
 }
+
+# Compile the physics kernels (cached per source version, a no-op when cached), so that the
+# first brake-sim command does not sit silent while numba compiles; then end successfully.
+finish() {
+  "$VENV/bin/python" -m brake_sim_ros.solvers.warmup
+  log "done"
+  exit 0
+}
+
 if [[ -n "${PYTHON:-}" ]]; then
   PY="$PYTHON"
 elif [[ $SYSTEM_ROS == 1 ]]; then
@@ -161,8 +170,7 @@ else
 fi
 if [[ $FORCE == 0 && -f "$MSG_STAMP" && "$(cat "$MSG_STAMP")" == "$msg_hash" && -f "$installed_marker" ]]; then
   log "brake_sim_msgs up to date (msg_defs unchanged), skipping the build"
-  log "done"
-  exit 0
+  finish
 fi
 rm -f "$MSG_STAMP"
 
@@ -192,8 +200,7 @@ if [[ $SYSTEM_ROS == 1 ]]; then
     log "before running ROS code: source $ROS_SETUP && source $BUILD_DIR/install/share/brake_sim_msgs/local_setup.bash"
   fi
   echo "$msg_hash" > "$MSG_STAMP"
-  log "done"
-  exit 0
+  finish
 fi
 
 # Wheels mode: plain cmake against the venv prefix, using the cmake and ninja
@@ -248,4 +255,4 @@ step "install" "$CMAKE" --install "$BUILD_DIR"
 grep -E "CMake (Warning|Deprecation)" -A 6 "$LOG" >&2 || true
 echo "$msg_hash" > "$MSG_STAMP"
 log "brake_sim_msgs installed into .venv"
-log "done"
+finish

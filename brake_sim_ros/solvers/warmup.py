@@ -1,0 +1,67 @@
+"""Compile every physics kernel once, ahead of use, and say so while it happens.
+
+numba compiles a kernel on its first call and keeps the machine code in the on-disk cache
+(see :mod:`brake_sim_ros.model`). A first call otherwise sits silent for tens of seconds;
+:func:`ensure_compiled` runs a tiny event through every path (each fixed-step scheme, the
+sample evaluation of the reference solver, the contact-regime level and the step-limit
+analysis) when the cache has no record of it, printing one line before and one after. The
+set-up command runs it, so the first ``brake-sim`` command starts at once.
+
+Run ``python -m brake_sim_ros.solvers.warmup`` to compile (or check) explicitly.
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+import numba
+
+_MARKER = "brake_sim_compiled"
+
+
+def _marker() -> Path | None:
+    cache = numba.config.CACHE_DIR
+    return Path(cache) / _MARKER if cache else None
+
+
+def is_compiled() -> bool:
+    """Whether the kernels of this source version are in the cache already."""
+    marker = _marker()
+    return marker is not None and marker.exists()
+
+
+def compile_kernels() -> float:
+    """Run every kernel path once on a tiny event; returns the wall time taken, s."""
+    from brake_sim_ros.model.trajectory import BrakeSetup
+    from brake_sim_ros.solvers.contact_regime import run_contact_regime
+    from brake_sim_ros.solvers.fixed_step import FIXED_STEP_SCHEMES, FixedStepStepper
+    from brake_sim_ros.solvers.reference import run_reference
+
+    start = time.perf_counter()
+    setup = BrakeSetup()
+    for scheme in FIXED_STEP_SCHEMES:
+        FixedStepStepper(setup, 4e-5, scheme=scheme).advance(8, record_every=2)
+    run_reference(setup, 0.01, rtol=1e-6)
+    run_contact_regime(setup, 0.01)
+    return time.perf_counter() - start
+
+
+def ensure_compiled(say: Callable[[str], None] | None = None) -> None:
+    """Compile the kernels unless this source version's are cached, telling ``say``."""
+    if is_compiled():
+        return
+    say = say or (lambda line: print(line, file=sys.stderr, flush=True))
+    say("brake-sim: compiling the physics kernels (once per installed version, about 40 s)...")
+    took = compile_kernels()
+    marker = _marker()
+    if marker is not None:
+        marker.parent.mkdir(parents=True, exist_ok=True)
+        marker.write_text(f"compiled in {took:.1f} s\n", encoding="utf-8")
+    say(f"brake-sim: kernels compiled in {took:.1f} s")
+
+
+if __name__ == "__main__":
+    ensure_compiled(print)
