@@ -2,8 +2,9 @@
 
 Definitions (used by the validation report and the tests alike):
 
-* impact: a contact onset, the instant a shoe's indentation crosses zero upward
-  (linearly interpolated between samples);
+* impact: a contact onset as :mod:`.onsets` defines it, at the instant the shoe's
+  indentation crosses zero upward (linearly interpolated between samples); a contact
+  already present at the first sample is no impact;
 * impact period ``T``: time from a shoe's first impact to its second; the whole series of
   onset-to-onset intervals is kept too;
 * peak pivot force of an impact: the largest ``|F_pivot|`` between that onset and the
@@ -21,6 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from brake_sim_ros.analysis.onsets import contact_changes, crossing_times, in_contact
 from brake_sim_ros.model.trajectory import SampleBlock
 
 CONTACT_WINDOW_S = (1.0, 6.0)
@@ -66,16 +68,6 @@ class EventMetrics:
 
     def shoe(self, side: str) -> ShoeMetrics:
         return self.left if side == "left" else self.right
-
-
-def _crossings(t: np.ndarray, x: np.ndarray, upward: bool) -> tuple[np.ndarray, np.ndarray]:
-    """Interpolated times where ``x`` crosses zero, and the sample index after each."""
-    if upward:
-        idx = np.flatnonzero((x[:-1] <= 0.0) & (x[1:] > 0.0))
-    else:
-        idx = np.flatnonzero((x[:-1] > 0.0) & (x[1:] <= 0.0))
-    frac = -x[idx] / (x[idx + 1] - x[idx])
-    return t[idx] + frac * (t[idx + 1] - t[idx]), idx + 1
 
 
 def _refined_peak(y: np.ndarray, i: int) -> float:
@@ -141,8 +133,10 @@ def shoe_metrics(
     t = block.time_s
     eps = block[f"{side}_indentation_m"]
     fr = block.pivot_force_magnitude(side)
-    onsets, on_idx = _crossings(t, eps, upward=True)
-    seps, sep_idx = _crossings(t, eps, upward=False)
+    changes = contact_changes(in_contact(eps))  # no change at the first sample
+    on_idx, sep_idx = changes.onsets, changes.separations
+    onsets = crossing_times(t, eps, on_idx)
+    seps = crossing_times(t, eps, sep_idx)
     peaks = []
     for i0 in on_idx:
         later = sep_idx[sep_idx > i0 - 1]

@@ -20,6 +20,7 @@ from sensor_msgs.msg import JointState
 from std_msgs.msg import Header
 
 from brake_sim_ros.analysis import contact_events
+from brake_sim_ros.analysis.onsets import in_contact
 from brake_sim_ros.model.defects import Defects
 from brake_sim_ros.model.layout import COL
 from brake_sim_ros.model.parameters import BrakeParameters
@@ -135,8 +136,8 @@ def brake_state(block: SampleBlock, row: int) -> BrakeState:
         left_contact_y_m=float(r[c["left_contact_y_m"]]),
         right_contact_x_m=float(r[c["right_contact_x_m"]]),
         right_contact_y_m=float(r[c["right_contact_y_m"]]),
-        left_in_contact=left_indent > 0.0,
-        right_in_contact=right_indent > 0.0,
+        left_in_contact=in_contact(left_indent),
+        right_in_contact=in_contact(right_indent),
         regime=int(r[c["regime"]]),
     )
 
