@@ -17,6 +17,7 @@ import dataclasses
 import math
 from typing import Any
 
+from brake_sim_ros.analysis.energy import ENERGY_COLUMNS, energy_balance
 from brake_sim_ros.model.fidelity import LEVELS, Needs
 from brake_sim_ros.scenarios import load_scenario
 from brake_sim_ros.scenarios.loader import Scenario
@@ -39,51 +40,13 @@ def _worst(values: list[float]) -> float:
 
 
 def energy_residual(result: RunResult, scenario: Scenario) -> float:
-    """Relative residual of the run's energy balance (NaN without the energy columns).
-
-    initial kinetic energy + actuator work = friction work + damper, contact and lock
-    losses + kinetic + coupling and contact elastic energy at the end, over the initial
-    kinetic energy.
-    """
+    """The run's energy-balance residual over its initial stored energy
+    (:attr:`~brake_sim_ros.analysis.energy.EnergyBalance.relative_residual`); NaN where the
+    level did not keep every column of the balance."""
     b = result.samples
-    names = (
-        "flywheel_speed_rad_s",
-        "drum_speed_rad_s",
-        "flywheel_angle_rad",
-        "drum_angle_rad",
-        "friction_work_j",
-        "coupling_damper_loss_j",
-        "contact_loss_j",
-        "actuation_work_j",
-        "lock_loss_j",
-    )
-    if not b.has(*names) or len(b) == 0:
+    if len(b) == 0 or not b.has(*ENERGY_COLUMNS):
         return NAN
-    params = scenario.setup.params
-    d = params.driveline
-    last = {n: float(b[n][-1]) for n in names}
-    e0 = 0.5 * (d.flywheel_inertia_kg_m2 + d.drum_inertia_kg_m2) * d.initial_speed_rad_s**2
-    kinetic = 0.5 * d.flywheel_inertia_kg_m2 * last["flywheel_speed_rad_s"] ** 2
-    kinetic += 0.5 * d.drum_inertia_kg_m2 * last["drum_speed_rad_s"] ** 2
-    twist = last["flywheel_angle_rad"] - last["drum_angle_rad"]
-    potential = 0.5 * d.coupling_stiffness_n_m_per_rad * twist**2
-    for side in ("left", "right"):
-        if b.has(f"{side}_speed_rad_s", f"{side}_indentation_m"):
-            kinetic += (
-                0.5 * params.shoe.inertia_about_pivot_kg_m2 * b[f"{side}_speed_rad_s"][-1] ** 2
-            )
-            eps = max(float(b[f"{side}_indentation_m"][-1]), 0.0)
-            potential += 0.5 * params.contact_stiffness_n_per_m * eps**2
-    supplied = e0 + last["actuation_work_j"]
-    spent = (
-        last["friction_work_j"]
-        + last["coupling_damper_loss_j"]
-        + last["contact_loss_j"]
-        + last["lock_loss_j"]
-        + kinetic
-        + potential
-    )
-    return abs(supplied - spent) / e0
+    return energy_balance(b, scenario.setup.params).relative_residual
 
 
 def _forced(scenario: Scenario, level: str, shoes: tuple[str, ...]) -> Scenario:

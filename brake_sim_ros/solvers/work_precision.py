@@ -170,7 +170,7 @@ def compare(
                 for s in SIDES
             ]
         ),
-        energy_residual=abs(books.residual_j) / books.stored_start_j,
+        energy_residual=books.relative_residual,
     )
 
 
