@@ -6,9 +6,17 @@ from __future__ import annotations
 import dataclasses
 import math
 
+import numpy as np
 import pytest
 
+from brake_sim_ros.analysis.comparison import (
+    impact_count_diff,
+    metric_errors,
+    relative_error,
+    worse,
+)
 from brake_sim_ros.analysis.energy import ENERGY_COLUMNS, energy_balance
+from brake_sim_ros.analysis.impacts import EventMetrics, ShoeMetrics
 from brake_sim_ros.scenarios import load_scenario
 from brake_sim_ros.solvers import fidelity_study
 from brake_sim_ros.solvers.run import RunResult
@@ -43,3 +51,49 @@ def test_studies_report_the_one_energy_residual(symmetric_run: RunResult):
         symmetric_run, samples=symmetric_run.samples.select(ENERGY_COLUMNS[:-1])
     )
     assert math.isnan(fidelity_study.energy_residual(partial, scenario))
+
+
+def _metrics(n_left: int, n_right: int, stop: float | None = 5.0) -> EventMetrics:
+    def shoe(n: int) -> ShoeMetrics:
+        onsets = 0.2 + 0.01 * np.arange(n)
+        peaks = np.full(n, 1000.0)
+        return ShoeMetrics(onsets, onsets + 0.005, peaks, 50.0, 0.3, 700.0)
+
+    return EventMetrics(shoe(n_left), shoe(n_right), stop)
+
+
+def test_impact_count_diff_is_summed_over_the_shoes():
+    """One impact missed on the left and one added on the right count 2 (the worse shoe
+    would say 1): the figure is the number of impacts the run gets wrong."""
+    run, ref = _metrics(8, 9), _metrics(9, 8)
+    assert impact_count_diff(run, ref) == 2
+    assert impact_count_diff(run, ref, ("left",)) == 1
+    assert metric_errors(run, ref).impact_count_diff == 2
+
+
+def test_relative_errors_and_the_worse_shoe():
+    assert relative_error(1.01, 1.0) == pytest.approx(0.01)
+    for value, reference in ((None, 1.0), (1.0, None), (math.nan, 1.0), (1.0, math.inf)):
+        assert math.isnan(relative_error(value, reference))
+    assert worse([0.1, 0.3]) == 0.3
+    assert math.isnan(worse([0.1, math.nan])) and math.isnan(worse([]))
+    # a shoe with one impact has no period: the worse-shoe period error is NaN, not the other's
+    errors = metric_errors(_metrics(1, 9), _metrics(9, 9))
+    assert math.isnan(errors.period) and errors.first_peak == 0.0
+    assert math.isnan(metric_errors(_metrics(9, 9, None), _metrics(9, 9)).stop_time)
+
+
+def test_both_studies_use_the_one_comparison(symmetric_run: RunResult):
+    scenario = load_scenario("symmetric")
+    ref = dataclasses.replace(symmetric_run, metrics=_metrics(9, 8, 6.6))
+    run = dataclasses.replace(symmetric_run, metrics=_metrics(8, 9, 6.7))
+    expected = metric_errors(run.metrics, ref.metrics)
+    assert expected.impact_count_diff == 2
+    row = compare("s", "x", run.samples, run.metrics, ref.metrics, scenario, 1.0, 1.0)
+    fid = fidelity_study._row("s", "x", run, ref, 1.0, scenario)
+    for got in (dataclasses.asdict(row), fid):
+        assert got["impact_count_diff"] == expected.impact_count_diff
+        assert got["err_stop_time"] == expected.stop_time
+        assert got["err_first_peak"] == expected.first_peak
+        assert got["err_period"] == expected.period
+        assert got["err_contact_force"] == expected.contact_force

@@ -6,8 +6,10 @@ that level and ask for everything it delivers; the figures are CPU seconds per s
 second (best of ``repeats``), the real-time factor, and relative errors against the full
 model: stop time, first-impact peak pivot force and impact period (both shoes, the worse
 one), contact-regime mean pivot force (both shoes, the worse one), the impact count
-difference, and the energy-balance residual of the level's own balance. NaN where a level
-does not deliver that output.
+difference (impacts missed or added, summed over the shoes), all as
+:mod:`brake_sim_ros.analysis.comparison` defines them for the accuracy study too, and the
+residual of the level's own energy balance (:mod:`brake_sim_ros.analysis.energy`). NaN
+where a level does not deliver that output.
 """
 
 from __future__ import annotations
@@ -17,6 +19,7 @@ import dataclasses
 import math
 from typing import Any
 
+from brake_sim_ros.analysis.comparison import metric_errors, relative_error
 from brake_sim_ros.analysis.energy import ENERGY_COLUMNS, energy_balance
 from brake_sim_ros.model.fidelity import LEVELS, Needs
 from brake_sim_ros.scenarios import load_scenario
@@ -26,17 +29,6 @@ from brake_sim_ros.solvers.run import RunResult, run_scenario
 TARGET_CONTACT_X_REAL_TIME = 1000.0
 TARGET_CONTACT_REL = 0.01
 NAN = float("nan")
-
-
-def _rel(value: float | None, ref: float | None) -> float:
-    if value is None or ref is None or not (math.isfinite(value) and math.isfinite(ref)):
-        return NAN
-    return abs(value / ref - 1.0)
-
-
-def _worst(values: list[float]) -> float:
-    finite = [v for v in values if math.isfinite(v)]
-    return max(finite) if len(finite) == len(values) and finite else NAN
 
 
 def energy_residual(result: RunResult, scenario: Scenario) -> float:
@@ -68,31 +60,23 @@ def _best_run(scenario: Scenario, repeats: int) -> RunResult:
 def _row(
     scheme: str, setting: str, r: RunResult, ref: RunResult, duration: float, scenario: Scenario
 ) -> dict[str, Any]:
-    sides = [s for s in ("left", "right") if s in r.plan.shoes]
-    m, rm = r.metrics, ref.metrics
+    sides = tuple(s for s in ("left", "right") if s in r.plan.shoes)
+    errors = metric_errors(r.metrics, ref.metrics, sides)
     impacts = "impacts" in r.plan.level.outputs
-    peak = _worst(
-        [_rel(m.shoe(s).first_impact_peak_n, rm.shoe(s).first_impact_peak_n) for s in sides]
-    )
-    period = _worst([_rel(m.shoe(s).period_s, rm.shoe(s).period_s) for s in sides])
-    contact = _worst(
-        [_rel(m.shoe(s).contact_regime_force_n, rm.shoe(s).contact_regime_force_n) for s in sides]
-    )
-    count = max(abs(m.shoe(s).n_impacts - rm.shoe(s).n_impacts) for s in sides) if impacts else -1
     cpu = r.cpu_s / duration
     return {
         "scheme": scheme,
         "setting": setting,
         "cpu_s_per_sim_s": cpu,
         "x_real_time": 1.0 / cpu if cpu > 0 else math.inf,
-        "err_stop_time": _rel(m.stop_time_s, rm.stop_time_s),
-        "err_first_peak": peak if impacts else NAN,
-        "err_period": period if impacts else NAN,
-        "impact_count_diff": count,
-        "err_contact_force": contact,
+        "err_stop_time": errors.stop_time,
+        "err_first_peak": errors.first_peak if impacts else NAN,
+        "err_period": errors.period if impacts else NAN,
+        "impact_count_diff": errors.impact_count_diff if impacts else -1,
+        "err_contact_force": errors.contact_force,
         "energy_residual": energy_residual(r, scenario),
         "memory_bytes": r.memory_bytes,
-        "model_stop_err": _rel(r.model_stop_time_s, rm.stop_time_s),
+        "model_stop_err": relative_error(r.model_stop_time_s, ref.metrics.stop_time_s),
     }
 
 
