@@ -66,7 +66,8 @@ class SampleBlock:
 
     @property
     def time_s(self) -> np.ndarray:
-        return self.data[:, 0]
+        """Sample times, s (the ``time_s`` column)."""
+        return self["time_s"]
 
     def pivot_force_magnitude(self, side: str) -> np.ndarray:
         """|F_pivot| of one shoe, N."""

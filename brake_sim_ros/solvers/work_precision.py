@@ -41,7 +41,6 @@ from brake_sim_ros.analysis.comparison import metric_errors
 from brake_sim_ros.analysis.energy import energy_balance
 from brake_sim_ros.analysis.impacts import EventMetrics, event_metrics
 from brake_sim_ros.errors import BrakeSimError
-from brake_sim_ros.model import layout as L
 from brake_sim_ros.model.trajectory import SampleBlock
 from brake_sim_ros.scenarios import load_scenario
 from brake_sim_ros.scenarios.loader import Scenario
@@ -175,17 +174,19 @@ def convergence(
 ) -> Convergence:
     """State error at :data:`ORDER_TIME_S` s per step and the least-squares order."""
     times = np.array([ORDER_TIME_S])
-    ref = run_reference(
-        scenario.setup, ORDER_TIME_S + 1e-3, sample_times=times, rtol=1e-12
-    ).samples.data[0]
-    cols = [L.COL[name] for name, _ in _ORDER_COLUMNS]
+    names = [name for name, _ in _ORDER_COLUMNS]
     scale = np.array([s for _, s in _ORDER_COLUMNS])
+    ref_block = run_reference(
+        scenario.setup, ORDER_TIME_S + 1e-3, sample_times=times, rtol=1e-12
+    ).samples
+    ref = np.array([ref_block[n][0] for n in names])
     errors = []
     for dt in steps_s:
         stepper = FixedStepStepper(scenario.setup, dt, scheme=scheme, check_step=False)
-        data = stepper.run(ORDER_TIME_S + 2 * dt).data
-        row = data[round(ORDER_TIME_S / dt)]
-        errors.append(float(np.max(np.abs(row[cols] - ref[cols]) / scale)))
+        block = stepper.run(ORDER_TIME_S + 2 * dt)
+        at = round(ORDER_TIME_S / dt)
+        state = np.array([block[n][at] for n in names])
+        errors.append(float(np.max(np.abs(state - ref) / scale)))
     order = float(np.polyfit(np.log(steps_s), np.log(errors), 1)[0])
     return Convergence(scheme, tuple(steps_s), tuple(errors), order)
 
