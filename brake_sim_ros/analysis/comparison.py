@@ -19,8 +19,7 @@ import math
 from dataclasses import dataclass
 
 from brake_sim_ros.analysis.impacts import EventMetrics
-
-SIDES = ("left", "right")
+from brake_sim_ros.model.assembly import SIDES
 
 
 def relative_error(value: float | None, reference: float | None) -> float:

@@ -17,10 +17,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from brake_sim_ros.model.assembly import SIDES
 from brake_sim_ros.model.parameters import BrakeParameters
 from brake_sim_ros.model.trajectory import SampleBlock
 
-SIDES = ("left", "right")
 _LOSSES = ("friction_work_j", "coupling_damper_loss_j", "contact_loss_j", "lock_loss_j")
 # every column the books read (a run restricted to some outputs may not keep them all)
 ENERGY_COLUMNS: tuple[str, ...] = (
