@@ -38,8 +38,8 @@ def test_changes_with_unknown_and_carried_predecessor():
     assert _changes(flags, before=True) == ([4, 6], [2, 5])
     assert _changes([0, 1], before=True) == ([1], [0])
     assert _changes([]) == ([], [])
-    c = ContactChanges(np.array([0, 4]), np.array([2, 5]))
-    assert c.positions().tolist() == [0, 2, 4, 5]
+    c = contact_changes(np.array([1, 0, 0, 1, 0], dtype=bool), before=False)
+    assert c.positions.tolist() == [0, 1, 3, 4]
 
 
 def test_crossing_time_is_the_linear_zero_crossing():

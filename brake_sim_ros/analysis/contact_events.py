@@ -121,7 +121,7 @@ class ContactEventDetector:
         contact = in_contact(block[f"{side}_indentation_m"])
         magnitude = block.pivot_force_magnitude(side)
         episode = self._open[shoe]
-        changes = contact_changes(contact, before=episode is not None).positions()
+        changes = contact_changes(contact, before=episode is not None).positions
         events: list[ContactEvent] = []
         # segments [start, end) of constant contact flag; each change opens one with an event
         change_set = set(changes.tolist())

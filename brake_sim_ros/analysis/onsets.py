@@ -47,14 +47,12 @@ class ContactChanges:
     Attributes:
         onsets: positions of the first sample of each contact, increasing, int64.
         separations: positions of the first sample out of contact again, increasing, int64.
+        positions: onsets and separations together, increasing (never both at one).
     """
 
     onsets: np.ndarray
     separations: np.ndarray
-
-    def positions(self) -> np.ndarray:
-        """Onsets and separations together, increasing (they never share a position)."""
-        return np.sort(np.concatenate([self.onsets, self.separations]))
+    positions: np.ndarray
 
 
 def contact_changes(contact: np.ndarray, *, before: bool | None = None) -> ContactChanges:
@@ -68,13 +66,15 @@ def contact_changes(contact: np.ndarray, *, before: bool | None = None) -> Conta
     contact = np.asarray(contact, dtype=bool)
     if contact.size == 0:
         empty = np.zeros(0, dtype=np.int64)
-        return ContactChanges(empty, empty)
+        return ContactChanges(empty, empty, empty)
     previous = np.empty_like(contact)
     previous[0] = contact[0] if before is None else before
     previous[1:] = contact[:-1]
+    changed = contact != previous
     return ContactChanges(
-        onsets=np.flatnonzero(contact & ~previous),
-        separations=np.flatnonzero(~contact & previous),
+        onsets=np.flatnonzero(changed & contact),
+        separations=np.flatnonzero(changed & previous),
+        positions=np.flatnonzero(changed),
     )
 
 

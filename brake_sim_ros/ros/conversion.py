@@ -109,7 +109,8 @@ def state_rows(block: SampleBlock, stride: int) -> list[int]:
 def _reader(block: SampleBlock, row: int) -> Callable[[str], float]:
     """The value of a named column at ``row`` (by name: a block may keep only some columns,
     in its own order)."""
-    return lambda name: float(block[name][row])
+    r = block.data[row]
+    return lambda name: float(r[block.index_of(name)])
 
 
 def brake_state(block: SampleBlock, row: int) -> BrakeState:
@@ -153,12 +154,13 @@ def joint_state(block: SampleBlock, row: int) -> JointState:
     Shoe angles follow the core's sign (positive outward, toward the drum), so the left
     shoe turns counter-clockwise and the right shoe clockwise for a positive value.
     """
+    value = _reader(block, row)
     index = block.first_index + row
     return JointState(
         header=header(stamp_ns(index, block.sample_period_s)),
         name=list(JOINT_NAMES),
-        position=_doubles(np.array([block[n][row] for n in _JOINT_ANGLES])),
-        velocity=_doubles(np.array([block[n][row] for n in _JOINT_SPEEDS])),
+        position=_doubles(np.array([value(n) for n in _JOINT_ANGLES])),
+        velocity=_doubles(np.array([value(n) for n in _JOINT_SPEEDS])),
     )
 
 
