@@ -97,3 +97,31 @@ def test_both_studies_use_the_one_comparison(symmetric_run: RunResult):
         assert got["err_first_peak"] == expected.first_peak
         assert got["err_period"] == expected.period
         assert got["err_contact_force"] == expected.contact_force
+
+
+def _fidelity_row(scheme: str, **figures: float) -> dict:
+    nan = math.nan
+    row = dict.fromkeys(("err_stop_time", "err_first_peak", "err_period"), nan)
+    row.update(err_contact_force=nan, energy_residual=nan, model_stop_err=nan)
+    row.update(scheme=scheme, setting="symmetric", cpu_s_per_sim_s=0.01, x_real_time=100.0)
+    row.update(impact_count_diff=-1, memory_bytes=1e6)
+    return {**row, **figures}
+
+
+def test_fidelity_table_says_not_delivered_instead_of_nan(monkeypatch, capsys):
+    rows = [
+        _fidelity_row(
+            "level full",
+            err_stop_time=0.0,
+            impact_count_diff=0,
+            err_contact_force=0.0,
+            energy_residual=7.4e-8,
+        ),
+        _fidelity_row("level contact_regime", err_stop_time=1e-4, err_contact_force=1e-10),
+    ]
+    monkeypatch.setattr(fidelity_study, "fidelity_rows", lambda *args, **kwargs: rows)
+    assert fidelity_study.main([]) == 0
+    out = capsys.readouterr().out
+    assert "nan" not in out.lower()
+    assert "| 7.40e-08 |" in out
+    assert "| 1e-08 % | - | 1.00 MB" in out

@@ -113,7 +113,7 @@ def fidelity_rows(
 def _fmt(x: float, pct: bool = True) -> str:
     if isinstance(x, float) and math.isnan(x):
         return "-"
-    return f"{100 * x:.2g} %" if pct else f"{x:g}"
+    return f"{100 * x:.2g} %" if pct else f"{x:.2e}"
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -140,7 +140,7 @@ def main(argv: list[str] | None = None) -> int:
                 f"{r['scheme']} | {r['cpu_s_per_sim_s']:.3g} | {r['x_real_time']:.0f} |"
                 f" {stop} | {_fmt(r['err_first_peak'])} |"
                 f" {_fmt(r['err_period'])} | {count} | {_fmt(r['err_contact_force'])} |"
-                f" {r['energy_residual']:.2e} | {r['memory_bytes'] / 1e6:.2f} MB"
+                f" {_fmt(r['energy_residual'], pct=False)} | {r['memory_bytes'] / 1e6:.2f} MB"
             )
         contact = next(r for r in rows if r["scheme"] == "level contact_regime")
         ok = (
