@@ -10,12 +10,18 @@ import json
 import sys
 import time
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from brake_sim_ros import __version__
 from brake_sim_ros.errors import BrakeSimError
 from brake_sim_ros.scenarios.loader import SOLVER_METHODS
+
+if TYPE_CHECKING:  # the CLI imports the numerics only when a command needs them
+    from brake_sim_ros.analysis.impacts import ShoeMetrics
+    from brake_sim_ros.scenarios.loader import Scenario
+    from brake_sim_ros.solvers.run import RunResult
 
 EXIT_ERROR = 2
 
@@ -60,16 +66,34 @@ def _write_history(path: Path, result, scenario) -> None:
         )
 
 
-def cmd_simulate(args: argparse.Namespace) -> int:
-    from brake_sim_ros.scenarios import load_scenario
-    from brake_sim_ros.solvers.run import run_scenario
+def _shoe_summary(shoe: ShoeMetrics) -> str:
+    """One shoe's figures; a figure the run has no value for is "none" with the reason."""
+    parts = []
+    if shoe.impacts_analysed:
+        n = shoe.n_impacts
+        if n == 0:
+            parts.append("no impacts within the run")
+        else:
+            if n == 1:
+                period = "period T none (a single impact)"
+            else:
+                period = f"period T {1e3 * shoe.period_s:.2f} ms"
+            parts.append(
+                f"{n} impact{'s' if n > 1 else ''}, first at {shoe.onsets_s[0]:.4f} s"
+                f" ({shoe.first_impact_actuation_n:.1f} N actuation), first-impact peak"
+                f" |F_pivot| {shoe.first_impact_peak_n:.0f} N, {period}"
+            )
+    if shoe.no_contact_regime_reason:
+        parts.append(f"contact-regime |F_pivot| none: {shoe.no_contact_regime_reason}")
+    else:
+        digits = 0 if shoe.impacts_analysed else 1
+        parts.append(f"contact-regime |F_pivot| {shoe.contact_regime_force_n:.{digits}f} N")
+    return ", ".join(parts)
 
-    scenario = load_scenario(args.scenario)
-    rerun_targets = _rerun_targets(args)
-    progress = _progress(f"simulating {scenario.name}") if not args.quiet else None
-    result = run_scenario(
-        scenario, duration_s=args.duration, method=args.method, dt_s=args.dt, progress=progress
-    )
+
+def simulate_summary(result: RunResult, scenario: Scenario) -> str:
+    """What ``brake-sim simulate`` prints about a finished run: the level, the stop and cost,
+    and one line per shoe. No figure is printed as nan: it says "none" and why."""
     m = result.metrics
     chosen = result.plan
     sim_s = result.samples.time_s[-1] if len(result.samples) else 0.0
@@ -81,32 +105,33 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     else:
         stop = "not delivered by this level"
     unit = {"reference": "f-evals", "contact_regime": "RK4 steps"}.get(result.method, "steps")
-    print(
+    lines = [
         f"level {chosen.level.name} ({chosen.level.description}; shoes"
-        f" {', '.join(chosen.shoes)}): {chosen.reason}"
-    )
-    print(
+        f" {', '.join(chosen.shoes)}): {chosen.reason}",
         f"scenario {scenario.name} ({result.method}): drum stop {stop};"
         f" cost {result.cpu_s:.3f} s CPU for {sim_s:.3f} s simulated"
         f" ({rtf:.0f}x real time, {result.n_steps} {unit}); kept"
-        f" {len(result.samples.columns)} columns, {result.memory_bytes / 1e6:.2f} MB"
-    )
-    impacts = "impacts" in chosen.level.outputs
+        f" {len(result.samples.columns)} columns, {result.memory_bytes / 1e6:.2f} MB",
+    ]
     for side in ("left", "right"):
-        s = m.shoe(side)
         if not any(c.startswith(f"{side}_") for c in result.samples.columns):
-            print(f"  {side:5s}: not asked for")
+            lines.append(f"  {side:5s}: not asked for")
             continue
-        if not impacts:
-            print(f"  {side:5s}: contact-regime |F_pivot| {s.contact_regime_force_n:.1f} N")
-            continue
-        first = s.onsets_s[0] if s.n_impacts else float("nan")
-        print(
-            f"  {side:5s}: {s.n_impacts} impacts, first at {first:.4f} s"
-            f" ({s.first_impact_actuation_n:.1f} N actuation), first-impact peak |F_pivot|"
-            f" {s.first_impact_peak_n:.0f} N, period T {1e3 * s.period_s:.2f} ms,"
-            f" contact-regime |F_pivot| {s.contact_regime_force_n:.0f} N"
-        )
+        lines.append(f"  {side:5s}: {_shoe_summary(m.shoe(side))}")
+    return "\n".join(lines)
+
+
+def cmd_simulate(args: argparse.Namespace) -> int:
+    from brake_sim_ros.scenarios import load_scenario
+    from brake_sim_ros.solvers.run import run_scenario
+
+    scenario = load_scenario(args.scenario)
+    rerun_targets = _rerun_targets(args)
+    progress = _progress(f"simulating {scenario.name}") if not args.quiet else None
+    result = run_scenario(
+        scenario, duration_s=args.duration, method=args.method, dt_s=args.dt, progress=progress
+    )
+    print(simulate_summary(result, scenario))
     if args.out:
         _write_history(Path(args.out), result, scenario)
         print(

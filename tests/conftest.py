@@ -6,8 +6,11 @@ import functools
 
 import pytest
 
+from brake_sim_ros.model.trajectory import SampleBlock
 from brake_sim_ros.scenarios import load_scenario
 from brake_sim_ros.solvers.run import RunResult, run_scenario
+
+IMPACTING_S = 0.3  # the impacting regime of the symmetric run ends at 0.27 s
 
 
 @functools.cache
@@ -30,3 +33,13 @@ def symmetric_rk4() -> RunResult:
 @pytest.fixture(scope="session")
 def symmetric_reference() -> RunResult:
     return cached_run("symmetric", "reference")
+
+
+@pytest.fixture(scope="session")
+def symmetric_impacting(symmetric_run: RunResult) -> SampleBlock:
+    """The first :data:`IMPACTING_S` of the symmetric run (every impact of both shoes)."""
+    samples = symmetric_run.samples
+    n = round(IMPACTING_S / samples.sample_period_s)
+    return SampleBlock(
+        samples.data[:n], samples.first_index, samples.sample_period_s, samples.columns
+    )

@@ -3,12 +3,17 @@
 from __future__ import annotations
 
 import json
+import re
 import subprocess
 import sys
 
 import numpy as np
 
 from brake_sim_ros.analysis.validation import checks
+from brake_sim_ros.cli import simulate_summary
+from brake_sim_ros.scenarios import load_scenario
+from brake_sim_ros.scenarios.loader import parse_scenario
+from brake_sim_ros.solvers.run import run_scenario
 
 
 def _cli(*args, cwd=None):
@@ -88,3 +93,64 @@ def test_validate_writes_report_and_json(tmp_path):
         "drum_speed.png",
     ):
         assert (tmp_path / "v" / png).stat().st_size > 10_000
+
+
+# --- the simulate summary: no nan, "none" with the reason ------------------------------------
+SLOW_DRUM = """
+[parameters.driveline]
+initial_speed_rad_s = 3.0
+flywheel_inertia_kg_m2 = 0.5
+"""
+
+
+def _summary(text: str) -> str:
+    scenario = parse_scenario(f'name = "t"\n{text}')
+    return simulate_summary(run_scenario(scenario), scenario)
+
+
+def _shoe_lines(summary: str) -> list[str]:
+    assert "nan" not in summary.lower(), summary
+    return [line for line in summary.splitlines() if line.startswith("  ")]
+
+
+def test_summary_of_a_whole_event_has_every_figure(symmetric_run):
+    lines = _shoe_lines(simulate_summary(symmetric_run, load_scenario("symmetric")))
+    assert len(lines) == 2
+    for line in lines:
+        assert "impacts, first at" in line and "period T" in line and "none" not in line
+        assert re.search(r"contact-regime \|F_pivot\| \d+ N$", line), line
+
+
+def test_summary_says_why_a_stop_has_no_contact_regime():
+    """The drum locks at 0.22 s, while the shoes still bounce: no contact regime."""
+    for line in _shoe_lines(_summary(f"duration_s = 0.5\n{SLOW_DRUM}")):
+        assert re.search(
+            r"contact-regime \|F_pivot\| none: the drum locked at 0\.2\d+ s during the"
+            r" impacting regime, before the contact-regime window \(1-6 s\)$",
+            line,
+        ), line
+    # the quasi-static level has no impacting regime to speak of
+    needs = '[needs]\noutputs = ["stop_time", "contact_regime_forces"]'
+    for line in _shoe_lines(_summary(f"duration_s = 0.5\n{SLOW_DRUM}\n{needs}")):
+        assert re.search(r"none: the drum locked at 0\.\d+ s, before the contact", line), line
+
+
+def test_summary_of_runs_too_short_for_a_figure():
+    lines = _shoe_lines(_summary("duration_s = 0.1"))
+    for line in lines:
+        assert line.endswith(
+            ": no impacts within the run, contact-regime |F_pivot| none: not reached within"
+            " the run: it ends at 0.100 s, before the contact-regime window (1-6 s)"
+        ), line
+    one = _shoe_lines(
+        _summary('duration_s = 0.23\n[needs]\noutputs = ["impacts"]\nshoes = ["left"]')
+    )
+    assert "1 impact, first at" in one[0] and "period T none (a single impact)" in one[0]
+    assert one[1] == "  right: not asked for"
+    motion = _shoe_lines(_summary('duration_s = 0.1\n[needs]\noutputs = ["shoe_motion"]'))
+    assert all(
+        line.endswith(
+            ": contact-regime |F_pivot| none: its pivot force was not kept (not asked for)"
+        )
+        for line in motion
+    ), motion

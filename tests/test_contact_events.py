@@ -14,21 +14,7 @@ from brake_sim_ros.analysis.contact_events import ContactEventDetector
 from brake_sim_ros.model import layout as L
 from brake_sim_ros.model.trajectory import SampleBlock
 from brake_sim_ros.solvers.run import RunResult
-
-IMPACTING_S = 0.3  # the impacting regime of the symmetric run ends at 0.27 s
-
-
-def cut(block: SampleBlock, sizes: list[int]) -> list[SampleBlock]:
-    """``block`` cut into consecutive blocks of ``sizes`` (cycled), the last one shorter."""
-    out, start, k = [], 0, 0
-    while start < len(block):
-        n = sizes[k % len(sizes)]
-        rows = block.data[start : start + n]
-        out.append(
-            SampleBlock(rows, block.first_index + start, block.sample_period_s, block.columns)
-        )
-        start, k = start + n, k + 1
-    return out
+from tests.sample_blocks import cut
 
 
 def detect(blocks: list[SampleBlock]) -> list[ce.ContactEvent]:
@@ -36,21 +22,11 @@ def detect(blocks: list[SampleBlock]) -> list[ce.ContactEvent]:
     return [e for b in blocks for e in detector.feed(b)]
 
 
-@pytest.fixture(scope="module")
-def impacting(symmetric_run: RunResult) -> SampleBlock:
-    """The first 0.3 s of the symmetric run (every impact of both shoes), one block."""
-    samples = symmetric_run.samples
-    n = round(IMPACTING_S / samples.sample_period_s)
-    return SampleBlock(
-        samples.data[:n], samples.first_index, samples.sample_period_s, samples.columns
-    )
-
-
-def test_onsets_and_peaks_match_the_impact_analysis(symmetric_run: RunResult, impacting):
-    events = detect(cut(impacting, [250]))  # the node's default chunk: 10 ms
+def test_onsets_and_peaks_match_the_impact_analysis(symmetric_run: RunResult, symmetric_impacting):
+    events = detect(cut(symmetric_impacting, [250]))  # the node's default chunk: 10 ms
     assert events == sorted(events, key=lambda e: (e.sample_index, e.shoe))
-    dt = impacting.sample_period_s
-    t = impacting.time_s
+    dt = symmetric_impacting.sample_period_s
+    t = symmetric_impacting.time_s
     for shoe, side in enumerate(ce.SHOES):
         metrics = symmetric_run.metrics.shoe(side)
         mine = [e for e in events if e.shoe == shoe]
@@ -65,7 +41,7 @@ def test_onsets_and_peaks_match_the_impact_analysis(symmetric_run: RunResult, im
         np.testing.assert_array_equal([e.sample_index for e in seps], expected_sep)
         # onsets and separations alternate, starting with an onset
         assert [e.kind for e in mine][: 2 * len(seps)] == [0, 1] * len(seps)
-        magnitude = impacting.pivot_force_magnitude(side)
+        magnitude = symmetric_impacting.pivot_force_magnitude(side)
         for on, sep, analysed in zip(onsets, seps, metrics.impact_peaks_n, strict=False):
             window = magnitude[on.sample_index : sep.sample_index]
             assert sep.peak_pivot_force_n == window.max()
@@ -78,10 +54,10 @@ def test_onsets_and_peaks_match_the_impact_analysis(symmetric_run: RunResult, im
 
 
 @pytest.mark.parametrize("sizes", [[1], [7, 1, 250, 3], [1000], [17, 4000]])
-def test_events_do_not_depend_on_the_chunking(impacting, sizes):
-    whole = detect([impacting])
+def test_events_do_not_depend_on_the_chunking(symmetric_impacting, sizes):
+    whole = detect([symmetric_impacting])
     assert len(whole) >= 32
-    assert detect(cut(impacting, sizes)) == whole
+    assert detect(cut(symmetric_impacting, sizes)) == whole
 
 
 def test_episode_spanning_blocks_and_contact_at_the_first_sample():
@@ -107,8 +83,8 @@ def test_episode_spanning_blocks_and_contact_at_the_first_sample():
         assert second_sep.duration_s == 2.5
 
 
-def test_a_gap_is_refused_and_reset_starts_over(impacting):
-    blocks = cut(impacting, [300])
+def test_a_gap_is_refused_and_reset_starts_over(symmetric_impacting):
+    blocks = cut(symmetric_impacting, [300])
     detector = ContactEventDetector()
     detector.feed(blocks[0])
     with pytest.raises(ValueError, match="reset"):

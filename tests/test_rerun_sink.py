@@ -20,6 +20,7 @@ pytestmark = pytest.mark.filterwarnings("ignore:module 'sre_(parse|constants)' i
 rr = pytest.importorskip("rerun")
 pytest.importorskip("brake_sim_msgs", reason="ROS interfaces not built (run scripts/setup.sh)")
 
+from brake_sim_ros.analysis.onsets import contact_changes, in_contact  # noqa: E402
 from brake_sim_ros.cli import main  # noqa: E402
 from brake_sim_ros.ros import parameters as ros_params  # noqa: E402
 from brake_sim_ros.ros import stream  # noqa: E402
@@ -186,7 +187,8 @@ def test_impacts_without_contact_events_at_full_state_rate(tmp_path: Path):
         if topic is not stream.CONTACT_EVENTS:
             sink.write(topic, msg, ns)
     sink.close()
-    metrics = run_scenario(scenario, duration_s=duration).metrics
+    run = run_scenario(scenario, duration_s=duration)
+    metrics = run.metrics
     for side in E.SIDES:
         assert metrics.shoe(side).n_impacts >= 8
         assert sink.impacts[side] == metrics.shoe(side).n_impacts
@@ -197,6 +199,9 @@ def test_impacts_without_contact_events_at_full_state_rate(tmp_path: Path):
         assert marks.size == onsets_ns.size
         # each marker sits at the sample where the onset is first seen (the next sample)
         assert np.all((marks >= onsets_ns) & (marks - onsets_ns <= DT_NS))
+        # ... which is the onset sample of the shared definition (a run starts out of contact)
+        shared = contact_changes(in_contact(run.samples[f"{side}_indentation_m"]), before=False)
+        np.testing.assert_array_equal(marks, (run.samples.first_index + shared.onsets) * DT_NS)
 
 
 # -- brake-sim view FILE.mcap --------------------------------------------------------------

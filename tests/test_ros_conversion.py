@@ -115,6 +115,15 @@ def test_brake_state_and_joint_state_map_the_columns(block):
     assert joints.header == msg.header
 
 
+def test_messages_read_the_columns_by_name(block):
+    """A block keeping its columns in another order gives the same messages."""
+    shuffled = block.select(("time_s", *reversed(block.columns[1:])))
+    for row in (0, 5_600, 29_000):
+        assert conversion.brake_state(shuffled, row) == conversion.brake_state(block, row)
+        assert conversion.joint_state(shuffled, row) == conversion.joint_state(block, row)
+    assert conversion.pivot_force_chunk(shuffled) == conversion.pivot_force_chunk(block)
+
+
 def test_all_finite_catches_any_non_finite_number(block):
     assert conversion.all_finite(block)
     for value in (math.nan, math.inf, -math.inf):

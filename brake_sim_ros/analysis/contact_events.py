@@ -1,10 +1,10 @@
 """Contact events (impact ground truth) from consecutive sample blocks, at the full rate.
 
-A *contact episode* of a shoe is a maximal run of consecutive samples whose indentation
-(``<side>_indentation_m``, m, positive = the lining penetrates the drum) is > 0. Its
-*onset* is the first sample in contact, its *separation* the first sample out of contact
-again; these are the samples :mod:`brake_sim_ros.analysis.impacts` reports (the sample
-after each interpolated zero crossing).
+A *contact episode* of a shoe is a maximal run of consecutive samples in contact, as
+:mod:`.onsets` defines it (indentation ``<side>_indentation_m`` > 0). Its *onset* is the
+first sample in contact, its *separation* the first sample out of contact again; these
+are the samples :mod:`brake_sim_ros.analysis.impacts` reports (the sample after each
+interpolated zero crossing), found by the same function.
 
 :class:`ContactEventDetector` is fed the blocks of a run in order and returns each event
 as soon as it is known: an onset in the block of its sample, a separation in the block of
@@ -22,6 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from brake_sim_ros.analysis.onsets import contact_changes, in_contact
 from brake_sim_ros.model.trajectory import SampleBlock
 
 SHOE_LEFT = 0
@@ -117,13 +118,10 @@ class ContactEventDetector:
             return []
         dt = block.sample_period_s
         first = int(block.first_index)
-        contact = block[f"{side}_indentation_m"] > 0.0
+        contact = in_contact(block[f"{side}_indentation_m"])
         magnitude = block.pivot_force_magnitude(side)
         episode = self._open[shoe]
-        was_in = np.empty(n, dtype=bool)
-        was_in[0] = episode is not None
-        was_in[1:] = contact[:-1]
-        changes = np.flatnonzero(contact != was_in)
+        changes = contact_changes(contact, before=episode is not None).positions
         events: list[ContactEvent] = []
         # segments [start, end) of constant contact flag; each change opens one with an event
         change_set = set(changes.tolist())

@@ -17,14 +17,21 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import numpy as np
-
-from brake_sim_ros.model import layout as L
+from brake_sim_ros.model.assembly import SIDES
 from brake_sim_ros.model.parameters import BrakeParameters
 from brake_sim_ros.model.trajectory import SampleBlock
 
-SIDES = ("left", "right")
 _LOSSES = ("friction_work_j", "coupling_damper_loss_j", "contact_loss_j", "lock_loss_j")
+# every column the books read (a run restricted to some outputs may not keep them all)
+ENERGY_COLUMNS: tuple[str, ...] = (
+    "flywheel_angle_rad",
+    "drum_angle_rad",
+    "flywheel_speed_rad_s",
+    "drum_speed_rad_s",
+    *(f"{s}_{name}" for s in SIDES for name in ("speed_rad_s", "indentation_m")),
+    "actuation_work_j",
+    *_LOSSES,
+)
 
 
 @dataclass(frozen=True)
@@ -50,21 +57,31 @@ class EnergyBalance:
         """Energy that entered the books: what was stored at the start plus what was supplied."""
         return self.stored_start_j + abs(self.supplied_j)
 
+    @property
+    def relative_residual(self) -> float:
+        """``|residual| / stored_start``: for a run from t = 0, the residual as a fraction of
+        the initial kinetic energy (the figure the work-precision and fidelity studies
+        report)."""
+        return abs(self.residual_j) / self.stored_start_j
 
-def stored_energy_j(row: np.ndarray, params: BrakeParameters) -> float:
-    """Kinetic plus elastic energy of one sample row (layout.COLUMNS), J."""
+
+def stored_energy_j(block: SampleBlock, params: BrakeParameters, row: int) -> float:
+    """Kinetic plus elastic energy at row ``row`` of ``block`` (columns read by name), J."""
     d = params.driveline
-    c = L.COL
     i_s = params.shoe.inertia_about_pivot_kg_m2
+
+    def at(name: str) -> float:  # a numpy float64, as the arithmetic below expects
+        return block[name][row]
+
     kinetic = (
-        0.5 * d.flywheel_inertia_kg_m2 * row[c["flywheel_speed_rad_s"]] ** 2
-        + 0.5 * d.drum_inertia_kg_m2 * row[c["drum_speed_rad_s"]] ** 2
-        + 0.5 * i_s * (row[c["left_speed_rad_s"]] ** 2 + row[c["right_speed_rad_s"]] ** 2)
+        0.5 * d.flywheel_inertia_kg_m2 * at("flywheel_speed_rad_s") ** 2
+        + 0.5 * d.drum_inertia_kg_m2 * at("drum_speed_rad_s") ** 2
+        + 0.5 * i_s * (at("left_speed_rad_s") ** 2 + at("right_speed_rad_s") ** 2)
     )
-    twist = row[c["flywheel_angle_rad"]] - row[c["drum_angle_rad"]]
+    twist = at("flywheel_angle_rad") - at("drum_angle_rad")
     k_c = params.contact_stiffness_n_per_m
     elastic = 0.5 * d.coupling_stiffness_n_m_per_rad * twist**2 + sum(
-        0.5 * k_c * max(float(row[c[f"{s}_indentation_m"]]), 0.0) ** 2 for s in SIDES
+        0.5 * k_c * max(float(at(f"{s}_indentation_m")), 0.0) ** 2 for s in SIDES
     )
     return float(kinetic + elastic)
 
@@ -74,15 +91,16 @@ def energy_balance(block: SampleBlock, params: BrakeParameters) -> EnergyBalance
 
     Raises:
         ValueError: for an empty block.
+        KeyError: ``block`` lacks one of :data:`ENERGY_COLUMNS` (check with
+            ``block.has(*ENERGY_COLUMNS)``).
     """
     if len(block) == 0:
         raise ValueError("energy_balance needs at least one sample")
-    first, last = block.data[0], block.data[-1]
-    c = L.COL
-    start = stored_energy_j(first, params)
-    end = stored_energy_j(last, params)
-    supplied = float(last[c["actuation_work_j"]] - first[c["actuation_work_j"]])
-    spent = float(sum(last[c[name]] - first[c[name]] for name in _LOSSES))
+    start = stored_energy_j(block, params, 0)
+    end = stored_energy_j(block, params, -1)
+    work = block["actuation_work_j"]
+    supplied = float(work[-1] - work[0])
+    spent = float(sum(block[name][-1] - block[name][0] for name in _LOSSES))
     return EnergyBalance(
         stored_start_j=start,
         stored_end_j=end,

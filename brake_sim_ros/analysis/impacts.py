@@ -2,8 +2,9 @@
 
 Definitions (used by the validation report and the tests alike):
 
-* impact: a contact onset, the instant a shoe's indentation crosses zero upward
-  (linearly interpolated between samples);
+* impact: a contact onset as :mod:`.onsets` defines it, at the instant the shoe's
+  indentation crosses zero upward (linearly interpolated between samples); a contact
+  already present at the first sample is no impact;
 * impact period ``T``: time from a shoe's first impact to its second; the whole series of
   onset-to-onset intervals is kept too;
 * peak pivot force of an impact: the largest ``|F_pivot|`` between that onset and the
@@ -11,16 +12,20 @@ Definitions (used by the validation report and the tests alike):
 * end of the impacting regime: the onset of the first contact that lasts at least
   ``settle_s`` (the shoe rides on the drum from then on);
 * contact-regime pivot force: time-weighted mean ``|F_pivot|`` over ``window_s``
-  (default 1 s to 6 s), cut at the stop if the drum stops earlier;
+  (default 1 s to 6 s), cut at the stop if the drum stops earlier; none (NaN, with the
+  reason in words) when fewer than two samples fall in the window, e.g. when the drum
+  locks during the impacting regime or the run ends before 1 s;
 * stopping time: the instant the brake locks (sliding speed down to the smoothing width).
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
+from brake_sim_ros.analysis.onsets import contact_changes, crossing_times, in_contact
 from brake_sim_ros.model.trajectory import SampleBlock
 
 CONTACT_WINDOW_S = (1.0, 6.0)
@@ -29,7 +34,19 @@ SETTLE_S = 0.05
 
 @dataclass(frozen=True)
 class ShoeMetrics:
-    """What happened to one shoe; forces in N, times in s."""
+    """What happened to one shoe; forces in N, times in s.
+
+    Attributes:
+        onsets_s, separations_s: interpolated contact onsets and separations.
+        impact_peaks_n: peak ``|F_pivot|`` of each impact.
+        first_impact_actuation_n: actuation force at the first impact (NaN without one).
+        end_of_impacting_s: onset of the first settled contact (NaN without one).
+        contact_regime_force_n: contact-regime mean ``|F_pivot|`` (NaN without one).
+        impacts_analysed: False where the run kept no impact signals or its shoes had no
+            impact dynamics (then the impact fields above are empty or NaN).
+        no_contact_regime_reason: why ``contact_regime_force_n`` is NaN, in words; empty
+            where it is a number.
+    """
 
     onsets_s: np.ndarray
     separations_s: np.ndarray
@@ -37,6 +54,8 @@ class ShoeMetrics:
     first_impact_actuation_n: float
     end_of_impacting_s: float
     contact_regime_force_n: float
+    impacts_analysed: bool = True
+    no_contact_regime_reason: str = ""
 
     @property
     def n_impacts(self) -> int:
@@ -66,16 +85,6 @@ class EventMetrics:
 
     def shoe(self, side: str) -> ShoeMetrics:
         return self.left if side == "left" else self.right
-
-
-def _crossings(t: np.ndarray, x: np.ndarray, upward: bool) -> tuple[np.ndarray, np.ndarray]:
-    """Interpolated times where ``x`` crosses zero, and the sample index after each."""
-    if upward:
-        idx = np.flatnonzero((x[:-1] <= 0.0) & (x[1:] > 0.0))
-    else:
-        idx = np.flatnonzero((x[:-1] > 0.0) & (x[1:] <= 0.0))
-    frac = -x[idx] / (x[idx + 1] - x[idx])
-    return t[idx] + frac * (t[idx + 1] - t[idx]), idx + 1
 
 
 def _refined_peak(y: np.ndarray, i: int) -> float:
@@ -109,6 +118,34 @@ def contact_regime_force(
     return time_weighted_mean(t, pivot_force_n, window_s[0], end)
 
 
+def no_contact_regime_reason(
+    t: np.ndarray,
+    *,
+    stop_time_s: float | None,
+    end_of_impacting_s: float | None,
+    window_s: tuple[float, float] = CONTACT_WINDOW_S,
+) -> str:
+    """Why :func:`contact_regime_force` of samples at times ``t`` (s) has no value.
+
+    Args:
+        stop_time_s: the lock instant the force was cut at, or None.
+        end_of_impacting_s: the shoe's end of the impacting regime (NaN: it never settled),
+            or None where impacts were not analysed.
+    """
+    start, end = window_s
+    window = f"the contact-regime window ({start:g}-{end:g} s)"
+    if t.size == 0:
+        return "no samples"
+    if stop_time_s is not None and stop_time_s < start:
+        during = ""
+        if end_of_impacting_s is not None and not end_of_impacting_s < stop_time_s:
+            during = " during the impacting regime"
+        return f"the drum locked at {stop_time_s:.4f} s{during}, before {window}"
+    if t[-1] < start:
+        return f"not reached within the run: it ends at {t[-1]:.3f} s, before {window}"
+    return f"fewer than two samples in {window}"
+
+
 def contact_only_metrics(
     block: SampleBlock,
     side: str,
@@ -118,16 +155,31 @@ def contact_only_metrics(
 ) -> ShoeMetrics:
     """Metrics of a model without impacts (or a run that kept no impact signals): only the
     contact-regime force, when the pivot force was kept; everything else empty or nan."""
-    force = float("nan")
+    force, reason = float("nan"), "its pivot force was not kept (not asked for)"
     if block.has(f"{side}_pivot_fx_n", f"{side}_pivot_fy_n"):
+        t = block.time_s
         force = contact_regime_force(
-            block.time_s,
-            block.pivot_force_magnitude(side),
-            stop_time_s=stop_time_s,
-            window_s=window_s,
+            t, block.pivot_force_magnitude(side), stop_time_s=stop_time_s, window_s=window_s
+        )
+        reason = (
+            no_contact_regime_reason(
+                t, stop_time_s=stop_time_s, end_of_impacting_s=None, window_s=window_s
+            )
+            if math.isnan(force)
+            else ""
         )
     empty = np.empty(0)
-    return ShoeMetrics(empty, empty, empty, float("nan"), float("nan"), force)
+    nan = float("nan")
+    return ShoeMetrics(
+        empty,
+        empty,
+        empty,
+        nan,
+        nan,
+        force,
+        impacts_analysed=False,
+        no_contact_regime_reason=reason,
+    )
 
 
 def shoe_metrics(
@@ -141,8 +193,10 @@ def shoe_metrics(
     t = block.time_s
     eps = block[f"{side}_indentation_m"]
     fr = block.pivot_force_magnitude(side)
-    onsets, on_idx = _crossings(t, eps, upward=True)
-    seps, sep_idx = _crossings(t, eps, upward=False)
+    changes = contact_changes(in_contact(eps))  # no change at the first sample
+    on_idx, sep_idx = changes.onsets, changes.separations
+    onsets = crossing_times(t, eps, on_idx)
+    seps = crossing_times(t, eps, sep_idx)
     peaks = []
     for i0 in on_idx:
         later = sep_idx[sep_idx > i0 - 1]
@@ -164,6 +218,13 @@ def shoe_metrics(
             end_impacting = float(t_on)
             break
     contact = contact_regime_force(t, fr, stop_time_s=stop_time_s, window_s=window_s)
+    reason = (
+        no_contact_regime_reason(
+            t, stop_time_s=stop_time_s, end_of_impacting_s=end_impacting, window_s=window_s
+        )
+        if math.isnan(contact)
+        else ""
+    )
     return ShoeMetrics(
         onsets_s=onsets,
         separations_s=seps,
@@ -171,6 +232,7 @@ def shoe_metrics(
         first_impact_actuation_n=actuation,
         end_of_impacting_s=end_impacting,
         contact_regime_force_n=contact,
+        no_contact_regime_reason=reason,
     )
 
 

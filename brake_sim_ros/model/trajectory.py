@@ -45,13 +45,17 @@ class SampleBlock:
         return int(self.data.shape[0])
 
     def __getitem__(self, name: str) -> np.ndarray:
+        return self.data[:, self.index_of(name)]
+
+    def index_of(self, name: str) -> int:
+        """Position of column ``name`` along the second axis of ``data`` (for reading one
+        row, ``data[row, index_of(name)]``, without a column view per value)."""
         try:
-            index = L.COL[name] if self.columns is L.COLUMNS else self.columns.index(name)
+            return L.COL[name] if self.columns is L.COLUMNS else self.columns.index(name)
         except (KeyError, ValueError):
             raise KeyError(
                 f"column {name!r} is not in this sample block: it holds {list(self.columns)}"
             ) from None
-        return self.data[:, index]
 
     def has(self, *names: str) -> bool:
         """Whether every column in ``names`` is recorded."""
@@ -66,7 +70,8 @@ class SampleBlock:
 
     @property
     def time_s(self) -> np.ndarray:
-        return self.data[:, 0]
+        """Sample times, s (the ``time_s`` column)."""
+        return self["time_s"]
 
     def pivot_force_magnitude(self, side: str) -> np.ndarray:
         """|F_pivot| of one shoe, N."""

@@ -11,6 +11,7 @@ from __future__ import annotations
 import array
 import dataclasses
 import math
+from collections.abc import Callable
 
 import numpy as np
 from brake_sim_msgs.msg import BrakeState, ContactEvent, DefectState, PivotForceChunk
@@ -20,8 +21,8 @@ from sensor_msgs.msg import JointState
 from std_msgs.msg import Header
 
 from brake_sim_ros.analysis import contact_events
+from brake_sim_ros.analysis.onsets import in_contact
 from brake_sim_ros.model.defects import Defects
-from brake_sim_ros.model.layout import COL
 from brake_sim_ros.model.parameters import BrakeParameters
 from brake_sim_ros.model.trajectory import SampleBlock
 
@@ -105,39 +106,45 @@ def state_rows(block: SampleBlock, stride: int) -> list[int]:
     return list(range(start, len(block), stride))
 
 
+def _reader(block: SampleBlock, row: int) -> Callable[[str], float]:
+    """The value of a named column at ``row`` (by name: a block may keep only some columns,
+    in its own order)."""
+    r = block.data[row]
+    return lambda name: float(r[block.index_of(name)])
+
+
 def brake_state(block: SampleBlock, row: int) -> BrakeState:
     """Row ``row`` of ``block`` as a BrakeState."""
-    r = block.data[row]
-    c = COL
+    value = _reader(block, row)
     index = block.first_index + row
-    left_indent = float(r[c["left_indentation_m"]])
-    right_indent = float(r[c["right_indentation_m"]])
+    left_indent = value("left_indentation_m")
+    right_indent = value("right_indentation_m")
     return BrakeState(
         header=header(stamp_ns(index, block.sample_period_s)),
         sample_index=int(index),
-        flywheel_angle_rad=float(r[c["flywheel_angle_rad"]]),
-        drum_angle_rad=float(r[c["drum_angle_rad"]]),
-        left_shoe_angle_rad=float(r[c["left_angle_rad"]]),
-        right_shoe_angle_rad=float(r[c["right_angle_rad"]]),
-        flywheel_speed_rad_s=float(r[c["flywheel_speed_rad_s"]]),
-        drum_speed_rad_s=float(r[c["drum_speed_rad_s"]]),
-        left_shoe_speed_rad_s=float(r[c["left_speed_rad_s"]]),
-        right_shoe_speed_rad_s=float(r[c["right_speed_rad_s"]]),
+        flywheel_angle_rad=value("flywheel_angle_rad"),
+        drum_angle_rad=value("drum_angle_rad"),
+        left_shoe_angle_rad=value("left_angle_rad"),
+        right_shoe_angle_rad=value("right_angle_rad"),
+        flywheel_speed_rad_s=value("flywheel_speed_rad_s"),
+        drum_speed_rad_s=value("drum_speed_rad_s"),
+        left_shoe_speed_rad_s=value("left_speed_rad_s"),
+        right_shoe_speed_rad_s=value("right_speed_rad_s"),
         left_indentation_m=left_indent,
         right_indentation_m=right_indent,
-        left_normal_force_n=float(r[c["left_normal_force_n"]]),
-        right_normal_force_n=float(r[c["right_normal_force_n"]]),
-        left_friction_force_n=float(r[c["left_friction_force_n"]]),
-        right_friction_force_n=float(r[c["right_friction_force_n"]]),
-        left_actuation_force_n=float(r[c["left_actuation_force_n"]]),
-        right_actuation_force_n=float(r[c["right_actuation_force_n"]]),
-        left_contact_x_m=float(r[c["left_contact_x_m"]]),
-        left_contact_y_m=float(r[c["left_contact_y_m"]]),
-        right_contact_x_m=float(r[c["right_contact_x_m"]]),
-        right_contact_y_m=float(r[c["right_contact_y_m"]]),
-        left_in_contact=left_indent > 0.0,
-        right_in_contact=right_indent > 0.0,
-        regime=int(r[c["regime"]]),
+        left_normal_force_n=value("left_normal_force_n"),
+        right_normal_force_n=value("right_normal_force_n"),
+        left_friction_force_n=value("left_friction_force_n"),
+        right_friction_force_n=value("right_friction_force_n"),
+        left_actuation_force_n=value("left_actuation_force_n"),
+        right_actuation_force_n=value("right_actuation_force_n"),
+        left_contact_x_m=value("left_contact_x_m"),
+        left_contact_y_m=value("left_contact_y_m"),
+        right_contact_x_m=value("right_contact_x_m"),
+        right_contact_y_m=value("right_contact_y_m"),
+        left_in_contact=in_contact(left_indent),
+        right_in_contact=in_contact(right_indent),
+        regime=int(value("regime")),
     )
 
 
@@ -147,13 +154,13 @@ def joint_state(block: SampleBlock, row: int) -> JointState:
     Shoe angles follow the core's sign (positive outward, toward the drum), so the left
     shoe turns counter-clockwise and the right shoe clockwise for a positive value.
     """
-    r = block.data[row]
+    value = _reader(block, row)
     index = block.first_index + row
     return JointState(
         header=header(stamp_ns(index, block.sample_period_s)),
         name=list(JOINT_NAMES),
-        position=_doubles(np.array([r[COL[n]] for n in _JOINT_ANGLES])),
-        velocity=_doubles(np.array([r[COL[n]] for n in _JOINT_SPEEDS])),
+        position=_doubles(np.array([value(n) for n in _JOINT_ANGLES])),
+        velocity=_doubles(np.array([value(n) for n in _JOINT_SPEEDS])),
     )
 
 

@@ -6,8 +6,10 @@ that level and ask for everything it delivers; the figures are CPU seconds per s
 second (best of ``repeats``), the real-time factor, and relative errors against the full
 model: stop time, first-impact peak pivot force and impact period (both shoes, the worse
 one), contact-regime mean pivot force (both shoes, the worse one), the impact count
-difference, and the energy-balance residual of the level's own balance. NaN where a level
-does not deliver that output.
+difference (impacts missed or added, summed over the shoes), all as
+:mod:`brake_sim_ros.analysis.comparison` defines them for the accuracy study too, and the
+residual of the level's own energy balance (:mod:`brake_sim_ros.analysis.energy`). NaN
+where a level does not deliver that output.
 """
 
 from __future__ import annotations
@@ -17,6 +19,8 @@ import dataclasses
 import math
 from typing import Any
 
+from brake_sim_ros.analysis.comparison import metric_errors, relative_error
+from brake_sim_ros.analysis.energy import ENERGY_COLUMNS, energy_balance
 from brake_sim_ros.model.fidelity import LEVELS, Needs
 from brake_sim_ros.scenarios import load_scenario
 from brake_sim_ros.scenarios.loader import Scenario
@@ -27,63 +31,14 @@ TARGET_CONTACT_REL = 0.01
 NAN = float("nan")
 
 
-def _rel(value: float | None, ref: float | None) -> float:
-    if value is None or ref is None or not (math.isfinite(value) and math.isfinite(ref)):
-        return NAN
-    return abs(value / ref - 1.0)
-
-
-def _worst(values: list[float]) -> float:
-    finite = [v for v in values if math.isfinite(v)]
-    return max(finite) if len(finite) == len(values) and finite else NAN
-
-
 def energy_residual(result: RunResult, scenario: Scenario) -> float:
-    """Relative residual of the run's energy balance (NaN without the energy columns).
-
-    initial kinetic energy + actuator work = friction work + damper, contact and lock
-    losses + kinetic + coupling and contact elastic energy at the end, over the initial
-    kinetic energy.
-    """
+    """The run's energy-balance residual over its initial stored energy
+    (:attr:`~brake_sim_ros.analysis.energy.EnergyBalance.relative_residual`); NaN where the
+    level did not keep every column of the balance."""
     b = result.samples
-    names = (
-        "flywheel_speed_rad_s",
-        "drum_speed_rad_s",
-        "flywheel_angle_rad",
-        "drum_angle_rad",
-        "friction_work_j",
-        "coupling_damper_loss_j",
-        "contact_loss_j",
-        "actuation_work_j",
-        "lock_loss_j",
-    )
-    if not b.has(*names) or len(b) == 0:
+    if len(b) == 0 or not b.has(*ENERGY_COLUMNS):
         return NAN
-    params = scenario.setup.params
-    d = params.driveline
-    last = {n: float(b[n][-1]) for n in names}
-    e0 = 0.5 * (d.flywheel_inertia_kg_m2 + d.drum_inertia_kg_m2) * d.initial_speed_rad_s**2
-    kinetic = 0.5 * d.flywheel_inertia_kg_m2 * last["flywheel_speed_rad_s"] ** 2
-    kinetic += 0.5 * d.drum_inertia_kg_m2 * last["drum_speed_rad_s"] ** 2
-    twist = last["flywheel_angle_rad"] - last["drum_angle_rad"]
-    potential = 0.5 * d.coupling_stiffness_n_m_per_rad * twist**2
-    for side in ("left", "right"):
-        if b.has(f"{side}_speed_rad_s", f"{side}_indentation_m"):
-            kinetic += (
-                0.5 * params.shoe.inertia_about_pivot_kg_m2 * b[f"{side}_speed_rad_s"][-1] ** 2
-            )
-            eps = max(float(b[f"{side}_indentation_m"][-1]), 0.0)
-            potential += 0.5 * params.contact_stiffness_n_per_m * eps**2
-    supplied = e0 + last["actuation_work_j"]
-    spent = (
-        last["friction_work_j"]
-        + last["coupling_damper_loss_j"]
-        + last["contact_loss_j"]
-        + last["lock_loss_j"]
-        + kinetic
-        + potential
-    )
-    return abs(supplied - spent) / e0
+    return energy_balance(b, scenario.setup.params).relative_residual
 
 
 def _forced(scenario: Scenario, level: str, shoes: tuple[str, ...]) -> Scenario:
@@ -105,31 +60,23 @@ def _best_run(scenario: Scenario, repeats: int) -> RunResult:
 def _row(
     scheme: str, setting: str, r: RunResult, ref: RunResult, duration: float, scenario: Scenario
 ) -> dict[str, Any]:
-    sides = [s for s in ("left", "right") if s in r.plan.shoes]
-    m, rm = r.metrics, ref.metrics
+    sides = tuple(s for s in ("left", "right") if s in r.plan.shoes)
+    errors = metric_errors(r.metrics, ref.metrics, sides)
     impacts = "impacts" in r.plan.level.outputs
-    peak = _worst(
-        [_rel(m.shoe(s).first_impact_peak_n, rm.shoe(s).first_impact_peak_n) for s in sides]
-    )
-    period = _worst([_rel(m.shoe(s).period_s, rm.shoe(s).period_s) for s in sides])
-    contact = _worst(
-        [_rel(m.shoe(s).contact_regime_force_n, rm.shoe(s).contact_regime_force_n) for s in sides]
-    )
-    count = max(abs(m.shoe(s).n_impacts - rm.shoe(s).n_impacts) for s in sides) if impacts else -1
     cpu = r.cpu_s / duration
     return {
         "scheme": scheme,
         "setting": setting,
         "cpu_s_per_sim_s": cpu,
         "x_real_time": 1.0 / cpu if cpu > 0 else math.inf,
-        "err_stop_time": _rel(m.stop_time_s, rm.stop_time_s),
-        "err_first_peak": peak if impacts else NAN,
-        "err_period": period if impacts else NAN,
-        "impact_count_diff": count,
-        "err_contact_force": contact,
+        "err_stop_time": errors.stop_time,
+        "err_first_peak": errors.first_peak if impacts else NAN,
+        "err_period": errors.period if impacts else NAN,
+        "impact_count_diff": errors.impact_count_diff if impacts else -1,
+        "err_contact_force": errors.contact_force,
         "energy_residual": energy_residual(r, scenario),
         "memory_bytes": r.memory_bytes,
-        "model_stop_err": _rel(r.model_stop_time_s, rm.stop_time_s),
+        "model_stop_err": relative_error(r.model_stop_time_s, ref.metrics.stop_time_s),
     }
 
 
@@ -166,7 +113,7 @@ def fidelity_rows(
 def _fmt(x: float, pct: bool = True) -> str:
     if isinstance(x, float) and math.isnan(x):
         return "-"
-    return f"{100 * x:.2g} %" if pct else f"{x:g}"
+    return f"{100 * x:.2g} %" if pct else f"{x:.2e}"
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -193,7 +140,7 @@ def main(argv: list[str] | None = None) -> int:
                 f"{r['scheme']} | {r['cpu_s_per_sim_s']:.3g} | {r['x_real_time']:.0f} |"
                 f" {stop} | {_fmt(r['err_first_peak'])} |"
                 f" {_fmt(r['err_period'])} | {count} | {_fmt(r['err_contact_force'])} |"
-                f" {r['energy_residual']:.2e} | {r['memory_bytes'] / 1e6:.2f} MB"
+                f" {_fmt(r['energy_residual'], pct=False)} | {r['memory_bytes'] / 1e6:.2f} MB"
             )
         contact = next(r for r in rows if r["scheme"] == "level contact_regime")
         ok = (

@@ -33,7 +33,8 @@ class Preset:
         max_err_period: first impact period, worse shoe.
         max_err_stop_time: stopping time.
         max_err_contact_force: contact-regime mean pivot force, worse shoe.
-        max_impact_count_diff: impacts missed or added, both shoes together.
+        max_impact_count_diff: impacts missed or added, summed over the shoes
+            (``analysis.comparison.impact_count_diff``).
         measured_x_real_time: real-time factor measured by the study (recording every sample).
         purpose: when to choose it.
     """

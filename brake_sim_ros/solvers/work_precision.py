@@ -8,10 +8,12 @@ compared with a DOP853 run at ``rtol = 1e-11`` (:data:`REFERENCE_RTOL`):
 
 * ``err_stop_time``, ``err_first_peak``, ``err_period``, ``err_contact_force``: relative
   errors (fractions) of the stop time, and the worse shoe's first-impact peak pivot force,
-  first impact period and contact-regime mean pivot force (``analysis.impacts``);
-* ``impact_count_diff``: sum over the shoes of |impacts - reference impacts|;
+  first impact period and contact-regime mean pivot force (metrics of
+  ``analysis.impacts``, errors as ``analysis.comparison`` defines them);
+* ``impact_count_diff``: impacts missed or added, summed over the shoes
+  (``analysis.comparison.impact_count_diff``);
 * ``energy_residual``: |energy supplied - spent - left| / initial kinetic energy at the end
-  of the run itself (a conservation check, not a comparison).
+  of the run itself (``analysis.energy``; a conservation check, not a comparison).
 
 Each metric is taken from the samples a user of that scheme gets (the uniform grid of a
 fixed step, the reference's sample times for an adaptive solver), so output sampling is part
@@ -35,10 +37,10 @@ from pathlib import Path
 
 import numpy as np
 
+from brake_sim_ros.analysis.comparison import metric_errors
 from brake_sim_ros.analysis.energy import energy_balance
 from brake_sim_ros.analysis.impacts import EventMetrics, event_metrics
 from brake_sim_ros.errors import BrakeSimError
-from brake_sim_ros.model import layout as L
 from brake_sim_ros.model.trajectory import SampleBlock
 from brake_sim_ros.scenarios import load_scenario
 from brake_sim_ros.scenarios.loader import Scenario
@@ -70,7 +72,6 @@ _ORDER_COLUMNS = (
     ("right_speed_rad_s", 1.0),
     ("drum_speed_rad_s", 100.0),
 )
-SIDES = ("left", "right")
 
 
 @dataclass(frozen=True)
@@ -121,17 +122,6 @@ class StudyResult:
     convergence: list[Convergence] = field(default_factory=list)
 
 
-def _rel(value: float, ref: float) -> float:
-    if value is None or ref is None or not (math.isfinite(value) and math.isfinite(ref)):
-        return math.nan
-    return abs(value / ref - 1.0)
-
-
-def _worse(values: list[float]) -> float:
-    """Worse of the shoes' errors; NaN if any is NaN (a missing impact is not a small error)."""
-    return math.nan if any(math.isnan(v) for v in values) else max(values)
-
-
 def compare(
     scheme: str,
     setting: str,
@@ -144,33 +134,18 @@ def compare(
 ) -> WorkPrecisionRow:
     """Row of the study for one run (``cpu_s`` for ``duration_s`` simulated seconds)."""
     books = energy_balance(samples, scenario.setup.params)
+    errors = metric_errors(metrics, reference)
     return WorkPrecisionRow(
         scheme=scheme,
         setting=setting,
         cpu_s_per_sim_s=cpu_s / duration_s,
         x_real_time=duration_s / cpu_s if cpu_s > 0 else math.inf,
-        err_stop_time=_rel(metrics.stop_time_s, reference.stop_time_s),
-        err_first_peak=_worse(
-            [
-                _rel(metrics.shoe(s).first_impact_peak_n, reference.shoe(s).first_impact_peak_n)
-                for s in SIDES
-            ]
-        ),
-        err_period=_worse(
-            [_rel(metrics.shoe(s).period_s, reference.shoe(s).period_s) for s in SIDES]
-        ),
-        impact_count_diff=sum(
-            abs(metrics.shoe(s).n_impacts - reference.shoe(s).n_impacts) for s in SIDES
-        ),
-        err_contact_force=_worse(
-            [
-                _rel(
-                    metrics.shoe(s).contact_regime_force_n, reference.shoe(s).contact_regime_force_n
-                )
-                for s in SIDES
-            ]
-        ),
-        energy_residual=abs(books.residual_j) / books.stored_start_j,
+        err_stop_time=errors.stop_time,
+        err_first_peak=errors.first_peak,
+        err_period=errors.period,
+        impact_count_diff=errors.impact_count_diff,
+        err_contact_force=errors.contact_force,
+        energy_residual=books.relative_residual,
     )
 
 
@@ -199,17 +174,19 @@ def convergence(
 ) -> Convergence:
     """State error at :data:`ORDER_TIME_S` s per step and the least-squares order."""
     times = np.array([ORDER_TIME_S])
-    ref = run_reference(
-        scenario.setup, ORDER_TIME_S + 1e-3, sample_times=times, rtol=1e-12
-    ).samples.data[0]
-    cols = [L.COL[name] for name, _ in _ORDER_COLUMNS]
+    names = [name for name, _ in _ORDER_COLUMNS]
     scale = np.array([s for _, s in _ORDER_COLUMNS])
+    ref_block = run_reference(
+        scenario.setup, ORDER_TIME_S + 1e-3, sample_times=times, rtol=1e-12
+    ).samples
+    ref = np.array([ref_block[n][0] for n in names])
     errors = []
     for dt in steps_s:
         stepper = FixedStepStepper(scenario.setup, dt, scheme=scheme, check_step=False)
-        data = stepper.run(ORDER_TIME_S + 2 * dt).data
-        row = data[round(ORDER_TIME_S / dt)]
-        errors.append(float(np.max(np.abs(row[cols] - ref[cols]) / scale)))
+        block = stepper.run(ORDER_TIME_S + 2 * dt)
+        at = round(ORDER_TIME_S / dt)
+        state = np.array([block[n][at] for n in names])
+        errors.append(float(np.max(np.abs(state - ref) / scale)))
     order = float(np.polyfit(np.log(steps_s), np.log(errors), 1)[0])
     return Convergence(scheme, tuple(steps_s), tuple(errors), order)
 

@@ -16,9 +16,10 @@ timeline taken from the messages' stamps):
   is an event and a marker at its exact sample, valued |F_pivot| of that sample (when
   the chunk holding it was received); each separation is an event and a marker at the
   episode's peak |F_pivot| (``pivot_force/impacts/<side>/peak``). A stream without
-  ContactEvents (an older recording) falls back to the state rate: a contact flag rising
-  between two BrakeStates gives an event and a marker at the largest |F_pivot| of that
-  shoe since the previous state (raise ``state_rate_hz`` to resolve every bounce).
+  ContactEvents (an older recording) falls back to the state rate: a contact onset
+  (:mod:`brake_sim_ros.analysis.onsets`) between two BrakeStates' contact flags gives an
+  event and a marker at the largest |F_pivot| of that shoe since the previous state
+  (raise ``state_rate_hz`` to resolve every bounce).
   Regime changes are events;
 * the defect ground truth (markdown and scalars) when a DefectState arrives;
 * the 2-D drawing (:mod:`.drawing`) at ``drawing_rate_hz`` of simulated time.
@@ -38,6 +39,7 @@ from typing import Any
 import numpy as np
 import rerun as rr
 
+from brake_sim_ros.analysis.onsets import contact_changes
 from brake_sim_ros.errors import BrakeSimError, ParameterError
 from brake_sim_ros.model.defects import Defects, ShoeDefect
 from brake_sim_ros.model.layout import REGIME_NAMES
@@ -491,9 +493,11 @@ class RerunSink:
         if self._contact_events_seen:
             return  # impacts come from the ContactEvents, at their exact samples
         for side in E.SIDES:
-            now_in = bool(getattr(msg, f"{side}_in_contact"))
+            # the BrakeState flags are onsets.in_contact of the indentation; an onset is
+            # detected between consecutive states by the same rule as in the samples
+            now_in = np.array([bool(getattr(msg, f"{side}_in_contact"))])
             was_in = prev is not None and bool(getattr(prev, f"{side}_in_contact"))
-            if now_in and not was_in:
+            if contact_changes(now_in, before=was_in).onsets.size:
                 self.impacts[side] += 1
                 peak = self._peak_since(side, self._last_state_index, index)
                 text = f"impact: {side} shoe touches the drum (contact onset seen at this state"
