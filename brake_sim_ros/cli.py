@@ -17,6 +17,7 @@ import numpy as np
 from brake_sim_ros import __version__
 from brake_sim_ros.errors import BrakeSimError
 from brake_sim_ros.scenarios.loader import SOLVER_METHODS
+from brake_sim_ros.solvers.presets import PRESETS
 
 if TYPE_CHECKING:  # the CLI imports the numerics only when a command needs them
     from brake_sim_ros.analysis.impacts import ShoeMetrics
@@ -50,6 +51,9 @@ def _write_history(path: Path, result, scenario) -> None:
         "stop_time_s": result.stop_time_s,
         "version": __version__,
         "sample_period_s": result.samples.sample_period_s,
+        "sample_rate_hz": scenario.sample_rate_hz,
+        "preset": scenario.solver.preset,
+        "step": result.step_note,
         "scenario_toml": scenario.text,
     }
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -104,7 +108,9 @@ def simulate_summary(result: RunResult, scenario: Scenario) -> str:
         stop = "not stopped"
     else:
         stop = "not delivered by this level"
-    unit = {"reference": "f-evals", "contact_regime": "RK4 steps"}.get(result.method, "steps")
+    unit = {"reference": "f-evals", "contact_regime": "RK4 steps"}.get(
+        result.method, "physics steps"
+    )
     lines = [
         f"level {chosen.level.name} ({chosen.level.description}; shoes"
         f" {', '.join(chosen.shoes)}): {chosen.reason}",
@@ -113,6 +119,8 @@ def simulate_summary(result: RunResult, scenario: Scenario) -> str:
         f" ({rtf:.0f}x real time, {result.n_steps} {unit}); kept"
         f" {len(result.samples.columns)} columns, {result.memory_bytes / 1e6:.2f} MB",
     ]
+    if result.step_note:
+        lines.append(f"  preset {scenario.solver.preset}: {result.step_note}")
     for side in ("left", "right"):
         if not any(c.startswith(f"{side}_") for c in result.samples.columns):
             lines.append(f"  {side:5s}: not asked for")
@@ -125,12 +133,22 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     from brake_sim_ros.scenarios import load_scenario
     from brake_sim_ros.solvers.run import run_scenario
 
-    scenario = load_scenario(args.scenario)
+    if args.dt is not None:
+        raise BrakeSimError(
+            "--dt is gone: the output sample rate belongs to the scenario (--sample-rate HZ,"
+            " default 25600) and the physics step is chosen below the step limit (--max-step S"
+            " bounds it)"
+        )
+    # the overrides go into the scenario once: every output below runs the same stepper
+    scenario = load_scenario(args.scenario).with_solver(
+        preset=args.preset,
+        method=args.method,
+        max_step_s=args.max_step,
+        sample_rate_hz=args.sample_rate,
+    )
     rerun_targets = _rerun_targets(args)
     progress = _progress(f"simulating {scenario.name}") if not args.quiet else None
-    result = run_scenario(
-        scenario, duration_s=args.duration, method=args.method, dt_s=args.dt, progress=progress
-    )
+    result = run_scenario(scenario, duration_s=args.duration, progress=progress)
     print(simulate_summary(result, scenario))
     if args.out:
         _write_history(Path(args.out), result, scenario)
@@ -144,12 +162,8 @@ def cmd_simulate(args: argparse.Namespace) -> int:
 
 
 def _write_stream(args: argparse.Namespace, scenario, rerun_targets: list) -> None:
-    """The node's stream, produced offline once, into the MCAP file and the Rerun targets."""
-    import dataclasses
-
-    if args.dt is not None:
-        solver = dataclasses.replace(scenario.solver, dt_s=args.dt)
-        scenario = dataclasses.replace(scenario, solver=solver)
+    """The node's stream, produced offline once, into the MCAP file and the Rerun targets
+    (``scenario`` carries the command line's solver and sample-rate overrides)."""
     if not args.mcap:
         from brake_sim_ros.viz.commands import simulate_to_rerun
 
@@ -343,8 +357,22 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("scenario", help="built-in scenario name or path to a .toml file")
     p.add_argument("--out", help="write the full time history (.npz or .csv)")
     p.add_argument("--duration", type=float, help="simulated seconds (default: the scenario's)")
-    p.add_argument("--method", choices=SOLVER_METHODS, help="override the scenario's solver")
-    p.add_argument("--dt", type=float, help="override the fixed step, s")
+    p.add_argument(
+        "--preset",
+        choices=tuple(PRESETS),
+        help="solver preset (scheme and largest physics step); replaces the scenario's solver",
+    )
+    p.add_argument("--method", choices=SOLVER_METHODS, help="override the solver method")
+    p.add_argument(
+        "--max-step", type=float, metavar="S", help="override the largest physics step, s"
+    )
+    p.add_argument(
+        "--sample-rate",
+        type=float,
+        metavar="HZ",
+        help="override the scenario's output sample rate (default 25600 Hz)",
+    )
+    p.add_argument("--dt", type=float, help=argparse.SUPPRESS)  # retired: a one-line pointer
     p.add_argument("--quiet", action="store_true", help="no progress output")
     p.add_argument(
         "--rerun",

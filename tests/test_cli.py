@@ -32,9 +32,11 @@ def test_simulate_writes_a_history_numpy_opens(tmp_path):
     assert r.returncode == 0, r.stderr
     assert "impacts" in r.stdout and "real time" in r.stdout
     data = np.load(out)
-    assert data["time_s"].size == 25_000
+    assert data["time_s"].size == 25_600  # the default sample rate, 25.6 kHz
+    np.testing.assert_array_equal(data["time_s"], np.arange(25_600) * (1 / 25_600))
     assert data["left_pivot_fx_n"].shape == data["time_s"].shape
-    assert json.loads(str(data["metadata"]))["scenario"] == "symmetric"
+    meta = json.loads(str(data["metadata"]))
+    assert meta["scenario"] == "symmetric" and meta["sample_rate_hz"] == 25_600.0
 
 
 def test_simulate_csv(tmp_path):
@@ -42,7 +44,24 @@ def test_simulate_csv(tmp_path):
     r = _cli("simulate", "case5_left_tilted", "--duration", "0.3", "--out", str(out), "--quiet")
     assert r.returncode == 0, r.stderr
     arr = np.genfromtxt(out, delimiter=",", names=True)
-    assert arr["time_s"].size == 7500 and "right_pivot_fy_n" in arr.dtype.names
+    assert arr["time_s"].size == 7680 and "right_pivot_fy_n" in arr.dtype.names
+
+
+def test_simulate_runs_at_the_scenarios_sample_rate_for_every_preset_and_defect(tmp_path):
+    """The sample rate is the scenario's: the preset and a defect that needs a smaller step
+    (case 2's leading pivot 3 % inward: limit 9 us) change the physics step, not the rate."""
+    for args in (
+        ("case2_left_pivot_in", "--preset", "fast"),
+        ("case2_left_pivot_in", "--preset", "accurate"),
+        ("symmetric", "--preset", "accurate", "--sample-rate", "10000"),
+    ):
+        out = tmp_path / "run.npz"
+        r = _cli("simulate", *args, "--duration", "0.05", "--out", str(out), "--quiet")
+        assert r.returncode == 0, r.stderr
+        rate = float(args[-1]) if "--sample-rate" in args else 25_600.0
+        time_s = np.load(out)["time_s"]
+        np.testing.assert_array_equal(time_s, np.arange(round(0.05 * rate)) * (1 / rate))
+        assert f"{rate:g} Hz samples, physics step" in r.stdout
 
 
 def test_errors_are_one_line_and_nonzero(tmp_path):
@@ -51,7 +70,9 @@ def test_errors_are_one_line_and_nonzero(tmp_path):
     for args in (
         ("simulate", str(bad)),
         ("simulate", "nope"),
-        ("simulate", "symmetric", "--dt", "1e-3"),
+        ("simulate", "symmetric", "--dt", "1e-3"),  # retired: the rate is the scenario's
+        ("simulate", "symmetric", "--sample-rate", "0"),
+        ("simulate", "symmetric", "--max-step", "0"),
     ):
         r = _cli(*args)
         assert r.returncode == 2

@@ -18,7 +18,7 @@ import pytest
 from brake_sim_ros.analysis.bounds import indentation_bound_m
 from brake_sim_ros.analysis.energy import energy_balance
 from brake_sim_ros.analysis.impacts import event_metrics
-from brake_sim_ros.errors import ParameterError, SimulationError, StepSizeError
+from brake_sim_ros.errors import ParameterError, SimulationError
 from brake_sim_ros.model import layout as L
 from brake_sim_ros.model.actuation import MAX_ACTUATION_FORCE_N, Actuation, ForceProfile
 from brake_sim_ros.model.assembly import contact_arms, pack
@@ -28,7 +28,8 @@ from brake_sim_ros.model.trajectory import BrakeSetup
 from brake_sim_ros.solvers.fixed_step import FixedStepStepper
 from brake_sim_ros.solvers.stability import step_limit
 
-DEFAULT_DT = 4e-5  # the built-in scenarios' step (25 kHz)
+DEFAULT_DT = 4e-5  # a physics step of 40 us, one sample per step
+SAMPLE_PERIOD_S = 1 / 25_600  # the scenarios' default sample rate
 NOMINAL_FORCE_N = 1300.0
 # The stepper's accuracy requirements (solvers/benchmark.py): impact peak force and
 # period within 1 %, stop time within 0.1 % of a converged solution.
@@ -149,25 +150,28 @@ def test_smoothing_width_below_the_model_range_is_refused():
     ],
     ids=["stiffness-x100", "damping-1e6", "smoothing-1e-5", "near-self-locking", "force-50kN"],
 )
-def test_edges_too_stiff_for_the_default_step_are_refused(overrides, force_n, names):
-    """Each of these edges makes the model stiffer than the 25 kHz step can integrate: the
-    stepper refuses with the limit it computed and the mode that sets it."""
+def test_edges_too_stiff_for_one_step_per_sample_take_whole_substeps(overrides, force_n, names):
+    """Each of these edges makes the model stiffer than one step per 25.6 kHz sample can
+    integrate: the stepper keeps the sample rate and splits each sample interval into the
+    fewest whole substeps within the limit it computed, whose reason names the mode."""
     setup = _setup(overrides, force_n)
     limit = step_limit(setup, force_n)
-    assert limit.max_step_s < DEFAULT_DT
-    with pytest.raises(StepSizeError) as info:
-        FixedStepStepper(setup, DEFAULT_DT)
-    message = str(info.value)
-    assert f"limit {limit.max_step_s:.3g} s" in message and names in message
+    assert limit.max_step_s < SAMPLE_PERIOD_S
+    stepper = FixedStepStepper(setup, SAMPLE_PERIOD_S)
+    assert stepper.limit.max_step_s == limit.max_step_s and names in stepper.limit.reason
+    assert stepper.physics_step_s <= limit.max_step_s < SAMPLE_PERIOD_S / (stepper.substeps - 1)
+    block = stepper.advance(8)
+    np.testing.assert_array_equal(block.time_s, np.arange(8) * SAMPLE_PERIOD_S)
+    assert np.all(np.isfinite(block.data))
 
 
-def test_step_just_beyond_the_limit_is_refused_and_at_the_limit_accepted():
-    """The refusal is exact: dt at the limit runs, 0.1 % above it is refused."""
+def test_a_sample_period_at_the_limit_takes_one_step_and_just_above_it_two():
+    """The rule is exact: a sample period at the limit is one step, 0.1 % above it two."""
     setup = _setup()
     limit = step_limit(setup, NOMINAL_FORCE_N).max_step_s
-    FixedStepStepper(setup, limit)
-    with pytest.raises(StepSizeError, match="exceeds the limit"):
-        FixedStepStepper(setup, 1.001 * limit)
+    assert FixedStepStepper(setup, limit).substeps == 1
+    above = FixedStepStepper(setup, 1.001 * limit)
+    assert above.substeps == 2 and above.physics_step_s == 1.001 * limit / 2
 
 
 # -- correct results at the edges ---------------------------------------------------------------
@@ -358,7 +362,7 @@ def test_very_long_run_stays_exact():
     setup = BrakeSetup()
     stepper = FixedStepStepper(setup, DEFAULT_DT)
     block = stepper.run(60.0, record_every=250)  # 100 Hz samples, physics at 25 kHz
-    assert stepper.step_index == round(60.0 / DEFAULT_DT)
+    assert stepper.sample_index == round(60.0 / DEFAULT_DT)
     idx = np.arange(len(block)) * 250
     np.testing.assert_array_equal(block.time_s, idx * DEFAULT_DT)
     assert np.all(np.isfinite(block.data))

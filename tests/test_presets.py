@@ -1,4 +1,5 @@
-"""Presets: the stated error bounds hold on the symmetric event; scenarios pick and check them."""
+"""Presets: the stated error bounds hold on the symmetric event at the default sample rate;
+a preset chooses the scheme and the largest step, never the sample rate."""
 
 from __future__ import annotations
 
@@ -9,8 +10,8 @@ import pytest
 from brake_sim_ros.analysis.impacts import event_metrics
 from brake_sim_ros.errors import ParameterError, ScenarioError
 from brake_sim_ros.scenarios import load_scenario
-from brake_sim_ros.scenarios.loader import parse_scenario
-from brake_sim_ros.solvers.fixed_step import FixedStepStepper
+from brake_sim_ros.scenarios.loader import DEFAULT_SAMPLE_RATE_HZ, parse_scenario
+from brake_sim_ros.solvers.build import stepper_for
 from brake_sim_ros.solvers.presets import DEFAULT_PRESET, PRESETS, get_preset
 from brake_sim_ros.solvers.work_precision import compare
 
@@ -18,8 +19,11 @@ from brake_sim_ros.solvers.work_precision import compare
 @pytest.mark.parametrize("name", sorted(PRESETS))
 def test_preset_meets_its_stated_error_bounds(name, symmetric_reference):
     preset = PRESETS[name]
-    scenario = load_scenario("symmetric")
-    stepper = FixedStepStepper(scenario.setup, preset.dt_s, scheme=preset.scheme)
+    scenario = load_scenario("symmetric").with_solver(preset=name)
+    stepper = stepper_for(scenario)
+    assert stepper.scheme == preset.scheme
+    assert stepper.sample_period_s == 1 / DEFAULT_SAMPLE_RATE_HZ
+    assert stepper.physics_step_s <= preset.max_step_s
     samples = stepper.run(scenario.duration_s)
     metrics = event_metrics(samples, stop_time_s=stepper.stop_time_s)
     row = compare(
@@ -40,19 +44,21 @@ def test_balanced_preset_meets_the_issue_targets():
 
 
 def test_default_solver_is_the_balanced_preset():
-    solver = parse_scenario('name = "x"').solver
-    assert (solver.method, solver.dt_s, solver.preset) == (
+    scenario = parse_scenario('name = "x"')
+    solver = scenario.solver
+    assert (solver.method, solver.max_step_s, solver.preset) == (
         PRESETS["balanced"].scheme,
-        PRESETS["balanced"].dt_s,
+        PRESETS["balanced"].max_step_s,
         "balanced",
     )
+    assert scenario.sample_rate_hz == DEFAULT_SAMPLE_RATE_HZ == 25_600.0
 
 
-def test_explicit_step_and_method_override_the_preset():
+def test_explicit_step_bound_and_method_override_the_preset():
     solver = parse_scenario(
-        'name = "x"\n[solver]\npreset = "accurate"\nmethod = "rk4"\ndt_s = 3e-5'
+        'name = "x"\n[solver]\npreset = "accurate"\nmethod = "rk4"\nmax_step_s = 3e-5'
     ).solver
-    assert (solver.method, solver.dt_s, solver.preset) == ("rk4", 3e-5, "accurate")
+    assert (solver.method, solver.max_step_s, solver.preset) == ("rk4", 3e-5, "accurate")
 
 
 def test_unknown_preset_is_refused_with_the_allowed_names():
@@ -60,11 +66,24 @@ def test_unknown_preset_is_refused_with_the_allowed_names():
         parse_scenario('name = "x"\n[solver]\npreset = "turbo"')
     with pytest.raises(ParameterError, match="allowed one of"):
         get_preset("turbo")
+    with pytest.raises(ScenarioError, match="allowed one of"):
+        load_scenario("symmetric").with_solver(preset="turbo")
 
 
-def test_preset_step_above_the_scenario_limit_is_refused_naming_the_limit():
-    text = 'name = "x"\n[defects.left]\npivot_radius_change_pct = -3.0'  # case 2: limit 9 us
-    with pytest.raises(ScenarioError, match=r"step limit 8\.\d+e-06 s.*dt_s <="):
-        parse_scenario(text)
-    solver = parse_scenario(text + "\n[solver]\ndt_s = 8e-6").solver
-    assert math.isclose(solver.dt_s, 8e-6)
+def test_a_preset_never_sets_the_sample_rate_nor_is_refused_for_the_step_limit():
+    """Case 2's leading pivot 3 % inward has a 9 us limit (6.4 us for symplectic Euler):
+    every preset runs it at the scenario's sample rate, with a smaller physics step."""
+    text = 'name = "x"\nsample_rate_hz = 20000\n[defects.left]\npivot_radius_change_pct = -3.0'
+    for name, preset in PRESETS.items():
+        scenario = parse_scenario(text).with_solver(preset=name)
+        stepper = stepper_for(scenario)
+        assert stepper.sample_period_s == 1 / 20_000
+        assert stepper.physics_step_s <= min(stepper.limit.max_step_s, preset.max_step_s)
+        assert stepper.substeps == math.ceil(
+            5e-5 / min(stepper.limit.max_step_s, preset.max_step_s)
+        )
+
+
+def test_the_retired_dt_s_key_is_refused_with_what_replaced_it():
+    with pytest.raises(ScenarioError, match=r"solver.dt_s.*sample_rate_hz.*max_step_s"):
+        parse_scenario('name = "x"\n[solver]\ndt_s = 4e-5')

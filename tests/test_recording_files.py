@@ -44,6 +44,7 @@ from brake_sim_ros.ros import conversion, stream  # noqa: E402
 from brake_sim_ros.ros import parameters as ros_params  # noqa: E402
 from brake_sim_ros.ros.offline import offline_messages  # noqa: E402
 from brake_sim_ros.scenarios import load_scenario  # noqa: E402
+from brake_sim_ros.solvers.build import stepper_for  # noqa: E402
 
 SCENARIO = "case7_left_actuation"
 DURATION_S = 2.5
@@ -190,7 +191,13 @@ def test_metadata_explains_the_recording(recording, scenario):
     run = records[metadata.RUN]
     assert run["mode"] == "offline"
     assert ast.literal_eval(run["seed"]) == scenario.seed
-    assert ast.literal_eval(run["dt_s"]) == scenario.solver.dt_s
+    stepper = stepper_for(scenario)
+    assert ast.literal_eval(run["sample_rate_hz"]) == scenario.sample_rate_hz == 25_600.0
+    assert ast.literal_eval(run["sample_period_s"]) == stepper.sample_period_s
+    assert ast.literal_eval(run["physics_step_s"]) == stepper.physics_step_s
+    assert ast.literal_eval(run["substeps_per_sample"]) == stepper.substeps
+    assert ast.literal_eval(run["step_limit_s"]) == stepper.limit.max_step_s
+    assert (run["scheme"], run["preset"]) == ("rk4-located", "balanced")
     assert ast.literal_eval(run["duration_s"]) == DURATION_S
     assert run["software_version"].startswith("brake-sim-ros ")
 

@@ -22,8 +22,8 @@ pytest.importorskip("brake_sim_msgs", reason="ROS interfaces not built (run scri
 
 from brake_sim_ros.analysis.onsets import contact_changes, in_contact  # noqa: E402
 from brake_sim_ros.cli import main  # noqa: E402
+from brake_sim_ros.ros import conversion, stream  # noqa: E402
 from brake_sim_ros.ros import parameters as ros_params  # noqa: E402
-from brake_sim_ros.ros import stream  # noqa: E402
 from brake_sim_ros.ros.offline import StreamSettings, offline_messages  # noqa: E402
 from brake_sim_ros.scenarios import load_scenario  # noqa: E402
 from brake_sim_ros.solvers.run import run_scenario  # noqa: E402
@@ -36,9 +36,10 @@ from brake_sim_ros.viz.rerun_sink import (  # noqa: E402
 )
 from brake_sim_ros.viz.targets import RerunTargetError, parse_target  # noqa: E402
 
-DT_NS = 40_000  # the built-in scenarios' 40 us step
+SAMPLE_RATE_HZ = 25_600.0  # the built-in scenarios' sample rate
+PERIOD_NS = 1e9 / SAMPLE_RATE_HZ  # 39062.5 ns
 RUN_S = 1.0
-N_SAMPLES = round(RUN_S * 1e9 / DT_NS)
+N_SAMPLES = round(RUN_S * SAMPLE_RATE_HZ)
 DRAWING = [
     f"{E.DRAWING}/{p}"
     for p in ("drum", "linings", "shoes", "pivots", "actuation", "pivot_forces", "contact_points")
@@ -48,6 +49,11 @@ DRAWING = [
 def expected_paths() -> set[str]:
     pivot = {E.pivot_path(s, c) for s in E.SIDES for c in E.PIVOT_SERIES}
     return pivot | set(E.state_paths()) | set(DRAWING) | {E.EVENTS, f"{E.DEFECTS}/ground_truth"}
+
+
+def stamp(index: int) -> int:
+    """Simulated time of sample ``index`` as the stream stamps it, ns."""
+    return conversion.stamp_ns(index, 1 / SAMPLE_RATE_HZ)
 
 
 def check_run(path: Path, *, n_samples: int, n_states: int) -> None:
@@ -63,10 +69,10 @@ def check_run(path: Path, *, n_samples: int, n_states: int) -> None:
             t = c.times(E.pivot_path(side, series))
             # every simulated sample, once, at its own time
             assert t.size == n_samples
-            np.testing.assert_array_equal(t, np.arange(n_samples) * DT_NS)
+            np.testing.assert_array_equal(t, [stamp(k) for k in range(n_samples)])
     speed = c.times(f"{E.SPEED}/drum")
     assert speed.size == n_states
-    assert speed[0] == 0 and speed[-1] == (n_samples - n_samples // n_states) * DT_NS
+    assert speed[0] == 0 and speed[-1] == stamp(n_samples - n_samples // n_states)
     assert c.texts[f"{E.DEFECTS}/ground_truth"], "the ground truth is shown"
 
 
@@ -129,7 +135,7 @@ def test_live_settings_decimate_and_keep_peaks(tmp_path: Path):
     full, live = read(full_path), read(live_path)
     path = E.pivot_path("left", "magnitude")
     n_full, n_live = full.times(path).size, live.times(path).size
-    buckets = math.ceil(n_full / round(25_000 / LIVE_SETTINGS.force_envelope_hz))
+    buckets = math.ceil(n_full / round(SAMPLE_RATE_HZ / LIVE_SETTINGS.force_envelope_hz))
     assert buckets <= n_live <= 2 * buckets
     assert live.values(path).max() == full.values(path).max()
     assert live.values(path).min() == full.values(path).min()
@@ -153,14 +159,15 @@ def test_impacts_match_the_analysis_at_the_default_state_rate(tmp_path: Path):
     sink.close()
     verify(tmp_path / "impacts.rrd")
     run = run_scenario(scenario, duration_s=IMPACTING_S)
-    t_ns = np.rint(run.samples.time_s * 1e9).astype(np.int64)
+    period = run.samples.sample_period_s
     c = read(tmp_path / "impacts.rrd")
     for side in E.SIDES:
         metrics = run.metrics.shoe(side)
         assert metrics.n_impacts >= 8, "more bounces than 100 Hz states can resolve"
         assert sink.impacts[side] == metrics.n_impacts
         # the onset sample is the first one after the interpolated crossing
-        onset_ns = t_ns[np.searchsorted(run.samples.time_s, metrics.onsets_s, side="right")]
+        onset_index = np.searchsorted(run.samples.time_s, metrics.onsets_s, side="right")
+        onset_ns = [conversion.stamp_ns(int(k), period) for k in onset_index]
         np.testing.assert_array_equal(c.times(f"{E.IMPACTS}/{side}"), onset_ns)
         # one peak per finished episode (the last contact lasts past the end of the run)
         n_closed = metrics.separations_s.size
@@ -182,7 +189,7 @@ def test_impacts_without_contact_events_at_full_state_rate(tmp_path: Path):
     rec = rr.RecordingStream("brake_sim_test")
     rec.save(tmp_path / "impacts.rrd")
     sink = RerunSink(rec, params=scenario.setup.params)
-    every_sample = StreamSettings(state_rate_hz=25_000.0)
+    every_sample = StreamSettings(state_rate_hz=SAMPLE_RATE_HZ)
     for topic, msg, ns in offline_messages(scenario, duration_s=duration, settings=every_sample):
         if topic is not stream.CONTACT_EVENTS:
             sink.write(topic, msg, ns)
@@ -197,11 +204,14 @@ def test_impacts_without_contact_events_at_full_state_rate(tmp_path: Path):
         onsets_ns = np.asarray(metrics.shoe(side).onsets_s) * 1e9
         marks = c.times(f"{E.IMPACTS}/{side}")
         assert marks.size == onsets_ns.size
-        # each marker sits at the sample where the onset is first seen (the next sample)
-        assert np.all((marks >= onsets_ns) & (marks - onsets_ns <= DT_NS))
+        # each marker sits at the sample where the onset is first seen (the next sample;
+        # its stamp rounded to the ns)
+        assert np.all((marks >= onsets_ns - 0.5) & (marks - onsets_ns <= PERIOD_NS + 0.5))
         # ... which is the onset sample of the shared definition (a run starts out of contact)
         shared = contact_changes(in_contact(run.samples[f"{side}_indentation_m"]), before=False)
-        np.testing.assert_array_equal(marks, (run.samples.first_index + shared.onsets) * DT_NS)
+        np.testing.assert_array_equal(
+            marks, [stamp(run.samples.first_index + k) for k in shared.onsets]
+        )
 
 
 # -- brake-sim view FILE.mcap --------------------------------------------------------------

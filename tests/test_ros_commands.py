@@ -14,7 +14,7 @@ from brake_sim_ros.ros.commands import (
     check_command,
 )
 from brake_sim_ros.scenarios import load_scenario
-from brake_sim_ros.solvers.fixed_step import FixedStepStepper
+from brake_sim_ros.solvers.build import stepper_for
 
 DT = 4e-5
 TIMEOUT_STEPS = 5000  # 0.2 s
@@ -124,19 +124,21 @@ def test_superseded_and_cleared_commands_are_reported_as_dropped():
 
 
 def test_chunked_stepping_with_commands_equals_one_offline_run():
-    """Same commands at the same steps give the same numbers, however the run is cut."""
+    """Same commands at the same samples give the same numbers, however the run is cut;
+    also when a command above the profile's peak makes the stepper take more substeps."""
     scenario = load_scenario("symmetric")
     policy = CommandPolicy(0.004, TimeoutBehaviour.RAMP_TO_ZERO, 2e5)
 
     def run(cuts: list[int]) -> np.ndarray:
-        stepper = FixedStepStepper(scenario.setup, scenario.solver.dt_s, max_actuation_n=2000.0)
-        planner = ActuationPlanner(scenario.solver.dt_s, policy)
+        stepper = stepper_for(scenario)
+        planner = ActuationPlanner(stepper.sample_period_s, policy)
         rows = []
         for i, n in enumerate(cuts):
             if i == 1:
-                planner.command((1500.0, 900.0), stepper.step_index)
-            for count, forces in planner.segments(stepper.step_index, n):
+                planner.command((3000.0, 900.0), stepper.sample_index)
+            for count, forces in planner.segments(stepper.sample_index, n):
                 rows.append(stepper.advance(count, actuation_n=forces).data)
+        assert stepper.substeps == 2  # the limit for 3000 N: 28 us in a 39 us sample
         return np.concatenate(rows)
 
     a = run([500, 1000, 500])

@@ -34,7 +34,7 @@ DT = 4e-5
 def block() -> SampleBlock:
     """1.2 s of the symmetric scenario: free flight, impacts and contact."""
     scenario = load_scenario("symmetric")
-    return FixedStepStepper(scenario.setup, scenario.solver.dt_s).advance(30_000)
+    return FixedStepStepper(scenario.setup, DT).advance(30_000)
 
 
 def test_stamps_are_simulated_time_in_integer_nanoseconds():
@@ -42,6 +42,12 @@ def test_stamps_are_simulated_time_in_integer_nanoseconds():
     assert conversion.stamp_ns(1, DT) == 40_000
     assert conversion.stamp_ns(187_500, DT) == 7_500_000_000
     assert conversion.stamp_ns(10**9, DT) == 40_000 * 10**9
+    # 25.6 kHz, the default rate: 39062.5 ns per sample, exact, ties to even, no drift
+    period = 1 / 25_600
+    assert [conversion.stamp_ns(k, period) for k in range(5)] == [0, 39062, 78125, 117188, 156250]
+    assert conversion.stamp_ns(256, period) == 10_000_000  # one 10 ms chunk
+    assert conversion.stamp_ns(192_000, period) == 7_500_000_000
+    assert conversion.stamp_ns(10**12 + 1, period) == 39_062_500_000_039_062
     t = conversion.time_msg(7_500_000_123)
     assert (t.sec, t.nanosec) == (7, 500_000_123)
     assert conversion.header(5).frame_id == "brake_backing_plate"
@@ -170,15 +176,18 @@ def view(**changes) -> RunView:
         state="running",
         message="",
         sim_time_s=7.5,
-        sample_index=187_500,
-        sample_rate_hz=25_000.0,
+        sample_index=192_000,
+        sample_rate_hz=25_600.0,
         duration_s=7.5,
         target_real_time_factor=1.0,
         measured_real_time_factor=0.998,
         actuation_source="profile",
         stop_time_s=6.58,
-        step_limit_s=4.0e-5,
-        max_actuation_force_n=2080.0,
+        physics_step_s=1.953125e-5,
+        substeps=2,
+        step_limit_s=3.2e-5,
+        step_limit_force_n=2600.0,
+        max_actuation_force_n=2600.0,
         seed=0,
     )
     values.update(changes)
@@ -187,7 +196,8 @@ def view(**changes) -> RunView:
 
 def test_diagnostics_report_every_counter():
     stats = RunStats(
-        steps_done=187_500,
+        samples_done=192_000,
+        physics_steps_done=384_000,
         deadline_misses=2,
         commands_accepted=3,
         commands_rejected=4,
@@ -201,7 +211,11 @@ def test_diagnostics_report_every_counter():
     (status,) = array.status
     values = {kv.key: kv.value for kv in status.values}
     assert values["deadline_misses"] == "2"
-    assert values["steps_done"] == "187500"
+    assert values["samples_done"] == "192000"
+    assert values["physics_steps_done"] == "384000"
+    assert values["sample_rate_hz"] == "25600"
+    assert (values["physics_step_s"], values["substeps_per_sample"]) == ("1.953125e-05", "2")
+    assert (values["step_limit_s"], values["step_limit_force_n"]) == ("3.2e-05", "2600")
     assert values["commands_accepted"] == "3"
     assert values["commands_rejected"] == "4"
     assert values["commands_dropped"] == "1"
@@ -219,7 +233,7 @@ def test_diagnostics_report_every_counter():
 
 def test_summary_is_one_paragraph_with_the_figures():
     stats = RunStats(
-        samples_published=187_500,
+        samples_published=192_000,
         chunks_published=750,
         states_published=750,
         commands_accepted=3,
@@ -231,7 +245,7 @@ def test_summary_is_one_paragraph_with_the_figures():
     assert "\n" not in text
     for fragment in (
         "7.5000 s",
-        "187500 samples in 750 chunks",
+        "192000 samples in 750 chunks",
         "accepted 3",
         "rejected 4",
         "stopped at t = 6.5800 s",

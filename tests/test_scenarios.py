@@ -22,6 +22,7 @@ def test_every_builtin_loads_and_the_papers_cases_are_there():
     assert sum(n.startswith("case") for n in names) == 8
     for name in names:
         assert load_scenario(name).name == name
+        assert load_scenario(name).sample_rate_hz == 25_600.0  # the default
 
 
 def test_piecewise_actuation_and_overrides_are_applied():
@@ -62,8 +63,11 @@ shoes = ["left"]
         ),
         ("[parameters.friction]\ncoefficient = nan", "parameters.friction.coefficient", "finite"),
         ("[parameters.shoe]\nmass_kg = inf", "parameters.shoe.mass_kg", "finite"),
-        ("[solver]\ndt_s = -1e-5", "solver.dt_s", "> 0"),
+        ("[solver]\nmax_step_s = -1e-5", "solver.max_step_s", "> 0"),
         ("[solver]\nmax_step = 1", "solver.max_step", "unknown key"),
+        ("[solver]\ndt_s = 4e-5", "solver.dt_s", "sample_rate_hz"),  # retired
+        ("sample_rate_hz = 0", "sample_rate_hz", ">= 1"),
+        ('sample_rate_hz = "25.6k"', "sample_rate_hz", "a number"),
         ('[solver]\nmethod = "euler"', "solver.method", "one of"),
         ("seed = -3", "seed", "integer"),
         ("[defects.left]\ninitial_angle_deg = true", "defects.left.initial_angle_deg", "a number"),

@@ -1,7 +1,8 @@
-"""Fixed-step stepper: step limits, live actuation, refusals."""
+"""Fixed-step stepper: sample rate and substeps, step limits, live actuation, refusals."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -9,25 +10,60 @@ import pytest
 
 from brake_sim_ros.errors import ParameterError, StepSizeError
 from brake_sim_ros.model import layout as L
+from brake_sim_ros.model.actuation import Actuation, ForceProfile
 from brake_sim_ros.model.defects import Defects, ShoeDefect
+from brake_sim_ros.model.parameters import BrakeParameters
 from brake_sim_ros.model.trajectory import BrakeSetup
 from brake_sim_ros.scenarios import load_scenario
-from brake_sim_ros.solvers.fixed_step import FixedStepStepper
+from brake_sim_ros.solvers.build import stepper_for
+from brake_sim_ros.solvers.fixed_step import (
+    MIN_PHYSICS_STEP_S,
+    FixedStepStepper,
+    substeps_for,
+)
 from brake_sim_ros.solvers.reference import run_reference
 from brake_sim_ros.solvers.stability import rk4_stable_step, step_limit
+
+PERIOD = 1 / 25_600  # the default sample rate
 
 
 def test_rk4_stability_interval_on_the_real_axis():
     assert rk4_stable_step(-1.0 + 0j) == pytest.approx(2.785293563, rel=1e-6)
 
 
-def test_step_above_the_limit_is_refused_with_limit_and_reason():
+def test_substeps_are_the_fewest_whole_ones_within_the_bound():
+    assert substeps_for(4e-5, 4e-5) == 1  # at the bound: one step
+    assert substeps_for(4e-5, 3.9999e-5) == 2
+    assert substeps_for(1e-4, 1e-4 / 3) == 3  # a rounded quotient does not add a substep
+    assert substeps_for(1e-4, 0.0334e-4) == 30
+    assert substeps_for(1e-4, math.inf) == 1
+
+
+def test_a_sample_period_above_the_limit_is_split_into_whole_substeps():
+    """The sample period is never refused for the step limit: the physics step divides it."""
     setup = BrakeSetup()
-    limit = step_limit(setup, 1300.0)
+    limit = step_limit(setup, 1300.0, scheme="rk4-located").max_step_s
+    stepper = FixedStepStepper(setup, 2.5 * limit)
+    assert stepper.substeps == 3 and stepper.physics_step_s <= limit
+    assert stepper.physics_step_s * 3 == pytest.approx(2.5 * limit, rel=1e-15)
+    block = stepper.advance(40)
+    assert len(block) == 40 and block.sample_period_s == 2.5 * limit
+    np.testing.assert_array_equal(block.time_s, np.arange(40) * (2.5 * limit))
+    assert FixedStepStepper(setup, limit).substeps == 1  # exactly at the limit: one step
+
+
+def test_a_pathological_limit_is_refused_with_the_limit_and_its_reason():
+    """A drum of 1e-6 kg m^2 on the coupling: a limit of a few ns, below the smallest step
+    the stepper takes, thousands of substeps per sample."""
+    params = BrakeParameters().with_overrides({"driveline": {"drum_inertia_kg_m2": 1e-6}})
+    setup = BrakeSetup(params=params)
+    limit = step_limit(setup, 1300.0, scheme="rk4-located")
+    assert limit.max_step_s < MIN_PHYSICS_STEP_S
     with pytest.raises(StepSizeError) as info:
-        FixedStepStepper(setup, 1.5 * limit.max_step_s)
+        FixedStepStepper(setup, PERIOD)
     message = str(info.value)
-    assert f"{limit.max_step_s:.3g}" in message and "friction" in message
+    assert f"at most {limit.max_step_s:.3g} s" in message and limit.reason in message
+    assert "substeps per" in message and "\n" not in message
 
 
 def test_a_step_beyond_the_limit_really_gives_wrong_results():
@@ -49,40 +85,116 @@ def test_limit_shrinks_with_actuation_force():
 
 @pytest.mark.parametrize("bad", [math.nan, math.inf, -1.0, 1e6])
 def test_bad_live_actuation_is_refused_and_changes_nothing(bad):
-    s = load_scenario("symmetric")
-    stepper = FixedStepStepper(s.setup, s.solver.dt_s)
+    stepper = stepper_for(load_scenario("symmetric"))
     stepper.advance(100)
     before = stepper.state
     with pytest.raises(ParameterError, match="actuation force"):
         stepper.advance(10, actuation_n=(bad, 100.0))
-    assert np.array_equal(stepper.state, before) and stepper.step_index == 100
+    assert np.array_equal(stepper.state, before) and stepper.sample_index == 100
+    assert stepper.limit_force_n == 1300.0 and stepper.substeps == 1
 
 
 def test_live_actuation_takes_effect_between_calls():
-    s = load_scenario("symmetric")
-    stepper = FixedStepStepper(s.setup, s.solver.dt_s)
-    stepper.advance(6000)  # 0.24 s, shoes impacting
+    stepper = stepper_for(load_scenario("symmetric"))
+    stepper.advance(6144)  # 0.24 s, shoes impacting
     block = stepper.advance(10_000, actuation_n=(1000.0, 0.0))
     assert np.all(block["left_actuation_force_n"] == 1000.0)
     assert np.all(block["right_actuation_force_n"] == 0.0)
     assert block["right_normal_force_n"][-1] == 0.0 and block["left_normal_force_n"][-1] > 1000
 
 
+def test_live_actuation_above_the_limit_force_takes_more_substeps_not_a_refusal():
+    """5000 N on a stepper whose limit was computed for the profile's 1300 N: the limit
+    is recomputed for 5000 N and the sample interval split into more substeps; the sample
+    grid stays. A reset goes back to the start's substeps, and the same commands give the
+    same numbers, bit for bit."""
+    scenario = load_scenario("symmetric")
+
+    def run(stepper: FixedStepStepper) -> np.ndarray:
+        parts = [stepper.advance(5000).data]
+        assert stepper.substeps == 1
+        parts.append(stepper.advance(2000, actuation_n=(5000.0, 5000.0)).data)
+        assert stepper.limit_force_n == 5000.0
+        assert stepper.physics_step_s <= step_limit(stepper.setup, 5000.0).max_step_s
+        assert stepper.substeps == 3  # 16.7 us limit in a 39.1 us sample
+        parts.append(stepper.advance(3000).data)  # the profile again: the limit stays
+        assert stepper.substeps == 3
+        return np.concatenate(parts)
+
+    stepper = stepper_for(scenario)
+    first = run(stepper)
+    np.testing.assert_array_equal(first[:, 0], np.arange(10_000) * PERIOD)
+    assert np.all(first[5000:7000, L.COL["left_actuation_force_n"]] == 5000.0)
+    stepper.reset()
+    assert (stepper.substeps, stepper.limit_force_n) == (1, 1300.0)
+    np.testing.assert_array_equal(run(stepper), first)
+    with pytest.raises(ParameterError, match="from 0 to 50000 N"):
+        stepper.advance(1, actuation_n=(50_001.0, 0.0))
+
+
 def test_replace_setup_validates_and_keeps_state_on_error():
     s = load_scenario("symmetric")
-    stepper = FixedStepStepper(s.setup, s.solver.dt_s)
+    stepper = stepper_for(s)
     stepper.advance(100)
     with pytest.raises(ParameterError, match="inside the drum"):
         stepper.replace_setup(BrakeSetup(defects=Defects(left=ShoeDefect(initial_angle_deg=3.0))))
     assert stepper.setup is s.setup
     stepper.replace_setup(BrakeSetup(defects=Defects(left=ShoeDefect(pivot_radius_change_pct=1.0))))
-    assert stepper.step_index == 100
+    assert stepper.sample_index == 100
+    params = BrakeParameters().with_overrides({"driveline": {"drum_inertia_kg_m2": 1e-6}})
+    with pytest.raises(StepSizeError, match="smallest step"):
+        stepper.replace_setup(BrakeSetup(params=params))
+    assert stepper.setup.params == BrakeParameters() and stepper.substeps == 1
+
+
+def test_replace_setup_with_a_defect_that_needs_a_smaller_step_repicks_the_substeps():
+    """The leading pivot 3 % inward (case 2) needs a 9 us step: accepted mid-run, with 5
+    substeps per 39.1 us sample, on the same sample grid."""
+    scenario = load_scenario("symmetric")
+    stepper = stepper_for(scenario)
+    before = stepper.advance(25_600)  # 1 s
+    assert stepper.substeps == 1
+    inward = dataclasses.replace(
+        scenario.setup, defects=Defects(left=ShoeDefect(pivot_radius_change_pct=-3.0))
+    )
+    stepper.replace_setup(inward)
+    assert stepper.substeps == 5 and stepper.physics_step_s <= stepper.limit.max_step_s
+    assert stepper.limit.max_step_s == pytest.approx(9e-6, rel=0.01)
+    after = stepper.advance(2560)
+    assert after.first_index == 25_600 and after.sample_period_s == before.sample_period_s
+    np.testing.assert_array_equal(after.time_s, (25_600 + np.arange(2560)) * PERIOD)
+    assert np.all(np.isfinite(after.data))
+    # a fresh stepper with the defect from the start takes the same substeps
+    assert stepper_for(scenario.with_defects(inward.defects)).substeps == 5
+
+
+def test_a_substep_change_keeps_the_regime_clock_in_seconds():
+    """The kernel's contact-regime bookkeeping counts physics steps since the last contact
+    change: a new step rescales that count, so the settling time (50 ms) is kept."""
+    scenario = load_scenario("symmetric")
+    stepper = stepper_for(scenario)
+    stepper.advance(6144)  # 0.24 s: impacting
+
+    def since_s() -> list[float]:
+        now = stepper.sample_index * stepper.substeps
+        keys = (L.K_LEFT_LAST_CHANGE_STEP, L.K_RIGHT_LAST_CHANGE_STEP)
+        return [(now - stepper._kstate[k]) * stepper.physics_step_s for k in keys]
+
+    before = since_s()
+    far = ForceProfile((0.0, 0.2, 0.7, 1e6), (0.0, 0.0, 1300.0, 5000.0))  # a 5000 N peak
+    stepper.replace_setup(dataclasses.replace(scenario.setup, actuation=Actuation(far, far)))
+    assert stepper.substeps == 3
+    np.testing.assert_allclose(since_s(), before, atol=stepper.physics_step_s)
+    stepper.replace_setup(scenario.setup)  # the limit force stays 5000 N: still 3
+    assert stepper.substeps == 3
 
 
 @pytest.mark.parametrize("dt", [0.0, -1e-5, math.nan, math.inf])
-def test_nonsense_step_is_refused(dt):
+def test_nonsense_sample_period_or_step_bound_is_refused(dt):
     with pytest.raises(StepSizeError, match="allowed a finite step > 0"):
         FixedStepStepper(BrakeSetup(), dt)
+    with pytest.raises(StepSizeError, match="max_step_s"):
+        FixedStepStepper(BrakeSetup(), PERIOD, max_step_s=dt)
 
 
 def test_unknown_scheme_is_refused_with_the_allowed_ones():
@@ -90,14 +202,17 @@ def test_unknown_scheme_is_refused_with_the_allowed_ones():
         FixedStepStepper(BrakeSetup(), 4e-5, scheme="leapfrog")
 
 
-def test_located_scheme_chunked_equals_one_call():
-    s = load_scenario("symmetric")
-    whole = FixedStepStepper(s.setup, s.solver.dt_s, scheme="rk4-located")
-    data = whole.advance(8000).data  # to 0.32 s: several located onsets and separations
+@pytest.mark.parametrize("preset", ["balanced", "accurate"])  # 1 and 2 substeps per sample
+def test_located_scheme_chunked_equals_one_call(preset):
+    s = load_scenario("symmetric").with_solver(preset=preset)
+    whole = stepper_for(s)
+    assert whole.scheme == "rk4-located"
+    data = whole.advance(8192).data  # to 0.32 s: several located onsets and separations
     assert whole.located_switches > 4
-    chunked = FixedStepStepper(s.setup, s.solver.dt_s, scheme="rk4-located")
-    parts = [chunked.advance(n).data for n in (1, 5536, 17, 2446)]
+    chunked = stepper_for(s)
+    parts = [chunked.advance(n).data for n in (1, 5536, 17, 2638)]
     assert np.array_equal(data, np.concatenate(parts))
+    assert np.array_equal(stepper_for(s).run(8192 * s.sample_period_s).data, data)
 
 
 def _state_error_after_impacts(scheme: str, steps: tuple[float, ...]) -> list[float]:
@@ -133,6 +248,7 @@ def test_semi_implicit_euler_has_its_own_step_limit():
     rk4 = step_limit(setup, 1300.0).max_step_s
     euler = step_limit(setup, 1300.0, scheme="semi-implicit-euler").max_step_s
     assert euler < rk4  # explicit in the damping: a smaller stable step than RK4's
-    FixedStepStepper(setup, 0.95 * euler, scheme="semi-implicit-euler")
-    with pytest.raises(StepSizeError, match="symplectic Euler"):
-        FixedStepStepper(setup, 1.05 * euler, scheme="semi-implicit-euler")
+    assert FixedStepStepper(setup, 0.95 * euler, scheme="semi-implicit-euler").substeps == 1
+    split = FixedStepStepper(setup, 1.05 * euler, scheme="semi-implicit-euler")
+    assert split.substeps == 2 and "symplectic Euler" in split.limit.reason
+    assert FixedStepStepper(setup, 1.05 * euler, scheme="rk4").substeps == 1

@@ -11,7 +11,10 @@ Metadata records (MCAP ``Metadata``; every value a string):
     ``name``, ``source`` (file path or ``<built-in NAME>``), ``toml`` (the scenario file's
     text), ``sha256`` (of that text), ``description``.
 ``brake_sim_run``
-    ``seed``, ``software_version``, ``dt_s``, ``sample_rate_hz``, ``mode`` (``live`` or
+    ``seed``, ``software_version``, ``sample_rate_hz`` and ``sample_period_s`` (the
+    scenario's), the stepper at the start of the recording (``scheme``, ``preset``,
+    ``physics_step_s``, ``substeps_per_sample``, ``step_limit_s``; a live run may re-pick
+    the substeps later, which its /diagnostics and log say), ``mode`` (``live`` or
     ``offline``), ``duration_s``, the stream settings (``chunk_rate_hz``,
     ``state_rate_hz``, ``publish_clock``), ``time_base`` and ``model_note``; a live run
     adds its node name and ``real_time_factor``; values are ``repr()`` of the Python value
@@ -43,6 +46,7 @@ from brake_sim_ros.model.defects import Defects
 from brake_sim_ros.model.parameters import BrakeParameters
 from brake_sim_ros.ros import parameters as ros_params
 from brake_sim_ros.scenarios import Scenario
+from brake_sim_ros.solvers.fixed_step import FixedStepStepper
 
 MODEL = "brake_sim_model"
 SCENARIO = "brake_sim_scenario"
@@ -101,22 +105,28 @@ def run_record(
     *,
     mode: str,
     seed: int,
-    dt_s: float,
+    scenario: Scenario,
+    stepper: FixedStepStepper,
     duration_s: float,
     chunk_rate_hz: float,
     state_rate_hz: float,
     publish_clock: bool,
     extra: Mapping[str, Any] | None = None,
 ) -> dict[str, str]:
-    """The ``brake_sim_run`` record (see the module doc)."""
+    """The ``brake_sim_run`` record (see the module doc); ``stepper`` as it is now."""
     if mode not in ("live", "offline"):
         raise ValueError(f"mode={mode!r}: allowed 'live' or 'offline'")
     values: dict[str, Any] = {
         "mode": mode,
         "seed": seed,
         "software_version": software_version(),
-        "dt_s": dt_s,
-        "sample_rate_hz": 1.0 / dt_s,
+        "sample_rate_hz": scenario.sample_rate_hz,
+        "sample_period_s": stepper.sample_period_s,
+        "scheme": stepper.scheme,
+        "preset": scenario.solver.preset,
+        "physics_step_s": stepper.physics_step_s,
+        "substeps_per_sample": stepper.substeps,
+        "step_limit_s": stepper.limit.max_step_s,
         "duration_s": duration_s,
         "chunk_rate_hz": chunk_rate_hz,
         "state_rate_hz": state_rate_hz,

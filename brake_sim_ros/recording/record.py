@@ -20,6 +20,7 @@ from brake_sim_ros.ros import stream
 from brake_sim_ros.ros.offline import StreamSettings, offline_messages
 from brake_sim_ros.ros.stream import MessageSink
 from brake_sim_ros.scenarios import Scenario
+from brake_sim_ros.solvers.build import stepper_for
 
 if TYPE_CHECKING:
     from brake_sim_ros.ros.node import BrakeSimNode
@@ -74,7 +75,8 @@ def record_offline(
     """
     settings = settings or StreamSettings()
     duration = scenario.duration_s if duration_s is None else duration_s
-    dt = scenario.solver.dt_s
+    stepper = stepper_for(scenario)
+    dt = stepper.sample_period_s
     params, defects = scenario.setup.params, scenario.setup.defects
     records = {
         metadata.MODEL: metadata.model_record(params, defects),
@@ -82,7 +84,8 @@ def record_offline(
         metadata.RUN: metadata.run_record(
             mode="offline",
             seed=scenario.seed,
-            dt_s=dt,
+            scenario=scenario,
+            stepper=stepper,
             duration_s=duration,
             chunk_rate_hz=settings.chunk_rate_hz,
             state_rate_hz=settings.state_rate_hz,
@@ -100,7 +103,10 @@ def record_offline(
         custom_data=_custom_data(scenario, scenario.seed, "offline"),
     )
     try:
-        for topic, msg, ns in offline_messages(scenario, duration_s=duration, settings=settings):
+        messages = offline_messages(
+            scenario, duration_s=duration, settings=settings, stepper=stepper
+        )
+        for topic, msg, ns in messages:
             recorder.write(topic, msg, ns)
             for sink in also:  # e.g. Rerun: one simulation feeds every output
                 sink.write(topic, msg, ns)
@@ -146,7 +152,8 @@ def node_recorder(
         metadata.RUN: metadata.run_record(
             mode="live",
             seed=view.seed,
-            dt_s=scenario.solver.dt_s,
+            scenario=scenario,
+            stepper=node.stepper,
             duration_s=view.duration_s,
             chunk_rate_hz=values["chunk_rate_hz"],
             state_rate_hz=values["state_rate_hz"],

@@ -58,7 +58,7 @@ class _Window:
         diag1 = self.client.next_diagnostics()
         wall = time.monotonic() - self.wall0
         dt = 1.0 / float(diag1["sample_rate_hz"])
-        steps = int(diag1["steps_done"]) - int(self.diag0["steps_done"])
+        steps = int(diag1["samples_done"]) - int(self.diag0["samples_done"])
         return {
             "wall_s": wall,
             "cpu_pct": 100.0 * (_cpu_seconds(self.pid) - self.cpu0) / wall,

@@ -1,19 +1,20 @@
 """Actuation commands: the checks they must pass and what happens when they stop.
 
-Pure logic, no ROS. Time is counted in physics steps (simulated time), so the same
-commands at the same steps give the same forces, whatever the wall clock did.
+Pure logic, no ROS. Time is counted in steps of one output sample (simulated time: the
+stepper's unit, whatever physics substeps it takes inside), so the same commands at the
+same steps give the same forces, whatever the wall clock did.
 
 Semantics (the node's ``~/actuation`` subscription):
 
 * A valid command (both forces finite, >= 0 and <= ``max_actuation_force_n``) takes effect
-  at the next physics step, ``s_c`` = the node's step index when the command is
+  at the next sample, ``s_c`` = the node's sample index when the command is
   processed, and overrides the scenario's force profile for both shoes. The forces are
   per shoe, before the actuation-share defect (the core multiplies each shoe's force by
   ``2 * actuation_share``, exactly as it does for the profile).
 * It stays in force for ``command_timeout_s`` of *simulated* time: steps
-  ``s_c .. s_c + timeout_steps - 1``, ``timeout_steps = max(1, round(timeout_s / dt))``.
-  Every new valid command restarts that window. While paused, simulated time does not
-  advance, so a command does not age.
+  ``s_c .. s_c + timeout_steps - 1``, ``timeout_steps = max(1, round(timeout_s /
+  period))`` with ``period`` the sample period. Every new valid command restarts that
+  window. While paused, simulated time does not advance, so a command does not age.
 * When the window ends without a new command, ``on_command_timeout`` decides:
 
   ``profile``      the scenario's force profile resumes, evaluated at the current
@@ -97,20 +98,23 @@ class _Command:
 class ActuationPlanner:
     """Turns the latest command and the policy into constant-force segments of steps.
 
+    A step here is one output sample, the stepper's unit: a command takes effect at a
+    sample boundary.
+
     Args:
-        dt_s: physics step, s.
+        sample_period_s: time between samples, s.
         policy: timeout behaviour.
     """
 
-    def __init__(self, dt_s: float, policy: CommandPolicy | None = None) -> None:
-        self.dt_s = float(dt_s)
+    def __init__(self, sample_period_s: float, policy: CommandPolicy | None = None) -> None:
+        self.sample_period_s = float(sample_period_s)
         self.policy = policy or CommandPolicy()
         self._command: _Command | None = None
         self._applied = True
 
     @property
     def timeout_steps(self) -> int:
-        return max(1, round(self.policy.timeout_s / self.dt_s))
+        return max(1, round(self.policy.timeout_s / self.sample_period_s))
 
     @property
     def last_command(self) -> Forces | None:
@@ -177,7 +181,7 @@ class ActuationPlanner:
     def _ramp_forces(self, step: int) -> Forces:
         cmd = self._command
         assert cmd is not None
-        elapsed_s = (step - cmd.step - self.timeout_steps) * self.dt_s
+        elapsed_s = (step - cmd.step - self.timeout_steps) * self.sample_period_s
         drop = self.policy.ramp_rate_n_per_s * max(0.0, elapsed_s)
         return (max(0.0, cmd.forces[0] - drop), max(0.0, cmd.forces[1] - drop))
 

@@ -1,9 +1,10 @@
 """SampleBlock -> ROS messages. Pure functions: no rclpy, no clock, no DDS.
 
-Every stamp is simulated time, ``t = sample_index * dt`` in integer nanoseconds
-(:func:`stamp_ns`), never the wall clock; every frame_id is ``brake_backing_plate``
-(see ``model/parameters.py`` for the frame). Units and signs are those of the core's
-columns (``model/layout.py::COLUMNS``), which the message definitions repeat.
+Every stamp is simulated time, ``t = sample_index * sample_period`` in integer
+nanoseconds (:func:`stamp_ns`, exact for a whole-number sample rate), never the wall
+clock; every frame_id is ``brake_backing_plate`` (see ``model/parameters.py`` for the
+frame). Units and signs are those of the core's columns (``model/layout.py::COLUMNS``),
+which the message definitions repeat.
 """
 
 from __future__ import annotations
@@ -12,6 +13,7 @@ import array
 import dataclasses
 import math
 from collections.abc import Callable
+from fractions import Fraction
 
 import numpy as np
 from brake_sim_msgs.msg import BrakeState, ContactEvent, DefectState, PivotForceChunk
@@ -47,9 +49,12 @@ PIVOT_CHUNK_ARRAYS = (
 )
 
 
-def stamp_ns(sample_index: int, dt_s: float) -> int:
-    """Simulated time of a sample, integer ns: ``round(sample_index * dt_s * 1e9)``."""
-    return round(sample_index * dt_s * _NS_PER_S)
+def stamp_ns(sample_index: int, period_s: float) -> int:
+    """Simulated time of a sample, integer ns: ``sample_index * period_s`` to the nearest ns
+    (ties to even), in exact arithmetic on the sample rate (:func:`sample_rate_hz`), so
+    the stamps of a 25.6 kHz stream are exact multiples of 39062.5 ns, without drift."""
+    rate = Fraction(sample_rate_hz(period_s))
+    return round(Fraction(sample_index * _NS_PER_S * rate.denominator, rate.numerator))
 
 
 def sample_rate_hz(period_s: float) -> float:
@@ -165,7 +170,8 @@ def joint_state(block: SampleBlock, row: int) -> JointState:
 
 
 def contact_event(event: contact_events.ContactEvent, dt_s: float) -> ContactEvent:
-    """``event`` as a ContactEvent message; header stamp = time of its sample (``dt_s``, s)."""
+    """``event`` as a ContactEvent message; header stamp = time of its sample (``dt_s``: the
+    sample period, s)."""
     return ContactEvent(
         header=header(stamp_ns(event.sample_index, dt_s)),
         sample_index=int(event.sample_index),

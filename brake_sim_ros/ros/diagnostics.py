@@ -4,7 +4,8 @@ No rclpy: the node fills :class:`RunStats` and :class:`RunView`; the functions h
 them into a ``diagnostic_msgs/DiagnosticArray`` or a one-paragraph summary.
 
 Counters (cumulative since the node started; a reset does not clear them):
-    steps_done: physics steps taken.
+    samples_done: samples stepped (sample intervals advanced).
+    physics_steps_done: physics steps taken (each sample takes the substeps in use then).
     samples_published / chunks_published / states_published: what went out.
     deadline_misses: chunks published, in real-time mode, later than one chunk period
         (wall) after their last sample was due, or two timer ticks at high real-time
@@ -14,7 +15,7 @@ Counters (cumulative since the node started; a reset does not clear them):
         stream itself has no gap).
     commands_accepted: valid commands. commands_rejected: invalid ones (NaN, inf,
         negative, above max_actuation_force_n). commands_dropped: accepted commands that
-        never reached the physics (replaced by a newer one before the next step, arrived
+        never reached the physics (replaced by a newer one before the next sample, arrived
         after the end or a failure of the run, or cleared by a reset).
     parameter_changes_accepted / parameter_changes_refused: set-parameter requests
         (external ones; the node's own updates are not counted).
@@ -33,7 +34,8 @@ HARDWARE_ID = "brake_sim"
 
 @dataclass
 class RunStats:
-    steps_done: int = 0
+    samples_done: int = 0
+    physics_steps_done: int = 0
     samples_published: int = 0
     chunks_published: int = 0
     states_published: int = 0
@@ -73,7 +75,10 @@ class RunView:
     measured_real_time_factor: float  # over the last diagnostics period
     actuation_source: str
     stop_time_s: float | None
+    physics_step_s: float  # the step in use: sample period / substeps
+    substeps: int  # physics steps per sample, from the step limit now
     step_limit_s: float
+    step_limit_force_n: float  # the actuation force the step limit is computed for
     max_actuation_force_n: float
     seed: int
 
@@ -114,7 +119,8 @@ def diagnostic_array(
         "deadline_misses": str(stats.deadline_misses),
         "slips": str(stats.slips),
         "slipped_s": f"{stats.slipped_s:.6f}",
-        "steps_done": str(stats.steps_done),
+        "samples_done": str(stats.samples_done),
+        "physics_steps_done": str(stats.physics_steps_done),
         "samples_published": str(stats.samples_published),
         "chunks_published": str(stats.chunks_published),
         "states_published": str(stats.states_published),
@@ -128,7 +134,10 @@ def diagnostic_array(
         "sink_failures": str(stats.sink_failures),
         "actuation_source": view.actuation_source,
         "stop_time_s": "" if view.stop_time_s is None else f"{view.stop_time_s:.6f}",
+        "physics_step_s": f"{view.physics_step_s:.9g}",
+        "substeps_per_sample": str(view.substeps),
         "step_limit_s": f"{view.step_limit_s:.6g}",
+        "step_limit_force_n": f"{view.step_limit_force_n:g}",
         "max_actuation_force_n": f"{view.max_actuation_force_n:g}",
         "seed": str(view.seed),
         "failure": view.message if view.state == "failed" else "",

@@ -23,10 +23,15 @@ Topics (node name ``brake_sim``; ``~`` = ``/brake_sim``; QoS in :mod:`.qos`):
     /diagnostics     diagnostic_msgs/DiagnosticArray  every diagnostics_period_s (wall)
     ~/actuation      brake_sim_msgs/ActuationCommand  (subscribed) overrides the profile
 Services:
-    ~/step   brake_sim_msgs/StepSimulation   advance N steps or a duration while paused
+    ~/step   brake_sim_msgs/StepSimulation   advance N samples or a duration while paused
     ~/reset  brake_sim_msgs/ResetSimulation  back to t = 0, optionally a new scenario/seed
 
-Every header stamp is simulated time (sample index x dt), frame ``brake_backing_plate``.
+The sample rate is the scenario's. The stepper takes whole physics substeps per sample,
+re-picked from the step limit at every model change and for any accepted actuation force
+above the one the limit was computed for; /diagnostics says which step it uses.
+
+Every header stamp is simulated time (sample index x sample period), frame
+``brake_backing_plate``.
 Timers run on the steady wall clock, whatever ``use_sim_time`` says. Parameters: see
 :mod:`.parameters`; command semantics: :mod:`.commands`; pacing: :mod:`.pacing`.
 """
@@ -77,7 +82,7 @@ from brake_sim_ros.ros.diagnostics import RunStats, RunView, diagnostic_array, s
 from brake_sim_ros.ros.pacing import Pacer, PacingMode
 from brake_sim_ros.ros.stream import MessageSink, Topic
 from brake_sim_ros.scenarios import Scenario, load_scenario
-from brake_sim_ros.scenarios.loader import SolverSettings
+from brake_sim_ros.solvers.build import stepper_for
 from brake_sim_ros.solvers.fixed_step import FixedStepStepper
 from brake_sim_ros.solvers.realtime import calibrate_chunk_cost, check_realtime
 
@@ -100,8 +105,8 @@ class BrakeSimNode(Node):
 
     Raises:
         BrakeSimError: at start-up, for a scenario that cannot be loaded, invalid
-            parameter overrides, or a scenario step too large for max_actuation_force_n
-            (StepSizeError). The message is one line, fit to show the user.
+            parameter overrides, or a pathological step limit (StepSizeError). The
+            message is one line, fit to show the user.
     """
 
     def __init__(
@@ -141,7 +146,7 @@ class BrakeSimNode(Node):
         }
         params, defects = ros_params.build_model({**values, **implied})
         setup = dataclasses.replace(self.scenario.setup, params=params, defects=defects)
-        self._stepper = self._make_stepper(setup, self.scenario.solver)
+        self._stepper = self._make_stepper(setup, self.scenario)
         self._run_initial_angles = self._initial_angles(setup)
         self._double_names = {
             name
@@ -152,7 +157,7 @@ class BrakeSimNode(Node):
             {
                 **implied,
                 "duration_s": self._duration_s(),
-                "max_actuation_force_n": self._stepper.max_actuation_n,
+                "max_actuation_force_n": self._max_force_n(setup),
             }
         )
         self._exit_at_end = bool(self._param("exit_at_end"))
@@ -160,16 +165,16 @@ class BrakeSimNode(Node):
             policy = self._policy_from_params()
         except ValueError as exc:  # a bad --ros-args override
             raise ParameterError(str(exc)) from None
-        self._planner = ActuationPlanner(self._stepper.dt_s, policy)
+        self._planner = ActuationPlanner(self._stepper.sample_period_s, policy)
         self._pacer = Pacer(
-            self._stepper.dt_s,
+            self._stepper.sample_period_s,
             real_time_factor=self._param("real_time_factor"),
             paused=self._param("paused"),
             max_lag_s=MAX_LAG_S,
         )
         self._publish_clock = bool(self._param("publish_clock"))
-        self._chunk_steps = self._steps_per(self._param("chunk_rate_hz"))
-        self._state_stride = self._steps_per(self._param("state_rate_hz"))
+        self._chunk_samples = self._samples_per(self._param("chunk_rate_hz"))
+        self._state_stride = self._samples_per(self._param("state_rate_hz"))
         self._check_keeps_up()
         # open contact episodes carried between published blocks; reset with the stepper
         self._contact_events = ContactEventDetector()
@@ -208,7 +213,7 @@ class BrakeSimNode(Node):
         self._pacer.restart(now, 0)
         self._last_run_tick: float | None = now
         self._ticking = False
-        self._diag_last = (now, 0, 0)  # wall, steps_done, deadline misses
+        self._diag_last = (now, 0, 0)  # wall, samples_done, deadline misses
         self._measured_rtf = 0.0
         for open_sink in sink_openers:
             try:
@@ -219,33 +224,38 @@ class BrakeSimNode(Node):
         self._publish_defects()
         if self._publish_clock:
             self._emit(stream.CLOCK, conversion.clock(0), 0)
-        limit = self._stepper.limit
+        self._substeps_logged = self._stepper.substeps
         self.get_logger().info(
-            f"scenario '{self.scenario.name}' ({self.scenario.source}): dt {self._stepper.dt_s:g}"
-            f" s ({self._sample_rate_hz():g} Hz), step limit {limit.max_step_s:.3g} s for"
-            f" max_actuation_force_n {self._stepper.max_actuation_n:g} N, duration"
-            f" {self._duration_s():g} s, {self._chunk_steps} samples per chunk"
+            f"scenario '{self.scenario.name}' ({self.scenario.source}):"
+            f" {self._stepper.describe_step()}; max_actuation_force_n"
+            f" {self._param('max_actuation_force_n'):g} N, duration {self._duration_s():g} s,"
+            f" {self._chunk_samples} samples per chunk"
         )
+
+    @property
+    def stepper(self) -> FixedStepStepper:
+        """The stepper in use (read it; the node alone advances and changes it)."""
+        return self._stepper
 
     def _check_keeps_up(self) -> None:
         """Refuse to start when this machine cannot step the chunks in real time.
 
-        A calibration of a few ms measures the stepper's per-chunk cost here; the budget
-        logic is :func:`brake_sim_ros.solvers.realtime.check_realtime`.
+        A calibration of a few ms measures the stepper's per-chunk cost here, driven by
+        max_actuation_force_n (so at the substeps that force needs); the budget logic is
+        :func:`brake_sim_ros.solvers.realtime.check_realtime`.
         """
         factor = self._pacer.real_time_factor
         if factor == 0.0:
             return  # as fast as possible: nothing to keep up with
         cost = calibrate_chunk_cost(
-            self._stepper.setup,
-            self._stepper.dt_s,
-            self._chunk_steps,
-            max_actuation_n=self._stepper.max_actuation_n,
+            self._stepper.fresh(),
+            self._chunk_samples,
+            force_n=float(self._param("max_actuation_force_n")),
         )
         verdict = check_realtime(
             cost.median_s,
-            dt_s=self._stepper.dt_s,
-            chunk_steps=self._chunk_steps,
+            sample_period_s=self._stepper.sample_period_s,
+            chunk_samples=self._chunk_samples,
             real_time_factor=factor,
             label=f"scenario '{self.scenario.name}'",
         )
@@ -285,19 +295,25 @@ class BrakeSimNode(Node):
         finally:
             self._internal_update = False
 
-    def _make_stepper(self, setup: BrakeSetup, solver: SolverSettings) -> FixedStepStepper:
-        dt_s = solver.dt_s
-        if self._max_force_explicit:
-            max_force = float(self._param("max_actuation_force_n"))
-        else:
-            max_force, note = ros_params.auto_max_actuation_force(setup, dt_s)
-            if note:
-                self.get_logger().warning(note)
-        stepper = FixedStepStepper(
-            setup, dt_s, max_actuation_n=max_force, scheme=solver.fixed_step_scheme
-        )
+    @staticmethod
+    def _make_stepper(setup: BrakeSetup, scenario: Scenario) -> FixedStepStepper:
+        """The scenario's stepper (:func:`stepper_for`) for ``setup`` (its values with any
+        ROS parameter overrides)."""
+        stepper = stepper_for(scenario, setup=setup)
         stepper.advance(0)  # loads the compiled kernel now (ms), not during the first chunk
         return stepper
+
+    def _max_force_n(self, setup: BrakeSetup) -> float:
+        """max_actuation_force_n: as set at start-up, or 2 x the scenario's peak."""
+        if self._max_force_explicit:
+            return float(self._param("max_actuation_force_n"))
+        return ros_params.auto_max_actuation_force(setup)
+
+    def _log_step_change(self, why: str) -> None:
+        """Say so when the stepper picked other substeps (a model change, a large force)."""
+        if self._stepper.substeps != self._substeps_logged:
+            self._substeps_logged = self._stepper.substeps
+            self.get_logger().info(f"{why}: {self._stepper.describe_step()}")
 
     @staticmethod
     def _initial_angles(setup: BrakeSetup) -> tuple[float, float]:
@@ -320,24 +336,24 @@ class BrakeSimNode(Node):
         return value if value > 0.0 else self.scenario.duration_s
 
     def _end_step(self) -> int:
-        return round(self._duration_s() / self._stepper.dt_s)
+        return round(self._duration_s() / self._stepper.sample_period_s)
 
     def _sample_rate_hz(self) -> float:
-        return conversion.sample_rate_hz(self._stepper.dt_s)
+        return conversion.sample_rate_hz(self._stepper.sample_period_s)
 
-    def _steps_per(self, rate_hz: float) -> int:
+    def _samples_per(self, rate_hz: float) -> int:
         return max(1, round(self._sample_rate_hz() / rate_hz))
 
     def _tick_period_s(self) -> float:
         if self._pacer.mode is PacingMode.REAL_TIME:
-            half_chunk = 0.5 * self._pacer.chunk_wall_period_s(self._chunk_steps)
+            half_chunk = 0.5 * self._pacer.chunk_wall_period_s(self._chunk_samples)
             return min(0.01, max(0.001, half_chunk))
         return 0.001 if self._pacer.mode is PacingMode.AS_FAST_AS_POSSIBLE else 0.01
 
     def _max_chunks_per_tick(self) -> int:
         if self._pacer.mode is not PacingMode.REAL_TIME:
             return 64
-        per_tick = self._tick_period_s() / self._pacer.chunk_wall_period_s(self._chunk_steps)
+        per_tick = self._tick_period_s() / self._pacer.chunk_wall_period_s(self._chunk_samples)
         return max(2, 4 * math.ceil(per_tick))
 
     def set_parameters_atomically(self, parameter_list):
@@ -408,6 +424,7 @@ class BrakeSimNode(Node):
                 self._stepper.replace_setup(setup)  # validates, or changes nothing
             except BrakeSimError as exc:
                 return SetParametersResult(successful=False, reason=str(exc))
+            self._log_step_change("new model parameters")
         self._apply_run_changes(changes, policy)
         if model_changes:
             self._publish_defects()
@@ -420,7 +437,7 @@ class BrakeSimNode(Node):
 
     def _apply_run_changes(self, changes: dict, policy: CommandPolicy) -> None:
         now = self._wall()
-        step = self._stepper.step_index
+        step = self._stepper.sample_index
         self._account_free_run(now)
         self._planner.policy = policy
         if "real_time_factor" in changes:
@@ -428,16 +445,19 @@ class BrakeSimNode(Node):
         if "paused" in changes:
             self._pacer.set_paused(changes["paused"], now, step)
         if "chunk_rate_hz" in changes:
-            self._chunk_steps = self._steps_per(changes["chunk_rate_hz"])
+            self._chunk_samples = self._samples_per(changes["chunk_rate_hz"])
         if "state_rate_hz" in changes:
-            self._state_stride = self._steps_per(changes["state_rate_hz"])
+            self._state_stride = self._samples_per(changes["state_rate_hz"])
         if "publish_clock" in changes:
             self._publish_clock = bool(changes["publish_clock"])
         if "diagnostics_period_s" in changes:
             self._diag_timer.timer_period_ns = int(changes["diagnostics_period_s"] * 1e9)
         if "duration_s" in changes:
             self._duration_explicit = True
-            if self._finished and round(changes["duration_s"] / self._stepper.dt_s) > step:
+            if (
+                self._finished
+                and round(changes["duration_s"] / self._stepper.sample_period_s) > step
+            ):
                 self._finished = False
                 self._pacer.restart(now, step)
         if changes.keys() & {"real_time_factor", "paused", "chunk_rate_hz"}:
@@ -445,7 +465,9 @@ class BrakeSimNode(Node):
 
     # -- commands ----------------------------------------------------------------------------------
     def _on_actuation(self, msg: ActuationCommand) -> None:
-        reason = check_command(msg.left_force_n, msg.right_force_n, self._stepper.max_actuation_n)
+        reason = check_command(
+            msg.left_force_n, msg.right_force_n, float(self._param("max_actuation_force_n"))
+        )
         if reason is not None:
             self.stats.commands_rejected += 1
             self.stats.last_command_rejection = reason
@@ -457,13 +479,13 @@ class BrakeSimNode(Node):
         self._to_sinks(
             self._actuation_topic,
             msg,
-            conversion.stamp_ns(self._stepper.step_index, self._stepper.dt_s),
+            conversion.stamp_ns(self._stepper.sample_index, self._stepper.sample_period_s),
         )
         if self._failure or (self._finished and not self._pacer.paused):
             self.stats.commands_dropped += 1  # no physics will run to use it
             return
         forces = (msg.left_force_n, msg.right_force_n)
-        if self._planner.command(forces, self._stepper.step_index):
+        if self._planner.command(forces, self._stepper.sample_index):
             self.stats.commands_dropped += 1
 
     # -- stepping and publishing --------------------------------------------------------------
@@ -473,7 +495,7 @@ class BrakeSimNode(Node):
         now = self._wall()
         if not self._ticking:  # pace from the first tick: start-up costs are not lateness
             self._ticking = True
-            self._pacer.restart(now, self._stepper.step_index)
+            self._pacer.restart(now, self._stepper.sample_index)
             self._last_run_tick = now
         mode = self._pacer.mode
         if mode is PacingMode.PAUSED:
@@ -481,32 +503,36 @@ class BrakeSimNode(Node):
         end = self._end_step()
         self._account_free_run(now)
         if mode is PacingMode.AS_FAST_AS_POSSIBLE:
-            while self._stepper.step_index < end and self._wall() - now < AFAP_TICK_BUDGET_S:
-                n = min(self._chunk_steps, end - self._stepper.step_index)
+            while self._stepper.sample_index < end and self._wall() - now < AFAP_TICK_BUDGET_S:
+                n = min(self._chunk_samples, end - self._stepper.sample_index)
                 if not self._advance_and_publish(n, free_run=True):
                     return
         else:
             plan = self._pacer.plan(
-                now, self._stepper.step_index, self._chunk_steps, self._max_chunks_per_tick(), end
+                now,
+                self._stepper.sample_index,
+                self._chunk_samples,
+                self._max_chunks_per_tick(),
+                end,
             )
             if plan.slipped_steps:
                 self.stats.slips += 1
-                self.stats.slipped_s += plan.slipped_steps * self._stepper.dt_s
+                self.stats.slipped_s += plan.slipped_steps * self._stepper.sample_period_s
             # a chunk is late when published more than a chunk period after its last sample
             # was due, or two ticks (what tick granularity alone costs at high factors)
             tolerance = max(
-                self._pacer.chunk_wall_period_s(self._chunk_steps), 2.0 * self._tick_period_s()
+                self._pacer.chunk_wall_period_s(self._chunk_samples), 2.0 * self._tick_period_s()
             )
             remaining = plan.steps
             while remaining > 0:
-                n = min(self._chunk_steps, remaining)
+                n = min(self._chunk_samples, remaining)
                 if not self._advance_and_publish(n, free_run=True):
                     return
                 remaining -= n
-                late = self._wall() - self._pacer.deadline_s(self._stepper.step_index)
+                late = self._wall() - self._pacer.deadline_s(self._stepper.sample_index)
                 if late > tolerance:
                     self.stats.deadline_misses += 1
-        if self._stepper.step_index >= end:
+        if self._stepper.sample_index >= end:
             self._finish()
 
     def _account_free_run(self, now: float) -> None:
@@ -517,22 +543,24 @@ class BrakeSimNode(Node):
         self._last_run_tick = now
 
     def _advance_and_publish(self, n_steps: int, *, free_run: bool) -> bool:
-        """Take ``n_steps`` (at most one chunk) and publish them. False on failure."""
-        step0 = self._stepper.step_index
+        """Take ``n_steps`` samples (at most one chunk) and publish them. False on failure."""
+        step0 = self._stepper.sample_index
         blocks = []
         try:
             for count, forces in self._planner.segments(step0, n_steps):
                 blocks.append(self._stepper.advance(count, actuation_n=forces))
+                self.stats.physics_steps_done += count * self._stepper.substeps
         except BrakeSimError as exc:
             self._fail(str(exc))
             return False
+        self._log_step_change("actuation above the force of the step limit")
         block = blocks[0] if len(blocks) == 1 else SampleBlock.concatenate(blocks)
-        self.stats.steps_done += n_steps
+        self.stats.samples_done += n_steps
         if free_run:
-            self.stats.free_run_sim_s += n_steps * self._stepper.dt_s
+            self.stats.free_run_sim_s += n_steps * self._stepper.sample_period_s
         if len(block) != n_steps or not conversion.all_finite(block):
             self._fail(
-                f"non-finite or missing samples between steps {step0} and"
+                f"non-finite or missing samples between samples {step0} and"
                 f" {step0 + n_steps}; nothing of them was published"
             )
             return False
@@ -606,7 +634,7 @@ class BrakeSimNode(Node):
     def _on_step(
         self, request: StepSimulation.Request, response: StepSimulation.Response
     ) -> StepSimulation.Response:
-        dt = self._stepper.dt_s
+        dt = self._stepper.sample_period_s
         steps, duration = int(request.steps), float(request.duration_s)
         error = ""
         if not self._pacer.paused:
@@ -620,23 +648,23 @@ class BrakeSimNode(Node):
         else:
             steps = steps or round(duration / dt)
             if steps < 1:
-                error = f"duration_s={duration:g} s is shorter than half a step ({dt:g} s)"
+                error = f"duration_s={duration:g} s is shorter than half a sample ({dt:g} s)"
             elif steps * dt > MAX_STEP_REQUEST_S:
                 error = (
-                    f"{steps} steps = {steps * dt:g} s: allowed at most"
+                    f"{steps} samples = {steps * dt:g} s: allowed at most"
                     f" {MAX_STEP_REQUEST_S:g} s of simulated time per call"
                 )
         if not error:
             done = 0
             while done < steps:
-                n = min(self._chunk_steps, steps - done)
+                n = min(self._chunk_samples, steps - done)
                 if not self._advance_and_publish(n, free_run=False):
                     error = f"the simulation failed: {self._failure}"
                     break
                 done += n
         response.success = not error
-        index = self._stepper.step_index
-        response.message = error or f"advanced {steps} steps to t = {index * dt:.9g} s"
+        index = self._stepper.sample_index
+        response.message = error or f"advanced {steps} samples to t = {index * dt:.9g} s"
         response.sample_index = max(0, index - 1)
         response.sim_time_s = index * dt
         return response
@@ -652,6 +680,7 @@ class BrakeSimNode(Node):
                 self._switch_scenario(load_scenario(request.scenario), request.scenario)
             else:
                 self._stepper.reset()
+                self._log_step_change("reset")
         except BrakeSimError as exc:
             response.success, response.message = False, f"reset refused: {exc}"
             return response
@@ -677,30 +706,31 @@ class BrakeSimNode(Node):
 
     def _switch_scenario(self, scenario: Scenario, name_or_path: str) -> None:
         """Replace scenario, stepper and timing; on error nothing changes."""
-        stepper = self._make_stepper(scenario.setup, scenario.solver)
+        stepper = self._make_stepper(scenario.setup, scenario)
         self.scenario, self._stepper, self._seed = scenario, stepper, scenario.seed
         values = ros_params.model_values(scenario.setup.params, scenario.setup.defects)
         values["scenario"] = name_or_path
-        values["max_actuation_force_n"] = stepper.max_actuation_n
+        values["max_actuation_force_n"] = self._max_force_n(scenario.setup)
         if not self._duration_explicit:
             values["duration_s"] = scenario.duration_s
         self._set_internal(values)
-        dt = stepper.dt_s
-        self._planner.dt_s = dt
+        self._log_step_change(f"scenario '{scenario.name}'")
+        dt = stepper.sample_period_s
+        self._planner.sample_period_s = dt
         self._pacer = Pacer(
             dt,
             real_time_factor=self._pacer.real_time_factor,
             paused=self._pacer.paused,
             max_lag_s=MAX_LAG_S,
         )
-        self._chunk_steps = self._steps_per(self._param("chunk_rate_hz"))
-        self._state_stride = self._steps_per(self._param("state_rate_hz"))
+        self._chunk_samples = self._samples_per(self._param("chunk_rate_hz"))
+        self._state_stride = self._samples_per(self._param("state_rate_hz"))
         self._tick_timer.timer_period_ns = int(self._tick_period_s() * 1e9)
 
     # -- ground truth and diagnostics --------------------------------------------------------
     def _publish_defects(self) -> None:
         setup = self._stepper.setup
-        ns = conversion.stamp_ns(self._stepper.step_index, self._stepper.dt_s)
+        ns = conversion.stamp_ns(self._stepper.sample_index, self._stepper.sample_period_s)
         msg = conversion.defect_state(
             scenario=self.scenario.name,
             params=setup.params,
@@ -719,34 +749,38 @@ class BrakeSimNode(Node):
             state = "paused"
         else:
             state = "running"
-        step = self._stepper.step_index
+        stepper = self._stepper
+        step = stepper.sample_index
         return RunView(
             node_name=self.get_name(),
             scenario=self.scenario.name,
             state=state,
             message=self._failure,
-            sim_time_s=step * self._stepper.dt_s,
+            sim_time_s=step * stepper.sample_period_s,
             sample_index=step,
             sample_rate_hz=self._sample_rate_hz(),
             duration_s=self._duration_s(),
             target_real_time_factor=self._pacer.real_time_factor,
             measured_real_time_factor=self._measured_rtf,
             actuation_source=self._planner.source(step),
-            stop_time_s=self._stepper.stop_time_s,
-            step_limit_s=self._stepper.limit.max_step_s,
-            max_actuation_force_n=self._stepper.max_actuation_n,
+            stop_time_s=stepper.stop_time_s,
+            physics_step_s=stepper.physics_step_s,
+            substeps=stepper.substeps,
+            step_limit_s=stepper.limit.max_step_s,
+            step_limit_force_n=stepper.limit_force_n,
+            max_actuation_force_n=float(self._param("max_actuation_force_n")),
             seed=self._seed,
         )
 
     def _on_diagnostics(self) -> None:
         now = self._wall()
-        last_wall, last_steps, last_misses = self._diag_last
+        last_wall, last_samples, last_misses = self._diag_last
         if now > last_wall:
-            sim = (self.stats.steps_done - last_steps) * self._stepper.dt_s
+            sim = (self.stats.samples_done - last_samples) * self._stepper.sample_period_s
             self._measured_rtf = sim / (now - last_wall)
         new_misses = self.stats.deadline_misses - last_misses
-        self._diag_last = (now, self.stats.steps_done, self.stats.deadline_misses)
-        ns = conversion.stamp_ns(self._stepper.step_index, self._stepper.dt_s)
+        self._diag_last = (now, self.stats.samples_done, self.stats.deadline_misses)
+        ns = conversion.stamp_ns(self._stepper.sample_index, self._stepper.sample_period_s)
         self._emit(
             stream.DIAGNOSTICS,
             diagnostic_array(self.run_view(), self.stats, ns=ns, new_misses=new_misses),

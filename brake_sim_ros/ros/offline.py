@@ -1,9 +1,10 @@
 """The node's message stream, produced offline: no DDS, no pacing, as fast as the CPU goes.
 
 :func:`offline_messages` steps a scenario exactly as :class:`~brake_sim_ros.ros.node.
-BrakeSimNode` does with its default run parameters and no actuation commands (same step,
-same chunking, same state decimation, same /clock), so the sequence it yields equals what
-the node publishes for the same scenario, message for message. /diagnostics is the one
+BrakeSimNode` does with its default run parameters and no actuation commands (the stepper
+from :func:`~brake_sim_ros.solvers.build.stepper_for`, same chunking, same state
+decimation, same /clock), so the sequence it yields equals what the node publishes for the
+same scenario, message for message. /diagnostics is the one
 topic it does not produce: that is a wall-clock report of a live node.
 """
 
@@ -18,6 +19,7 @@ from brake_sim_ros.ros import conversion, stream
 from brake_sim_ros.ros import parameters as ros_params
 from brake_sim_ros.ros.stream import Topic
 from brake_sim_ros.scenarios import Scenario
+from brake_sim_ros.solvers.build import stepper_for
 from brake_sim_ros.solvers.fixed_step import FixedStepStepper
 
 
@@ -33,15 +35,9 @@ class StreamSettings:
     state_rate_hz: float = _default("state_rate_hz")
     publish_clock: bool = _default("publish_clock")
 
-    def steps_per(self, rate_hz: float, dt_s: float) -> int:
+    def samples_per(self, rate_hz: float, sample_period_s: float) -> int:
         """Samples per ``rate_hz`` period, as the node rounds it (at least 1)."""
-        return max(1, round(conversion.sample_rate_hz(dt_s) / rate_hz))
-
-
-def offline_stepper(scenario: Scenario) -> FixedStepStepper:
-    """The stepper the node would build for ``scenario`` (same step, same force limit)."""
-    max_force, _note = ros_params.auto_max_actuation_force(scenario.setup, scenario.solver.dt_s)
-    return FixedStepStepper(scenario.setup, scenario.solver.dt_s, max_actuation_n=max_force)
+        return max(1, round(conversion.sample_rate_hz(sample_period_s) / rate_hz))
 
 
 def offline_messages(
@@ -57,16 +53,17 @@ def offline_messages(
         scenario: the scenario, actuated by its own force profile.
         duration_s: simulated seconds (default: the scenario's duration).
         settings: chunk and state rates, /clock on or off (default: the node's defaults).
-        stepper: a stepper to use (default :func:`offline_stepper`); it is reset first.
+        stepper: a stepper to use (default :func:`stepper_for` the scenario, as the node
+            builds it); it is reset first.
     """
     settings = settings or StreamSettings()
-    stepper = stepper or offline_stepper(scenario)
+    stepper = stepper or stepper_for(scenario)
     stepper.reset()
-    dt = stepper.dt_s
+    period = stepper.sample_period_s
     duration = scenario.duration_s if duration_s is None else duration_s
-    end = round(duration / dt)
-    chunk = settings.steps_per(settings.chunk_rate_hz, dt)
-    stride = settings.steps_per(settings.state_rate_hz, dt)
+    end = round(duration / period)
+    chunk = settings.samples_per(settings.chunk_rate_hz, period)
+    stride = settings.samples_per(settings.state_rate_hz, period)
     setup = stepper.setup
     initial_angles = (setup.defects.left.initial_angle_deg, setup.defects.right.initial_angle_deg)
     yield (
@@ -83,8 +80,8 @@ def offline_messages(
     if settings.publish_clock:
         yield stream.CLOCK, conversion.clock(0), 0
     detector = ContactEventDetector()
-    while stepper.step_index < end:
-        block = stepper.advance(min(chunk, end - stepper.step_index))
+    while stepper.sample_index < end:
+        block = stepper.advance(min(chunk, end - stepper.sample_index))
         yield from stream.block_messages(
             block, stride, with_clock=settings.publish_clock, contact_events=detector
         )

@@ -1,9 +1,12 @@
 """Pacing of the simulation against the wall clock. Pure logic: no ROS, no clock reads.
 
-The node asks, at every tick, how many physics steps are due. The answer comes from an
+The node asks, at every tick, how many steps are due. A step here is one output sample,
+the stepper's unit (it takes whole physics substeps inside it). The answer comes from an
 anchor ``(wall_s, step)`` set when pacing (re)starts:
 
-    target_step(now) = anchor_step + floor((now - anchor_wall_s) * real_time_factor / dt_s)
+    target_step(now) = anchor_step + floor((now - anchor_wall_s) * real_time_factor / period)
+
+with ``period`` the sample period.
 
 The target is computed from the wall time elapsed since the anchor, never by adding up
 per-tick increments, so timer jitter and late ticks do not accumulate into drift: a late
@@ -43,7 +46,7 @@ class TickPlan:
     """What one tick should do.
 
     Attributes:
-        steps: physics steps to take now: a whole number of chunks, or the remainder up
+        steps: samples to take now: a whole number of chunks, or the remainder up
             to ``end_step``. In as-fast-as-possible mode, the most the tick may take (the
             caller also bounds the tick by wall time).
         behind_steps: steps that are due but left for later ticks (catch-up).
@@ -60,7 +63,7 @@ class Pacer:
     """Decides how many steps are due at a wall-clock instant.
 
     Args:
-        dt_s: physics step, s.
+        sample_period_s: time between samples (steps), s.
         real_time_factor: simulated seconds per wall second; 0 = as fast as possible.
         paused: start paused.
         max_lag_s: largest backlog, in wall seconds, that is caught up; beyond it the
@@ -71,18 +74,18 @@ class Pacer:
 
     def __init__(
         self,
-        dt_s: float,
+        sample_period_s: float,
         *,
         real_time_factor: float = 1.0,
         paused: bool = False,
         max_lag_s: float = 0.5,
     ) -> None:
-        if not (math.isfinite(dt_s) and dt_s > 0):
-            raise ValueError(f"dt_s={dt_s!r}: allowed a finite step > 0 s")
+        if not (math.isfinite(sample_period_s) and sample_period_s > 0):
+            raise ValueError(f"sample_period_s={sample_period_s!r}: allowed a finite period > 0 s")
         _check_factor(real_time_factor)
         if not max_lag_s > 0:
             raise ValueError(f"max_lag_s={max_lag_s!r}: allowed > 0 s")
-        self.dt_s = float(dt_s)
+        self.sample_period_s = float(sample_period_s)
         self._factor = float(real_time_factor)
         self._paused = bool(paused)
         self.max_lag_s = float(max_lag_s)
@@ -126,18 +129,20 @@ class Pacer:
         if self.mode is not PacingMode.REAL_TIME:
             raise RuntimeError(f"no target step in {self.mode.value} mode")
         elapsed = max(0.0, now_s - self._anchor_wall_s)
-        # the tiny epsilon keeps an exact multiple of dt from flooring one step short
-        return self._anchor_step + math.floor(elapsed * self._factor / self.dt_s + 1e-9)
+        # the tiny epsilon keeps an exact multiple of the period from flooring one step short
+        return self._anchor_step + math.floor(elapsed * self._factor / self.sample_period_s + 1e-9)
 
     def deadline_s(self, step: int) -> float:
         """Wall instant at which the simulation should reach ``step`` (real-time mode)."""
         if self.mode is not PacingMode.REAL_TIME:
             raise RuntimeError(f"no deadline in {self.mode.value} mode")
-        return self._anchor_wall_s + (step - self._anchor_step) * self.dt_s / self._factor
+        return (
+            self._anchor_wall_s + (step - self._anchor_step) * self.sample_period_s / self._factor
+        )
 
     def chunk_wall_period_s(self, chunk_steps: int) -> float:
         """Wall time one chunk spans (real-time mode)."""
-        return chunk_steps * self.dt_s / self._factor
+        return chunk_steps * self.sample_period_s / self._factor
 
     def plan(
         self,
@@ -172,7 +177,7 @@ class Pacer:
             return TickPlan(remaining)  # the final, partial chunk
         chunks = due // chunk_steps
         slipped = 0
-        lag_s = due * self.dt_s / self._factor
+        lag_s = due * self.sample_period_s / self._factor
         if chunks > max_chunks and lag_s > self.max_lag_s:
             # starved for longer than we are willing to catch up: drop the excess
             slipped = due - max_chunks * chunk_steps

@@ -4,15 +4,17 @@ Model parameters are not a second source of truth. Their names, types and defaul
 come from the core's frozen dataclasses (``BrakeParameters``'s groups in
 ``model/parameters.py``, ``ShoeDefect`` in ``model/defects.py``), read from the loaded
 scenario, and a new value is validated by building the core objects again and handing
-them to the stepper: the core's ``ParameterError`` / ``StepSizeError`` message is the
-refusal reason. Names are ``<group>.<field>`` (``friction.coefficient``,
-``shoe.running_clearance_m``) and ``defects.<side>.<field>``.
+them to the stepper: the core's ``ParameterError`` message (or ``StepSizeError``, for a
+pathological step limit) is the refusal reason. A change that needs a smaller physics step
+is not refused: the stepper re-picks its substeps per sample. Names are
+``<group>.<field>`` (``friction.coefficient``, ``shoe.running_clearance_m``) and
+``defects.<side>.<field>``.
 
 The ``FloatingPointRange`` of each descriptor is an envelope for tools such as
 rqt_reconfigure; where the core has fixed bounds (defects, friction, drum radius, ...)
 it equals them, elsewhere it is a generous plausible span. The core checks everything
 else (open bounds, relations between fields such as pivot radius < drum radius, the
-lining clearing the drum, the step limit).
+lining clearing the drum).
 
 Two model fields are initial conditions and only take effect at the next ``~/reset``:
 ``defects.<side>.initial_angle_deg`` (the shoe's starting angle) and
@@ -24,16 +26,13 @@ This module imports no rclpy; :func:`descriptor` imports ``rcl_interfaces`` lazi
 from __future__ import annotations
 
 import inspect
-import math
 from dataclasses import dataclass, fields
 from typing import Any
 
-from brake_sim_ros.model.actuation import NOMINAL_PEAK_ACTUATION_N
-from brake_sim_ros.model.assembly import pack
+from brake_sim_ros.model.actuation import MAX_ACTUATION_FORCE_N, NOMINAL_PEAK_ACTUATION_N
 from brake_sim_ros.model.defects import Defects, ShoeDefect
 from brake_sim_ros.model.parameters import PARAMETER_GROUPS, BrakeParameters
 from brake_sim_ros.model.trajectory import BrakeSetup
-from brake_sim_ros.solvers.stability import step_limit
 
 SIDES = ("left", "right")
 DEFAULT_SCENARIO = "symmetric"
@@ -172,9 +171,9 @@ def run_parameter_specs() -> list[ParamSpec]:
             "max_actuation_force_n",
             0.0,
             "Largest accepted actuation command per shoe (N); larger commands are "
-            "rejected. The physics step limit is computed for it. 0 at start-up = 2 x "
-            "the scenario's peak force. " + fixed,
-            (0.0, 50_000.0),
+            "rejected. The physics step follows any accepted force (more substeps per "
+            "sample). 0 at start-up = 2 x the scenario's peak force. " + fixed,
+            (0.0, MAX_ACTUATION_FORCE_N),
         ),
         ParamSpec(
             "command_timeout_s",
@@ -346,37 +345,13 @@ def descriptor(spec: ParamSpec):
 
 
 # -- the actuation limit ------------------------------------------------------------------------
-def auto_max_actuation_force(setup: BrakeSetup, dt_s: float) -> tuple[float, str | None]:
-    """Default ``max_actuation_force_n``: 2 x the scenario's peak force, if the step allows it.
+def auto_max_actuation_force(setup: BrakeSetup) -> float:
+    """Default ``max_actuation_force_n``: 2 x the scenario's peak force (the nominal peak
+    for a scenario without actuation), at most MAX_ACTUATION_FORCE_N.
 
-    The fixed step's stability limit shrinks as the largest actuation force grows
-    (friction stiffness near standstill grows with the normal force). When ``dt_s`` is
-    too large for 2 x peak, the default is the largest force, rounded down to 10 N, that
-    ``dt_s`` still allows, but never below the peak (the stepper then refuses the
-    scenario itself). The step is never changed.
-
-    Returns:
-        (force in N, a one-line note when the default is below 2 x peak, else None).
+    It bounds what commands may ask, nothing else: the stepper re-picks its substeps for
+    any accepted force, so the physics step never limits it.
     """
     peak = max(setup.actuation.left.peak_n, setup.actuation.right.peak_n)
     base = peak if peak > 0 else NOMINAL_PEAK_ACTUATION_N
-    packed = pack(setup.params, setup.defects, setup.options)
-
-    def allowed(force: float) -> bool:
-        return dt_s <= step_limit(setup, force, packed=packed).max_step_s
-
-    if allowed(2.0 * base):
-        return 2.0 * base, None
-    if not allowed(base):
-        return base, None  # the scenario itself is refused, with the stepper's reason
-    lo, hi = base, 2.0 * base
-    for _ in range(24):
-        mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if allowed(mid) else (lo, mid)
-    force = max(base, math.floor(lo / 10.0) * 10.0)
-    note = (
-        f"max_actuation_force_n defaults to {force:g} N, not 2 x the scenario's peak"
-        f" ({2.0 * base:g} N): the scenario's step {dt_s:g} s allows at most that much"
-        " force; set max_actuation_force_n (and a smaller solver.dt_s) to go higher"
-    )
-    return force, note
+    return min(2.0 * base, MAX_ACTUATION_FORCE_N)

@@ -1,7 +1,8 @@
 """Scenario files (TOML): strict loading into a BrakeSetup plus run settings.
 
 A scenario names any parameter override, the defects, the actuation, the duration, the
-stepper and its step, and optionally what it needs (``[needs]``: outputs, shoes, accuracy,
+output sample rate, the solver (a preset, or a method and a largest physics step), and
+optionally what it needs (``[needs]``: outputs, shoes, accuracy,
 forced level; see :mod:`brake_sim_ros.model.fidelity`). Loading is strict: an unknown key,
 a wrong type, or a non-finite or out-of-range value is an error that names the file, the
 key, the value and what is allowed. See ``builtin/symmetric.toml`` for a commented example.
@@ -31,29 +32,41 @@ from brake_sim_ros.model.fidelity import ACCURACY_PRESETS, LEVEL_BY_NAME, OUTPUT
 from brake_sim_ros.model.parameters import PARAMETER_GROUPS, BrakeParameters
 from brake_sim_ros.model.trajectory import BrakeSetup
 from brake_sim_ros.solvers.presets import DEFAULT_PRESET, PRESETS
-from brake_sim_ros.solvers.stability import step_limit
 
 BUILTIN_PACKAGE = "brake_sim_ros.scenarios.builtin"
 FIXED_STEP_METHODS = ("rk4", "rk4-located", "semi-implicit-euler")
 SOLVER_METHODS = (*FIXED_STEP_METHODS, "reference")
+# The output sample rate of a scenario that does not set one: 25.6 kHz, the common
+# condition-monitoring rate (a power-of-two number of samples per 10 ms chunk: 256).
+DEFAULT_SAMPLE_RATE_HZ = 25_600.0
+SAMPLE_RATE_RANGE_HZ = (1.0, 1e6)
+# the key that set step and sample rate together before the sample rate became the
+# scenario's: refused with a pointer to what replaced it
+_RETIRED_STEP_KEY = (
+    "is no longer read: the output sample rate is the top-level sample_rate_hz (default"
+    " 25600 Hz) and the physics step is chosen below the step limit; [solver] max_step_s"
+    " bounds it"
+)
 
 
 @dataclass(frozen=True)
 class SolverSettings:
-    """How a scenario is integrated.
+    """How a scenario is integrated. Not the sample rate: that is the scenario's.
 
     Attributes:
         method: a fixed-step scheme ("rk4-located", "rk4", "semi-implicit-euler": compiled,
             real-time capable) or "reference" (adaptive DOP853 with contact onsets and the
             lock located as events).
-        dt_s: fixed step, s.
+        max_step_s: largest physics step of the fixed-step schemes, s (accuracy); the
+            stepper takes the fewest whole substeps per sample that keep within it and
+            within the step limit of the parameters.
         rtol: relative tolerance of the reference solver.
-        preset: the preset (``solvers.presets``) that gave the method and step where the
-            scenario did not set them explicitly.
+        preset: the preset (``solvers.presets``) that gave the method and the largest
+            step where the scenario did not set them explicitly.
     """
 
     method: str = PRESETS[DEFAULT_PRESET].scheme
-    dt_s: float = PRESETS[DEFAULT_PRESET].dt_s
+    max_step_s: float = PRESETS[DEFAULT_PRESET].max_step_s
     rtol: float = 1e-9
     preset: str = DEFAULT_PRESET
 
@@ -62,6 +75,35 @@ class SolverSettings:
         """The scheme a fixed-step stepper (the ROS node) uses: the method, or the preset's
         scheme when the method is the reference solver."""
         return self.method if self.method in FIXED_STEP_METHODS else PRESETS[self.preset].scheme
+
+    def with_overrides(
+        self,
+        *,
+        preset: str | None = None,
+        method: str | None = None,
+        max_step_s: float | None = None,
+    ) -> SolverSettings:
+        """These settings with a new preset (its method and largest step replace the
+        current ones), then an explicit method or largest step on top; None keeps."""
+        out = self
+        if preset is not None:
+            if preset not in PRESETS:
+                raise ScenarioError(f"solver preset {preset!r}: allowed one of {list(PRESETS)}")
+            chosen = PRESETS[preset]
+            out = dataclasses.replace(
+                out, preset=preset, method=chosen.scheme, max_step_s=chosen.max_step_s
+            )
+        if method is not None:
+            if method not in SOLVER_METHODS:
+                raise ScenarioError(f"solver method {method!r}: allowed one of {SOLVER_METHODS}")
+            out = dataclasses.replace(out, method=method)
+        if max_step_s is not None:
+            if not (math.isfinite(max_step_s) and 0.0 < max_step_s <= 1e-2):
+                raise ScenarioError(
+                    f"largest physics step {max_step_s!r} s: allowed a step > 0 and <= 0.01 s"
+                )
+            out = dataclasses.replace(out, max_step_s=float(max_step_s))
+        return out
 
 
 @dataclass(frozen=True)
@@ -74,6 +116,7 @@ class Scenario:
     duration_s: float = 7.5
     seed: int = 0
     solver: SolverSettings = field(default_factory=SolverSettings)
+    sample_rate_hz: float = DEFAULT_SAMPLE_RATE_HZ
     source: str = "<built-in>"
     text: str = ""
     needs: Needs | None = None  # None: the full model, every signal
@@ -82,6 +125,32 @@ class Scenario:
     def digest(self) -> str:
         """SHA-256 of the scenario file's text (empty when built in code)."""
         return hashlib.sha256(self.text.encode()).hexdigest()
+
+    @property
+    def sample_period_s(self) -> float:
+        """Time between output samples, s."""
+        return 1.0 / self.sample_rate_hz
+
+    def with_solver(
+        self,
+        *,
+        preset: str | None = None,
+        method: str | None = None,
+        max_step_s: float | None = None,
+        sample_rate_hz: float | None = None,
+    ) -> Scenario:
+        """This scenario with solver settings or the sample rate overridden (the CLI's
+        ``--preset``, ``--method``, ``--max-step``, ``--sample-rate``); None keeps."""
+        solver = self.solver.with_overrides(preset=preset, method=method, max_step_s=max_step_s)
+        rate = self.sample_rate_hz
+        if sample_rate_hz is not None:
+            lo, hi = SAMPLE_RATE_RANGE_HZ
+            if not (math.isfinite(sample_rate_hz) and lo <= sample_rate_hz <= hi):
+                raise ScenarioError(
+                    f"sample rate {sample_rate_hz!r} Hz: allowed {lo:g} to {hi:g} Hz"
+                )
+            rate = float(sample_rate_hz)
+        return dataclasses.replace(self, solver=solver, sample_rate_hz=rate)
 
     def with_defects(self, defects: Defects) -> Scenario:
         setup = dataclasses.replace(self.setup, defects=defects)
@@ -242,33 +311,25 @@ def _options(ctx: _Ctx, data: Any) -> ModelOptions:
     return ModelOptions(rigid_coupling=rigid, shoes=tuple(s for s in SIDES if s in shoes))
 
 
-def _solver(ctx: _Ctx, data: Any, setup: BrakeSetup) -> SolverSettings:
-    """Solver settings: a preset (default "balanced") gives the method and the step; an
-    explicit ``method`` or ``dt_s`` overrides it. A step taken from the preset that exceeds
-    this scenario's step limit is refused here, naming the limit: it is never shrunk
-    silently, since the step is also the published sample period."""
-    data = ctx.table(data, "solver", {"preset", "method", "dt_s", "rtol"})
+def _solver(ctx: _Ctx, data: Any) -> SolverSettings:
+    """Solver settings: a preset (default "balanced") gives the method and the largest
+    physics step; an explicit ``method`` or ``max_step_s`` overrides it. The step itself
+    is chosen by the stepper, below the step limit of the parameters; the sample rate is
+    the scenario's, not the solver's."""
+    if isinstance(data, dict) and "dt_s" in data:
+        raise ScenarioError(
+            f"{ctx.source}: key 'solver.dt_s' = {data['dt_s']!r} {_RETIRED_STEP_KEY}"
+        )
+    data = ctx.table(data, "solver", {"preset", "method", "max_step_s", "rtol"})
     name = ctx.string(data.get("preset", DEFAULT_PRESET), "solver.preset", tuple(PRESETS))
     preset = PRESETS[name]
     method = ctx.string(data.get("method", preset.scheme), "solver.method", SOLVER_METHODS)
-    if "dt_s" in data:
-        dt = ctx.number(data["dt_s"], "solver.dt_s", 0.0, 1e-2, lo_open=True)
-    else:
-        dt = preset.dt_s
-        scheme = method if method in FIXED_STEP_METHODS else preset.scheme
-        peak = max(setup.actuation.left.peak_n, setup.actuation.right.peak_n)
-        limit = step_limit(setup, peak, scheme=scheme)
-        if dt > limit.max_step_s:
-            raise ctx.fail(
-                "solver.preset",
-                name,
-                f"a preset whose step ({dt:g} s) is within this scenario's step limit"
-                f" {limit.max_step_s:.3g} s for {scheme} ({limit.reason}); set [solver]"
-                f" dt_s <= {limit.max_step_s:.3g} explicitly",
-            )
+    max_step = preset.max_step_s
+    if "max_step_s" in data:
+        max_step = ctx.number(data["max_step_s"], "solver.max_step_s", 0.0, 1e-2, lo_open=True)
     return SolverSettings(
         method=method,
-        dt_s=dt,
+        max_step_s=max_step,
         rtol=ctx.number(data.get("rtol", 1e-9), "solver.rtol", 1e-13, 1e-3),
         preset=name,
     )
@@ -314,6 +375,7 @@ def parse_scenario(text: str, source: str = "<string>") -> Scenario:
             "name",
             "description",
             "duration_s",
+            "sample_rate_hz",
             "seed",
             "solver",
             "actuation",
@@ -351,7 +413,12 @@ def parse_scenario(text: str, source: str = "<string>") -> Scenario:
             top.get("duration_s", 7.5), "duration_s", 0.0, 86_400.0, lo_open=True
         ),
         seed=seed,
-        solver=_solver(ctx, top.get("solver", {}), setup),
+        solver=_solver(ctx, top.get("solver", {})),
+        sample_rate_hz=ctx.number(
+            top.get("sample_rate_hz", DEFAULT_SAMPLE_RATE_HZ),
+            "sample_rate_hz",
+            *SAMPLE_RATE_RANGE_HZ,
+        ),
         source=source,
         text=text,
         needs=needs,

@@ -1,22 +1,29 @@
 """``brake-sim bench core``: cost and accuracy of the fixed-step stepper against the reference.
 
-Prints nanoseconds per right-hand-side evaluation and per step, the real-time factor of
-the 7.5 s symmetric event on one core, and the error of first-impact peak pivot force,
-impact period and stop time against the adaptive reference for a range of steps.
+Prints nanoseconds per right-hand-side evaluation; the scenario's own stepper
+(:func:`stepper_for`: its sample rate, its preset) with its physics step, substeps,
+nanoseconds per sample and real-time factor of the whole event on one core; then every
+preset at the scenario's sample rate, and one scheme over a range of physics steps, each
+with its real-time factor and its error of first-impact peak pivot force, impact period
+and stop time against the adaptive reference.
 """
 
 from __future__ import annotations
 
 import argparse
 import time
+from collections.abc import Callable
 
 import numpy as np
 from numba import njit
 
+from brake_sim_ros.analysis.impacts import EventMetrics, event_metrics
 from brake_sim_ros.model import kernel
 from brake_sim_ros.model import layout as L
 from brake_sim_ros.scenarios import load_scenario
+from brake_sim_ros.solvers.build import stepper_for
 from brake_sim_ros.solvers.fixed_step import FixedStepStepper
+from brake_sim_ros.solvers.presets import PRESETS
 from brake_sim_ros.solvers.run import run_scenario
 
 TARGET_RTF = 50.0
@@ -45,20 +52,43 @@ def _best_cpu(fn, repeats: int) -> float:
     return best
 
 
+def _errors(m: EventMetrics, ref: EventMetrics) -> tuple[list[float], list[float], float]:
+    """Relative errors, %: first-impact peak and period per shoe (left, right), stop time."""
+    sides = ("left", "right")
+    peak = [
+        100 * (m.shoe(s).first_impact_peak_n / ref.shoe(s).first_impact_peak_n - 1) for s in sides
+    ]
+    period = [100 * (m.shoe(s).period_s / ref.shoe(s).period_s - 1) for s in sides]
+    return peak, period, 100 * (m.stop_time_s / ref.stop_time_s - 1)
+
+
+def _timed_run(make: Callable[[], FixedStepStepper], duration: float, repeats: int):
+    """Best CPU time of stepping a whole event recording every sample (building the stepper
+    and its step-limit analysis outside the timed region), and the last run's samples."""
+    best, stepper, samples = float("inf"), None, None
+    for _ in range(repeats):
+        stepper = make()
+        start = time.process_time()
+        samples = stepper.run(duration)
+        best = min(best, time.process_time() - start)
+    return best, stepper, samples
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="brake-sim bench core", description=__doc__)
     parser.add_argument("--scenario", default="symmetric")
     parser.add_argument(
         "--steps",
         default="1e-5,2e-5,4e-5,5e-5,6e-5",
-        help="comma-separated fixed steps to compare, s",
+        help="comma-separated physics steps for the step table (one sample per step), s",
     )
+    parser.add_argument("--scheme", default="rk4", help="scheme of the step table")
     parser.add_argument("--repeats", type=int, default=3)
     args = parser.parse_args(argv)
     scenario = load_scenario(args.scenario)
     duration = scenario.duration_s
 
-    stepper = FixedStepStepper(scenario.setup, scenario.solver.dt_s)
+    stepper = stepper_for(scenario)
     p = stepper.packed_parameters
     y = stepper.state
     _rhs_loop(y.copy(), p, 10)
@@ -68,30 +98,19 @@ def main(argv: list[str] | None = None) -> int:
         f"right-hand side: {1e9 * rhs_cpu / n_eval:.1f} ns per evaluation (both shoes in contact)"
     )
 
-    def stepping_cpu(dt: float, repeats: int, record: bool = True) -> float:
-        """Best CPU time of the stepping alone; building the stepper (and its step-limit
-        analysis) happens outside the timed region."""
-        n = round(duration / dt)
-        best = float("inf")
-        for _ in range(repeats):
-            st = FixedStepStepper(scenario.setup, dt, check_step=False)
-            start = time.process_time()
-            if record:
-                st.run(duration)
-            else:
-                st.advance(n, record_every=n)
-            best = min(best, time.process_time() - start)
-        return best
+    stepper.run(0.01)  # compile, or load the compiled kernel from the cache
+    n = round(duration / stepper.sample_period_s)
+    cpu_rec, stepper, _ = _timed_run(lambda: stepper_for(scenario), duration, args.repeats)
 
-    dt0 = scenario.solver.dt_s
-    n0 = round(duration / dt0)
-    stepping_cpu(dt0, 1)  # compile, or load the compiled kernel from the cache
-    cpu_rec = stepping_cpu(dt0, args.repeats)
-    cpu_norec = stepping_cpu(dt0, args.repeats, record=False)
+    def no_record() -> None:
+        st = stepper_for(scenario)
+        st.advance(n, record_every=n)
+
+    cpu_norec = _best_cpu(no_record, args.repeats)  # includes the step-limit analysis (ms)
+    print(f"scenario {scenario.name}, preset {scenario.solver.preset}: {stepper.describe_step()}")
     print(
-        f"fixed step {dt0:g} s ({n0} steps, 4 evaluations each):"
-        f" {1e9 * cpu_rec / n0:.0f} ns per step recording every sample,"
-        f" {1e9 * cpu_norec / n0:.0f} ns per step without recording"
+        f"  {n} samples: {1e9 * cpu_rec / n:.0f} ns per sample recording every sample,"
+        f" {1e9 * cpu_norec / n:.0f} ns without recording"
     )
     print(
         f"  {duration:g} s event in {cpu_rec:.3f} s CPU: {duration / cpu_rec:.0f}x real time"
@@ -106,25 +125,42 @@ def main(argv: list[str] | None = None) -> int:
     ref_cpu = time.process_time() - start
     rm = ref.metrics
     print(f"  {ref_cpu:.2f} s CPU, {ref.n_steps} evaluations, stop {rm.stop_time_s:.6f} s")
-    print()
+
+    print(f"\npresets at the scenario's sample rate ({1 / stepper.sample_period_s:g} Hz):\n")
+    print(
+        "preset | scheme | physics step (us) | substeps | x real time | peak F_r err L/R (%)"
+        " | period err L/R (%) | stop err (%)"
+    )
+    print("---|---|---|---|---|---|---|---")
+    for name in PRESETS:
+        chosen = scenario.with_solver(preset=name)
+        cpu, st, samples = _timed_run(lambda c=chosen: stepper_for(c), duration, args.repeats)
+        pe, te, se = _errors(event_metrics(samples, stop_time_s=st.stop_time_s), rm)
+        print(
+            f"{name} | {st.scheme} | {1e6 * st.physics_step_s:.4g} | {st.substeps} |"
+            f" {duration / cpu:.0f} | {pe[0]:+.4f} / {pe[1]:+.4f} | {te[0]:+.4f} / {te[1]:+.4f}"
+            f" | {se:+.6f}"
+        )
+
+    print(f"\n{args.scheme} over physics steps (one sample per step):\n")
     print(
         "step (s) | x real time | peak F_r err L/R (%) | period err L/R (%) | stop err (%) | meets"
     )
     print("---|---|---|---|---|---")
-    limit = stepper.limit.max_step_s
+    table_limit = FixedStepStepper(scenario.setup, 1e-3, scheme=args.scheme, check_step=False).limit
+    limit = table_limit.max_step_s
     for dt in (float(s) for s in args.steps.split(",")):
-        cpu = stepping_cpu(dt, args.repeats)
-        st_res = run_scenario(scenario, method="rk4", dt_s=dt) if dt <= limit else None
-        if st_res is None:
-            print(f"{dt:g} | - | refused: above the step limit {limit:.3g} s | | |")
+        if dt > limit:
+            print(f"{dt:g} | - | above the step limit {limit:.3g} s | | |")
             continue
-        m = st_res.metrics
-        pe = [
-            100 * (m.shoe(s).first_impact_peak_n / rm.shoe(s).first_impact_peak_n - 1)
-            for s in ("left", "right")
-        ]
-        te = [100 * (m.shoe(s).period_s / rm.shoe(s).period_s - 1) for s in ("left", "right")]
-        se = 100 * (m.stop_time_s / rm.stop_time_s - 1)
+        cpu, st, samples = _timed_run(
+            lambda dt=dt: FixedStepStepper(
+                scenario.setup, dt, scheme=args.scheme, check_step=False
+            ),
+            duration,
+            args.repeats,
+        )
+        pe, te, se = _errors(event_metrics(samples, stop_time_s=st.stop_time_s), rm)
         ok = (
             max(map(abs, pe)) <= 100 * TARGET_IMPACT_REL
             and max(map(abs, te)) <= 100 * TARGET_IMPACT_REL
@@ -136,5 +172,5 @@ def main(argv: list[str] | None = None) -> int:
             f" {te[0]:+.3f} / {te[1]:+.3f}"
             f" | {se:+.5f} | {'yes' if ok else 'no'}"
         )
-    print(f"\nstep limit for this scenario: {limit:.3g} s ({stepper.limit.reason})")
+    print(f"\n{args.scheme} step limit for this scenario: {limit:.3g} s ({table_limit.reason})")
     return 0

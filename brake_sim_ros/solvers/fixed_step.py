@@ -9,6 +9,19 @@ Schemes (:data:`FIXED_STEP_SCHEMES`):
   through impacts, at a few per cent more cost per step.
 * ``semi-implicit-euler``: symplectic Euler, one evaluation per step, first order.
 
+The stepper's unit is the output sample. It is built with a sample period (the scenario's
+``sample_rate_hz``) and takes, inside each sample interval, the fewest whole physics
+substeps whose step stays within both the accuracy bound ``max_step_s`` (a preset's largest
+step) and the step limit of the current parameters (:func:`step_limit`)::
+
+    substeps = ceil(sample_period / min(max_step_s, limit))
+    physics step = sample_period / substeps
+
+so the sample rate never depends on the defect or the actuation level. A change of the
+parameters (:meth:`FixedStepStepper.replace_setup`) or an actuation force above the one the
+limit was computed for re-picks the substeps at once; only a limit below
+:data:`MIN_PHYSICS_STEP_S` (a pathological model) is refused.
+
 The stepper owns the state between calls, so a caller (the ROS node, the offline
 simulator) advances it in chunks and may change the actuation between any two calls.
 """
@@ -32,6 +45,10 @@ from brake_sim_ros.solvers.stability import StepLimit, step_limit
 # contact this long is free. Longer than the longest flight between impacts (about
 # 20 ms for the published cases), short against the contact regime.
 SETTLE_TIME_S = 0.05
+# The smallest physics step the stepper takes, s. A limit below it is refused: 10 ns is
+# 3907 substeps per 25.6 kHz sample, 1e8 steps (a minute of CPU) per simulated second;
+# every defect in the core's ranges at MAX_ACTUATION_FORCE_N needs more than 500 ns.
+MIN_PHYSICS_STEP_S = 1e-8
 
 
 FIXED_STEP_SCHEMES: dict[str, int] = {
@@ -47,27 +64,50 @@ class StepperStatus(enum.Enum):
     FAILED = "failed"
 
 
+def substeps_for(sample_period_s: float, max_step_s: float) -> int:
+    """Fewest whole substeps of one sample interval whose step is at most ``max_step_s``."""
+    if not max_step_s < math.inf:
+        return 1
+    n = max(1, math.ceil(sample_period_s / max_step_s))
+    while n > 1 and sample_period_s / (n - 1) <= max_step_s:  # ceil of a rounded quotient
+        n -= 1
+    return n
+
+
 class FixedStepStepper:
-    """A fixed-step scheme at step ``dt_s``; state carried between :meth:`advance` calls.
+    """A fixed-step scheme that outputs one sample every ``sample_period_s``; state carried
+    between :meth:`advance` calls.
 
     Args:
         setup: parameters, defects, actuation profile and model options.
-        dt_s: physics step, s. Refused (StepSizeError) above the limit that the stiffest
-            mode of the current parameters allows for this scheme; see :func:`step_limit`.
+        sample_period_s: time between output samples, s (1 / the scenario's sample rate).
         scheme: one of :data:`FIXED_STEP_SCHEMES` (default :data:`DEFAULT_SCHEME`).
-        max_actuation_n: the largest actuation force this stepper will ever be given
-            (the profile's peak by default); the step limit is computed for it, since
-            friction stiffness near standstill grows with the normal force.
+        max_step_s: largest physics step for accuracy, s (a preset's); None = only the
+            step limit bounds it.
+        limit_force_n: actuation force, N, the step limit is computed for at the start
+            (friction stiffness near standstill grows with the normal force); at least the
+            profile's peak, which is the default. A larger force given to :meth:`advance`
+            raises it and re-picks the substeps.
+        check_step: False for studies of steps beyond the limit: the limit is still
+            computed (and reported) but neither picks the substeps nor refuses anything;
+            the physics step is the sample period divided by ``ceil(sample_period_s /
+            max_step_s)`` (1 without ``max_step_s``).
+
+    Raises:
+        StepSizeError: a sample period that is not a finite time > 0, or a step limit
+            below :data:`MIN_PHYSICS_STEP_S` (named, with its reason).
+        ParameterError: an unknown scheme or invalid parameters.
     """
 
     def __init__(
         self,
         setup: BrakeSetup,
-        dt_s: float,
+        sample_period_s: float,
         *,
-        max_actuation_n: float | None = None,
-        check_step: bool = True,
         scheme: str = DEFAULT_SCHEME,
+        max_step_s: float | None = None,
+        limit_force_n: float | None = None,
+        check_step: bool = True,
     ) -> None:
         if scheme not in FIXED_STEP_SCHEMES:
             raise ParameterError(
@@ -75,48 +115,105 @@ class FixedStepStepper:
             )
         self.scheme = scheme
         self._scheme_id = FIXED_STEP_SCHEMES[scheme]
-        if not (isinstance(dt_s, float | int) and math.isfinite(dt_s) and dt_s > 0):
-            raise StepSizeError(f"step dt_s={dt_s!r} is invalid: allowed a finite step > 0 s")
+        for name, value in (("sample period", sample_period_s), ("max_step_s", max_step_s)):
+            if value is not None and not (
+                isinstance(value, float | int) and math.isfinite(value) and value > 0
+            ):
+                raise StepSizeError(f"{name} {value!r} is invalid: allowed a finite step > 0 s")
+        self.sample_period_s = float(sample_period_s)
+        self.max_step_s = None if max_step_s is None else float(max_step_s)
+        self.check_step = check_step
         self.setup = setup
-        self.dt_s = float(dt_s)
-        peak = max(setup.actuation.left.peak_n, setup.actuation.right.peak_n)
-        self.max_actuation_n = float(peak if max_actuation_n is None else max_actuation_n)
-        if not 0.0 <= self.max_actuation_n <= MAX_ACTUATION_FORCE_N:
-            raise ParameterError(
-                f"max_actuation_n={self.max_actuation_n}: allowed 0 to {MAX_ACTUATION_FORCE_N} N"
-            )
+        peak = _peak_n(setup)
+        force = peak if limit_force_n is None else max(peak, float(limit_force_n))
+        _check_force("limit_force_n", force)
+        self._base_force_n = force
         self._p = pack(setup.params, setup.defects, setup.options)
-        self.limit: StepLimit = step_limit(
-            setup, self.max_actuation_n, packed=self._p, scheme=scheme
-        )
-        if check_step and self.dt_s > self.limit.max_step_s:
-            raise StepSizeError(
-                f"step {self.dt_s:.3g} s exceeds the limit {self.limit.max_step_s:.3g} s for these"
-                f" parameters: {self.limit.reason}"
-            )
-        self._settle_steps = max(1, round(SETTLE_TIME_S / self.dt_s))
         self._profile = setup.actuation.as_arrays()
+        self.limit_force_n = force
+        self.limit: StepLimit = step_limit(setup, force, packed=self._p, scheme=scheme)
+        self.substeps = 1
         self.reset()
 
     def reset(self) -> None:
-        """Back to t = 0 with the setup's initial state."""
+        """Back to t = 0 with the setup's initial state; a step limit raised by live
+        actuation goes back to the one for the starting force."""
+        if self.limit_force_n != self._base_force_n:
+            self.limit_force_n = self._base_force_n
+            self.limit = step_limit(
+                self.setup, self._base_force_n, packed=self._p, scheme=self.scheme
+            )
+        self.substeps = self._substeps_for(self.limit, "these parameters")
         self._y = initial_state(self.setup.params, self.setup.defects)
-        self._step = 0
+        self._sample = 0
         self._kstate = np.zeros(L.N_KSTATE, np.int64)
         self._fstate = np.zeros(L.N_FSTATE)
         self._fstate[L.F_STOP_TIME] = -1.0  # the vehicle has not stopped yet
         self._fstate[L.F_WHEEL_LOCK_TIME] = -1.0  # the drum has not stuck yet
         self.status = StepperStatus.RUNNING
 
+    def fresh(self) -> FixedStepStepper:
+        """A new stepper at t = 0 with this one's setup, sample period, scheme and bounds."""
+        return FixedStepStepper(
+            self.setup,
+            self.sample_period_s,
+            scheme=self.scheme,
+            max_step_s=self.max_step_s,
+            limit_force_n=self._base_force_n,
+            check_step=self.check_step,
+        )
+
+    # -- the step ------------------------------------------------------------------------------
+    @property
+    def physics_step_s(self) -> float:
+        """The physics step in use, s: the sample period divided by :attr:`substeps`."""
+        return self.sample_period_s / self.substeps
+
+    def _substeps_for(self, limit: StepLimit, what: str) -> int:
+        """Substeps per sample for ``limit``; StepSizeError below MIN_PHYSICS_STEP_S."""
+        bound = math.inf if self.max_step_s is None else self.max_step_s
+        if not self.check_step:
+            return substeps_for(self.sample_period_s, bound)
+        if limit.max_step_s < MIN_PHYSICS_STEP_S:
+            needed = math.ceil(self.sample_period_s / limit.max_step_s)
+            raise StepSizeError(
+                f"{what} allow a physics step of at most {limit.max_step_s:.3g} s"
+                f" ({limit.reason}): {needed} substeps per {self.sample_period_s:.3g} s sample,"
+                f" below the smallest step taken, {MIN_PHYSICS_STEP_S:g} s"
+            )
+        return substeps_for(self.sample_period_s, min(bound, limit.max_step_s))
+
+    def _use_substeps(self, substeps: int) -> None:
+        """Switch to ``substeps`` per sample from the current sample on. The regime
+        bookkeeping counts physics steps: its counters are rescaled to the new step."""
+        old = self.substeps
+        if substeps == old:
+            return
+        now_old, now_new = self._sample * old, self._sample * substeps
+        for k in (L.K_LEFT_LAST_CHANGE_STEP, L.K_RIGHT_LAST_CHANGE_STEP):
+            since = now_old - int(self._kstate[k])
+            self._kstate[k] = now_new - (since * substeps) // old
+        self.substeps = substeps
+
+    def describe_step(self) -> str:
+        """One line: sample rate, physics step and substeps, and the limit that set them."""
+        bound = "" if self.max_step_s is None else f", accuracy bound {self.max_step_s:.3g} s"
+        return (
+            f"{1.0 / self.sample_period_s:g} Hz samples, physics step"
+            f" {self.physics_step_s:.4g} s ({self.substeps} per sample, {self.scheme}); step"
+            f" limit {self.limit.max_step_s:.3g} s for {self.limit_force_n:g} N of"
+            f" actuation{bound}"
+        )
+
     # -- state ------------------------------------------------------------------------------
     @property
-    def step_index(self) -> int:
-        """Number of steps taken since reset; also the index of the next sample."""
-        return self._step
+    def sample_index(self) -> int:
+        """Samples advanced since reset; also the index of the next sample."""
+        return self._sample
 
     @property
     def time_s(self) -> float:
-        return self._step * self.dt_s
+        return self._sample * self.sample_period_s
 
     @property
     def state(self) -> np.ndarray:
@@ -163,41 +260,54 @@ class FixedStepStepper:
         return self._p.copy()
 
     def replace_setup(self, setup: BrakeSetup) -> None:
-        """Swap parameters/defects mid-run (takes effect on the next step); state is kept.
+        """Swap parameters/defects mid-run (takes effect on the next sample); state is kept.
 
-        Validity and the step limit are checked first; on error nothing changes.
+        Validity is checked and the substeps re-picked for the new step limit; on error
+        (invalid parameters, a limit below MIN_PHYSICS_STEP_S) nothing changes.
         """
         p = pack(setup.params, setup.defects, setup.options)
-        limit = step_limit(setup, self.max_actuation_n, packed=p, scheme=self.scheme)
-        if self.dt_s > limit.max_step_s:
-            raise StepSizeError(
-                f"the new parameters allow at most {limit.max_step_s:.3g} s per step, the"
-                f" stepper runs at {self.dt_s:.3g} s: {limit.reason}"
-            )
-        self.setup, self._p, self.limit = setup, p, limit
+        force = max(self.limit_force_n, _peak_n(setup))
+        limit = step_limit(setup, force, packed=p, scheme=self.scheme)
+        substeps = self._substeps_for(limit, "the new parameters")
+        self.setup, self._p, self.limit, self.limit_force_n = setup, p, limit, force
+        self._base_force_n = max(self._base_force_n, _peak_n(setup))
         self._profile = setup.actuation.as_arrays()
+        self._use_substeps(substeps)
+
+    def _raise_limit_force(self, force_n: float) -> None:
+        """Recompute the step limit for a larger actuation force and re-pick the substeps."""
+        limit = step_limit(self.setup, force_n, packed=self._p, scheme=self.scheme)
+        substeps = self._substeps_for(limit, f"{force_n:g} N of actuation")
+        self.limit, self.limit_force_n = limit, force_n
+        self._use_substeps(substeps)
 
     # -- stepping -------------------------------------------------------------------------------
     def advance(
-        self, n_steps: int, *, actuation_n: tuple[float, float] | None = None, record_every: int = 1
+        self,
+        n_samples: int,
+        *,
+        actuation_n: tuple[float, float] | None = None,
+        record_every: int = 1,
     ) -> SampleBlock:
-        """Advance ``n_steps`` steps and return one sample every ``record_every`` steps.
+        """Advance ``n_samples`` sample intervals; return every ``record_every``-th sample.
 
         Args:
-            n_steps: steps to take (>= 0).
+            n_samples: sample intervals to advance (>= 0), each :attr:`substeps` physics steps.
             actuation_n: if given, constant (left, right) actuation forces in N for these
-                steps, overriding the profile; the actuation-share defect still applies.
-                Each must be finite, >= 0 and <= ``max_actuation_n``.
+                samples, overriding the profile; the actuation-share defect still applies.
+                Each must be finite, >= 0 and <= MAX_ACTUATION_FORCE_N; one above
+                :attr:`limit_force_n` raises it and re-picks the substeps first.
             record_every: decimation of the returned samples (the physics still runs at
-                every step).
+                every substep).
 
-        Samples are taken at the start of each recorded step, so consecutive calls give a
-        gap-free series; the block's ``first_index`` is the step index before the call.
+        Sample ``k`` is the state at ``k * sample_period_s`` exactly (the time column is
+        ``k * sample_period_s``), so consecutive calls give a gap-free series on one uniform
+        grid; the block's ``first_index`` is the sample index before the call.
         """
-        if n_steps < 0 or record_every < 1:
+        if n_samples < 0 or record_every < 1:
             raise ValueError(
-                f"n_steps={n_steps}, record_every={record_every}: allowed"
-                " n_steps >= 0 and record_every >= 1"
+                f"n_samples={n_samples}, record_every={record_every}: allowed"
+                " n_samples >= 0 and record_every >= 1"
             )
         if self.status is StepperStatus.FAILED:
             raise SimulationError("the stepper failed earlier (non-finite state); reset it")
@@ -206,22 +316,28 @@ class FixedStepStepper:
         else:
             left, right = (float(a) for a in actuation_n)
             for side, value in (("left", left), ("right", right)):
-                if not (math.isfinite(value) and 0.0 <= value <= self.max_actuation_n):
-                    raise ParameterError(
-                        f"{side} actuation force {value!r} N: allowed a finite force from 0 to"
-                        f" {self.max_actuation_n:g} N"
-                    )
+                _check_force(f"{side} actuation force", value)
+            if max(left, right) > self.limit_force_n:
+                self._raise_limit_force(max(left, right))
             tl = tr = np.zeros(1)
             fl = np.array([left])
             fr = np.array([right])
-        rows = -(-n_steps // record_every)
+        rows = -(-n_samples // record_every)
         out = np.empty((rows, L.N_COLUMNS))
-        first = self._step
+        first = self._sample
+        written = self._integrate(n_samples, record_every, (tl, fl, tr, fr), out)
+        return SampleBlock(out[:written], first, self.sample_period_s * record_every)
+
+    def _integrate(self, n_samples: int, record_every: int, knots, out: np.ndarray) -> int:
+        """Run the kernel over ``n_samples`` samples into ``out``; rows written."""
+        tl, fl, tr, fr = knots
+        first, sub = self._sample, self.substeps
+        dt = self.physics_step_s
         written = kernel.fixed_step_advance(
             self._y,
-            self._step,
-            self.dt_s,
-            n_steps,
+            first * sub,
+            dt,
+            n_samples * sub,
             self._p,
             tl,
             fl,
@@ -230,35 +346,52 @@ class FixedStepStepper:
             0,
             self._kstate,
             self._fstate,
-            self._settle_steps,
-            record_every,
+            max(1, round(SETTLE_TIME_S / dt)),
+            record_every * sub,
             out,
             self._scheme_id,
         )
+        # the kernel's time is step x physics step: state it on the sample grid exactly
+        out[:written, 0] = (first + record_every * np.arange(written)) * self.sample_period_s
         if self._kstate[L.K_STATUS]:
             self.status = StepperStatus.FAILED
+            t_fail = (first + written * record_every) * self.sample_period_s
             raise SimulationError(
-                f"non-finite state at t = {(first + written * record_every) * self.dt_s:.6f} s"
-                f" with step {self.dt_s:g} s ({self.scheme})"
+                f"non-finite state at t = {t_fail:.6f} s with physics step {dt:g} s ({self.scheme})"
             )
-        self._step += n_steps
-        return SampleBlock(out[:written], first, self.dt_s * record_every)
+        self._sample += n_samples
+        return written
 
     def run(
-        self, duration_s: float, *, record_every: int = 1, chunk_steps: int = 100_000, progress=None
+        self,
+        duration_s: float,
+        *,
+        record_every: int = 1,
+        chunk_samples: int = 100_000,
+        progress=None,
     ) -> SampleBlock:
-        """Advance until ``duration_s`` (from the current time) and return all samples."""
-        total = round(duration_s / self.dt_s)
-        blocks = []
-        done = 0
+        """Advance by ``duration_s`` (rounded to whole samples) and return every
+        ``record_every``-th sample, written into one array (no copies)."""
+        total = round(duration_s / self.sample_period_s)
+        first = self._sample
+        out = np.empty((-(-total // record_every), L.N_COLUMNS))
+        chunk = max(record_every, chunk_samples - chunk_samples % record_every)
+        done = rows = 0
         while done < total:
-            n = min(chunk_steps - chunk_steps % record_every or record_every, total - done)
-            blocks.append(self.advance(n, record_every=record_every))
+            n = min(chunk, total - done)
+            rows += self._integrate(n, record_every, self._profile, out[rows:])
             done += n
             if progress is not None:
                 progress(done / total)
-        return (
-            SampleBlock.concatenate(blocks)
-            if blocks
-            else SampleBlock(np.empty((0, L.N_COLUMNS)), self._step, self.dt_s * record_every)
+        return SampleBlock(out[:rows], first, self.sample_period_s * record_every)
+
+
+def _peak_n(setup: BrakeSetup) -> float:
+    return max(setup.actuation.left.peak_n, setup.actuation.right.peak_n)
+
+
+def _check_force(what: str, value: float) -> None:
+    if not (math.isfinite(value) and 0.0 <= value <= MAX_ACTUATION_FORCE_N):
+        raise ParameterError(
+            f"{what} {value!r} N: allowed a finite force from 0 to {MAX_ACTUATION_FORCE_N:g} N"
         )

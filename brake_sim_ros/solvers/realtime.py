@@ -1,14 +1,14 @@
 """Can the streaming stepper keep up with the wall clock? Measurement and budget check.
 
 Pure logic plus a short calibration run; no ROS. A real-time run publishes one chunk of
-``chunk_steps`` physics steps every ``chunk_steps * dt_s / real_time_factor`` seconds of
-wall time (the chunk's wall period). The stepper may spend at most
-:data:`STEPPER_SHARE` of that period on a chunk: the rest is for converting and
-publishing the chunk, the executor, and timer jitter.
+``chunk_samples`` samples every ``chunk_samples * sample_period_s / real_time_factor``
+seconds of wall time (the chunk's wall period); the stepper takes its substeps inside.
+The stepper may spend at most :data:`STEPPER_SHARE` of that period on a chunk: the rest is
+for converting and publishing the chunk, the executor, and timer jitter.
 
-The check is stated in terms of (stepper cost, dt, chunk steps, real-time factor), so a
-caller that chooses among solver presets can name the preset in the message through
-``label``.
+The check is stated in terms of (stepper cost, sample period, chunk samples, real-time
+factor), so a caller that chooses among solver presets can name the preset in the message
+through ``label``.
 """
 
 from __future__ import annotations
@@ -20,10 +20,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from brake_sim_ros.model.trajectory import BrakeSetup
 from brake_sim_ros.solvers.fixed_step import FixedStepStepper
 
-# Share of a chunk's wall period the stepper may use. Publishing a 250-sample chunk and
+# Share of a chunk's wall period the stepper may use. Publishing a 256-sample chunk and
 # its state messages costs the same order as stepping it in rclpy, so half the period is
 # left for that, the executor and scheduling jitter.
 STEPPER_SHARE = 0.5
@@ -80,8 +79,8 @@ class RealtimeVerdict:
 def check_realtime(
     chunk_cost_s: float,
     *,
-    dt_s: float,
-    chunk_steps: int,
+    sample_period_s: float,
+    chunk_samples: int,
     real_time_factor: float,
     label: str = "",
     share: float = STEPPER_SHARE,
@@ -90,8 +89,8 @@ def check_realtime(
 
     Args:
         chunk_cost_s: wall cost of stepping one chunk, s (> 0).
-        dt_s: physics step, s.
-        chunk_steps: steps per chunk (>= 1).
+        sample_period_s: time between samples, s.
+        chunk_samples: samples per chunk (>= 1).
         real_time_factor: simulated seconds per wall second; 0 (as fast as possible)
             always passes.
         label: what is being run (scenario, solver preset), named in the message.
@@ -99,13 +98,16 @@ def check_realtime(
     """
     if not (math.isfinite(chunk_cost_s) and chunk_cost_s > 0):
         raise ValueError(f"chunk_cost_s={chunk_cost_s!r}: allowed a finite cost > 0 s")
-    if not (math.isfinite(dt_s) and dt_s > 0) or chunk_steps < 1:
-        raise ValueError(f"dt_s={dt_s!r}, chunk_steps={chunk_steps!r}: allowed > 0 and >= 1")
+    if not (math.isfinite(sample_period_s) and sample_period_s > 0) or chunk_samples < 1:
+        raise ValueError(
+            f"sample_period_s={sample_period_s!r}, chunk_samples={chunk_samples!r}: allowed"
+            " > 0 and >= 1"
+        )
     if not (math.isfinite(real_time_factor) and real_time_factor >= 0):
         raise ValueError(f"real_time_factor={real_time_factor!r}: allowed a finite factor >= 0")
     if not 0 < share <= 1:
         raise ValueError(f"share={share!r}: allowed 0 < share <= 1")
-    sim_s = chunk_steps * dt_s
+    sim_s = chunk_samples * sample_period_s
     max_factor = share * sim_s / chunk_cost_s
     what = f" for {label}" if label else ""
     if real_time_factor == 0:
@@ -114,7 +116,8 @@ def check_realtime(
     budget = share * period
     ok = chunk_cost_s <= budget
     message = (
-        f"one chunk of {chunk_steps} steps of {dt_s:g} s{what} costs {1e6 * chunk_cost_s:.0f} us"
+        f"one chunk of {chunk_samples} samples of {sample_period_s:g} s{what} costs"
+        f" {1e6 * chunk_cost_s:.0f} us"
         f" of wall time on this machine; at real_time_factor {real_time_factor:g} a chunk spans"
         f" {1e6 * period:.0f} us and the stepper may use {100 * share:.0f} % of it"
         f" ({1e6 * budget:.0f} us)"
@@ -123,15 +126,15 @@ def check_realtime(
         message += f": fits (up to real_time_factor {max_factor:.3g})"
     else:
         message += (
-            f": too slow. Lower real_time_factor to at most {max_factor:.3g}, or use a larger"
-            " step (a faster solver preset), or a less loaded machine"
+            f": too slow. Lower real_time_factor to at most {max_factor:.3g}, or use a faster"
+            " solver preset or a lower sample rate, or a less loaded machine"
         )
     return RealtimeVerdict(ok, chunk_cost_s, period, budget, max_factor, message)
 
 
 def measure_chunk_costs(
     stepper: FixedStepStepper,
-    chunk_steps: int,
+    chunk_samples: int,
     *,
     max_chunks: int,
     wall_budget_s: float = math.inf,
@@ -139,7 +142,7 @@ def measure_chunk_costs(
     actuation_n: tuple[float, float] | None = None,
     clock: Callable[[], float] = time.perf_counter,
 ) -> np.ndarray:
-    """Wall cost of successive ``stepper.advance(chunk_steps)`` calls, s.
+    """Wall cost of successive ``stepper.advance(chunk_samples)`` calls, s.
 
     Stops after ``max_chunks`` chunks, or once ``wall_budget_s`` is spent and at least
     ``min_chunks`` were taken. The stepper is advanced: pass one made for the purpose.
@@ -148,7 +151,7 @@ def measure_chunk_costs(
     start = clock()
     while len(costs) < max_chunks:
         t0 = clock()
-        stepper.advance(chunk_steps, actuation_n=actuation_n)
+        stepper.advance(chunk_samples, actuation_n=actuation_n)
         costs.append(clock() - t0)
         if len(costs) >= min_chunks and clock() - start >= wall_budget_s:
             break
@@ -156,25 +159,25 @@ def measure_chunk_costs(
 
 
 def calibrate_chunk_cost(
-    setup: BrakeSetup,
-    dt_s: float,
-    chunk_steps: int,
+    stepper: FixedStepStepper,
+    chunk_samples: int,
     *,
-    max_actuation_n: float,
+    force_n: float,
     wall_budget_s: float = CALIBRATION_WALL_S,
 ) -> CostStats:
-    """Short calibration: the per-chunk cost of a throwaway stepper on this machine.
+    """Short calibration: the per-chunk cost of ``stepper`` (a throwaway one, at t = 0,
+    e.g. ``node_stepper.fresh()``) on this machine.
 
-    The shoes are driven by ``max_actuation_n`` from t = 0, so the calibration steps
-    through the contact code (impacts, then contact), the costlier branch of the model.
-    Takes about ``wall_budget_s`` of wall time (at least MIN_CALIBRATION_CHUNKS chunks).
+    The shoes are driven by ``force_n`` from t = 0, so the calibration steps through the
+    contact code (impacts, then contact), the costlier branch of the model, at the substeps
+    that force needs. Takes about ``wall_budget_s`` of wall time (at least
+    MIN_CALIBRATION_CHUNKS chunks).
     """
-    stepper = FixedStepStepper(setup, dt_s, max_actuation_n=max_actuation_n)
-    stepper.advance(1)  # the compiled kernel is loaded outside the timed chunks
-    force = (max_actuation_n, max_actuation_n)
+    force = (force_n, force_n)
+    stepper.advance(1, actuation_n=force)  # kernel loaded, substeps picked, outside the timing
     costs = measure_chunk_costs(
         stepper,
-        chunk_steps,
+        chunk_samples,
         max_chunks=10_000,
         wall_budget_s=wall_budget_s,
         min_chunks=MIN_CALIBRATION_CHUNKS,

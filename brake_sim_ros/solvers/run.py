@@ -15,11 +15,11 @@ from brake_sim_ros.model.assembly import SIDES, ModelOptions
 from brake_sim_ros.model.fidelity import Plan, plan
 from brake_sim_ros.model.trajectory import BrakeSetup, SampleBlock
 from brake_sim_ros.scenarios.loader import Scenario
+from brake_sim_ros.solvers.build import stepper_for
 from brake_sim_ros.solvers.contact_regime import run_contact_regime
-from brake_sim_ros.solvers.fixed_step import FixedStepStepper
 from brake_sim_ros.solvers.reference import run_reference
 
-CHUNK_STEPS = 100_000
+CHUNK_SAMPLES = 100_000
 _IMPACT_COLUMNS = ("indentation_m", "pivot_fx_n", "pivot_fy_n", "actuation_force_n")
 
 
@@ -32,12 +32,15 @@ class RunResult:
         metrics: impacts, periods, peak and contact-regime forces, stop time; what the
             level does not deliver is empty or nan (stop time None).
         cpu_s: process CPU time spent integrating, s.
-        n_steps: fixed steps taken (fixed-step schemes), right-hand-side evaluations
-            (reference) or RK4 steps including substeps (contact_regime).
+        n_steps: physics steps taken (fixed-step schemes: samples x substeps),
+            right-hand-side evaluations (reference) or RK4 steps including substeps
+            (contact_regime).
         method: the fixed-step scheme, "reference" or "contact_regime".
         plan: the fidelity level and signals chosen for the scenario's needs.
         model_stop_time_s: the instant the model locked, s, even where the level does not
             deliver the stop time (for the fidelity study).
+        step_note: fixed-step schemes: the sample rate, physics step, substeps and the
+            step limit that chose them (one line); empty otherwise.
 
     A run that fails raises (SimulationError, StepSizeError) instead of returning.
     """
@@ -49,6 +52,7 @@ class RunResult:
     method: str
     plan: Plan
     model_stop_time_s: float | None = None
+    step_note: str = ""
 
     @property
     def stop_time_s(self) -> float | None:
@@ -111,11 +115,15 @@ def run_scenario(
     *,
     duration_s: float | None = None,
     method: str | None = None,
-    dt_s: float | None = None,
     progress: Callable[[float], None] | None = None,
 ) -> RunResult:
     """Integrate ``scenario`` over its duration (or ``duration_s``) at the level its needs
-    call for (see :func:`brake_sim_ros.model.fidelity.plan`), and analyse it."""
+    call for (see :func:`brake_sim_ros.model.fidelity.plan`), and analyse it.
+
+    ``method`` overrides the scenario's solver method (its largest step stays). Every
+    impact-model method samples the scenario's sample rate: the fixed-step schemes
+    (:func:`stepper_for`) and the reference alike, so their samples compare one to one.
+    The contact-regime levels sample their macro step."""
     duration = scenario.duration_s if duration_s is None else duration_s
     chosen = plan(scenario.needs, model_shoes=scenario.setup.options.shoes)
     setup = planned_setup(scenario.setup, chosen)
@@ -128,33 +136,41 @@ def run_scenario(
             )
         method = "contact_regime"
     else:
-        method = method or scenario.solver.method
+        scenario = scenario.with_solver(method=method)
+        method = scenario.solver.method
     start = time.process_time()
+    note = ""
     if method == "contact_regime":
         qs = run_contact_regime(setup, duration, accuracy=chosen.accuracy)
         cpu = time.process_time() - start
         samples, stop, n = _keep(qs.samples, chosen.columns), qs.stop_time_s, qs.n_substeps
     elif method == "reference":
-        ref = run_reference(setup, duration, rtol=scenario.solver.rtol)
+        period = scenario.sample_period_s
+        grid = np.arange(round(duration / period)) * period  # the fixed-step schemes' samples
+        ref = run_reference(setup, duration, rtol=scenario.solver.rtol, sample_times=grid)
         cpu = time.process_time() - start
-        samples, stop, n = _keep(ref.samples, chosen.columns), ref.stop_time_s, ref.n_rhs
+        uniform = SampleBlock(ref.samples.data, 0, period, ref.samples.columns)
+        samples, stop, n = _keep(uniform, chosen.columns), ref.stop_time_s, ref.n_rhs
     else:
-        stepper = FixedStepStepper(setup, dt_s or scenario.solver.dt_s, scheme=method)
-        total = round(duration / stepper.dt_s)
-        blocks, done = [], 0
+        stepper = stepper_for(scenario, setup=setup)
+        total = round(duration / stepper.sample_period_s)
+        blocks, done, physics_steps = [], 0, 0
         while done < total:  # keep only the planned columns, chunk by chunk
-            chunk = min(CHUNK_STEPS, total - done)
+            chunk = min(CHUNK_SAMPLES, total - done)
             blocks.append(_keep(stepper.advance(chunk), chosen.columns))
             done += chunk
+            physics_steps += chunk * stepper.substeps
             if progress is not None:
                 progress(done / total)
         cpu = time.process_time() - start
         samples = (
             SampleBlock.concatenate(blocks)
             if blocks
-            else SampleBlock(np.empty((0, len(chosen.columns))), 0, stepper.dt_s, chosen.columns)
+            else SampleBlock(
+                np.empty((0, len(chosen.columns))), 0, stepper.sample_period_s, chosen.columns
+            )
         )
-        stop, n = stepper.stop_time_s, stepper.step_index
+        stop, n, note = stepper.stop_time_s, physics_steps, stepper.describe_step()
     return RunResult(
         samples=samples,
         metrics=_metrics(samples, stop, chosen, scenario.setup.options.shoes),
@@ -163,4 +179,5 @@ def run_scenario(
         method=method,
         plan=chosen,
         model_stop_time_s=stop,
+        step_note=note,
     )

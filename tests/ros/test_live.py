@@ -53,4 +53,4 @@ def test_live_streams_records_and_says_where(tmp_path: Path):
             len(reader.deserialize(raw, conn.msgtype).left_fx_n)
             for conn, _t, raw in reader.messages(connections=chunks)
         )
-    assert samples == round(DURATION_S / 4e-5)  # every sample of the run, 25 kHz
+    assert samples == round(DURATION_S * 25_600)  # every sample of the run, 25.6 kHz

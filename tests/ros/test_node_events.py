@@ -24,12 +24,9 @@ from brake_sim_ros.ros import stream  # noqa: E402
 from brake_sim_ros.ros.harness import NodeProcess, SimClient, domain_id_for  # noqa: E402
 from brake_sim_ros.ros.offline import offline_messages  # noqa: E402
 from brake_sim_ros.scenarios import load_scenario  # noqa: E402
-from brake_sim_ros.solvers.fixed_step import FixedStepStepper  # noqa: E402
 
 DOMAIN = domain_id_for(8)
-DT = 4e-5
-MAX_FORCE = 1600.0
-N_STEPS = 7500  # 0.3 s: every bounce of the symmetric run and the start of its contact
+N_STEPS = 7680  # 0.3 s of 25.6 kHz samples: every bounce of the symmetric run, contact starts
 LOSSLESS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
 FIELDS = (
     "sample_index",
@@ -48,8 +45,7 @@ def as_tuple(msg) -> tuple:
 
 def offline_events(scenario_name: str, n_steps: int) -> list[tuple]:
     scenario = load_scenario(scenario_name)
-    stepper = FixedStepStepper(scenario.setup, DT, max_actuation_n=MAX_FORCE)
-    messages = offline_messages(scenario, duration_s=n_steps * DT, stepper=stepper)
+    messages = offline_messages(scenario, duration_s=n_steps * scenario.sample_period_s)
     return [as_tuple(msg) for topic, msg, _ in messages if topic is stream.CONTACT_EVENTS]
 
 
@@ -57,7 +53,7 @@ def offline_events(scenario_name: str, n_steps: int) -> list[tuple]:
 def sim(tmp_path_factory):
     log = tmp_path_factory.mktemp("node") / "node.log"
     node = NodeProcess.start(
-        ["--ros-args", "-p", "paused:=true", "-p", f"max_actuation_force_n:={MAX_FORCE}"],
+        ["--ros-args", "-p", "paused:=true"],
         domain_id=DOMAIN,
         log_path=log,
     )
@@ -101,7 +97,7 @@ def test_node_publishes_the_offline_events_whatever_the_steps_and_resets(sim):
     assert [e[1] for e in received(sim)] == [onset, onset]  # both shoes touch at once
     assert sim.reset().success
     sim.forget()
-    step_all(sim, [250], N_STEPS)  # the offline chunking
+    step_all(sim, [256], N_STEPS)  # the offline chunking
     assert received(sim) == expected
 
 

@@ -2,9 +2,10 @@
 
 One node process, started paused, is driven by this module's client: steps, resets,
 actuation commands and run-time parameter changes. Every published sample is compared
-with :class:`FixedStepStepper` run offline with the same steps and commands: equal, bit
-for bit. Commands are synchronised through /diagnostics (published every 0.1 s here), so
-a command is known to be in the node before the next step request.
+with the scenario's stepper (``stepper_for``) run offline with the same samples, commands
+and model changes: equal, bit for bit, also where a change needs more substeps. Commands
+are synchronised through /diagnostics (published every 0.1 s here), so a command is known
+to be in the node before the next step request.
 """
 
 from __future__ import annotations
@@ -26,14 +27,16 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy  # noqa: E402
 
 from brake_sim_ros.model.defects import Defects, ShoeDefect  # noqa: E402
 from brake_sim_ros.model.layout import COL  # noqa: E402
+from brake_sim_ros.ros import conversion  # noqa: E402
 from brake_sim_ros.ros.harness import NodeProcess, SimClient, domain_id_for  # noqa: E402
 from brake_sim_ros.scenarios import load_scenario  # noqa: E402
-from brake_sim_ros.solvers.fixed_step import FixedStepStepper  # noqa: E402
+from brake_sim_ros.solvers.build import stepper_for  # noqa: E402
 
 DOMAIN = domain_id_for(2)
-DT = 4e-5
-MAX_FORCE = 1600.0  # headroom in the step limit for run-time defect changes
-STATE_STRIDE = 25  # state_rate_hz 1000
+DT = 1 / 25_600  # the sample period
+MAX_FORCE = 5000.0  # the largest command accepted: 3 substeps per sample (limit 16.7 us)
+STATE_RATE_HZ = 1024.0
+STATE_STRIDE = 25  # 25.6 kHz / 1024 Hz
 LOSSLESS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
 
 
@@ -50,7 +53,7 @@ def client(tmp_path_factory):
             "-p",
             f"max_actuation_force_n:={MAX_FORCE}",
             "-p",
-            "state_rate_hz:=1000.0",
+            f"state_rate_hz:={STATE_RATE_HZ}",
         ],
         domain_id=DOMAIN,
         log_path=log,
@@ -113,7 +116,7 @@ def command_and_sync(sim: SimClient, left: float, right: float) -> None:
 def offline(segments, setup=None, start: int = 0) -> np.ndarray:
     """Offline samples for ``[(n, forces or None, new_setup or None), ...]``."""
     scenario = load_scenario("symmetric")
-    stepper = FixedStepStepper(setup or scenario.setup, DT, max_actuation_n=MAX_FORCE)
+    stepper = stepper_for(scenario, setup=setup)
     rows = []
     for n, forces, new_setup in segments:
         if new_setup is not None:
@@ -141,32 +144,34 @@ def actuation(sim: SimClient) -> dict[int, tuple[float, float]]:
 def test_step_and_reset_are_deterministic_and_equal_the_offline_run(sim):
     step(sim, steps=2000)
     step(sim, steps=3001)
-    step(sim, duration_s=0.2)  # 5000 steps, through the start of the profile's ramp
+    step(sim, duration_s=0.2)  # 5120 samples, through the start of the profile's ramp
     first = sim.chunk_arrays()
-    assert len(first["index"]) == 10_001
-    assert_stream_equals(sim, offline([(10_001, None, None)]))
+    assert len(first["index"]) == 10_121
+    assert_stream_equals(sim, offline([(10_121, None, None)]))
     assert sim.reset().success
     sim.forget()
-    step(sim, steps=10_001)
+    step(sim, steps=10_121)
     again = sim.chunk_arrays()
     for name, values in first.items():
         np.testing.assert_array_equal(again[name], values)
-    assert [s.sample_index for s in sim.rx.states] == list(range(0, 10_001, STATE_STRIDE))
+    assert [s.sample_index for s in sim.rx.states] == list(range(0, 10_121, STATE_STRIDE))
+    ns = [s.header.stamp.sec * 10**9 + s.header.stamp.nanosec for s in sim.rx.states]
+    assert ns == [conversion.stamp_ns(s.sample_index, DT) for s in sim.rx.states]
 
 
 def test_command_overrides_the_profile_then_the_profile_resumes(sim):
     step(sim, steps=1000)
     command_and_sync(sim, 1500.0, 1200.0)
-    step(sim, steps=7500)  # 5000 steps of command (0.2 s timeout), then the profile
+    step(sim, steps=7500)  # 5120 samples of command (0.2 s timeout), then the profile
     forces = actuation(sim)
     assert forces[975] == (0.0, 0.0)  # the profile is 0 until 0.2 s
-    assert forces[1000] == (1500.0, 1200.0) and forces[5975] == (1500.0, 1200.0)
-    t = 6000 * DT  # the profile again: 0 until 0.2 s, linear to 1300 N at 0.7 s
-    assert forces[6000][0] == pytest.approx(1300.0 * (t - 0.2) / 0.5)
+    assert forces[1000] == (1500.0, 1200.0) and forces[6100] == (1500.0, 1200.0)
+    t = 6125 * DT  # the profile again: 0 until 0.2 s, linear to 1300 N at 0.7 s
+    assert forces[6125][0] == pytest.approx(1300.0 * (t - 0.2) / 0.5)
     normal = {s.sample_index: s.left_normal_force_n for s in sim.rx.states}
     assert max(normal[k] for k in range(1000, 6000, STATE_STRIDE)) > 1000.0  # shoes pressed
     assert_stream_equals(
-        sim, offline([(1000, None, None), (5000, (1500.0, 1200.0), None), (2500, None, None)])
+        sim, offline([(1000, None, None), (5120, (1500.0, 1200.0), None), (2380, None, None)])
     )
 
 
@@ -188,12 +193,13 @@ def test_hold_and_ramp_to_zero_after_commands_stop(sim):
     command_and_sync(sim, 1000.0, 800.0)
     step(sim, steps=10_000)
     forces = actuation(sim)
-    t_out = 5500
-    for k in range(t_out, 10_500, STATE_STRIDE):
+    t_out = 500 + 5120  # the end of the 0.2 s window
+    for k in range(5625, 10_500, STATE_STRIDE):
         elapsed = (k - t_out) * DT
         assert forces[k][0] == pytest.approx(max(0.0, 1000.0 - 10_000.0 * elapsed), abs=1e-9)
         assert forces[k][1] == pytest.approx(max(0.0, 800.0 - 10_000.0 * elapsed), abs=1e-9)
-    assert forces[t_out + 2500] == (0.0, 0.0) and forces[10_475] == (0.0, 0.0)
+    # 1000 N at 10 kN/s: zero after 0.1 s = 2560 samples
+    assert forces[t_out + 2580] == (0.0, 0.0) and forces[10_475] == (0.0, 0.0)
 
 
 def test_every_kind_of_bad_command_is_rejected_and_counted(sim):
@@ -221,9 +227,48 @@ def test_every_kind_of_bad_command_is_rejected_and_counted(sim):
     assert actuation(sim)[975] == (700.0, 700.0)  # the valid command, untouched by the rest
 
 
+def test_command_above_the_limit_force_takes_more_substeps_and_equals_offline(sim):
+    """5000 N (accepted: max_actuation_force_n) on a step limit computed for the profile's
+    1300 N: the node re-picks its substeps instead of refusing, says so in /diagnostics,
+    and the stream equals the offline stepper given the same commands."""
+    step(sim, steps=6400)  # 0.25 s: impacting
+    assert sim.next_diagnostics()["substeps_per_sample"] == "1"
+    command_and_sync(sim, 5000.0, 5000.0)
+    step(sim, steps=2560)
+    diag = sim.next_diagnostics()
+    assert (diag["substeps_per_sample"], diag["step_limit_force_n"]) == ("3", "5000")
+    assert float(diag["physics_step_s"]) == pytest.approx(DT / 3, rel=1e-12)
+    assert float(diag["sample_rate_hz"]) == 25_600.0
+    assert_stream_equals(sim, offline([(6400, None, None), (2560, (5000.0, 5000.0), None)]))
+    assert sim.reset().success  # back to the substeps of the profile's peak
+    assert sim.next_diagnostics()["substeps_per_sample"] == "1"
+
+
+def test_a_defect_that_needs_a_smaller_step_is_accepted_at_run_time(sim):
+    """The leading pivot 3 % inward (case 2: limit 9 us) while the brake is impacting:
+    accepted, 5 substeps per sample from then on, reported; the stream equals offline."""
+    try:
+        step(sim, steps=6400)  # 0.25 s: impacting
+        result = sim.set_parameter("defects.left.pivot_radius_change_pct", -3.0)
+        assert result.successful, result.reason
+        step(sim, steps=2560)
+        diag = sim.next_diagnostics()
+        assert diag["substeps_per_sample"] == "5"
+        assert float(diag["step_limit_s"]) == pytest.approx(9e-6, rel=0.01)
+        assert float(diag["physics_step_s"]) == pytest.approx(DT / 5, rel=1e-12)
+        assert float(diag["sample_rate_hz"]) == 25_600.0
+        scenario = load_scenario("symmetric")
+        inward = dataclasses.replace(
+            scenario.setup, defects=Defects(left=ShoeDefect(pivot_radius_change_pct=-3.0))
+        )
+        assert_stream_equals(sim, offline([(6400, None, None), (2560, None, inward)]))
+    finally:
+        sim.set_parameter("defects.left.pivot_radius_change_pct", 0.0)
+
+
 def test_defect_change_at_run_time_changes_the_shoe_and_the_ground_truth(sim):
     try:
-        step(sim, steps=25_000)  # 1 s: both shoes on the drum
+        step(sim, steps=25_600)  # 1 s: both shoes on the drum
         n_truth = len(sim.rx.defects)
         result = sim.set_parameter("defects.left.pivot_radius_change_pct", 3.0)
         assert result.successful, result.reason
@@ -238,19 +283,19 @@ def test_defect_change_at_run_time_changes_the_shoe_and_the_ground_truth(sim):
         changed = dataclasses.replace(
             scenario.setup, defects=Defects(left=ShoeDefect(pivot_radius_change_pct=3.0))
         )
-        expected = offline([(25_000, None, None), (5000, None, changed)])
+        expected = offline([(25_600, None, None), (5000, None, changed)])
         assert_stream_equals(sim, expected)
-        baseline = offline([(30_000, None, None)])
+        baseline = offline([(30_600, None, None)])
         got = sim.chunk_arrays()
         left_before = np.hypot(
-            baseline[25_000:, COL["left_pivot_fx_n"]], baseline[25_000:, COL["left_pivot_fy_n"]]
+            baseline[25_600:, COL["left_pivot_fx_n"]], baseline[25_600:, COL["left_pivot_fy_n"]]
         )
-        left_change = np.abs(got["left_magnitude_n"][25_000:] - left_before)
+        left_change = np.abs(got["left_magnitude_n"][25_600:] - left_before)
         assert left_change.mean() > 100.0  # newtons: the left shoe's pivot force moved
         right_before = np.hypot(
-            baseline[25_000:, COL["right_pivot_fx_n"]], baseline[25_000:, COL["right_pivot_fy_n"]]
+            baseline[25_600:, COL["right_pivot_fx_n"]], baseline[25_600:, COL["right_pivot_fy_n"]]
         )
-        np.testing.assert_allclose(got["right_magnitude_n"][25_000:], right_before, rtol=1e-6)
+        np.testing.assert_allclose(got["right_magnitude_n"][25_600:], right_before, rtol=1e-6)
     finally:
         sim.set_parameter("defects.left.pivot_radius_change_pct", 0.0)
 
@@ -290,7 +335,7 @@ def test_every_kind_of_bad_parameter_is_refused_and_counted(sim):
         sim.set_parameter("friction.coefficient", -0.1),
         sim.set_parameter("friction.coefficient", "steel"),
         sim.set_parameter("defects.right.pivot_radius_change_pct", 20.0),
-        sim.set_parameter("contact.damping_n_s_per_m", 1e6),
+        sim.set_parameter("driveline.drum_inertia_kg_m2", 1e-6),  # a 2 ns step limit
         sim.set_parameter("scenario", "case1_left_pivot_out"),
         sim.set_parameter("on_command_timeout", "stop"),
         sim.set_parameter("duration_s", 0.0),
@@ -300,6 +345,7 @@ def test_every_kind_of_bad_parameter_is_refused_and_counted(sim):
     ]
     assert not any(r.successful for r in refusals)
     assert "allowed a sum of exactly 1" in refusals[-1].reason
+    assert "smallest step taken" in refusals[3].reason  # pathological, not a headroom refusal
     assert 'allowed "hold", "ramp_to_zero", "profile"' in refusals[5].reason
     refusals.append(sim.set_parameter("no.such.parameter", 1.0))
     assert not refusals[-1].successful
@@ -315,20 +361,21 @@ def test_every_kind_of_bad_parameter_is_refused_and_counted(sim):
 
 def test_chunk_rate_state_rate_and_clock_are_configurable(sim):
     try:
-        assert (
-            sim.set_parameters(
-                {"chunk_rate_hz": 1000.0, "state_rate_hz": 100.0, "publish_clock": False}
-            )
-            and sim.next_diagnostics()
+        results = sim.set_parameters(
+            {"chunk_rate_hz": 800.0, "state_rate_hz": 100.0, "publish_clock": False}
         )
+        assert all(r.successful for r in results), [r.reason for r in results]
+        assert sim.next_diagnostics()
         clocks = len(sim.rx.clocks)
-        step(sim, steps=500, state_stride=250)
-        assert [len(c.left_fx_n) for c in sim.rx.chunks] == [25] * 20
-        assert [s.sample_index for s in sim.rx.states] == [0, 250]
+        step(sim, steps=512, state_stride=256)
+        assert [len(c.left_fx_n) for c in sim.rx.chunks] == [32] * 16
+        assert [s.sample_index for s in sim.rx.states] == [0, 256]
         sim.spin_for(0.2)
         assert len(sim.rx.clocks) == clocks
     finally:
-        sim.set_parameters({"chunk_rate_hz": 100.0, "state_rate_hz": 1000.0, "publish_clock": True})
+        sim.set_parameters(
+            {"chunk_rate_hz": 100.0, "state_rate_hz": STATE_RATE_HZ, "publish_clock": True}
+        )
 
 
 def test_step_service_refusals(sim):

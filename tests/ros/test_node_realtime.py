@@ -4,7 +4,8 @@ One node process runs the symmetric scenario for 3 s of simulated time at real-t
 factor 1 while this module's client (its own rclpy context, on a ROS domain of its own)
 checks the interfaces, sends bad commands and bad parameters, and records everything.
 The recorded stream must be complete, stamped with simulated time, and equal, sample for
-sample, to the offline FixedStepStepper run: the refused inputs changed nothing.
+sample, to the offline run of the same stepper (``stepper_for``): the refused inputs
+changed nothing.
 """
 
 from __future__ import annotations
@@ -39,19 +40,20 @@ from brake_sim_ros.ros.harness import (  # noqa: E402
     ros_environment,
 )
 from brake_sim_ros.scenarios import load_scenario  # noqa: E402
-from brake_sim_ros.solvers.fixed_step import FixedStepStepper  # noqa: E402
+from brake_sim_ros.solvers.build import stepper_for  # noqa: E402
 
 DOMAIN = domain_id_for(1)
 RUN_S = 3.0
-DT = 4e-5
-N_SAMPLES = round(RUN_S / DT)
+PERIOD = 1 / 25_600  # the scenario's sample rate
+N_SAMPLES = round(RUN_S / PERIOD)
+CHUNK = 256  # 100 chunks per simulated second
 LOSSLESS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
 BAD_COMMANDS = [(math.nan, 0.0), (0.0, math.inf), (-math.inf, 0.0), (-1.0, 0.0), (0.0, 1e9)]
 BAD_PARAMETERS = {
     "friction.coefficient": 1.5,  # outside the descriptor's range
     "contact.damping_n_s_per_m": "high",  # wrong type
     "defects.left.initial_angle_deg": 10.0,  # lining inside the drum (core)
-    "friction.smoothing_speed_m_s": 1e-4,  # step too large for the new parameters (core)
+    "driveline.drum_inertia_kg_m2": 1e-6,  # a step limit of 2 ns: pathological (core)
     "max_actuation_force_n": 100.0,  # fixed at start-up
 }
 
@@ -138,8 +140,8 @@ def test_chunks_are_contiguous_and_complete(run):
     for a, b in itertools.pairwise(chunks):
         assert b.first_sample_index == a.first_sample_index + len(a.left_fx_n)
     assert sum(len(c.left_fx_n) for c in chunks) == N_SAMPLES
-    assert {len(c.left_fx_n) for c in chunks} == {250}  # 100 chunks per simulated second
-    assert {c.sample_rate_hz for c in chunks} == {25_000.0}
+    assert {len(c.left_fx_n) for c in chunks} == {CHUNK}
+    assert {c.sample_rate_hz for c in chunks} == {25_600.0}
     for c in chunks:
         for name in conversion.PIVOT_CHUNK_ARRAYS:
             assert np.isfinite(np.asarray(getattr(c, name))).all()
@@ -152,12 +154,15 @@ def test_stamps_are_simulated_time(run):
     def ns(stamp):
         return stamp.sec * 1_000_000_000 + stamp.nanosec
 
+    def at(index):  # every stamp is its sample's time: index x 39062.5 ns, to the ns
+        return conversion.stamp_ns(index, PERIOD)
+
     for c in rx.chunks:
-        assert ns(c.header.stamp) == c.first_sample_index * 40_000
+        assert ns(c.header.stamp) == at(c.first_sample_index) == c.first_sample_index // 256 * 10**7
         assert c.header.frame_id == "brake_backing_plate"
-    assert [s.sample_index for s in rx.states] == list(range(0, N_SAMPLES, 250))
+    assert [s.sample_index for s in rx.states] == list(range(0, N_SAMPLES, CHUNK))
     for s, j in zip(rx.states, rx.joints, strict=True):
-        assert ns(s.header.stamp) == s.sample_index * 40_000 == ns(j.header.stamp)
+        assert ns(s.header.stamp) == at(s.sample_index) == ns(j.header.stamp)
         assert s.header.frame_id == j.header.frame_id == "brake_backing_plate"
         assert list(j.name) == ["flywheel", "drum", "left_shoe", "right_shoe"]
         assert list(j.position) == [
@@ -167,21 +172,19 @@ def test_stamps_are_simulated_time(run):
             s.right_shoe_angle_rad,
         ]
     clocks = [ns(c.clock) for c in rx.clocks]
-    assert clocks == sorted(clocks) and clocks[-1] == N_SAMPLES * 40_000
+    assert clocks == sorted(clocks) and clocks[-1] == at(N_SAMPLES) == RUN_S * 10**9
     for array in rx.diagnostics + rx.defects:
-        assert ns(array.header.stamp) <= N_SAMPLES * 40_000  # not the wall clock's epoch
+        assert ns(array.header.stamp) <= at(N_SAMPLES)  # not the wall clock's epoch
 
 
 def test_the_stream_equals_the_offline_stepper(run):
     """Sample for sample: the bad commands and parameters changed nothing."""
     client, _ = run
-    scenario = load_scenario("symmetric")
-    stepper = FixedStepStepper(
-        scenario.setup,
-        scenario.solver.dt_s,
-        max_actuation_n=float(client.final["max_actuation_force_n"]),
-    )
+    stepper = stepper_for(load_scenario("symmetric"))
     block = stepper.advance(N_SAMPLES)
+    diag = client.final
+    assert float(diag["physics_step_s"]) == stepper.physics_step_s == PERIOD
+    assert (diag["substeps_per_sample"], diag["step_limit_force_n"]) == ("1", "1300")
     got = client.chunk_arrays()
     np.testing.assert_array_equal(got["index"], np.arange(N_SAMPLES))
     for side in ("left", "right"):
@@ -190,10 +193,10 @@ def test_the_stream_equals_the_offline_stepper(run):
         np.testing.assert_array_equal(got[f"{side}_magnitude_n"], block.pivot_force_magnitude(side))
     states = client.rx.states
     np.testing.assert_array_equal(
-        [s.left_normal_force_n for s in states], block["left_normal_force_n"][::250]
+        [s.left_normal_force_n for s in states], block["left_normal_force_n"][::CHUNK]
     )
     np.testing.assert_array_equal(
-        [s.drum_speed_rad_s for s in states], block["drum_speed_rad_s"][::250]
+        [s.drum_speed_rad_s for s in states], block["drum_speed_rad_s"][::CHUNK]
     )
 
 
@@ -209,7 +212,7 @@ def test_bad_commands_and_parameters_are_refused_and_counted(run):
     assert "out of range" in reasons["friction.coefficient"]
     assert "Wrong parameter type" in reasons["contact.damping_n_s_per_m"]
     assert "inside the drum" in reasons["defects.left.initial_angle_deg"]
-    assert "per step" in reasons["friction.smoothing_speed_m_s"]
+    assert "smallest step taken" in reasons["driveline.drum_inertia_kg_m2"]
     assert "fixed at start-up" in reasons["max_actuation_force_n"]
     values = client.get_parameters(list(BAD_PARAMETERS))
     assert values["friction.coefficient"] == 0.285
@@ -249,7 +252,7 @@ def test_exit_at_end_prints_a_summary_and_exits_0(tmp_path):
         node.stop()
     out = node.output()
     assert "ended at simulated time 0.5000 s" in out
-    assert "published 12500 samples in 50 chunks" in out
+    assert "published 12800 samples in 50 chunks" in out
     assert "commands accepted 0, rejected 0" in out
 
 
@@ -280,14 +283,44 @@ def test_brake_sim_node_command_runs_a_scenario_to_the_end():
     assert "case1_left_pivot_out" in out and "ended at simulated time 0.3000 s" in out
 
 
+def test_a_defect_and_a_force_that_need_small_steps_are_not_refused():
+    """Case 2 (limit 9 us) with commands up to 20 kN allowed: the node starts, at the
+    scenario's sample rate, and says which physics step it takes."""
+    proc = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "brake_sim_ros.ros.node",
+            "--scenario",
+            "case2_left_pivot_in",
+            "--duration",
+            "0.05",
+            "--exit-at-end",
+            "--ros-args",
+            "-p",
+            "real_time_factor:=0.0",
+            "-p",
+            "max_actuation_force_n:=20000.0",
+        ],
+        env=ros_environment(domain_id_for(6)),
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    out = proc.stdout + proc.stderr
+    assert proc.returncode == 0, out
+    assert "25600 Hz samples, physics step 7.813e-06 s (5 per sample" in out
+    assert "published 1280 samples" in out
+
+
 @pytest.mark.parametrize(
     ("args", "message"),
     [
-        (["--ros-args", "-p", "max_actuation_force_n:=5000.0"], "exceeds the limit"),
+        (["--ros-args", "-p", "driveline.drum_inertia_kg_m2:=1e-06"], "smallest step taken"),
         (["--scenario", "no_such_scenario"], "unknown scenario 'no_such_scenario'"),
         (["--ros-args", "-p", "defects.left.initial_angle_deg:=10.0"], "inside the drum"),
-        # 25 kHz at 1000x real time: 10 us of wall time per 250-step chunk, far below the
-        # stepper's cost on any machine
+        # 25.6 kHz at 1000x real time: 10 us of wall time per 256-sample chunk, far below
+        # the stepper's cost on any machine
         (["--ros-args", "-p", "real_time_factor:=1000.0"], "cannot keep real time"),
     ],
 )

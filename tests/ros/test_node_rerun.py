@@ -16,12 +16,13 @@ pytestmark = [
 pytest.importorskip("rclpy", reason="rclpy not installed (run scripts/setup.sh)")
 pytest.importorskip("rerun")
 
+from brake_sim_ros.ros import conversion  # noqa: E402
 from brake_sim_ros.ros.harness import NodeProcess, domain_id_for  # noqa: E402
 from brake_sim_ros.viz import entities as E  # noqa: E402
 
 RUN_S = 0.5
-DT_NS = 40_000
-N_SAMPLES = round(RUN_S * 1e9 / DT_NS)
+SAMPLE_RATE_HZ = 25_600.0
+N_SAMPLES = round(RUN_S * SAMPLE_RATE_HZ)
 
 
 def test_node_rerun_save(tmp_path):
@@ -53,7 +54,8 @@ def test_node_rerun_save(tmp_path):
     c = read(rrd)
     for side in E.SIDES:
         t = c.times(E.pivot_path(side, "magnitude"))
-        np.testing.assert_array_equal(t, np.arange(N_SAMPLES) * DT_NS)
+        expected = [conversion.stamp_ns(k, 1 / SAMPLE_RATE_HZ) for k in range(N_SAMPLES)]
+        np.testing.assert_array_equal(t, expected)
     assert c.times(f"{E.SPEED}/drum").size == 50
     # the ground truth and drawing follow the model in force, --ros-args override included
     truth = c.texts[f"{E.DEFECTS}/ground_truth"][0]

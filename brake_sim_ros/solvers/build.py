@@ -1,0 +1,35 @@
+"""The one place a fixed-step stepper is built from a scenario.
+
+The ROS node, the offline stream (MCAP, Rerun), ``brake-sim simulate``, :func:`run_scenario`
+and the benchmarks all call :func:`stepper_for`, so they run the same scheme at the same
+sample rate with the same substeps, and give the same numbers for the same scenario.
+"""
+
+from __future__ import annotations
+
+from brake_sim_ros.model.trajectory import BrakeSetup
+from brake_sim_ros.scenarios.loader import Scenario
+from brake_sim_ros.solvers.fixed_step import FixedStepStepper
+
+
+def stepper_for(scenario: Scenario, *, setup: BrakeSetup | None = None) -> FixedStepStepper:
+    """The stepper for ``scenario``: its sample rate, its solver's fixed-step scheme and
+    largest step (preset, or explicit ``method`` / ``max_step_s``), and the step limit of
+    its setup at its actuation profile's peak force.
+
+    Args:
+        scenario: the scenario (apply command-line overrides first, with
+            :meth:`Scenario.with_solver`).
+        setup: the setup to step instead of the scenario's own (the node's, with ROS
+            parameter overrides; a fidelity level's reduced model).
+
+    Raises:
+        StepSizeError: the step limit of the setup is pathological (below
+            :data:`~brake_sim_ros.solvers.fixed_step.MIN_PHYSICS_STEP_S`).
+    """
+    return FixedStepStepper(
+        scenario.setup if setup is None else setup,
+        scenario.sample_period_s,
+        scheme=scenario.solver.fixed_step_scheme,
+        max_step_s=scenario.solver.max_step_s,
+    )
