@@ -351,8 +351,8 @@ class FixedStepStepper:
             out,
             self._scheme_id,
         )
-        # the kernel's time is step x physics step: state it on the sample grid exactly
-        out[:written, 0] = (first + record_every * np.arange(written)) * self.sample_period_s
+        if sub > 1:  # the kernel's time is step x physics step: state it on the sample grid
+            out[:written, 0] = (first + record_every * np.arange(written)) * self.sample_period_s
         if self._kstate[L.K_STATUS]:
             self.status = StepperStatus.FAILED
             t_fail = (first + written * record_every) * self.sample_period_s

@@ -7,13 +7,15 @@ within both the preset's largest step and the step limit of the current paramete
 (:mod:`brake_sim_ros.solvers.fixed_step`). Where the limit is the smaller, the step is
 smaller than the preset's and the result more accurate than its bounds.
 
-The error bounds are the guarantee for the symmetric scenario (7.5 s event) at the default
-sample rate against the DOP853 reference: the values measured by ``brake-sim bench
-accuracy`` at the preset's largest step (``docs/work_precision.md``, all runs
-deterministic), rounded up with a margin of 1.4x to 50x. ``tests/test_presets.py`` runs
-every preset at the default sample rate against the reference and checks these bounds. The
-real-time factor is measured at the default sample rate on one core of the project's 2-core
-machine while shared with other jobs; cost is checked by the benchmark, not by a test.
+The error bounds are the guarantee for the symmetric scenario (7.5 s event) against the
+DOP853 reference: the values ``brake-sim bench accuracy`` measured at the preset's largest
+step with one sample per step (``docs/work_precision.md``, all runs deterministic), rounded
+up with a margin of 1.4x to 50x. ``tests/test_presets.py`` runs every preset at the default
+sample rate, 25.6 kHz, against the reference sampled on the same grid, and checks these
+bounds (the errors measured there are beside each bound). The real-time factor is measured
+at the default sample rate (``brake-sim bench core``, best of 3) on one core of the
+project's 2-core machine while shared with other jobs; cost is checked by the benchmark,
+not by a test.
 """
 
 from __future__ import annotations
@@ -61,37 +63,40 @@ PRESETS: dict[str, Preset] = {
             name="fast",
             scheme="semi-implicit-euler",
             max_step_s=4e-5,
-            max_err_first_peak=0.01,  # measured 0.39 %
-            max_err_period=0.02,  # measured 1.46 %
-            max_err_stop_time=1e-5,  # measured 5.4e-7
-            max_err_contact_force=1e-6,  # measured 3e-11
+            # measured: study at 40 us / at 25.6 kHz (one 39.1 us step per sample)
+            max_err_first_peak=0.01,  # 0.39 % / 0.086 %
+            max_err_period=0.02,  # 1.46 % / 1.2 %
+            max_err_stop_time=1e-5,  # 5.4e-7 / 5.2e-7
+            max_err_contact_force=1e-6,  # 3e-11 / 1.5e-11
             max_impact_count_diff=0,
-            measured_x_real_time=194.0,
+            measured_x_real_time=155.0,
             purpose="many long runs where the impact period may be off by up to 2 %",
         ),
         Preset(
             name="balanced",
             scheme="rk4-located",
             max_step_s=6e-5,
-            max_err_first_peak=1e-3,  # measured 0.019 %
-            max_err_period=5e-4,  # measured 0.0052 %
-            max_err_stop_time=1e-6,  # measured 6.2e-10
-            max_err_contact_force=1e-6,  # measured 3e-11
+            # measured: study at 60 us / at 25.6 kHz (one 39.1 us step per sample)
+            max_err_first_peak=1e-3,  # 0.019 % / 3.7e-6
+            max_err_period=5e-4,  # 0.0052 % / 7.4e-6
+            max_err_stop_time=1e-6,  # 6.2e-10 / 7.6e-10
+            max_err_contact_force=1e-6,  # 3e-11 / 1.5e-11
             max_impact_count_diff=0,
-            measured_x_real_time=102.0,
-            purpose="the default: impact and stop figures well inside 0.1 % at 100x real time",
+            measured_x_real_time=52.0,
+            purpose="the default: impact and stop figures well inside 0.1 % at 50x real time",
         ),
         Preset(
             name="accurate",
             scheme="rk4-located",
             max_step_s=2e-5,
-            max_err_first_peak=1e-5,  # measured 9.9e-7
-            max_err_period=1e-5,  # measured 1.6e-6
-            max_err_stop_time=1e-6,  # measured 6.1e-10
-            max_err_contact_force=1e-6,  # measured 3e-11
+            # measured: study at 20 us / at 25.6 kHz (two 19.5 us steps per sample)
+            max_err_first_peak=1e-5,  # 9.9e-7 / 2.8e-7
+            max_err_period=1e-5,  # 1.6e-6 / 5.8e-7
+            max_err_stop_time=1e-6,  # 6.1e-10 / 5.7e-10
+            max_err_contact_force=1e-6,  # 3e-11 / 1.5e-11
             max_impact_count_diff=0,
-            measured_x_real_time=34.0,
-            purpose="reference-grade figures (1e-5) at 50 kHz output, still faster than real time",
+            measured_x_real_time=29.0,
+            purpose="reference-grade figures (1e-5), still faster than real time",
         ),
     )
 }
