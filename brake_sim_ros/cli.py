@@ -120,7 +120,7 @@ def simulate_summary(result: RunResult, scenario: Scenario) -> str:
         f" {len(result.samples.columns)} columns, {result.memory_bytes / 1e6:.2f} MB",
     ]
     if result.step_note:
-        lines.append(f"  preset {scenario.solver.preset}: {result.step_note}")
+        lines.append(f"preset {scenario.solver.preset}: {result.step_note}")
     for side in ("left", "right"):
         if not any(c.startswith(f"{side}_") for c in result.samples.columns):
             lines.append(f"  {side:5s}: not asked for")

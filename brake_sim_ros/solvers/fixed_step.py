@@ -352,7 +352,9 @@ class FixedStepStepper:
             self._scheme_id,
         )
         if sub > 1:  # the kernel's time is step x physics step: state it on the sample grid
-            out[:written, 0] = (first + record_every * np.arange(written)) * self.sample_period_s
+            out[:written, L.COL["time_s"]] = (
+                first + record_every * np.arange(written)
+            ) * self.sample_period_s
         if self._kstate[L.K_STATUS]:
             self.status = StepperStatus.FAILED
             t_fail = (first + written * record_every) * self.sample_period_s

@@ -66,8 +66,8 @@ PRESETS: dict[str, Preset] = {
             # measured: study at 40 us / at 25.6 kHz (one 39.1 us step per sample)
             max_err_first_peak=0.01,  # 0.39 % / 0.086 %
             max_err_period=0.02,  # 1.46 % / 1.2 %
-            max_err_stop_time=1e-5,  # 5.4e-7 / 5.2e-7
-            max_err_contact_force=1e-6,  # 3e-11 / 1.5e-11
+            max_err_stop_time=1e-5,  # 5.4e-7 / 5.1e-7
+            max_err_contact_force=1e-6,  # 3e-11 / 1e-12
             max_impact_count_diff=0,
             measured_x_real_time=155.0,
             purpose="many long runs where the impact period may be off by up to 2 %",
@@ -79,8 +79,8 @@ PRESETS: dict[str, Preset] = {
             # measured: study at 60 us / at 25.6 kHz (one 39.1 us step per sample)
             max_err_first_peak=1e-3,  # 0.019 % / 3.7e-6
             max_err_period=5e-4,  # 0.0052 % / 7.4e-6
-            max_err_stop_time=1e-6,  # 6.2e-10 / 7.6e-10
-            max_err_contact_force=1e-6,  # 3e-11 / 1.5e-11
+            max_err_stop_time=1e-6,  # 6.2e-10 / 4.8e-9
+            max_err_contact_force=1e-6,  # 3e-11 / 1e-12
             max_impact_count_diff=0,
             measured_x_real_time=52.0,
             purpose="the default: impact and stop figures well inside 0.1 % at 50x real time",
@@ -92,8 +92,8 @@ PRESETS: dict[str, Preset] = {
             # measured: study at 20 us / at 25.6 kHz (two 19.5 us steps per sample)
             max_err_first_peak=1e-5,  # 9.9e-7 / 2.8e-7
             max_err_period=1e-5,  # 1.6e-6 / 5.8e-7
-            max_err_stop_time=1e-6,  # 6.1e-10 / 5.7e-10
-            max_err_contact_force=1e-6,  # 3e-11 / 1.5e-11
+            max_err_stop_time=1e-6,  # 6.1e-10 / 5.0e-9
+            max_err_contact_force=1e-6,  # 3e-11 / 1e-12
             max_impact_count_diff=0,
             measured_x_real_time=29.0,
             purpose="reference-grade figures (1e-5), still faster than real time",
