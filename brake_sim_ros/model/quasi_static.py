@@ -109,7 +109,8 @@ SATURATED_SLIP = 20.0
 # centre m, the 14 shoe_eval outputs]. Indexed in 2-D, without row views: a view costs a
 # reference count per call, more than the arithmetic it serves.
 C_VALID, C_FE, C_THETA, C_DIST, C_OUT = 0, 1, 2, 3, 4
-N_CACHE = C_OUT + contact.N_EVAL
+C_SHARE = C_OUT + contact.N_EVAL  # row 0 only: last static-friction share, warm start
+N_CACHE = C_SHARE + 1
 # Static-friction share while the drum sticks: fixed-point iteration between the shoes'
 # balances and the share, to this tolerance (the map contracts by about mu h / d < 0.5).
 SHARE_TOL = 1e-13
@@ -167,24 +168,44 @@ def _balance(p, y, fel, fer, stuck, touch, shoes, cache):
                 return st
         return STATUS_OK
     coupling = _coupling(p, y, 0.0)
-    share = 0.0
+    # Steffensen (Aitken-accelerated) iteration of share -> share(capacity(share)), warm
+    # started from the last solution: the coupling torque changes little between stages.
+    share = cache[0, C_SHARE]
     for _ in range(MAX_SHARE_ITERATIONS):
-        for i in range(2):
-            st = _solve_shoe(p, i, fel if i == 0 else fer, 0.0, 1, share, touch, shoes, cache)
-            if st != STATUS_OK:
-                return st
-        capacity = standstill.static_capacity(
-            p,
-            cache[0, C_OUT + contact.E_FN],
-            cache[0, C_DIST],
-            cache[1, C_OUT + contact.E_FN],
-            cache[1, C_DIST],
-        )
-        new = standstill.stuck_share(coupling, capacity)
-        if abs(new - share) <= SHARE_TOL:
+        s1, st = _share_map(p, coupling, share, fel, fer, touch, shoes, cache)
+        if st != STATUS_OK:
+            return st
+        if abs(s1 - share) <= SHARE_TOL:
+            cache[0, C_SHARE] = s1
             return STATUS_OK
-        share = new
+        s2, st = _share_map(p, coupling, s1, fel, fer, touch, shoes, cache)
+        if st != STATUS_OK:
+            return st
+        if abs(s2 - s1) <= SHARE_TOL:
+            cache[0, C_SHARE] = s2
+            return STATUS_OK
+        denom = s2 - 2.0 * s1 + share
+        share = s2 if denom == 0.0 else share - (s1 - share) ** 2 / denom
+        share = min(max(share, -1.0), 1.0)
     return STATUS_NO_CONVERGENCE
+
+
+@njit(cache=True)
+def _share_map(p, coupling, share, fel, fer, touch, shoes, cache):
+    """Balance both shoes with the static share ``share``; returns (the share their normal
+    forces imply, status)."""
+    for i in range(2):
+        st = _solve_shoe(p, i, fel if i == 0 else fer, 0.0, 1, share, touch, shoes, cache)
+        if st != STATUS_OK:
+            return share, st
+    capacity = standstill.static_capacity(
+        p,
+        cache[0, C_OUT + contact.E_FN],
+        cache[0, C_DIST],
+        cache[1, C_OUT + contact.E_FN],
+        cache[1, C_DIST],
+    )
+    return standstill.stuck_share(coupling, capacity), STATUS_OK
 
 
 @njit(cache=True, inline="always")
@@ -301,17 +322,23 @@ def advance(y, step0, h, n_steps, p, tl, fl, tr, fr, touch, shoes, cache, kstate
                 for j in range(n):
                     tmp[j] = y[j] if stage == 0 else y[j] + stage_c[stage] * hs * ks[stage - 1, j]
                 # --- rotor right-hand side at (ts, tmp) ---
-                fe_l = gl * kernel._pwl(ts, tl, fl)
-                fe_r = gr * kernel._pwl(ts, tr, fr)
-                st = _balance(p, tmp, fe_l, fe_r, stuck, touch, shoes, cache)
-                if st != STATUS_OK:
-                    kstate[1] = st
-                    return k + 1
                 wd = 0.0 if stuck else tmp[R_DRUM_SPEED]
                 torque = 0.0
                 power = 0.0
                 damper_rate = 0.0  # d(friction torque)/d(drum speed), N m s
+                if not stuck:
+                    # (a held drum's rotor does not depend on the shoes: the flywheel
+                    # turns on the coupling alone; the shoes are balanced for the samples
+                    # and the breakaway check only)
+                    fe_l = gl * kernel._pwl(ts, tl, fl)
+                    fe_r = gr * kernel._pwl(ts, tr, fr)
+                    st = _balance(p, tmp, fe_l, fe_r, 0, touch, shoes, cache)
+                    if st != STATUS_OK:
+                        kstate[1] = st
+                        return k + 1
                 for i in range(2):
+                    if stuck:
+                        break
                     torque += cache[i, C_OUT + contact.E_DRUM_TORQUE]
                     power += cache[i, C_OUT + contact.E_FRICTION_POWER]
                     fn = cache[i, C_OUT + contact.E_FN]
@@ -349,6 +376,21 @@ def advance(y, step0, h, n_steps, p, tl, fl, tr, fr, touch, shoes, cache, kstate
                 y[j] += hs / 6.0 * (ks[0, j] + 2.0 * ks[1, j] + 2.0 * ks[2, j] + ks[3, j])
             kstate[2] += 1
             # the stick/slip rule of the full model, on the balanced shoes
+            if stuck:
+                t_new = t_end if last else t + hs
+                st = _balance(
+                    p,
+                    y,
+                    gl * kernel._pwl(t_new, tl, fl),
+                    gr * kernel._pwl(t_new, tr, fr),
+                    1,
+                    touch,
+                    shoes,
+                    cache,
+                )
+                if st != STATUS_OK:
+                    kstate[1] = st
+                    return k + 1
             _full_state(y, shoes, full)
             if stuck:
                 if standstill.slips(p, full):
