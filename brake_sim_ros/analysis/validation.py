@@ -549,7 +549,7 @@ def notes(fig: dict, params: BrakeParameters) -> str:
   {pub["period_change_pct"]:+.1f} %. In this model the shoe sits between two abutments, the
   pin at its heel and the piston at its tip (model/assembly.py, `place_shoe`): a pin shift
   moves the lining only by turning the shoe about its tip, which closes the running
-  clearance at the first contact by `pct/100 D a / L` to first order, with `L` the tip-pin
+  clearance at the first contact by (pct/100) D a / L to first order, with `L` the tip-pin
   distance ({1e3 * geo.chord_m:.0f} mm), `D` the distance of the tip-pin line from the drum
   centre ({1e3 * geo.chord_offset_m:.0f} mm) and `a` the tip's distance from the contact
   normal ({1e3 * geo.tip_arm_m:.0f} mm): {1e3 * geo.closure_m:.2f} mm at 3 %, {100 * fraction:.0f} %
@@ -558,7 +558,7 @@ def notes(fig: dict, params: BrakeParameters) -> str:
   {c1["first_impact_actuation_n"]:.1f} N and the period {c1["period_change_pct"]:+.1f} %; the
   peak falls {c1["peak_fr_change_pct"]:+.1f} % ({speed_only:+.0f} % from the impact speed, the
   rest from the moment arms and the inertia about the moved pin). To close
-  {100 * closure_needed:.0f} % of the clearance, `D a / (L P)` (`P` the pin radius) would
+  {100 * closure_needed:.0f} % of the clearance, D a / (L P) (`P` the pin radius) would
   have to be about {needed_factor:.2f} instead of {factor:.2f}. A pin at the bottom of the
   drum and a tip at its top make `D` small by construction: over every layout the
   calibration searched (pins at 245-265 deg and 120-160 mm, tips up to 45 mm from the axis
