@@ -589,9 +589,16 @@ def notes(fig: dict, params: BrakeParameters) -> str:
 * **Cases 2, 3 and 4 (predictions).** An inward pin turns the shoe's heel away from the drum:
   the first impact comes later and harder, the mirror image of an outward pin. The first
   contact stays mid-lining for every pivot case, so no shoe comes near self-locking. In the
-  contact regime the pin's new place changes the moment arms: the leading shoe's pivot force
-  changes by {fig["cases"]["1"]["contact_fr_change_pct"]:+.1f} % (case 1) and
-  {fig["cases"]["2"]["contact_fr_change_pct"]:+.1f} % (case 2).
+  contact regime the turned shoe presses at a slightly different point of its lining (the
+  lining is nearly concentric with the drum, so its single contact point follows the small
+  turn over a few degrees) and the pin's new place changes the moment arms: the leading
+  shoe's pivot force changes by {fig["cases"]["1"]["contact_fr_change_pct"]:+.1f} % (case 1)
+  and {fig["cases"]["2"]["contact_fr_change_pct"]:+.1f} % (case 2), monotonically. The
+  trailing shoe's changes by {fig["cases"]["3"]["contact_fr_change_pct"]:+.1f} % (case 3)
+  and {fig["cases"]["4"]["contact_fr_change_pct"]:+.1f} % (case 4): its pin force, the
+  small difference of the large actuation and contact forces, has a minimum close to the
+  healthy pin (near +1 %), so both shifts of 3 % raise it; its normal force still moves
+  monotonically.
 * **Standstill.** When the drum's sliding speed has fallen to the friction smoothing width
   and static friction can hold the coupling torque, the drum sticks; the flywheel rocks on
   the tyre and hub compliance while it is held (model/standstill.py, README "Standstill").
