@@ -232,14 +232,17 @@ def cmd_validate(args: argparse.Namespace) -> int:
         progress=lambda name: print(f"running {name}", file=sys.stderr),
     )
     passed = sum(c.passed for c in check_list)
+    limits = sum(bool(c.model_limit) for c in check_list)
     for c in check_list:
+        why = f" [beyond the model: {c.model_limit}]" if c.model_limit else ""
         print(
             f"{'ok  ' if c.passed else 'MISS'} {c.what}: published {c.published},"
-            f" model {c.model} ({c.difference})"
+            f" model {c.model} ({c.difference}){why}"
         )
     print(
-        f"{passed}/{len(check_list)} calibration checks within their bands;"
-        f" report: {out / 'report.md'}"
+        f"{passed}/{len(check_list)} checks within their bands"
+        + (f", {limits} beyond the model (see the report's notes)" if limits else "")
+        + f"; report: {out / 'report.md'}"
     )
     return 0
 

@@ -151,8 +151,9 @@ def test_defect_state_is_the_ground_truth_in_force():
         ns=1_500_000_000,
     )
     assert msg.scenario == "mine" and not msg.healthy
-    assert msg.left_pivot_radius_m == pytest.approx(0.150 * 1.03)
-    assert msg.right_pivot_radius_m == 0.150
+    nominal = BrakeParameters().shoe.pivot_radius_m
+    assert msg.left_pivot_radius_m == pytest.approx(nominal * 1.03)
+    assert msg.right_pivot_radius_m == nominal
     assert msg.left_initial_angle_rad == math.radians(-2.0)
     assert (msg.left_actuation_share, msg.right_actuation_share) == (0.55, 0.45)
     assert list(msg.active_defects) == defects.labels()

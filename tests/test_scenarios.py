@@ -87,7 +87,7 @@ def test_malformed_values_name_file_key_value_and_what_is_allowed(extra, key, fr
         ("[parameters.friction]\ncoefficient = 3.0", "coefficient=3.0 is invalid: allowed 0 to 1"),
         ("[parameters.shoe]\npivot_radius_m = 0.5", "pivot_radius_m=0.5 is invalid"),
         ("[defects.left]\ninitial_angle_deg = 2.0", "inside the drum"),
-        ("[defects.right]\npivot_radius_change_pct = 15.0", "inside the drum"),
+        ("[defects.right]\npivot_radius_change_pct = 18.0", "inside the drum"),
         ("[defects.left]\nactuation_share = 1.5", "actuation_share=1.5 is invalid"),
         (
             "[defects.left]\nactuation_share = 0.6\n[defects.right]\nactuation_share = 0.6",

@@ -32,7 +32,25 @@ class ModelOptions:
 
 @dataclass(frozen=True)
 class ShoePlacement:
-    """One shoe's resolved world geometry at its symmetric rest angle (defects applied)."""
+    """One shoe's assembled geometry at its symmetric rest angle (defects applied), in the
+    backing-plate frame (m, rad).
+
+    Attributes:
+        sign: +1 left shoe (outward = counter-clockwise), -1 right shoe (mirror image).
+        pivot_xy_m: the pin, the axis the shoe turns about in service.
+        lining_centre_xy_m, lining_radius_m, lining_mid_rad, lining_half_rad: the lining
+            arc (centre, radius, polar angle of its middle seen from the centre, half span).
+        tip_xy_m: where the piston pushes; it stays on the piston whatever the pin does.
+        actuation_dir: unit direction of the piston's push (fixed in the backing plate).
+        mass_centre_xy_m: the shoe's mass centre.
+        inertia_about_pivot_kg_m2: moment of inertia about the pin (parallel-axis theorem
+            from the nominal value, for the pin's place in the shoe's heel seat).
+        abutment_turn_rad: angle the shoe body turned about its tip abutment to follow
+            the pin, rad, in the shoe's own sense (counter-clockwise for the left shoe,
+            clockwise for the right one, as its angle).
+        heel_seat_offset_m: part of the pin's displacement along the tip-pin line, taken
+            up in the heel seat (positive: the pin moved away from the tip), m.
+    """
 
     sign: float
     pivot_xy_m: tuple[float, float]
@@ -43,30 +61,81 @@ class ShoePlacement:
     tip_xy_m: tuple[float, float]
     actuation_dir: tuple[float, float]
     mass_centre_xy_m: tuple[float, float]
+    inertia_about_pivot_kg_m2: float
+    abutment_turn_rad: float
+    heel_seat_offset_m: float
 
 
 def place_shoe(params: BrakeParameters, side: str, defect: ShoeDefect) -> ShoePlacement:
-    """Resolve a shoe's geometry. A pivot-radius defect moves the pivot radially and the
-    whole shoe with it (the shoe is carried by its pin)."""
+    """Assemble a shoe between its two abutments: the pin at the heel, the piston at the tip.
+
+    The nominal geometry (:class:`ShoeGeometry`, left shoe) has the lining concentric with
+    the drum at rest. A pivot-radius defect moves the pin radially, ``delta = pct/100 * P``.
+    A rigid shoe at rest is held by two abutments and its return spring:
+
+    * the tip rests on the wheel-cylinder piston, retracted against its stop: the piston
+      holds it along its axis, the slot in its end across it. The tip stays where it is,
+      whatever the pin does;
+    * the heel rests in its seat on the pin. The seat is open along the shoe's tip-pin
+      line, as a heel on an anchor: it holds the heel across that line and lets it slide
+      along it. (A seat closed both ways would over-constrain a rigid shoe held at its tip:
+      a pin displaced along the line would have to stretch the shoe.)
+
+    So the part of ``delta`` across the tip-pin line carries the heel with the pin: the
+    shoe body turns about the tip ``T`` by the exact angle between ``P - T`` and ``P' - T``;
+    lining, mass centre and heel follow, the tip stays on the piston. The part along the
+    line is taken up in the seat: it does not move the body, but the shoe then turns on the
+    pin at its new place ``P'`` (its moment arms and its inertia about the pin follow).
+
+    To first order a radial pin shift thus closes the running clearance at the first
+    contact by ``pct/100 * D * a / L`` (``D`` the distance of the tip-pin line from the drum
+    centre, ``a`` the tip's distance from the contact normal, ``L`` the tip-pin distance):
+    opposite shifts move the lining by equal amounts in opposite directions. A pin at the
+    bottom of the drum moves mostly along the line (``D`` small), so it turns the shoe
+    little.
+
+    The right shoe is the mirror image of the left one about the y axis, defect included.
+    """
     g = params.shoe
-    mirror = -1.0 if side == "right" else 1.0
-    px, py = g.pivot_xy_m
-    px *= mirror
     shift = defect.pivot_radius_change_pct / 100.0
-    sx, sy = shift * px, shift * py
-    start, end = g.lining_start_deg, g.lining_end_deg
-    if side == "right":
-        start, end = 180.0 - end, 180.0 - start
+    px, py = g.pivot_xy_m
+    qx, qy = px * (1.0 + shift), py * (1.0 + shift)  # the displaced pin P'
+    tx, ty = g.tip_x_m, g.tip_y_m
+    ax, ay = px - tx, py - ty  # tip -> nominal pin
+    bx, by = qx - tx, qy - ty  # tip -> displaced pin
+    turn = math.atan2(ax * by - ay * bx, ax * bx + ay * by)
+    c, s = math.cos(turn), math.sin(turn)
+
+    def body(x: float, y: float) -> tuple[float, float]:
+        """A point of the shoe body after the turn about the tip."""
+        dx, dy = x - tx, y - ty
+        return tx + c * dx - s * dy, ty + s * dx + c * dy
+
+    chord = math.hypot(ax, ay)
+    seat = (math.hypot(bx, by) - chord) if chord > 0.0 else 0.0
+    centre = body(0.0, 0.0)
+    mass_centre = body(g.mass_centre_x_m, g.mass_centre_y_m)
+    # parallel-axis theorem: the inertia about the mass centre is the shoe's own
+    arm0 = (g.mass_centre_x_m - px) ** 2 + (g.mass_centre_y_m - py) ** 2
+    arm1 = (mass_centre[0] - qx) ** 2 + (mass_centre[1] - qy) ** 2
+    inertia = g.inertia_about_pivot_kg_m2 + g.mass_kg * (arm1 - arm0)
+    mid = math.radians(0.5 * (g.lining_start_deg + g.lining_end_deg)) + turn
+    half = math.radians(0.5 * (g.lining_end_deg - g.lining_start_deg))
+    # computed for the left shoe; the right one is its mirror image about the y axis
+    m = -1.0 if side == "right" else 1.0
     return ShoePlacement(
-        sign=mirror,
-        pivot_xy_m=(px + sx, py + sy),
-        lining_centre_xy_m=(sx, sy),
+        sign=m,
+        pivot_xy_m=(m * qx, qy),
+        lining_centre_xy_m=(m * centre[0], centre[1]),
         lining_radius_m=g.drum_radius_m - g.running_clearance_m,
-        lining_mid_rad=math.radians(0.5 * (start + end)),
-        lining_half_rad=math.radians(0.5 * (end - start)),
-        tip_xy_m=(mirror * g.tip_x_m + sx, g.tip_y_m + sy),
-        actuation_dir=(-mirror, 0.0),
-        mass_centre_xy_m=(mirror * g.mass_centre_x_m + sx, g.mass_centre_y_m + sy),
+        lining_mid_rad=mid if m > 0 else math.pi - mid,
+        lining_half_rad=half,
+        tip_xy_m=(m * tx, ty),
+        actuation_dir=(-m, 0.0),
+        mass_centre_xy_m=(m * mass_centre[0], mass_centre[1]),
+        inertia_about_pivot_kg_m2=inertia,
+        abutment_turn_rad=turn,
+        heel_seat_offset_m=seat,
     )
 
 
@@ -110,7 +179,7 @@ def pack(
         p[b + L.S_ACTUATION_DIR_X], p[b + L.S_ACTUATION_DIR_Y] = s.actuation_dir
         p[b + L.S_MASS] = params.shoe.mass_kg
         p[b + L.S_MASS_CENTRE_X], p[b + L.S_MASS_CENTRE_Y] = s.mass_centre_xy_m
-        p[b + L.S_INERTIA] = params.shoe.inertia_about_pivot_kg_m2
+        p[b + L.S_INERTIA] = s.inertia_about_pivot_kg_m2
         p[b + L.S_ACTUATION_GAIN] = defect.actuation_gain
         p[b + L.S_ENABLED] = 1.0 if side in options.shoes else 0.0
         _check_shoe(params, side, defect, s, p, b)

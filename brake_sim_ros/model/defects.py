@@ -14,8 +14,11 @@ class ShoeDefect:
 
     Attributes:
         pivot_radius_change_pct: change of the pivot's distance from the drum centre, in
-            percent of the nominal radius. Positive moves the pivot, and the whole shoe
-            with it, radially outward, closer to the drum.
+            percent of the nominal radius. Positive moves the pin radially outward, closer
+            to the drum. The shoe stays on its piston at the tip: the pin carries the heel
+            across the tip-pin line, so the shoe turns about its tip (outward for a pin
+            moved outward, inward for one moved inward), and the shoe then turns on the pin
+            at its new place (see :func:`brake_sim_ros.model.assembly.place_shoe`).
         initial_angle_deg: the shoe's starting angle about its pivot, degrees. Negative
             tilts the shoe toward the drum centre, away from the drum.
         actuation_share: this shoe's share of the total actuation force (0.5 healthy).

@@ -82,7 +82,8 @@ class BrakeDrawing:
 
     Args:
         params: parameters in force (drum radius, shoe geometry).
-        defects: defects in force (a pivot-radius change moves the shoe with its pin).
+        defects: defects in force (a pivot-radius change turns the shoe about its tip:
+            :func:`brake_sim_ros.model.assembly.place_shoe`).
     """
 
     def __init__(self, params: BrakeParameters, defects: Defects) -> None:

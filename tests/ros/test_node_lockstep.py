@@ -275,7 +275,8 @@ def test_defect_change_at_run_time_changes_the_shoe_and_the_ground_truth(sim):
         sim.wait_for(lambda: len(sim.rx.defects) > n_truth, 5.0, "republished ground truth")
         truth = sim.rx.defects[-1]
         assert truth.left_pivot_radius_change_pct == 3.0 and not truth.healthy
-        assert truth.left_pivot_radius_m == pytest.approx(0.150 * 1.03)
+        nominal = load_scenario("symmetric").setup.params.shoe.pivot_radius_m
+        assert truth.left_pivot_radius_m == pytest.approx(nominal * 1.03)
         assert list(truth.active_defects) == ["left pivot radius +3.0 %"]
         assert truth.header.stamp.sec == 1 and truth.header.stamp.nanosec == 0
         step(sim, steps=5000)
