@@ -394,7 +394,7 @@ def markdown(
         )
     lines += [
         "",
-        f"Drum stop (brake locks): {sym['stop_time_s']:.3f} s.",
+        f"Vehicle stop (drum held by static friction): {sym['stop_time_s']:.3f} s.",
         "",
         "## All cases (changes of the defective shoe against the symmetric brake)",
         "",
@@ -602,6 +602,10 @@ def notes(fig: dict, params: BrakeParameters) -> str:
 * **Standstill.** When the drum's sliding speed has fallen to the friction smoothing width
   and static friction can hold the coupling torque, the drum sticks; the flywheel rocks on
   the tyre and hub compliance while it is held (model/standstill.py, README "Standstill").
+  The study's "both pivot forces become equal when the drum stops" holds where the
+  coupling torque that static friction carries is zero: the two forces swing about their
+  common value with the rocking (1.65 Hz, decaying over about 7 s with the published
+  coupling damping) and are equal at each zero of that torque (tests/test_standstill.py).
 """
     return _reflow(text)
 
