@@ -127,3 +127,10 @@ def test_unknown_scenario_and_unreadable_file(tmp_path):
         load_scenario("nope")
     with pytest.raises(ScenarioError, match="cannot read"):
         load_scenario(tmp_path / "missing.toml")
+
+
+@pytest.mark.parametrize("side", ["left", "right"])
+def test_a_shoe_defect_out_of_range_names_the_shoe(side):
+    text = f'name = "x"\n[defects.{side}]\npivot_radius_change_pct = 50.0'
+    with pytest.raises(ScenarioError, match=rf"\[defects\.{side}\].*pivot_radius_change_pct=50"):
+        parse_scenario(text)

@@ -275,8 +275,14 @@ def _defects(ctx: _Ctx, data: Any) -> Defects:
     for side, other in (("left", "right"), ("right", "left")):
         if "actuation_share" in shoes[side] and "actuation_share" not in shoes[other]:
             shoes[other]["actuation_share"] = 1.0 - shoes[side]["actuation_share"]
+    built = {}
+    for side in SIDES:  # each shoe's own checks name the shoe's table
+        try:
+            built[side] = ShoeDefect(**shoes[side])
+        except BrakeSimError as exc:
+            raise ScenarioError(f"{ctx.source}: [defects.{side}]: {exc}") from exc
     try:
-        return Defects(left=ShoeDefect(**shoes["left"]), right=ShoeDefect(**shoes["right"]))
+        return Defects(**built)
     except BrakeSimError as exc:
         raise ScenarioError(f"{ctx.source}: [defects]: {exc}") from exc
 
