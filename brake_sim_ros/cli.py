@@ -264,6 +264,10 @@ BENCHMARKS = {
         "brake_sim_ros.solvers.work_precision",
         "work-precision study of every solver and preset (table and plot)",
     ),
+    "presets": (
+        "brake_sim_ros.solvers.preset_study",
+        "each preset's errors over onset phases, against its stated bounds",
+    ),
     "node": ("brake_sim_ros.ros.benchmark", "the ROS node's real-time figures"),
     "recording": (
         "brake_sim_ros.recording.benchmark",

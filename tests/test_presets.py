@@ -15,28 +15,8 @@ from brake_sim_ros.solvers.build import stepper_for
 from brake_sim_ros.solvers.presets import DEFAULT_PRESET, PRESETS, get_preset
 from brake_sim_ros.solvers.work_precision import compare
 
-# The first-impact peak errors of `fast` (first-order scheme) and `accurate` (the sampled
-# peak's parabolic refinement) depend on where the onset falls inside a step. Measured on
-# the symmetric event against DOP853 at rtol 1e-11, with the ramp's start moved by 0, 8, 16,
-# 24 and 32 us: fast 2.9e-2, 1.8e-2, 7.9e-3, 7.1e-4, 7.8e-3; accurate 1.0e-5, 1.2e-5,
-# 2.7e-6, 1.2e-5, 2.9e-6. The geometry before issue 10 gave fast 3.9e-3, 3.3e-2, 2.1e-2,
-# 1.1e-2, 3.0e-3 and accurate 9.9e-7, 1.1e-5, 5.5e-6, 4.3e-6, 1.3e-5: its stated bounds
-# (1e-2 and 1e-5, solvers/presets.py) were the lucky phase of the old calibration and hold
-# for neither geometry; they are to be re-derived in solvers/presets.py.
-_PHASE_LUCK = pytest.mark.xfail(
-    strict=True,
-    reason="first-peak bound of this preset holds only for a lucky onset phase (see above):"
-    " fast 2.9e-2 > 1e-2, accurate 1.03e-5 > 1e-5 on the recalibrated symmetric event",
-)
 
-
-@pytest.mark.parametrize(
-    "name",
-    [
-        pytest.param(n, marks=_PHASE_LUCK) if n in ("fast", "accurate") else n
-        for n in sorted(PRESETS)
-    ],
-)
+@pytest.mark.parametrize("name", sorted(PRESETS))
 def test_preset_meets_its_stated_error_bounds(name, symmetric_reference):
     preset = PRESETS[name]
     scenario = load_scenario("symmetric").with_solver(preset=name)
