@@ -147,25 +147,26 @@ def test_replace_setup_validates_and_keeps_state_on_error():
     assert stepper.setup.params == BrakeParameters() and stepper.substeps == 1
 
 
-def test_replace_setup_with_a_defect_that_needs_a_smaller_step_repicks_the_substeps():
-    """The leading pivot 3 % inward (case 2) needs a 9 us step: accepted mid-run, with 5
-    substeps per 39.1 us sample, on the same sample grid."""
+def test_replace_setup_with_a_model_that_needs_a_smaller_step_repicks_the_substeps():
+    """Friction smoothed over 5 mm/s (limit 16 us) set mid-run: accepted, with 3 substeps per
+    39.1 us sample, on the same sample grid."""
     scenario = load_scenario("symmetric")
     stepper = stepper_for(scenario)
     before = stepper.advance(25_600)  # 1 s
     assert stepper.substeps == 1
-    inward = dataclasses.replace(
-        scenario.setup, defects=Defects(left=ShoeDefect(pivot_radius_change_pct=-3.0))
+    narrow = dataclasses.replace(
+        scenario.setup,
+        params=scenario.setup.params.with_overrides({"friction": {"smoothing_speed_m_s": 0.005}}),
     )
-    stepper.replace_setup(inward)
-    assert stepper.substeps == 5 and stepper.physics_step_s <= stepper.limit.max_step_s
-    assert stepper.limit.max_step_s == pytest.approx(9e-6, rel=0.01)
+    stepper.replace_setup(narrow)
+    assert stepper.substeps == 3 and stepper.physics_step_s <= stepper.limit.max_step_s
+    assert stepper.limit.max_step_s == pytest.approx(1.59e-5, rel=0.01)
     after = stepper.advance(2560)
     assert after.first_index == 25_600 and after.sample_period_s == before.sample_period_s
     np.testing.assert_array_equal(after.time_s, (25_600 + np.arange(2560)) * PERIOD)
     assert np.all(np.isfinite(after.data))
-    # a fresh stepper with the defect from the start takes the same substeps
-    assert stepper_for(scenario.with_defects(inward.defects)).substeps == 5
+    # a fresh stepper with the change from the start takes the same substeps
+    assert stepper_for(dataclasses.replace(scenario, setup=narrow)).substeps == 3
 
 
 def test_a_substep_change_keeps_the_regime_clock_in_seconds():

@@ -244,26 +244,29 @@ def test_command_above_the_limit_force_takes_more_substeps_and_equals_offline(si
     assert sim.next_diagnostics()["substeps_per_sample"] == "1"
 
 
-def test_a_defect_that_needs_a_smaller_step_is_accepted_at_run_time(sim):
-    """The leading pivot 3 % inward (case 2: limit 9 us) while the brake is impacting:
-    accepted, 5 substeps per sample from then on, reported; the stream equals offline."""
+def test_a_model_change_that_needs_a_smaller_step_is_accepted_at_run_time(sim):
+    """Friction smoothed over 5 mm/s (limit 16 us) while the brake is impacting: accepted,
+    3 substeps per sample from then on, reported; the stream equals offline."""
     try:
         step(sim, steps=6400)  # 0.25 s: impacting
-        result = sim.set_parameter("defects.left.pivot_radius_change_pct", -3.0)
+        result = sim.set_parameter("friction.smoothing_speed_m_s", 0.005)
         assert result.successful, result.reason
         step(sim, steps=2560)
         diag = sim.next_diagnostics()
-        assert diag["substeps_per_sample"] == "5"
-        assert float(diag["step_limit_s"]) == pytest.approx(9e-6, rel=0.01)
-        assert float(diag["physics_step_s"]) == pytest.approx(DT / 5, rel=1e-12)
+        assert diag["substeps_per_sample"] == "3"
+        assert float(diag["step_limit_s"]) == pytest.approx(1.59e-5, rel=0.01)
+        assert float(diag["physics_step_s"]) == pytest.approx(DT / 3, rel=1e-12)
         assert float(diag["sample_rate_hz"]) == 25_600.0
         scenario = load_scenario("symmetric")
-        inward = dataclasses.replace(
-            scenario.setup, defects=Defects(left=ShoeDefect(pivot_radius_change_pct=-3.0))
+        narrow = dataclasses.replace(
+            scenario.setup,
+            params=scenario.setup.params.with_overrides(
+                {"friction": {"smoothing_speed_m_s": 0.005}}
+            ),
         )
-        assert_stream_equals(sim, offline([(6400, None, None), (2560, None, inward)]))
+        assert_stream_equals(sim, offline([(6400, None, None), (2560, None, narrow)]))
     finally:
-        sim.set_parameter("defects.left.pivot_radius_change_pct", 0.0)
+        sim.set_parameter("friction.smoothing_speed_m_s", 0.02)
 
 
 def test_defect_change_at_run_time_changes_the_shoe_and_the_ground_truth(sim):
