@@ -300,16 +300,21 @@ def advance(y, step0, h, n_steps, p, tl, fl, tr, fr, touch, shoes, cache, kstate
     gl = p[L.P_SHOE_BASE + L.S_ACTUATION_GAIN]
     gr = p[L.P_SHOE_BASE + L.SHOE_STRIDE + L.S_ACTUATION_GAIN]
     stage_c = (0.0, 0.5, 0.5, 1.0)
+    # the held drum's shoes were balanced at the end of the last step, which is this step's
+    # start: the sample reuses that balance
+    held_balanced = False
     for k in range(n_steps):
         t0 = (step0 + k) * h
         t_end = (step0 + k + 1) * h
         fel = gl * kernel._pwl(t0, tl, fl)
         fer = gr * kernel._pwl(t0, tr, fr)
-        st = _balance(p, y, fel, fer, kstate[0], touch, shoes, cache)
-        if st != STATUS_OK:
-            kstate[1] = st
-            return k
+        if not (kstate[0] and held_balanced):
+            st = _balance(p, y, fel, fer, kstate[0], touch, shoes, cache)
+            if st != STATUS_OK:
+                kstate[1] = st
+                return k
         _record(out[k], t0, y, p, fel, fer, kstate[0], cache, fstate)
+        held_balanced = False
         t = t0
         for _ in range(MAX_SUBSTEPS):
             if t >= t_end:
@@ -391,6 +396,7 @@ def advance(y, step0, h, n_steps, p, tl, fl, tr, fr, touch, shoes, cache, kstate
                 if st != STATUS_OK:
                     kstate[1] = st
                     return k + 1
+                held_balanced = last
             _full_state(y, shoes, full)
             if stuck:
                 if standstill.slips(p, full):
