@@ -361,6 +361,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("view", help="show an MCAP recording in Rerun, or convert it to .rrd")
     p.add_argument("recording", help="MCAP file recorded from the simulator")
     p.add_argument("--save", metavar="FILE.rrd", help="write a Rerun file instead of a viewer")
+    p.add_argument("--overwrite", action="store_true", help="replace an existing --save file")
     p.set_defaults(func=cmd_view)
 
     p = sub.add_parser(
