@@ -466,6 +466,12 @@ def _expect_reason(case: Case, line: str) -> None:
         assert "not shown" in line
 
 
+@pytest.mark.parametrize("path", sorted((ROOT / "bags").glob("*.mcap")), ids=lambda p: p.name)
+def test_the_shipped_bags_pass_the_strict_reader(path: Path):
+    with open_recording(path) as recording:
+        assert recording.message_count == sum(1 for _ in recording.messages()) > 0
+
+
 def test_the_cases_cover_the_issue():
     kinds = {c.kind for c in CASES}
     assert {

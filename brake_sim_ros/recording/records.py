@@ -258,6 +258,8 @@ class Cursor:
 
 @dataclass(frozen=True)
 class Schema:
+    """A schema record (MCAP opcode 0x03)."""
+
     id: int
     name: str
     encoding: str
@@ -266,6 +268,8 @@ class Schema:
 
 @dataclass(frozen=True)
 class Channel:
+    """A channel record (0x04)."""
+
     id: int
     schema_id: int
     topic: str
@@ -275,6 +279,8 @@ class Channel:
 
 @dataclass(frozen=True)
 class Message:
+    """A message record (0x05); ``data`` is the CDR payload."""
+
     channel_id: int
     sequence: int
     log_time: int
@@ -284,6 +290,8 @@ class Message:
 
 @dataclass(frozen=True)
 class ChunkHeader:
+    """A chunk record (0x06); ``records`` still compressed."""
+
     start_ns: int
     end_ns: int
     uncompressed_size: int
@@ -294,6 +302,8 @@ class ChunkHeader:
 
 @dataclass(frozen=True)
 class Statistics:
+    """What a statistics record (0x0B) counts."""
+
     message_count: int
     chunk_count: int
     start_ns: int
@@ -303,6 +313,8 @@ class Statistics:
 
 @dataclass(frozen=True)
 class Footer:
+    """The footer record (0x02)."""
+
     summary_start: int
     summary_offset_start: int
     summary_crc: int
