@@ -197,7 +197,7 @@ def _write_stream(args: argparse.Namespace, scenario, rerun_targets: list) -> No
 def cmd_recover(args: argparse.Namespace) -> int:
     from brake_sim_ros.recording.recover import recover
 
-    print(recover(args.broken, args.fixed).describe())
+    print(recover(args.broken, args.fixed, overwrite=args.overwrite).describe())
     return 0
 
 
@@ -396,11 +396,15 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("view", help="show an MCAP recording in Rerun, or convert it to .rrd")
     p.add_argument("recording", help="MCAP file recorded from the simulator")
     p.add_argument("--save", metavar="FILE.rrd", help="write a Rerun file instead of a viewer")
+    p.add_argument("--overwrite", action="store_true", help="replace an existing --save file")
     p.set_defaults(func=cmd_view)
 
-    p = sub.add_parser("recover", help="make a truncated MCAP recording whole again")
-    p.add_argument("broken", help="the truncated .mcap file")
-    p.add_argument("fixed", help="the valid .mcap file to write")
+    p = sub.add_parser(
+        "recover", help="keep every intact chunk of a cut-short or damaged MCAP recording"
+    )
+    p.add_argument("broken", help="the damaged .mcap file (only read)")
+    p.add_argument("fixed", help="the .mcap file to write (not the input, not a link)")
+    p.add_argument("--overwrite", action="store_true", help="replace FIXED if it exists")
     p.set_defaults(func=cmd_recover)
 
     p = sub.add_parser("validate", help="run the study's cases and write the validation report")

@@ -33,6 +33,7 @@ from rosbags.rosbag2.storage_mcap import McapReader  # noqa: E402
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore  # noqa: E402
 
 from brake_sim_ros.recording import metadata  # noqa: E402
+from brake_sim_ros.recording.reader import RecordingReadError  # noqa: E402
 from brake_sim_ros.recording.record import record_offline  # noqa: E402
 from brake_sim_ros.recording.recover import RecoverError, recover  # noqa: E402
 from brake_sim_ros.recording.writer import (  # noqa: E402
@@ -239,7 +240,7 @@ def test_recover_keeps_every_complete_chunk_and_nothing_else(recording, source, 
         broken.write_bytes(data[:cut])
         fixed = tmp_path / f"fixed{i}.mcap"
         result = recover(broken, fixed)
-        assert not result.complete and result.chunks == i + 1
+        assert not result.complete and result.chunks_kept == i + 1
         assert result.messages == cumulative
         with fixed.open("rb") as f:
             reader = make_reader(f)
@@ -269,7 +270,7 @@ def test_recover_refuses_what_is_not_mcap(tmp_path):
     text.write_text("not a recording\n")
     with pytest.raises(RecoverError, match=r"notes\.mcap is not an MCAP file"):
         recover(text, tmp_path / "out.mcap")
-    with pytest.raises(RecoverError, match="cannot read"):
+    with pytest.raises(RecordingReadError, match=r"missing\.mcap: no such file"):
         recover(tmp_path / "missing.mcap", tmp_path / "out.mcap")
 
 

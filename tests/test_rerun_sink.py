@@ -296,7 +296,7 @@ def test_view_refuses_what_it_cannot_show(tmp_path: Path, capsys, monkeypatch):
     not_mcap = tmp_path / "junk.mcap"
     not_mcap.write_bytes(b"not an mcap file at all")
     assert main(["view", str(not_mcap), "--save", str(tmp_path / "j.rrd")]) == 2
-    assert "not a readable MCAP file" in capsys.readouterr().err
+    assert "junk.mcap is not an MCAP file" in capsys.readouterr().err
     good = tmp_path / "ok.mcap"
     write_mcap(good, "symmetric", 0.01, with_model=True)
     assert main(["view", str(good)]) == 2

@@ -17,6 +17,13 @@ Options:
 Topics whose QoS keeps the last message for late joiners (transient local, e.g. the
 defect ground truth) get the newest message recorded before the start offset published
 at the start, so a replay from an offset still carries the ground truth in force.
+
+The recording is read by the checked reader (:mod:`brake_sim_ros.recording.reader`) and
+checked whole before the node is created: every chunk's CRC, every message against the
+installed definition of its type, the summary against the data. Only the types of the
+simulator's topic table are published (a type name from the file never picks a module to
+import). A damaged or foreign file is refused with one line and nothing is published;
+``brake-sim recover`` keeps its intact chunks.
 """
 
 from __future__ import annotations
@@ -31,15 +38,15 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import rclpy
-import yaml
-from mcap.exceptions import McapError
-from mcap.reader import make_reader
+from rclpy.exceptions import InvalidTopicNameException
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
-from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.qos import DurabilityPolicy, QoSProfile
 from rclpy.utilities import remove_ros_args
 
 from brake_sim_ros.errors import BrakeSimError
+from brake_sim_ros.recording.cdr import RECORDED_TYPES
+from brake_sim_ros.recording.reader import RecordingReadError, open_recording
 from brake_sim_ros.ros import qos, stream
 
 NODE_NAME = "brake_sim_replay"
@@ -71,57 +78,25 @@ class RecordedTopic:
 
 
 def message_class(type_name: str):
-    """The Python class of ROS type ``pkg/msg/Name`` (``pkg/Name`` accepted too)."""
-    parts = type_name.split("/")
-    if len(parts) == 2:
-        parts = [parts[0], "msg", parts[1]]
-    if len(parts) != 3 or not all(parts):
-        raise BrakeSimError(f"message type '{type_name}': expected 'package/msg/Name'")
-    package, kind, name = parts
+    """The Python class of a type of the topic table (``pkg/msg/Name``).
+
+    Only those types are imported, from the module the table's name gives; any other
+    name is refused before anything is imported.
+    """
+    if type_name not in RECORDED_TYPES:
+        raise BrakeSimError(
+            f"message type {type_name!r} is not one this project publishes; allowed: "
+            + ", ".join(sorted(RECORDED_TYPES))
+        )
+    package, kind, name = type_name.split("/")
     try:
         return getattr(importlib.import_module(f"{package}.{kind}"), name)
     except (ImportError, AttributeError):
         raise BrakeSimError(
-            f"message type '{type_name}' is not installed here (no Python module"
-            f" {package}.{kind} with {name}); source the workspace that provides it"
+            f"message type {type_name} is not installed here (no Python module"
+            f" {package}.{kind} with {name}); run scripts/setup.sh or source the workspace"
+            " that provides it"
         ) from None
-
-
-def _policy(value, enum, field_name: str):
-    """A QoS policy from rosbag2's YAML: a name ("reliable") or the enum's integer."""
-    if isinstance(value, str):
-        try:
-            return enum[value.upper()]
-        except KeyError:
-            raise BrakeSimError(f"QoS {field_name} '{value}' is unknown") from None
-    return enum(int(value))
-
-
-def qos_from_metadata(offered_qos_profiles: str) -> QoSProfile | None:
-    """The first profile of rosbag2's ``offered_qos_profiles`` YAML, or None if absent.
-
-    Only history, depth, reliability and durability are replayed; deadline, lifespan and
-    liveliness stay at their defaults (the recorder's "infinite" defaults).
-    """
-    if not offered_qos_profiles.strip():
-        return None
-    try:
-        profiles = yaml.safe_load(offered_qos_profiles)
-    except yaml.YAMLError as exc:
-        raise BrakeSimError(f"offered_qos_profiles is not YAML: {exc}") from None
-    if not profiles:
-        return None
-    p = profiles[0]
-    history = _policy(p.get("history", "keep_last"), HistoryPolicy, "history")
-    if history == HistoryPolicy.SYSTEM_DEFAULT:
-        history = HistoryPolicy.KEEP_LAST
-    depth = int(p.get("depth", 10)) or 10
-    return QoSProfile(
-        history=history,
-        depth=depth,
-        reliability=_policy(p.get("reliability", "reliable"), ReliabilityPolicy, "reliability"),
-        durability=_policy(p.get("durability", "volatile"), DurabilityPolicy, "durability"),
-    )
 
 
 @dataclass(frozen=True)
@@ -136,69 +111,62 @@ class Schedule:
 
 
 class Recording:
-    """An MCAP file opened for replay: its topics and its messages in log-time order."""
+    """An MCAP file checked whole for replay: its topics and its messages in log-time order.
+
+    Raises:
+        BrakeSimError: (RecordingReadError) a file the checked reader refuses, a topic
+            recorded with two types, ``topics`` it does not hold, or no message at all.
+    """
 
     def __init__(self, path: Path, topics: list[str] | None = None) -> None:
         self.path = path
-        if not path.is_file():
-            raise BrakeSimError(f"recording {path}: no such file")
-        self._file = path.open("rb")
+        self._recording = open_recording(path)
         try:
-            reader = make_reader(self._file)
-            summary = reader.get_summary()
-        except (McapError, ValueError, EOFError) as exc:
-            self._file.close()
-            raise BrakeSimError(
-                f"recording {path} cannot be read ({exc}); if it was cut short, restore it"
-                " with: brake-sim recover BROKEN.mcap FIXED.mcap"
-            ) from None
-        if summary is None or summary.statistics is None:
-            self._file.close()
-            raise BrakeSimError(
-                f"recording {path} has no summary (not closed cleanly?); restore it with:"
-                " brake-sim recover BROKEN.mcap FIXED.mcap"
-            )
-        self._reader = reader
-        self.start_ns = summary.statistics.message_start_time
-        self.end_ns = summary.statistics.message_end_time
+            self._select(topics)
+        except BaseException:
+            self._recording.close()
+            raise
+
+    def _select(self, topics: list[str] | None) -> None:
+        recording = self._recording
         self.topics: dict[str, RecordedTopic] = {}
-        for channel in summary.channels.values():
-            schema = summary.schemas.get(channel.schema_id)
-            if channel.message_encoding != "cdr" or schema is None:
-                continue  # not a ROS 2 message: nothing to publish it as
-            known = self.topics.get(channel.topic)
+        for channel in recording.channels.values():
+            name, type_name = channel.topic.name, channel.topic.type_name
+            known = self.topics.get(name)
             if known is None:
-                profile = qos_from_metadata(channel.metadata.get("offered_qos_profiles", ""))
-                known = self.topics[channel.topic] = RecordedTopic(
-                    channel.topic,
-                    schema.name,
-                    profile or _KNOWN_QOS.get(channel.topic, _DEFAULT_QOS),
+                profile = channel.qos or _KNOWN_QOS.get(name, _DEFAULT_QOS)
+                known = self.topics[name] = RecordedTopic(name, type_name, profile)
+            elif known.type_name != type_name:
+                raise RecordingReadError(
+                    f"{recording.name}: topic {name} is recorded as {known.type_name} and as"
+                    f" {type_name}; allowed one type per topic"
                 )
-            known.channel_ids.append(channel.id)
-            known.count += summary.statistics.channel_message_counts.get(channel.id, 0)
+            known.channel_ids.append(channel.channel_id)
+            known.count += channel.message_count
         if topics is not None:
             missing = sorted(set(topics) - self.topics.keys())
             if missing:
                 raise BrakeSimError(
-                    f"topic(s) {missing} are not in {path}; it holds {sorted(self.topics)}"
+                    f"topic(s) {missing} are not in {recording.name}; it holds"
+                    f" {sorted(self.topics)}"
                 )
             self.topics = {t: self.topics[t] for t in topics}
-        if not self.topics:
-            raise BrakeSimError(f"recording {path} holds no ROS 2 (cdr) messages")
-        self._channel_topic = {cid: t.name for t in self.topics.values() for cid in t.channel_ids}
+        if recording.start_ns is None or recording.end_ns is None:
+            raise BrakeSimError(f"recording {recording.name} holds no messages")
+        self.start_ns, self.end_ns = recording.start_ns, recording.end_ns
 
     @property
     def duration_s(self) -> float:
         return (self.end_ns - self.start_ns) / _NS_PER_S
 
     def messages(self, start_ns: int | None = None) -> Iterator[tuple[str, bytes, int]]:
-        """``(topic, CDR payload, log time ns)`` from ``start_ns`` on, in log-time order."""
-        for _schema, channel, message in self._reader.iter_messages(
-            topics=list(self.topics), start_time=start_ns, log_time_order=True
-        ):
-            topic = self._channel_topic.get(channel.id)
-            if topic is not None:
-                yield topic, bytes(message.data), message.log_time
+        """``(topic, CDR payload, log time ns)`` from ``start_ns`` on, in log-time order.
+
+        Raises:
+            RecordingReadError: the file changed since it was checked.
+        """
+        for message in self._recording.messages(topics=list(self.topics), start_ns=start_ns):
+            yield message.topic.name, message.data, message.log_time_ns
 
     def latched_before(self, start_ns: int) -> list[tuple[str, bytes]]:
         """The newest message before ``start_ns`` of each transient-local topic."""
@@ -210,14 +178,12 @@ class Recording:
         if not latched or start_ns <= self.start_ns:
             return []
         newest: dict[str, bytes] = {}
-        for _schema, channel, message in self._reader.iter_messages(
-            topics=latched, end_time=start_ns, log_time_order=True
-        ):
-            newest[channel.topic] = bytes(message.data)
+        for message in self._recording.messages(topics=latched, end_ns=start_ns):
+            newest[message.topic.name] = message.data
         return list(newest.items())
 
     def close(self) -> None:
-        self._file.close()
+        self._recording.close()
 
 
 class ReplayNode(Node):
@@ -230,10 +196,15 @@ class ReplayNode(Node):
         self.start_ns = recording.start_ns + round(start_offset_s * _NS_PER_S)
         self.published = 0
         self.loops = 0
-        self._publishers_by_topic = {
-            t.name: self.create_publisher(message_class(t.type_name), t.name, t.qos)
-            for t in recording.topics.values()
-        }
+        self._publishers_by_topic = {}
+        for t in recording.topics.values():
+            try:
+                publisher = self.create_publisher(message_class(t.type_name), t.name, t.qos)
+            except InvalidTopicNameException:
+                raise BrakeSimError(
+                    f"topic {t.name} of {recording.path}: not a topic name ROS accepts"
+                ) from None
+            self._publishers_by_topic[t.name] = publisher
 
     def wait_for_subscribers(self, count: int, timeout_s: float) -> bool:
         """Wait until every topic has ``count`` matched subscriptions (True) or time out."""
@@ -346,6 +317,9 @@ def main(args: list[str] | None = None) -> int:
                 break
         print(f"brake-sim replay: published {node.published} messages", flush=True)
         return 0
+    except RecordingReadError as exc:  # the file changed after it was checked
+        print(f"brake-sim replay: {exc}", file=sys.stderr)
+        return 1
     except (KeyboardInterrupt, ExternalShutdownException):
         return 0
     finally:

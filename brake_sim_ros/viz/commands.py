@@ -102,19 +102,40 @@ def simulate_to_rerun(
 
 
 def cmd_view(args: argparse.Namespace) -> int:
-    """``brake-sim view FILE.mcap [--save FILE.rrd]``."""
+    """``brake-sim view FILE.mcap [--save FILE.rrd [--overwrite]]``.
+
+    The output is checked before the recording is read (not an existing file without
+    ``--overwrite``, not a link, not the recording), the recording is checked whole before
+    anything is shown, and the .rrd file appears only once complete
+    (:func:`~brake_sim_ros.recording.output.atomic_output`).
+    """
+    from brake_sim_ros.recording.output import atomic_output, check_output
+    from brake_sim_ros.recording.reader import open_recording
     from brake_sim_ros.viz.mcap_view import read_info, replay
 
     path = Path(args.recording)
-    info = read_info(path)
-    if not args.save and not has_display():
+    save_rules = {
+        "inputs": [path],
+        "overwrite": args.overwrite,
+        "suffix": ".rrd",
+        "option": "--save",
+    }
+    if args.save:
+        check_output(args.save, **save_rules)
+    elif not has_display():
         raise RerunTargetError(
             f"view {path}: no display here (DISPLAY/WAYLAND_DISPLAY unset) to open a viewer;"
             f" use --save FILE.rrd and open the file where there is one (rerun FILE.rrd)"
         )
-    target = parse_target(["save", args.save] if args.save else ["spawn"])
-    sink = open_sink(target, params=info.params, defects=info.defects, run_text=info.run_text)
-    summary = replay(path, [sink])
+    with open_recording(path) as recording:
+        info = read_info(recording)
+        opened = {"params": info.params, "defects": info.defects, "run_text": info.run_text}
+        if args.save:
+            with atomic_output(args.save, **save_rules) as partial:
+                sink = open_sink(parse_target(["save", str(partial)]), **opened)
+                summary = replay(recording, [sink])
+        else:
+            summary = replay(recording, [open_sink(parse_target(["spawn"]), **opened)])
     span = (
         f"{summary.first_s:.3f} s to {summary.last_s:.3f} s"
         if summary.first_s is not None and summary.last_s is not None

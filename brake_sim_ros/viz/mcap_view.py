@@ -1,9 +1,14 @@
 """``brake-sim view FILE.mcap``: a recording of the simulator's stream, shown in Rerun.
 
-Messages are decoded with ``mcap_ros2`` and handed, in log-time order, to the same
-:class:`~.rerun_sink.RerunSink` the node and the offline simulator use. The drawing's
-geometry comes from the recording's ``brake_sim_model`` metadata (``model_values`` of
-the run, values as ``repr`` strings); without it the built-in geometry is drawn and the
+The recording is checked whole by the checked reader
+(:func:`~brake_sim_ros.recording.reader.open_recording`: every chunk's CRC, every message
+against the installed definition of its type) before anything is shown; a damaged or
+foreign file is refused with one line. Messages are then decoded with the installed
+definitions (:func:`~brake_sim_ros.recording.cdr.decoder`, never the file's schema text)
+and handed, in log-time order, to the same :class:`~.rerun_sink.RerunSink` the node and
+the offline simulator use. The drawing's geometry comes from the recording's
+``brake_sim_model`` metadata (``model_values`` of the run, values as ``repr`` strings,
+each checked to be a plain number); without it the built-in geometry is drawn and the
 event log says so. ``brake_sim_scenario`` metadata (name, source, toml) is shown as the
 run's description.
 """
@@ -12,25 +17,18 @@ from __future__ import annotations
 
 import ast
 from dataclasses import dataclass
-from pathlib import Path
-
-from mcap.exceptions import McapError
-from mcap.reader import make_reader
-from mcap_ros2.decoder import DecoderFactory
 
 from brake_sim_ros.errors import BrakeSimError
 from brake_sim_ros.model.defects import Defects
 from brake_sim_ros.model.parameters import BrakeParameters
+from brake_sim_ros.recording import cdr
+from brake_sim_ros.recording.metadata import MODEL, SCENARIO
+from brake_sim_ros.recording.reader import Recording, RecordingReadError
 from brake_sim_ros.ros import parameters as ros_params
-from brake_sim_ros.ros.stream import Topic
 from brake_sim_ros.viz.rerun_sink import RerunSink
 
-MODEL_METADATA = "brake_sim_model"
-SCENARIO_METADATA = "brake_sim_scenario"
-
-
-class RecordingError(BrakeSimError, ValueError):
-    """An MCAP file that cannot be shown (missing, not MCAP, bad metadata)."""
+MAX_VALUE_CHARS = 100  # a model value is the repr() of one number
+MAX_TEXT_CHARS = 100_000  # scenario text shown in the viewer
 
 
 @dataclass(frozen=True)
@@ -51,61 +49,71 @@ class ViewSummary:
     last_s: float | None
 
 
-def read_info(path: Path) -> RecordingInfo:
-    """The model and scenario metadata of an MCAP recording.
+def _model_value(name: str, text: str) -> float | int | bool:
+    if len(text) > MAX_VALUE_CHARS:
+        raise ValueError(f"value of {name} is {len(text)} characters long")
+    value = ast.literal_eval(text)
+    if not isinstance(value, float | int | bool):
+        raise ValueError(f"value of {name} is not a number")
+    return value
+
+
+def read_info(recording: Recording) -> RecordingInfo:
+    """The model and scenario metadata of a checked recording.
 
     Raises:
-        RecordingError: not a readable MCAP file, or model metadata the core refuses.
+        RecordingReadError: model metadata that is not numbers, or that the core refuses.
     """
-    if not path.is_file():
-        raise RecordingError(f"{path}: no such file")
-    try:
-        with path.open("rb") as f:
-            metadata = {m.name: dict(m.metadata) for m in make_reader(f).iter_metadata()}
-    except (McapError, ValueError, OSError) as exc:
-        raise RecordingError(f"{path}: not a readable MCAP file ({exc})") from None
     params = defects = None
-    model = metadata.get(MODEL_METADATA)
+    model = recording.metadata_record(MODEL)
     if model is not None:
         try:
-            values = {k: ast.literal_eval(v) for k, v in model.items()}
+            values = {k: _model_value(k, v) for k, v in model.items()}
             params, defects = ros_params.build_model(values)
-        except (ValueError, SyntaxError, KeyError, TypeError) as exc:
-            raise RecordingError(
-                f"{path}: metadata '{MODEL_METADATA}' does not describe a brake ({exc})"
+        except (ValueError, SyntaxError, KeyError, TypeError, RecursionError, MemoryError) as exc:
+            problem = f"no value for {exc}" if isinstance(exc, KeyError) else str(exc)
+            if isinstance(exc, SyntaxError):
+                problem = "a value is not a Python literal"
+            raise RecordingReadError(
+                f"{recording.name}: metadata '{MODEL}' does not describe a brake ({problem})"
             ) from None
-    scenario = metadata.get(SCENARIO_METADATA, {})
-    lines = [f"### Recording `{path.name}`"]
+    scenario = recording.metadata_record(SCENARIO) or {}
+    lines = [f"### Recording `{recording.path.name}`"]
     if scenario:
-        lines.append(
-            f"scenario **{scenario.get('name', '?')}** from `{scenario.get('source', '?')}`"
-        )
+        name = scenario.get("name", "?")[:200]
+        lines.append(f"scenario **{name}** from `{scenario.get('source', '?')[:1000]}`")
         if scenario.get("toml"):
-            lines += ["", "```toml", scenario["toml"].rstrip(), "```"]
+            lines += ["", "```toml", scenario["toml"][:MAX_TEXT_CHARS].rstrip(), "```"]
     else:
         lines.append("(no scenario metadata in the recording)")
     return RecordingInfo(params=params, defects=defects, run_text="\n".join(lines))
 
 
-def replay(path: Path, sinks: list[RerunSink]) -> ViewSummary:
-    """Feed every message of the recording to ``sinks`` and close them.
+def replay(recording: Recording, sinks: list[RerunSink]) -> ViewSummary:
+    """Feed every message of the checked recording to ``sinks`` and close them.
 
     Raises:
-        RecordingError: the file cannot be read or decoded.
+        RecordingReadError: the file changed since it was checked, or a message holds
+            values the sinks cannot show (which message, on which topic).
     """
     count = 0
     try:
-        with path.open("rb") as f:
-            reader = make_reader(f, decoder_factories=[DecoderFactory()])
-            for schema, channel, message, decoded in reader.iter_decoded_messages(
-                log_time_order=True
-            ):
-                topic = Topic(channel.topic, schema.name if schema else "")
+        for message in recording.messages():
+            try:
+                decoded = cdr.decoder(message.topic.type_name)(message.data)
                 for sink in sinks:
-                    sink.write(topic, decoded, int(message.log_time))
-                count += 1
-    except (McapError, ValueError, KeyError, OSError) as exc:
-        raise RecordingError(f"{path}: cannot read its messages ({exc})") from None
+                    sink.write(message.topic, decoded, message.log_time_ns)
+            except BrakeSimError as exc:
+                raise RecordingReadError(
+                    f"{recording.name}: message {message.index} on {message.topic.name}"
+                    f" cannot be shown ({exc})"
+                ) from None
+            except (ValueError, TypeError, ArithmeticError, IndexError) as exc:
+                raise RecordingReadError(
+                    f"{recording.name}: message {message.index} on {message.topic.name}"
+                    f" holds values that cannot be shown ({type(exc).__name__})"
+                ) from None
+            count += 1
     finally:
         for sink in sinks:
             sink.close()

@@ -6,6 +6,7 @@ real DDS, and received by raw (CDR bytes) subscriptions in this process.
 
 from __future__ import annotations
 
+import re
 import subprocess
 import sys
 import time
@@ -222,3 +223,46 @@ def test_refuses_a_broken_recording_with_the_fix(tmp_path: Path, recording: Path
     )
     assert proc.returncode == 1
     assert "brake-sim recover" in proc.stderr, proc.stderr
+
+
+def _damaged_middle_chunk(recording: Path, out: Path) -> None:
+    """One byte of a middle chunk changed: mcap's own reader would replay it unchecked."""
+    with recording.open("rb") as f:
+        indexes = sorted(
+            make_reader(f).get_summary().chunk_indexes, key=lambda i: i.chunk_start_offset
+        )
+    middle = indexes[len(indexes) // 2]
+    data = bytearray(recording.read_bytes())
+    data[middle.chunk_start_offset + middle.chunk_length - 100] ^= 0x01
+    out.write_bytes(data)
+
+
+def test_a_damaged_recording_is_refused_and_nothing_is_published(tmp_path: Path, recording: Path):
+    """A CRC-damaged chunk in the middle of an otherwise whole file: refused before the node
+    starts, one line naming the chunk and the fix, not one message on any topic."""
+    broken = tmp_path / "damaged.mcap"
+    _damaged_middle_chunk(recording, broken)
+    topics = {t.name: t.type_name for t in stream.TOPICS if t.name in dict(_topics(recording))}
+    domain = domain_id_for(4)
+    listener = RawListener(domain, topics)
+    try:
+        proc = _replay(broken, domain)
+        listener.spin_until(lambda: proc.poll() is not None, 60.0)
+        listener.spin_until(lambda: False, 1.0)  # anything published would arrive by now
+        out = proc.communicate(timeout=10)[0]
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+        listener.close()
+    assert proc.returncode == 1, out
+    lines = out.strip().splitlines()
+    assert len(lines) == 1 and "Traceback" not in out, out
+    assert re.search(r"damaged\.mcap: chunk \d+ at offset \d+: ", lines[0]), lines[0]
+    assert "brake-sim recover" in lines[0]
+    assert listener.received == []
+
+
+def _topics(path: Path) -> list[tuple[str, str]]:
+    with path.open("rb") as f:
+        summary = make_reader(f).get_summary()
+    return [(c.topic, summary.schemas[c.schema_id].name) for c in summary.channels.values()]

@@ -1,0 +1,213 @@
+"""Files a command writes: checked before anything is written, whole or not at all.
+
+Rules (``recover FIXED``, ``view --save FILE.rrd``):
+
+* an existing output is refused unless ``overwrite`` (``--overwrite``);
+* an output that is a symbolic link is refused, even with ``overwrite`` (nothing is ever
+  written through a link);
+* an output that is one of the inputs is refused, even with ``overwrite``, whatever path
+  names it (the same device and inode: another path, a hard link, a link to it);
+* an output that exists and is not a regular file (a directory, a device) is refused;
+* the directory must be writable (missing directories are created, and removed again if
+  the command fails).
+
+All of this is checked before the first byte is written. The file is then written under a
+temporary name in the target directory (``.NAME.XXXX.partial.SUFFIX``), fsync'ed and
+renamed into place in one step: a failure or Ctrl-C leaves no partial output, and a
+reader never sees half a file. Without ``overwrite`` the rename is a hard link, which
+fails if the name was taken in the meantime.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import errno
+import os
+import secrets
+import stat
+from collections.abc import Iterator, Sequence
+from pathlib import Path
+
+from brake_sim_ros.errors import BrakeSimError
+from brake_sim_ros.recording.records import describe_path
+
+
+class OutputError(BrakeSimError, ValueError):
+    """An output path the rules above refuse, or a write that failed (one line)."""
+
+
+def _identity(path: Path) -> tuple[int, int] | None:
+    try:
+        info = os.stat(path)
+    except OSError:
+        return None
+    return info.st_dev, info.st_ino
+
+
+def _missing_parents(directory: Path) -> list[Path]:
+    """The directories of ``directory``'s path that do not exist yet, outermost first."""
+    missing = []
+    while not directory.exists():
+        missing.append(directory)
+        if directory.parent == directory:
+            break
+        directory = directory.parent
+    return missing[::-1]
+
+
+def check_output(
+    path: str | os.PathLike[str],
+    *,
+    inputs: Sequence[str | os.PathLike[str]] = (),
+    overwrite: bool = False,
+    suffix: str | None = None,
+    option: str = "output",
+) -> Path:
+    """Apply the module's rules to ``path`` (nothing is written).
+
+    Args:
+        inputs: the files the command reads; the output may be none of them.
+        suffix: the required suffix (``".mcap"``), or None.
+        option: how the output is named in messages (``"--save"``, ``"FIXED"``).
+
+    Raises:
+        OutputError: the first rule that refuses ``path``.
+    """
+    out = Path(path)
+    name = describe_path(path)
+    if not out.name or os.fspath(path).endswith(os.sep):
+        raise OutputError(f"{option} {name}: allowed a file path, not a directory")
+    if suffix is not None and out.suffix != suffix:
+        raise OutputError(f"{option} {name}: allowed a path ending in {suffix}")
+    try:
+        info = os.lstat(out)
+    except (FileNotFoundError, NotADirectoryError):  # the directory is checked below
+        info = None
+    except OSError as exc:
+        raise OutputError(f"{option} {name}: cannot check it ({exc.strerror or exc})") from None
+    if info is not None:
+        if stat.S_ISLNK(info.st_mode):
+            raise OutputError(
+                f"{option} {name} is a symbolic link: outputs are never written through a"
+                " link; give another path"
+            )
+        for source in inputs:
+            if (info.st_dev, info.st_ino) == _identity(Path(source)):
+                raise OutputError(
+                    f"{option} {name} is the input {describe_path(source)}: an output never"
+                    " replaces an input; give another path"
+                )
+        if not stat.S_ISREG(info.st_mode):
+            raise OutputError(
+                f"{option} {name} exists and is not a regular file: give another path"
+            )
+        if not overwrite:
+            raise OutputError(f"{option} {name} exists: pass --overwrite to replace it")
+    parent = out.parent
+    missing = _missing_parents(parent)
+    existing = missing[0].parent if missing else parent
+    if not existing.is_dir():
+        raise OutputError(f"{option} {name}: {describe_path(existing)} is not a directory")
+    if not os.access(existing, os.W_OK | os.X_OK):
+        raise OutputError(
+            f"{option} {name}: directory {describe_path(existing)} is not writable here"
+        )
+    return out
+
+
+@contextlib.contextmanager
+def atomic_output(
+    path: str | os.PathLike[str],
+    *,
+    inputs: Sequence[str | os.PathLike[str]] = (),
+    overwrite: bool = False,
+    suffix: str | None = None,
+    option: str = "output",
+) -> Iterator[Path]:
+    """Check ``path`` (:func:`check_output`), then yield a temporary path beside it to write.
+
+    When the block ends normally the temporary file is fsync'ed and renamed to ``path``
+    (the rules are checked once more just before); when it raises, the temporary file and
+    any directory made for it are removed and the exception goes on.
+
+    Raises:
+        OutputError: a rule refuses ``path``, or the file cannot be created or renamed.
+    """
+    out = check_output(path, inputs=inputs, overwrite=overwrite, suffix=suffix, option=option)
+    name = describe_path(path)
+    made = _missing_parents(out.parent)
+    tmp: Path | None = None
+    try:
+        try:
+            for directory in made:
+                directory.mkdir()
+            tmp = _create_temporary(out)
+        except OSError as exc:
+            raise OutputError(
+                f"{option} {name}: cannot write there ({exc.strerror or exc})"
+            ) from None
+        yield tmp
+        check_output(path, inputs=inputs, overwrite=overwrite, suffix=suffix, option=option)
+        try:
+            with open(tmp, "rb+") as f:
+                os.fsync(f.fileno())
+            _publish(tmp, out, overwrite=overwrite)
+            tmp = None
+            _fsync_directory(out.parent)
+        except FileExistsError:
+            raise OutputError(
+                f"{option} {name} appeared while it was written: pass --overwrite to replace it"
+            ) from None
+        except OSError as exc:
+            raise OutputError(f"{option} {name}: cannot write it ({exc.strerror or exc})") from None
+    except BaseException:
+        if tmp is not None:
+            with contextlib.suppress(OSError):
+                tmp.unlink()
+        for directory in reversed(made):
+            with contextlib.suppress(OSError):
+                directory.rmdir()  # only if still empty
+        raise
+
+
+def _create_temporary(out: Path) -> Path:
+    """A new empty file beside ``out``, with the permissions the umask gives new files."""
+    for _ in range(100):
+        tmp = out.with_name(f".{out.name}.{secrets.token_hex(4)}.partial{out.suffix}")
+        try:
+            fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_CLOEXEC, 0o666)
+        except FileExistsError:
+            continue
+        os.close(fd)
+        return tmp
+    raise FileExistsError(errno.EEXIST, "no free temporary name", str(out))
+
+
+def _publish(tmp: Path, out: Path, *, overwrite: bool) -> None:
+    """Rename ``tmp`` to ``out`` in one step; without ``overwrite`` never over a file."""
+    if overwrite:
+        os.replace(tmp, out)  # replaces a link itself, never writes through it
+        return
+    try:
+        os.link(tmp, out)  # fails with EEXIST if ``out`` was created meanwhile
+    except OSError as exc:
+        if exc.errno not in (errno.EPERM, errno.ENOTSUP, errno.EOPNOTSUPP, errno.EMLINK):
+            raise
+        if os.path.lexists(out):  # a file system without hard links: check, then rename
+            raise FileExistsError(errno.EEXIST, "exists", str(out)) from None
+        os.rename(tmp, out)
+        return
+    tmp.unlink()
+
+
+def _fsync_directory(directory: Path) -> None:
+    """Make the rename durable (best effort: not every file system allows it)."""
+    try:
+        fd = os.open(directory, os.O_RDONLY | os.O_DIRECTORY)
+    except OSError:
+        return
+    try:
+        with contextlib.suppress(OSError):
+            os.fsync(fd)
+    finally:
+        os.close(fd)
