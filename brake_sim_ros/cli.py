@@ -443,8 +443,16 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+# commands that run the physics kernels (compiled on first use)
+PHYSICS_COMMANDS = ("node", "live", "simulate", "validate", "bench")
+
+
 def main(argv: list[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
+    if argv[:1] and argv[0] in PHYSICS_COMMANDS and not {"-h", "--help"} & set(argv):
+        from brake_sim_ros.solvers.warmup import ensure_compiled
+
+        ensure_compiled()  # says so, once per installed version, instead of a silent pause
     if argv[:1] == ["node"]:
         return run_node(argv[1:])
     if argv[:1] == ["replay"]:
