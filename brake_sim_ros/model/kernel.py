@@ -115,7 +115,8 @@ def evaluate(y, p, fe_left, fe_right, stuck, mode_left, mode_right, dydt, out, r
     rlx, rly = _pivot_force(
         p,
         bl,
-        y[L.Y_LEFT_ANGLE],
+        kl[8],
+        kl[9],
         y[L.Y_LEFT_SPEED],
         sl[contact.E_THETA_DDOT],
         sl[contact.E_APPLIED_X],
@@ -124,7 +125,8 @@ def evaluate(y, p, fe_left, fe_right, stuck, mode_left, mode_right, dydt, out, r
     rrx, rry = _pivot_force(
         p,
         br,
-        y[L.Y_RIGHT_ANGLE],
+        kr[8],
+        kr[9],
         y[L.Y_RIGHT_SPEED],
         sr[contact.E_THETA_DDOT],
         sr[contact.E_APPLIED_X],
@@ -168,14 +170,12 @@ def rhs(y, p, fe_left, fe_right, stuck, mode_left, mode_right, dydt):
 
 
 @njit(cache=True, inline="always")
-def _pivot_force(p, base, theta, omega, theta_ddot, fx, fy):
-    """Force the pivot pin exerts on the shoe: m a_G - (applied forces), N."""
+def _pivot_force(p, base, c, sn, omega, theta_ddot, fx, fy):
+    """Force the pivot pin exerts on the shoe: m a_G - (applied forces), N. ``c``, ``sn``:
+    cos and sin of the shoe's turn (from :func:`contact.kinematics`)."""
     s = p[base + L.S_SIGN]
     px = p[base + L.S_PIVOT_X]
     py = p[base + L.S_PIVOT_Y]
-    phi = s * theta
-    c = math.cos(phi)
-    sn = math.sin(phi)
     gx0 = p[base + L.S_MASS_CENTRE_X] - px
     gy0 = p[base + L.S_MASS_CENTRE_Y] - py
     gx = c * gx0 - sn * gy0
