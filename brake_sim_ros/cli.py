@@ -339,7 +339,8 @@ def run_live(argv: list[str]) -> int:
         print(
             f"  replay on ROS 2:   .venv/bin/brake-sim replay {mcap}\n"
             f"  view in Rerun:     .venv/bin/brake-sim view {mcap}\n"
-            f"  ros2 bag / Foxglove: ros2 bag info {mcap}; or open the file in Foxglove"
+            f"  Foxglove / ros2 bag: open {mcap} in Foxglove, or `ros2 bag info` where a"
+            " ROS 2 install has rosbag2 (the set-up does not install it)"
         )
     if rrd in written:
         print(f"  open the Rerun recording: .venv/bin/rerun {rrd}")

@@ -8,6 +8,7 @@ import subprocess
 import sys
 
 import numpy as np
+import pytest
 
 from brake_sim_ros.analysis.validation import checks
 from brake_sim_ros.cli import simulate_summary
@@ -186,3 +187,12 @@ def test_summary_of_runs_too_short_for_a_figure():
         )
         for line in motion
     ), motion
+
+
+def test_node_help_names_the_command_the_user_typed(capsys):
+    from brake_sim_ros.cli import main
+
+    with pytest.raises(SystemExit) as exit_info:
+        main(["node", "--help"])
+    assert exit_info.value.code == 0
+    assert capsys.readouterr().out.startswith("usage: brake-sim node ")

@@ -792,9 +792,9 @@ class BrakeSimNode(Node):
 
 
 # -- command line ----------------------------------------------------------------------------
-def _parse_cli(argv: list[str]) -> argparse.Namespace:
+def _parse_cli(argv: list[str], prog: str) -> argparse.Namespace:
     parser = argparse.ArgumentParser(
-        prog="python -m brake_sim_ros.ros.node",
+        prog=prog,
         description="Drum-brake simulator as a ROS 2 node. ROS parameters go after"
         " --ros-args (-p name:=value); the options below override them.",
     )
@@ -874,7 +874,10 @@ def main(args: list[str] | None = None) -> int:
         0 on a clean exit, 1 when the node refused to start, 2 for bad options.
     """
     argv = list(sys.argv if args is None else args)
-    cli = _parse_cli(remove_ros_args(argv)[1:])
+    stripped = remove_ros_args(argv)
+    # the program name as invoked: "brake-sim node" from the CLI, the module otherwise
+    prog = argv[0] if argv and argv[0] == "brake-sim node" else "python -m brake_sim_ros.ros.node"
+    cli = _parse_cli(stripped[1:], prog)
     overrides = []
     if cli.scenario is not None:
         overrides.append(Parameter("scenario", value=cli.scenario))
