@@ -351,7 +351,7 @@ def run_live(argv: list[str]) -> int:
 
 def run_replay(argv: list[str]) -> int:
     """``brake-sim replay FILE.mcap ...``: publishes a recording on ROS 2 (own options)."""
-    from brake_sim_ros.ros.replay import main as replay_main
+    from brake_sim_ros.app.replay import main as replay_main
 
     return replay_main(["brake-sim replay", *argv]) or 0
 

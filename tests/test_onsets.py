@@ -102,7 +102,7 @@ def test_a_contact_at_the_first_sample_is_an_event_but_no_impact():
 
 
 def test_brake_state_flags_are_the_shared_rule(symmetric_impacting):
-    conversion = pytest.importorskip("brake_sim_ros.ros.conversion", reason="no brake_sim_msgs")
+    conversion = pytest.importorskip("brake_sim_ros.stream.conversion", reason="no brake_sim_msgs")
     rows = range(0, len(symmetric_impacting), 7)
     for side in ce.SHOES:
         flags = [

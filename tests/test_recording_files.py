@@ -32,6 +32,7 @@ from rclpy.serialization import deserialize_message  # noqa: E402
 from rosbags.rosbag2.storage_mcap import McapReader  # noqa: E402
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore  # noqa: E402
 
+from brake_sim_ros import stream  # noqa: E402
 from brake_sim_ros.recording import metadata  # noqa: E402
 from brake_sim_ros.recording.reader import RecordingReadError  # noqa: E402
 from brake_sim_ros.recording.record import record_offline  # noqa: E402
@@ -41,11 +42,11 @@ from brake_sim_ros.recording.writer import (  # noqa: E402
     RecordingError,
     RecordingOptions,
 )
-from brake_sim_ros.ros import conversion, stream  # noqa: E402
-from brake_sim_ros.ros import parameters as ros_params  # noqa: E402
-from brake_sim_ros.ros.offline import offline_messages  # noqa: E402
 from brake_sim_ros.scenarios import load_scenario  # noqa: E402
 from brake_sim_ros.solvers.build import stepper_for  # noqa: E402
+from brake_sim_ros.stream import conversion  # noqa: E402
+from brake_sim_ros.stream import parameters as ros_params  # noqa: E402
+from brake_sim_ros.stream.offline import offline_messages  # noqa: E402
 
 SCENARIO = "case7_left_actuation"
 DURATION_S = 2.5

@@ -14,7 +14,7 @@ payload, no chunk CRC, an unknown QoS, a foreign type hash). Every case goes thr
   definition survived: the chunk that holds it, or a summary whose bytes are intact);
 * ``brake-sim view FILE --save OUT.rrd`` (in-process): exit 0 only for a file whose
   messages are exactly the original ones, else exit 2 with one line and no .rrd;
-* replay's loading path (:class:`brake_sim_ros.ros.replay.Recording`, no DDS): the
+* replay's loading path (:class:`brake_sim_ros.recording.playback.Recording`, no DDS): the
   original messages exactly, or one :class:`BrakeSimError` line (and ``replay`` itself
   exits 1 with that line, before ROS is initialised).
 
@@ -41,15 +41,15 @@ from mcap.records import Channel, Chunk
 from mcap.stream_reader import StreamReader, breakup_chunk
 from mcap.writer import CompressionType, Writer
 
+from brake_sim_ros import stream
+from brake_sim_ros.app.replay import main as replay_main
 from brake_sim_ros.cli import main as cli_main
 from brake_sim_ros.errors import BrakeSimError
+from brake_sim_ros.recording.playback import Recording as ReplayRecording
 from brake_sim_ros.recording.reader import RecordingReadError, open_recording
 from brake_sim_ros.recording.record import record_offline
 from brake_sim_ros.recording.writer import RecordingOptions
-from brake_sim_ros.ros import stream
 from brake_sim_ros.ros.harness import domain_id_for, ros_environment
-from brake_sim_ros.ros.replay import Recording as ReplayRecording
-from brake_sim_ros.ros.replay import main as replay_main
 from brake_sim_ros.scenarios import load_scenario
 
 pytestmark = [

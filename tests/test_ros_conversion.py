@@ -17,7 +17,6 @@ from brake_sim_ros.model.defects import Defects, ShoeDefect
 from brake_sim_ros.model.layout import COL, N_COLUMNS
 from brake_sim_ros.model.parameters import BrakeParameters
 from brake_sim_ros.model.trajectory import SampleBlock
-from brake_sim_ros.ros import conversion
 from brake_sim_ros.ros.diagnostics import (
     RunStats,
     RunView,
@@ -26,6 +25,7 @@ from brake_sim_ros.ros.diagnostics import (
 )
 from brake_sim_ros.scenarios import load_scenario
 from brake_sim_ros.solvers.fixed_step import FixedStepStepper
+from brake_sim_ros.stream import conversion
 
 DT = 4e-5
 

@@ -165,8 +165,8 @@ def test_pure_ros_modules_do_not_import_rclpy():
 
     code = (
         "import sys, brake_sim_ros.ros, brake_sim_ros.ros.pacing, brake_sim_ros.ros.commands,"
-        " brake_sim_ros.ros.parameters\n"
-        "try:\n    import brake_sim_ros.ros.conversion, brake_sim_ros.ros.diagnostics\n"
+        " brake_sim_ros.stream.parameters\n"
+        "try:\n    import brake_sim_ros.stream.conversion, brake_sim_ros.ros.diagnostics\n"
         "except ImportError:\n    pass  # message packages not installed\n"
         "print(sorted(m for m in sys.modules if m.split('.')[0] == 'rclpy'))"
     )

@@ -9,8 +9,8 @@ import pytest
 from brake_sim_ros.errors import ParameterError
 from brake_sim_ros.model.defects import Defects, ShoeDefect
 from brake_sim_ros.model.parameters import PARAMETER_GROUPS, BrakeParameters
-from brake_sim_ros.ros import parameters as ros_params
 from brake_sim_ros.scenarios import builtin_names, load_scenario
+from brake_sim_ros.stream import parameters as ros_params
 
 
 def test_every_core_field_is_a_parameter():
@@ -116,10 +116,12 @@ def test_descriptors():
     pytest.importorskip("rcl_interfaces")
     from rcl_interfaces.msg import ParameterType
 
+    from brake_sim_ros.ros.descriptors import descriptor
+
     spec = ros_params.ParamSpec("friction.coefficient", 0.3, "text", (0.0, 1.0))
-    desc = ros_params.descriptor(spec)
+    desc = descriptor(spec)
     assert desc.type == ParameterType.PARAMETER_DOUBLE
     assert desc.floating_point_range[0].from_value == 0.0
     assert desc.floating_point_range[0].to_value == 1.0
-    flag = ros_params.descriptor(ros_params.ParamSpec("paused", False, "t"))
+    flag = descriptor(ros_params.ParamSpec("paused", False, "t"))
     assert flag.type == ParameterType.PARAMETER_BOOL

@@ -19,13 +19,13 @@ import tempfile
 import time
 from pathlib import Path
 
+from brake_sim_ros import stream
 from brake_sim_ros.recording.record import record_offline
 from brake_sim_ros.recording.writer import RecordingOptions
-from brake_sim_ros.ros import stream
 from brake_sim_ros.ros.benchmark import _cpu_seconds
 from brake_sim_ros.ros.harness import NodeProcess, domain_id_for
-from brake_sim_ros.ros.offline import offline_messages
 from brake_sim_ros.scenarios import load_scenario
+from brake_sim_ros.stream.offline import offline_messages
 
 
 def _stream_only(scenario, sim_s: float) -> tuple[float, int]:

@@ -1,9 +1,10 @@
 """CDR payloads of the types this project records, checked before anything uses them.
 
 A recording says which type each channel carries, but that is a claim of the file. Only
-the types of the simulator's own topic table (:data:`RECORDED_TYPES`) are accepted, and
-their layout is taken from the definitions installed here (:mod:`.schemas`), never from
-the schema text in the file, and no module is ever imported by a name the file gives.
+the types of the simulator's own topic table (:data:`~brake_sim_ros.stream.topics.TYPES`)
+are accepted, and their layout is taken from the definitions installed here
+(:mod:`.schemas`), never from the schema text in the file, and no module is ever imported
+by a name the file gives.
 
 :func:`check` walks one payload against that layout (XCDR1, as ROS 2 and mcap_ros2 write
 it): every length is compared with the bytes left before anything is read, so a truncated
@@ -25,10 +26,8 @@ from typing import Any
 from mcap_ros2._dynamic import _for_each_msgdef, generate_dynamic
 
 from brake_sim_ros.recording import schemas
-from brake_sim_ros.ros import stream
+from brake_sim_ros.stream.topics import TYPES
 
-# every type the simulator publishes, records or accepts: the topic table's types
-RECORDED_TYPES: frozenset[str] = frozenset(t.type_name for t in stream.TOPICS)
 MAX_TRAILING_BYTES = 8
 _ENCAPSULATIONS = {b"\x00\x00": False, b"\x00\x01": True}  # CDR big / little endian
 _SIZES = {
@@ -54,10 +53,10 @@ class _Field:
 
 
 def _check_type(type_name: str) -> None:
-    if type_name not in RECORDED_TYPES:
+    if type_name not in TYPES:
         raise CdrError(
             f"type {type_name!r} is not one this project records; allowed: "
-            + ", ".join(sorted(RECORDED_TYPES))
+            + ", ".join(sorted(TYPES))
         )
 
 

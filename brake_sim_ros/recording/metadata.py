@@ -44,9 +44,10 @@ from typing import Any
 from brake_sim_ros import __version__
 from brake_sim_ros.model.defects import Defects
 from brake_sim_ros.model.parameters import BrakeParameters
-from brake_sim_ros.ros import parameters as ros_params
 from brake_sim_ros.scenarios import Scenario
 from brake_sim_ros.solvers.fixed_step import FixedStepStepper
+from brake_sim_ros.stream import parameters as ros_params
+from brake_sim_ros.stream.topics import QosSpec
 
 MODEL = "brake_sim_model"
 SCENARIO = "brake_sim_scenario"
@@ -187,22 +188,22 @@ def _duration(ns: int) -> dict[str, int]:
     return {"sec": ns // 1_000_000_000, "nsec": ns % 1_000_000_000}
 
 
-def qos_dict(profile) -> dict[str, Any]:
-    """One rclpy ``QoSProfile`` as rosbag2 (version 9) serializes it."""
+def qos_dict(profile: QosSpec) -> dict[str, Any]:
+    """One QoS profile as rosbag2 (version 9) serializes it (other policies at defaults)."""
     return {
-        "history": profile.history.name.lower(),
+        "history": profile.history,
         "depth": int(profile.depth),
-        "reliability": profile.reliability.name.lower(),
-        "durability": profile.durability.name.lower(),
-        "deadline": _duration(profile.deadline.nanoseconds),
-        "lifespan": _duration(profile.lifespan.nanoseconds),
-        "liveliness": profile.liveliness.name.lower(),
-        "liveliness_lease_duration": _duration(profile.liveliness_lease_duration.nanoseconds),
-        "avoid_ros_namespace_conventions": bool(profile.avoid_ros_namespace_conventions),
+        "reliability": profile.reliability,
+        "durability": profile.durability,
+        "deadline": _duration(0),
+        "lifespan": _duration(0),
+        "liveliness": "system_default",
+        "liveliness_lease_duration": _duration(0),
+        "avoid_ros_namespace_conventions": False,
     }
 
 
-def qos_yaml(profiles: list) -> str:
+def qos_yaml(profiles: list[QosSpec]) -> str:
     """``offered_qos_profiles`` channel metadata: a YAML list of :func:`qos_dict`."""
     return "\n".join(_yaml([qos_dict(p) for p in profiles], 0))
 

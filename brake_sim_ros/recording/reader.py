@@ -15,9 +15,10 @@ file gives without comparing it with what the file can hold:
   (zstd or none, as the recorder writes) and its CRC compared before one of its records
   is parsed.
 * Schemas must be ``ros2msg`` definitions of a type in the simulator's topic table
-  (:data:`.cdr.RECORDED_TYPES`); the schema text of the file is never used to decode and
-  never names a module to import. Channels must be ``cdr`` on a valid ROS topic name; a
-  ``topic_type_hash`` that disagrees with the installed definition is refused.
+  (:data:`brake_sim_ros.stream.topics.TYPES`); the schema text of the file is never used
+  to decode and never names a module to import. Channels must be ``cdr`` on a valid ROS
+  topic name; a ``topic_type_hash`` that disagrees with the installed definition is
+  refused.
 * Every message is checked against its type (:func:`.cdr.check`) before anything is
   published or shown.
 
@@ -41,7 +42,6 @@ from collections.abc import Collection, Iterator
 from dataclasses import dataclass, field
 
 import yaml
-from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
 from brake_sim_ros.recording import cdr
 from brake_sim_ros.recording.records import (
@@ -82,7 +82,13 @@ from brake_sim_ros.recording.records import (
     shown,
     verify_chunk,
 )
-from brake_sim_ros.ros.stream import Topic
+from brake_sim_ros.stream import Topic
+from brake_sim_ros.stream.topics import (
+    DURABILITY_POLICIES,
+    HISTORY_POLICIES,
+    RELIABILITY_POLICIES,
+    QosSpec,
+)
 
 # -- channel QoS ------------------------------------------------------------------------------
 MAX_QOS_YAML_BYTES = 4096  # the recorder writes about 330 bytes per profile
@@ -96,22 +102,17 @@ _QOS_KEYS = frozenset(
 )  # fmt: skip
 
 
-def _qos_policy(profile: dict, key: str, enum: type, default: str):
+def _qos_policy(profile: dict, key: str, allowed: tuple[str, ...], default: str) -> str:
+    """A policy name of ``allowed`` from its name or its rmw enum value (the index)."""
     value = profile.get(key, default)
-    allowed = [m for m in enum if m.name != "UNKNOWN"]
-    if isinstance(value, str):
-        for member in allowed:
-            if member.name.lower() == value.lower():
-                return member
-    elif isinstance(value, int) and not isinstance(value, bool):
-        for member in allowed:
-            if member.value == value:
-                return member
-    names = ", ".join(m.name.lower() for m in allowed)
-    raise MalformedError(f"offered_qos_profiles {key}: allowed {names}")
+    if isinstance(value, str) and value.lower() in allowed:
+        return value.lower()
+    if isinstance(value, int) and not isinstance(value, bool) and 0 <= value < len(allowed):
+        return allowed[value]
+    raise MalformedError(f"offered_qos_profiles {key}: allowed {', '.join(allowed)}")
 
 
-def offered_qos(text: str) -> QoSProfile | None:
+def offered_qos(text: str) -> QosSpec | None:
     """The first profile of rosbag2's ``offered_qos_profiles`` YAML (None when empty).
 
     Only history, depth, reliability and durability are used (the recorder writes the
@@ -143,14 +144,12 @@ def offered_qos(text: str) -> QoSProfile | None:
     depth = profile.get("depth", 10)
     if isinstance(depth, bool) or not isinstance(depth, int) or not 0 <= depth <= MAX_QOS_DEPTH:
         raise MalformedError(f"offered_qos_profiles depth: allowed an integer 0..{MAX_QOS_DEPTH}")
-    history = _qos_policy(profile, "history", HistoryPolicy, "keep_last")
-    if history == HistoryPolicy.SYSTEM_DEFAULT:
-        history = HistoryPolicy.KEEP_LAST
-    return QoSProfile(
-        history=history,
+    history = _qos_policy(profile, "history", HISTORY_POLICIES, "keep_last")
+    return QosSpec(
+        reliability=_qos_policy(profile, "reliability", RELIABILITY_POLICIES, "reliable"),
+        durability=_qos_policy(profile, "durability", DURABILITY_POLICIES, "volatile"),
         depth=depth or 10,
-        reliability=_qos_policy(profile, "reliability", ReliabilityPolicy, "reliable"),
-        durability=_qos_policy(profile, "durability", DurabilityPolicy, "volatile"),
+        history="keep_last" if history == "system_default" else history,
     )
 
 
@@ -161,7 +160,7 @@ class RecordedChannel:
 
     channel_id: int
     topic: Topic  # name and type (a type of the topic table)
-    qos: QoSProfile | None  # the recorded offer (None when the channel has none)
+    qos: QosSpec | None  # the recorded offer (None when the channel has none)
     message_count: int
 
 

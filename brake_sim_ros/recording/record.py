@@ -13,14 +13,14 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
+from brake_sim_ros import stream
 from brake_sim_ros.recording import metadata
 from brake_sim_ros.recording.writer import McapRecorder, RecordingOptions
-from brake_sim_ros.ros import parameters as ros_params
-from brake_sim_ros.ros import stream
-from brake_sim_ros.ros.offline import StreamSettings, offline_messages
-from brake_sim_ros.ros.stream import MessageSink
 from brake_sim_ros.scenarios import Scenario
 from brake_sim_ros.solvers.build import stepper_for
+from brake_sim_ros.stream import MessageSink
+from brake_sim_ros.stream import parameters as ros_params
+from brake_sim_ros.stream.offline import StreamSettings, offline_messages
 
 if TYPE_CHECKING:
     from brake_sim_ros.ros.node import BrakeSimNode

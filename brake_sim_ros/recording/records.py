@@ -26,7 +26,8 @@ from pathlib import Path
 import zstandard
 
 from brake_sim_ros.errors import BrakeSimError
-from brake_sim_ros.recording import cdr, schemas
+from brake_sim_ros.recording import schemas
+from brake_sim_ros.stream.topics import TYPES
 
 MAGIC = b"\x89MCAP0\r\n"
 PROFILE = "ros2"
@@ -462,10 +463,10 @@ def check_schema(schema: Schema) -> None:
         raise MalformedError(
             f"schema {schema.id} has encoding {shown(schema.encoding)}: allowed {SCHEMA_ENCODING!r}"
         )
-    if schema.name not in cdr.RECORDED_TYPES:
+    if schema.name not in TYPES:
         raise MalformedError(
             f"schema {schema.id} names type {shown(schema.name)}, not one this project"
-            f" records; allowed: {', '.join(sorted(cdr.RECORDED_TYPES))}"
+            f" records; allowed: {', '.join(sorted(TYPES))}"
         )
 
 

@@ -74,8 +74,7 @@ from brake_sim_ros.recording.records import (
     read_frame,
     verify_chunk,
 )
-from brake_sim_ros.recording.writer import TYPE_QOS
-from brake_sim_ros.ros import qos
+from brake_sim_ros.stream.topics import TOPIC_BY_TYPE
 
 RECOVERY = "brake_sim_recovery"
 _REBUILT = (metadata.ROSBAG2, RECOVERY)
@@ -444,7 +443,7 @@ def _usable_channels(scan: _Scan, result: Recovery) -> tuple[dict[int, _Usable],
                 f" {type_name} is written instead"
             )
         if profile is None:
-            profile = TYPE_QOS.get(type_name, qos.STREAM)
+            profile = TOPIC_BY_TYPE[type_name].qos
         usable[channel_id] = _Usable(channel, type_name, metadata.qos_yaml([profile]))
     return usable, refused
 

@@ -1,4 +1,4 @@
-"""``McapRecorder``: a :class:`~brake_sim_ros.ros.stream.MessageSink` that writes a rosbag2 MCAP.
+"""``McapRecorder``: a :class:`~brake_sim_ros.stream.MessageSink` that writes a rosbag2 MCAP.
 
 The file is what ``ros2 bag`` (rosbag2_storage_mcap, Jazzy) writes: profile ``ros2``, one
 schema per type with its complete ``ros2msg`` definition (:mod:`.schemas`), channels with
@@ -52,26 +52,13 @@ from mcap_ros2._dynamic import EncoderFunction, serialize_dynamic
 from brake_sim_ros import __version__
 from brake_sim_ros.errors import BrakeSimError
 from brake_sim_ros.recording import metadata, schemas
-from brake_sim_ros.ros import qos, stream
-from brake_sim_ros.ros.stream import Topic
+from brake_sim_ros.stream import Topic
+from brake_sim_ros.stream.topics import QosSpec, offered_qos
 
 PROFILE = "ros2"
 SCHEMA_ENCODING = "ros2msg"
 MESSAGE_ENCODING = "cdr"
 COMPRESSIONS = {"zstd": CompressionType.ZSTD, "none": CompressionType.NONE}
-# offered QoS per message type (each type has one topic in the stream); the commands are
-# recorded as the offer a republisher (ros2 bag play) should make: reliable, volatile
-TYPE_QOS = {
-    stream.PIVOT_FORCES.type_name: qos.STREAM,
-    stream.STATE.type_name: qos.STREAM,
-    stream.JOINT_STATES.type_name: qos.STREAM,
-    stream.DEFECTS.type_name: qos.LATCHED,
-    stream.CLOCK.type_name: qos.CLOCK,
-    stream.DIAGNOSTICS.type_name: qos.DIAGNOSTICS,
-    stream.ACTUATION.type_name: qos.STREAM,
-}
-
-
 _BYTE_FIELD = re.compile(r"^\s*byte(\[[^\]]*\])?\s", re.MULTILINE)
 
 
@@ -288,8 +275,8 @@ class McapRecorder:
         return channel
 
     @staticmethod
-    def _qos(topic: Topic):
-        return TYPE_QOS.get(topic.type_name, qos.STREAM)
+    def _qos(topic: Topic) -> QosSpec:
+        return offered_qos(topic)
 
     def write(self, topic: Topic, msg: Any, time_ns: int) -> None:
         """Add one message at simulated time ``time_ns`` (ns, >= 0) on ``topic``.

@@ -27,7 +27,7 @@ from dataclasses import dataclass
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 
-from brake_sim_ros.ros.conversion import header
+from brake_sim_ros.stream.conversion import header
 
 HARDWARE_ID = "brake_sim"
 

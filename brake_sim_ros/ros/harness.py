@@ -38,7 +38,10 @@ from rclpy.qos import QoSProfile
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 
-from brake_sim_ros.ros import conversion, qos
+from brake_sim_ros import stream
+from brake_sim_ros.ros import qos
+from brake_sim_ros.stream import conversion
+from brake_sim_ros.stream.topics import STREAM_QOS
 
 NODE = "/brake_sim"
 
@@ -161,16 +164,26 @@ class SimClient:
         n.create_subscription(PivotForceChunk, f"{node}/pivot_forces", self._on_chunk, stream_qos)
         n.create_subscription(BrakeState, f"{node}/state", self._on_state, stream_qos)
         n.create_subscription(JointState, f"{node}/joint_states", self.rx.joints.append, stream_qos)
-        # reliable like the node's publisher: every label matters (see qos.EVENTS)
+        # reliable like the node's publisher: every label matters (see stream.topics.EVENTS_QOS)
         n.create_subscription(
-            ContactEvent, f"{node}/contact_events", self.rx.contact_events.append, qos.EVENTS
+            ContactEvent,
+            f"{node}/contact_events",
+            self.rx.contact_events.append,
+            qos.for_topic(stream.CONTACT_EVENTS),
         )
-        n.create_subscription(DefectState, f"{node}/defects", self.rx.defects.append, qos.LATCHED)
-        n.create_subscription(Clock, "/clock", self.rx.clocks.append, qos.CLOCK)
         n.create_subscription(
-            DiagnosticArray, "/diagnostics", self.rx.diagnostics.append, qos.DIAGNOSTICS
+            DefectState, f"{node}/defects", self.rx.defects.append, qos.for_topic(stream.DEFECTS)
         )
-        self.actuation = n.create_publisher(ActuationCommand, f"{node}/actuation", qos.STREAM)
+        n.create_subscription(Clock, "/clock", self.rx.clocks.append, qos.for_topic(stream.CLOCK))
+        n.create_subscription(
+            DiagnosticArray,
+            "/diagnostics",
+            self.rx.diagnostics.append,
+            qos.for_topic(stream.DIAGNOSTICS),
+        )
+        self.actuation = n.create_publisher(
+            ActuationCommand, f"{node}/actuation", qos.profile(STREAM_QOS)
+        )
         self._step = n.create_client(StepSimulation, f"{node}/step")
         self._reset = n.create_client(ResetSimulation, f"{node}/reset")
         self._set = n.create_client(SetParameters, f"{node}/set_parameters")

@@ -49,13 +49,8 @@ from collections.abc import Callable, Iterable
 import rclpy
 from brake_sim_msgs.msg import (
     ActuationCommand,
-    BrakeState,
-    ContactEvent,
-    DefectState,
-    PivotForceChunk,
 )
 from brake_sim_msgs.srv import ResetSimulation, StepSimulation
-from diagnostic_msgs.msg import DiagnosticArray
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.clock import Clock, ClockType
 from rclpy.exceptions import ParameterException, ParameterNotDeclaredException
@@ -64,27 +59,28 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.signals import SignalHandlerOptions
 from rclpy.utilities import remove_ros_args
-from rosgraph_msgs.msg import Clock as ClockMsg
-from sensor_msgs.msg import JointState
 
+from brake_sim_ros import stream
 from brake_sim_ros.analysis.contact_events import ContactEventDetector
 from brake_sim_ros.errors import BrakeSimError, ParameterError
 from brake_sim_ros.model.trajectory import BrakeSetup, SampleBlock
-from brake_sim_ros.ros import conversion, qos, stream
-from brake_sim_ros.ros import parameters as ros_params
+from brake_sim_ros.ros import qos
 from brake_sim_ros.ros.commands import (
     ActuationPlanner,
     CommandPolicy,
     TimeoutBehaviour,
     check_command,
 )
+from brake_sim_ros.ros.descriptors import descriptor
 from brake_sim_ros.ros.diagnostics import RunStats, RunView, diagnostic_array, summary
+from brake_sim_ros.ros.messages import message_class
 from brake_sim_ros.ros.pacing import Pacer, PacingMode
-from brake_sim_ros.ros.stream import MessageSink, Topic
 from brake_sim_ros.scenarios import Scenario, load_scenario
 from brake_sim_ros.solvers.build import stepper_for
 from brake_sim_ros.solvers.fixed_step import FixedStepStepper
 from brake_sim_ros.solvers.realtime import calibrate_chunk_cost, check_realtime
+from brake_sim_ros.stream import MessageSink, Topic, conversion
+from brake_sim_ros.stream import parameters as ros_params
 
 NODE_NAME = "brake_sim"
 MAX_LAG_S = 0.5  # wall seconds of backlog that are caught up (see pacing)
@@ -184,22 +180,20 @@ class BrakeSimNode(Node):
         # -- interfaces ----------------------------------------------------------------------
         # canonical topic -> (publisher, the topic under the name this node resolved)
         self._outputs: dict[Topic, tuple] = {}
-        for topic, msg_type, name, profile in (
-            (stream.PIVOT_FORCES, PivotForceChunk, "~/pivot_forces", qos.STREAM),
-            (stream.STATE, BrakeState, "~/state", qos.STREAM),
-            (stream.JOINT_STATES, JointState, "~/joint_states", qos.STREAM),
-            (stream.CONTACT_EVENTS, ContactEvent, "~/contact_events", qos.EVENTS),
-            (stream.DEFECTS, DefectState, "~/defects", qos.LATCHED),
-            (stream.CLOCK, ClockMsg, "/clock", qos.CLOCK),
-            (stream.DIAGNOSTICS, DiagnosticArray, "/diagnostics", qos.DIAGNOSTICS),
-        ):
-            pub = self.create_publisher(msg_type, name, profile)
-            self._outputs[topic] = (pub, Topic(pub.topic_name, topic.type_name))
+        for topic in stream.TOPICS:
+            if topic.published:
+                pub = self.create_publisher(
+                    message_class(topic.type_name), topic.relative, qos.for_topic(topic)
+                )
+                self._outputs[topic] = (pub, dataclasses.replace(topic, name=pub.topic_name))
         self._sinks: list[MessageSink] = []
         sub = self.create_subscription(
-            ActuationCommand, "~/actuation", self._on_actuation, qos.COMMANDS
+            ActuationCommand,
+            stream.ACTUATION.relative,
+            self._on_actuation,
+            qos.for_topic(stream.ACTUATION),
         )
-        self._actuation_topic = Topic(sub.topic_name, stream.ACTUATION.type_name)
+        self._actuation_topic = dataclasses.replace(stream.ACTUATION, name=sub.topic_name)
         self.create_service(StepSimulation, "~/step", self._on_step)
         self.create_service(ResetSimulation, "~/reset", self._on_reset)
         self._tick_timer = self.create_timer(
@@ -278,7 +272,7 @@ class BrakeSimNode(Node):
     def _declare(self, specs) -> None:
         for spec in specs:
             try:
-                self.declare_parameter(spec.name, spec.default, ros_params.descriptor(spec))
+                self.declare_parameter(spec.name, spec.default, descriptor(spec))
             except ParameterException as exc:  # a bad --ros-args override
                 raise ParameterError(f"--ros-args override refused: {exc}") from None
 

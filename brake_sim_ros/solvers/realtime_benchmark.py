@@ -18,7 +18,6 @@ import time
 import numpy as np
 
 from brake_sim_ros.model import layout as L
-from brake_sim_ros.ros import parameters as ros_params
 from brake_sim_ros.scenarios import load_scenario
 from brake_sim_ros.solvers.build import stepper_for
 from brake_sim_ros.solvers.realtime import (
@@ -27,6 +26,7 @@ from brake_sim_ros.solvers.realtime import (
     calibrate_chunk_cost,
     check_realtime,
 )
+from brake_sim_ros.stream import parameters as ros_params
 
 
 def _regime_of(block) -> str:

@@ -87,7 +87,7 @@ def simulate_to_rerun(
     Returns:
         One line saying what was logged where.
     """
-    from brake_sim_ros.ros.offline import offline_messages
+    from brake_sim_ros.stream.offline import offline_messages
 
     sinks = open_simulation_sinks(scenario, targets)
     try:
@@ -156,7 +156,7 @@ def rerun_openers(targets: list[RerunTarget]) -> list:
     Each is called with the node once it is set up, before its first message; the drawing
     uses the model in force (the node's model parameters, ``--ros-args`` overrides included).
     """
-    from brake_sim_ros.ros import parameters as ros_params
+    from brake_sim_ros.stream import parameters as ros_params
 
     def opener(node, target: RerunTarget):
         base = ros_params.model_values(node.scenario.setup.params, node.scenario.setup.defects)

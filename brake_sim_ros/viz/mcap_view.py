@@ -24,7 +24,7 @@ from brake_sim_ros.model.parameters import BrakeParameters
 from brake_sim_ros.recording import cdr
 from brake_sim_ros.recording.metadata import MODEL, SCENARIO
 from brake_sim_ros.recording.reader import Recording, RecordingReadError
-from brake_sim_ros.ros import parameters as ros_params
+from brake_sim_ros.stream import parameters as ros_params
 from brake_sim_ros.viz.rerun_sink import RerunSink
 
 MAX_VALUE_CHARS = 100  # a model value is the repr() of one number

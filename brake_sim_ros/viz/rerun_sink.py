@@ -1,4 +1,4 @@
-"""A :class:`~brake_sim_ros.ros.stream.MessageSink` that logs the simulator's stream to Rerun.
+"""A :class:`~brake_sim_ros.stream.MessageSink` that logs the simulator's stream to Rerun.
 
 It reads messages by attribute only, so it takes the node's rclpy messages and the
 objects ``mcap_ros2`` decodes from a recording alike (arrays may be lists,
@@ -44,7 +44,7 @@ from brake_sim_ros.errors import BrakeSimError, ParameterError
 from brake_sim_ros.model.defects import Defects, ShoeDefect
 from brake_sim_ros.model.layout import REGIME_NAMES
 from brake_sim_ros.model.parameters import BrakeParameters
-from brake_sim_ros.ros.stream import Topic
+from brake_sim_ros.stream import Topic
 from brake_sim_ros.viz import entities as E
 from brake_sim_ros.viz.drawing import FORCE_SCALE_M_PER_N, BrakeDrawing, contact_force_vectors
 

@@ -19,11 +19,11 @@ rclpy = pytest.importorskip("rclpy", reason="rclpy not installed (run scripts/se
 
 from rclpy.qos import QoSProfile, ReliabilityPolicy  # noqa: E402
 
+from brake_sim_ros import stream  # noqa: E402
 from brake_sim_ros.analysis import contact_events as ce  # noqa: E402
-from brake_sim_ros.ros import stream  # noqa: E402
 from brake_sim_ros.ros.harness import NodeProcess, SimClient, domain_id_for  # noqa: E402
-from brake_sim_ros.ros.offline import offline_messages  # noqa: E402
 from brake_sim_ros.scenarios import load_scenario  # noqa: E402
+from brake_sim_ros.stream.offline import offline_messages  # noqa: E402
 
 DOMAIN = domain_id_for(8)
 N_STEPS = 7680  # 0.3 s of 25.6 kHz samples: every bounce of the symmetric run, contact starts

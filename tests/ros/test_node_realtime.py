@@ -33,7 +33,8 @@ from rclpy.qos import (  # noqa: E402
     ReliabilityPolicy,
 )
 
-from brake_sim_ros.ros import conversion, qos  # noqa: E402
+from brake_sim_ros import stream  # noqa: E402
+from brake_sim_ros.ros import qos  # noqa: E402
 from brake_sim_ros.ros.harness import (  # noqa: E402
     NodeProcess,
     SimClient,
@@ -42,6 +43,7 @@ from brake_sim_ros.ros.harness import (  # noqa: E402
 )
 from brake_sim_ros.scenarios import load_scenario  # noqa: E402
 from brake_sim_ros.solvers.build import stepper_for  # noqa: E402
+from brake_sim_ros.stream import conversion  # noqa: E402
 
 DOMAIN = domain_id_for(1)
 RUN_S = 3.0
@@ -235,7 +237,9 @@ def test_ground_truth_is_latched_for_late_subscribers(run):
     from brake_sim_msgs.msg import DefectState
 
     late = []
-    client.node.create_subscription(DefectState, "/brake_sim/defects", late.append, qos.LATCHED)
+    client.node.create_subscription(
+        DefectState, "/brake_sim/defects", late.append, qos.for_topic(stream.DEFECTS)
+    )
     client.wait_for(lambda: bool(late), 10.0, "latched DefectState")
     assert late[-1].scenario == "symmetric" and late[-1].healthy
     assert late[-1].left_actuation_share == 0.5 and list(late[-1].active_defects) == []

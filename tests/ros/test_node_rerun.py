@@ -16,8 +16,8 @@ pytestmark = [
 pytest.importorskip("rclpy", reason="rclpy not installed (run scripts/setup.sh)")
 pytest.importorskip("rerun")
 
-from brake_sim_ros.ros import conversion  # noqa: E402
 from brake_sim_ros.ros.harness import NodeProcess, domain_id_for  # noqa: E402
+from brake_sim_ros.stream import conversion  # noqa: E402
 from brake_sim_ros.viz import entities as E  # noqa: E402
 
 RUN_S = 0.5

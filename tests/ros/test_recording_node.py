@@ -31,11 +31,12 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy  # noqa: E402
 from rosbags.rosbag2.storage_mcap import McapReader  # noqa: E402
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore  # noqa: E402
 
+from brake_sim_ros import stream  # noqa: E402
 from brake_sim_ros.recording.record import record_offline  # noqa: E402
 from brake_sim_ros.recording.recover import recover  # noqa: E402
-from brake_sim_ros.ros import conversion, stream  # noqa: E402
 from brake_sim_ros.ros.harness import NodeProcess, SimClient, domain_id_for  # noqa: E402
 from brake_sim_ros.scenarios import load_scenario  # noqa: E402
+from brake_sim_ros.stream import conversion  # noqa: E402
 
 SCENARIO = "symmetric"
 SUMMARY = re.compile(r"published (\d+) samples in (\d+) chunks and (\d+) states")

@@ -22,9 +22,10 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.serialization import deserialize_message
 
-from brake_sim_ros.ros import qos, stream
+from brake_sim_ros import stream
+from brake_sim_ros.ros import qos
 from brake_sim_ros.ros.harness import domain_id_for, ros_environment
-from brake_sim_ros.ros.replay import message_class
+from brake_sim_ros.ros.messages import message_class
 
 pytestmark = pytest.mark.ros
 
@@ -83,9 +84,9 @@ class RawListener:
         self.received: list[tuple[str, bytes, float]] = []
         for name, type_name in topics.items():
             if name == stream.DEFECTS.name:
-                profile = qos.LATCHED
+                profile = qos.for_topic(stream.DEFECTS)
             elif name == stream.CLOCK.name:
-                profile = qos.CLOCK
+                profile = qos.for_topic(stream.CLOCK)
             else:
                 profile = LOSSLESS
             self.node.create_subscription(

@@ -20,7 +20,8 @@ Two model fields are initial conditions and only take effect at the next ``~/res
 ``defects.<side>.initial_angle_deg`` (the shoe's starting angle) and
 ``driveline.initial_speed_rad_s``. They are validated and accepted at once.
 
-This module imports no rclpy; :func:`descriptor` imports ``rcl_interfaces`` lazily.
+This module imports no rclpy; ``brake_sim_ros.ros.descriptors`` turns a spec into ROS's
+``ParameterDescriptor``.
 """
 
 from __future__ import annotations
@@ -317,31 +318,6 @@ def complete_actuation_share(changes: dict[str, Any]) -> dict[str, Any]:
         ):
             out[other_name] = 1.0 - float(value)
     return out
-
-
-def descriptor(spec: ParamSpec):
-    """``rcl_interfaces/ParameterDescriptor`` for ``spec``."""
-    from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, ParameterType
-
-    types = {
-        bool: ParameterType.PARAMETER_BOOL,
-        int: ParameterType.PARAMETER_INTEGER,
-        float: ParameterType.PARAMETER_DOUBLE,
-        str: ParameterType.PARAMETER_STRING,
-    }
-    desc = ParameterDescriptor(
-        name=spec.name,
-        type=types[type(spec.default)],
-        description=spec.description,
-        additional_constraints=spec.constraints,
-    )
-    if spec.range is not None and isinstance(spec.default, float):
-        desc.floating_point_range = [
-            FloatingPointRange(
-                from_value=float(spec.range[0]), to_value=float(spec.range[1]), step=0.0
-            )
-        ]
-    return desc
 
 
 # -- the actuation limit ------------------------------------------------------------------------

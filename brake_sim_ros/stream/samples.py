@@ -4,48 +4,25 @@ The node publishes this stream over DDS; recorders (MCAP), viewers (Rerun) and t
 offline simulator consume the very same sequence, so a run recorded live and the same
 run produced offline hold the same messages. Nothing here talks to rclpy's transport.
 
-Topic names are the resolved ones of a node named ``brake_sim`` (the node itself uses
-``~/...`` names, so a renamed node publishes under its own name; sinks attached to a node
-receive the names it actually resolved). Times are simulated, integer nanoseconds.
+Topics, their types and QoS are those of :mod:`brake_sim_ros.stream.topics`. Times are
+simulated, integer nanoseconds.
 """
 
 from __future__ import annotations
 
 from collections.abc import Iterator
-from dataclasses import dataclass
 from typing import Any, Protocol
 
 from brake_sim_ros.analysis.contact_events import ContactEventDetector
 from brake_sim_ros.model.trajectory import SampleBlock
-from brake_sim_ros.ros import conversion
-
-
-@dataclass(frozen=True)
-class Topic:
-    """One published or subscribed topic: resolved name and ROS type (``pkg/msg/Name``)."""
-
-    name: str
-    type_name: str
-
-
-PIVOT_FORCES = Topic("/brake_sim/pivot_forces", "brake_sim_msgs/msg/PivotForceChunk")
-STATE = Topic("/brake_sim/state", "brake_sim_msgs/msg/BrakeState")
-JOINT_STATES = Topic("/brake_sim/joint_states", "sensor_msgs/msg/JointState")
-DEFECTS = Topic("/brake_sim/defects", "brake_sim_msgs/msg/DefectState")
-CLOCK = Topic("/clock", "rosgraph_msgs/msg/Clock")
-DIAGNOSTICS = Topic("/diagnostics", "diagnostic_msgs/msg/DiagnosticArray")
-ACTUATION = Topic("/brake_sim/actuation", "brake_sim_msgs/msg/ActuationCommand")
-CONTACT_EVENTS = Topic("/brake_sim/contact_events", "brake_sim_msgs/msg/ContactEvent")
-
-TOPICS = (
+from brake_sim_ros.stream import conversion
+from brake_sim_ros.stream.topics import (
+    CLOCK,
+    CONTACT_EVENTS,
+    JOINT_STATES,
     PIVOT_FORCES,
     STATE,
-    JOINT_STATES,
-    DEFECTS,
-    CLOCK,
-    DIAGNOSTICS,
-    ACTUATION,
-    CONTACT_EVENTS,
+    Topic,
 )
 
 

@@ -14,13 +14,13 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import Any
 
+from brake_sim_ros import stream
 from brake_sim_ros.analysis.contact_events import ContactEventDetector
-from brake_sim_ros.ros import conversion, stream
-from brake_sim_ros.ros import parameters as ros_params
-from brake_sim_ros.ros.stream import Topic
 from brake_sim_ros.scenarios import Scenario
 from brake_sim_ros.solvers.build import stepper_for
 from brake_sim_ros.solvers.fixed_step import FixedStepStepper
+from brake_sim_ros.stream import Topic, conversion
+from brake_sim_ros.stream import parameters as ros_params
 
 
 def _default(name: str):

@@ -1,0 +1,38 @@
+"""The sample stream, transport-free: what the simulator publishes, as data.
+
+``topics`` holds the one table of topics (name, type, QoS, rate); ``samples`` turns stepped
+blocks into ``(topic, message, time_ns)``; ``conversion`` builds the messages; ``offline``
+runs a scenario into the stream without DDS; ``parameters`` maps the node's parameters
+onto the core's dataclasses and rebuilds the model from them. The node, the MCAP recorder,
+the Rerun sink and the dataset writer all consume this one stream; nothing here imports
+rclpy's transport, a file format or a viewer.
+"""
+
+from brake_sim_ros.stream.samples import MessageSink, block_messages
+from brake_sim_ros.stream.topics import (
+    ACTUATION,
+    CLOCK,
+    CONTACT_EVENTS,
+    DEFECTS,
+    DIAGNOSTICS,
+    JOINT_STATES,
+    PIVOT_FORCES,
+    STATE,
+    TOPICS,
+    Topic,
+)
+
+__all__ = [
+    "ACTUATION",
+    "CLOCK",
+    "CONTACT_EVENTS",
+    "DEFECTS",
+    "DIAGNOSTICS",
+    "JOINT_STATES",
+    "PIVOT_FORCES",
+    "STATE",
+    "TOPICS",
+    "MessageSink",
+    "Topic",
+    "block_messages",
+]
