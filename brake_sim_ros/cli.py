@@ -16,13 +16,15 @@ import numpy as np
 
 from brake_sim_ros import __version__
 from brake_sim_ros.errors import BrakeSimError
-from brake_sim_ros.scenarios.loader import SOLVER_METHODS
+from brake_sim_ros.model.layout import SIDES
+from brake_sim_ros.solvers.methods import METHODS, SOLVER_METHODS
 from brake_sim_ros.solvers.presets import PRESETS
+from brake_sim_ros.studies import BENCHMARKS
 
 if TYPE_CHECKING:  # the CLI imports the numerics only when a command needs them
     from brake_sim_ros.analysis.impacts import ShoeMetrics
     from brake_sim_ros.scenarios.loader import Scenario
-    from brake_sim_ros.solvers.run import RunResult
+    from brake_sim_ros.stream.run import RunResult
 
 EXIT_ERROR = 2
 
@@ -108,9 +110,7 @@ def simulate_summary(result: RunResult, scenario: Scenario) -> str:
         stop = "not stopped"
     else:
         stop = "not delivered by this level"
-    unit = {"reference": "f-evals", "contact_regime": "RK4 steps"}.get(
-        result.method, "physics steps"
-    )
+    unit = METHODS[result.method].counts
     lines = [
         f"level {chosen.level.name} ({chosen.level.description}; shoes"
         f" {', '.join(chosen.shoes)}): {chosen.reason}",
@@ -121,7 +121,7 @@ def simulate_summary(result: RunResult, scenario: Scenario) -> str:
     ]
     if result.step_note:
         lines.append(f"preset {scenario.solver.preset}: {result.step_note}")
-    for side in ("left", "right"):
+    for side in SIDES:
         if not any(c.startswith(f"{side}_") for c in result.samples.columns):
             lines.append(f"  {side:5s}: not asked for")
             continue
@@ -131,7 +131,7 @@ def simulate_summary(result: RunResult, scenario: Scenario) -> str:
 
 def cmd_simulate(args: argparse.Namespace) -> int:
     from brake_sim_ros.scenarios import load_scenario
-    from brake_sim_ros.solvers.run import run_scenario
+    from brake_sim_ros.stream.run import run_scenario
 
     if args.dt is not None:
         raise BrakeSimError(
@@ -223,7 +223,7 @@ def cmd_view(args: argparse.Namespace) -> int:
 
 # --- validate ------------------------------------------------------------------------------------
 def cmd_validate(args: argparse.Namespace) -> int:
-    from brake_sim_ros.analysis.validation import write_report
+    from brake_sim_ros.studies.validation import write_report
 
     out = Path(args.out)
     _fig, check_list = write_report(
@@ -257,38 +257,8 @@ def cmd_scenarios(args: argparse.Namespace) -> int:
 
 
 # --- bench ---------------------------------------------------------------------------
-# benchmark name -> (module with main(argv), what it measures); imported only when run
-BENCHMARKS = {
-    "core": ("brake_sim_ros.solvers.benchmark", "cost and accuracy of the fixed-step stepper"),
-    "accuracy": (
-        "brake_sim_ros.solvers.work_precision",
-        "work-precision study of every solver and preset (table and plot)",
-    ),
-    "presets": (
-        "brake_sim_ros.solvers.preset_study",
-        "each preset's errors over onset phases, against its stated bounds",
-    ),
-    "node": ("brake_sim_ros.ros.benchmark", "the ROS node's real-time figures"),
-    "recording": (
-        "brake_sim_ros.recording.benchmark",
-        "MCAP recording throughput, CPU at real time and size per simulated second",
-    ),
-    "realtime": (
-        "brake_sim_ros.solvers.realtime_benchmark",
-        "worst-case cost per streaming chunk, against the real-time budget",
-    ),
-    "fidelity": (
-        "brake_sim_ros.solvers.fidelity_study",
-        "cost and error of each fidelity level against the full model",
-    ),
-}
-
-
 def cmd_bench(args: argparse.Namespace) -> int:
-    import importlib
-
-    module, _what = BENCHMARKS[args.what]
-    return int(importlib.import_module(module).main(args.rest) or 0)
+    return int(BENCHMARKS[args.what].run(args.rest) or 0)
 
 
 def run_node(argv: list[str]) -> int:
@@ -419,7 +389,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser(
         "bench",
         help="benchmarks that print figures: "
-        + "; ".join(f"{name}: {what}" for name, (_m, what) in BENCHMARKS.items()),
+        + "; ".join(f"{s.name}: {s.measures}" for s in BENCHMARKS.values()),
     )
     p.add_argument("what", choices=tuple(BENCHMARKS))
     p.add_argument("rest", nargs=argparse.REMAINDER)

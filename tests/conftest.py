@@ -8,7 +8,7 @@ import pytest
 
 from brake_sim_ros.model.trajectory import SampleBlock
 from brake_sim_ros.scenarios import load_scenario
-from brake_sim_ros.solvers.run import RunResult, run_scenario
+from brake_sim_ros.stream.run import RunResult, run_scenario
 
 IMPACTING_S = 0.3  # the impacting regime of the symmetric run ends at 0.27 s
 

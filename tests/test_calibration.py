@@ -5,13 +5,13 @@ from __future__ import annotations
 
 import pytest
 
-from brake_sim_ros.analysis.validation import (
+from brake_sim_ros.model.parameters import BrakeParameters
+from brake_sim_ros.studies import calibration as cal
+from brake_sim_ros.studies.validation import (
     PUBLISHED_CASES,
     PUBLISHED_FIRST_IMPACT_ACTUATION_N,
     PUBLISHED_STOP_TIME_S,
 )
-from brake_sim_ros.model.parameters import BrakeParameters
-from brake_sim_ros.studies import calibration as cal
 
 
 def test_search_vector_round_trips_through_the_parameters():

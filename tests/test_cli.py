@@ -10,11 +10,11 @@ import sys
 import numpy as np
 import pytest
 
-from brake_sim_ros.analysis.validation import checks
 from brake_sim_ros.cli import simulate_summary
 from brake_sim_ros.scenarios import load_scenario
 from brake_sim_ros.scenarios.loader import parse_scenario
-from brake_sim_ros.solvers.run import run_scenario
+from brake_sim_ros.stream.run import run_scenario
+from brake_sim_ros.studies.validation import checks
 
 
 def _cli(*args, cwd=None):

@@ -31,7 +31,7 @@ from brake_sim_ros.solvers.stability import step_limit
 DEFAULT_DT = 4e-5  # a physics step of 40 us, one sample per step
 SAMPLE_PERIOD_S = 1 / 25_600  # the scenarios' default sample rate
 NOMINAL_FORCE_N = 1300.0
-# The stepper's accuracy requirements (solvers/benchmark.py): impact peak force and
+# The stepper's accuracy requirements (studies/core_bench.py): impact peak force and
 # period within 1 %, stop time within 0.1 % of a converged solution.
 IMPACT_REL = 0.01
 STOP_REL = 0.001

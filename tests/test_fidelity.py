@@ -12,7 +12,7 @@ from brake_sim_ros.errors import FidelityError, ScenarioError
 from brake_sim_ros.model import layout as L
 from brake_sim_ros.model.fidelity import LEVELS, OUTPUTS, Needs, plan
 from brake_sim_ros.scenarios import load_scenario, parse_scenario
-from brake_sim_ros.solvers.run import run_scenario
+from brake_sim_ros.stream.run import run_scenario
 
 # --- planner: pure logic ----------------------------------------------------------------
 

@@ -15,9 +15,9 @@ from brake_sim_ros.model.defects import Defects, ShoeDefect
 from brake_sim_ros.model.parameters import BrakeParameters, ContactParameters, ShoeGeometry
 from brake_sim_ros.model.trajectory import BrakeSetup
 from brake_sim_ros.scenarios import load_scenario
-from brake_sim_ros.solvers.build import stepper_for
 from brake_sim_ros.solvers.fixed_step import FixedStepStepper
 from brake_sim_ros.solvers.reference import run_reference
+from brake_sim_ros.stream.build import stepper_for
 
 
 def test_hertz_line_contact_stiffness_closed_form():

@@ -11,9 +11,9 @@ from brake_sim_ros.analysis.impacts import event_metrics
 from brake_sim_ros.errors import ParameterError, ScenarioError
 from brake_sim_ros.scenarios import load_scenario
 from brake_sim_ros.scenarios.loader import DEFAULT_SAMPLE_RATE_HZ, parse_scenario
-from brake_sim_ros.solvers.build import stepper_for
 from brake_sim_ros.solvers.presets import DEFAULT_PRESET, PRESETS, get_preset
-from brake_sim_ros.solvers.work_precision import compare
+from brake_sim_ros.stream.build import stepper_for
+from brake_sim_ros.studies.work_precision import compare
 
 
 @pytest.mark.parametrize("name", sorted(PRESETS))

@@ -43,9 +43,9 @@ from brake_sim_ros.recording.writer import (  # noqa: E402
     RecordingOptions,
 )
 from brake_sim_ros.scenarios import load_scenario  # noqa: E402
-from brake_sim_ros.solvers.build import stepper_for  # noqa: E402
 from brake_sim_ros.stream import conversion  # noqa: E402
 from brake_sim_ros.stream import parameters as ros_params  # noqa: E402
+from brake_sim_ros.stream.build import stepper_for  # noqa: E402
 from brake_sim_ros.stream.offline import offline_messages  # noqa: E402
 
 SCENARIO = "case7_left_actuation"

@@ -24,10 +24,10 @@ from brake_sim_ros import stream  # noqa: E402
 from brake_sim_ros.analysis.onsets import contact_changes, in_contact  # noqa: E402
 from brake_sim_ros.cli import main  # noqa: E402
 from brake_sim_ros.scenarios import load_scenario  # noqa: E402
-from brake_sim_ros.solvers.run import run_scenario  # noqa: E402
 from brake_sim_ros.stream import conversion  # noqa: E402
 from brake_sim_ros.stream import parameters as ros_params  # noqa: E402
 from brake_sim_ros.stream.offline import StreamSettings, offline_messages  # noqa: E402
+from brake_sim_ros.stream.run import run_scenario  # noqa: E402
 from brake_sim_ros.viz import entities as E  # noqa: E402
 from brake_sim_ros.viz.rerun_sink import (  # noqa: E402
     LIVE_SETTINGS,

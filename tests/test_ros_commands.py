@@ -14,7 +14,7 @@ from brake_sim_ros.ros.commands import (
     check_command,
 )
 from brake_sim_ros.scenarios import load_scenario
-from brake_sim_ros.solvers.build import stepper_for
+from brake_sim_ros.stream.build import stepper_for
 
 DT = 4e-5
 TIMEOUT_STEPS = 5000  # 0.2 s

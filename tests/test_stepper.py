@@ -15,7 +15,6 @@ from brake_sim_ros.model.defects import Defects, ShoeDefect
 from brake_sim_ros.model.parameters import BrakeParameters
 from brake_sim_ros.model.trajectory import BrakeSetup
 from brake_sim_ros.scenarios import load_scenario
-from brake_sim_ros.solvers.build import stepper_for
 from brake_sim_ros.solvers.fixed_step import (
     MIN_PHYSICS_STEP_S,
     FixedStepStepper,
@@ -23,6 +22,7 @@ from brake_sim_ros.solvers.fixed_step import (
 )
 from brake_sim_ros.solvers.reference import run_reference
 from brake_sim_ros.solvers.stability import rk4_stable_step, step_limit
+from brake_sim_ros.stream.build import stepper_for
 
 PERIOD = 1 / 25_600  # the default sample rate
 

@@ -18,9 +18,9 @@ from brake_sim_ros.analysis.comparison import (
 from brake_sim_ros.analysis.energy import ENERGY_COLUMNS, energy_balance
 from brake_sim_ros.analysis.impacts import EventMetrics, ShoeMetrics
 from brake_sim_ros.scenarios import load_scenario
-from brake_sim_ros.solvers import fidelity_study
-from brake_sim_ros.solvers.run import RunResult
-from brake_sim_ros.solvers.work_precision import compare
+from brake_sim_ros.studies import fidelity as fidelity_study
+from brake_sim_ros.stream.run import RunResult
+from brake_sim_ros.studies.work_precision import compare
 
 
 def test_energy_books_read_their_columns_by_name(symmetric_run: RunResult):

@@ -26,6 +26,7 @@ import math
 
 from brake_sim_ros.model import layout as L
 from brake_sim_ros.model.assembly import contact_arms, pack
+from brake_sim_ros.model.layout import SIDES
 from brake_sim_ros.model.trajectory import BrakeSetup
 
 # Relative allowance for the change of the moment arms between first contact and the
@@ -43,7 +44,7 @@ def indentation_bound_m(setup: BrakeSetup, actuation_n: float) -> tuple[float, f
     k = p[L.P_CONTACT_STIFFNESS]
     mu = p[L.P_FRICTION_COEFFICIENT]
     out = []
-    for i, side in enumerate(("left", "right")):
+    for i, side in enumerate(SIDES):
         base = L.P_SHOE_BASE + i * L.SHOE_STRIDE
         start = math.radians(getattr(setup.defects, side).initial_angle_deg)
         arms = contact_arms(p, base, start)

@@ -23,11 +23,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from brake_sim_ros.analysis.onsets import contact_changes, in_contact
+from brake_sim_ros.model.layout import SIDES
 from brake_sim_ros.model.trajectory import SampleBlock
 
 SHOE_LEFT = 0
 SHOE_RIGHT = 1
-SHOES = ("left", "right")  # position = SHOE_* value
+SHOES = SIDES  # position = SHOE_* value
 
 KIND_ONSET = 0
 KIND_SEPARATION = 1

@@ -14,7 +14,7 @@ from brake_sim_ros.model import layout as L
 from brake_sim_ros.model.defects import Defects, ShoeDefect
 from brake_sim_ros.model.parameters import BrakeParameters
 
-SIDES = ("left", "right")
+SIDES = L.SIDES
 
 
 @dataclass(frozen=True)

@@ -40,7 +40,8 @@ from dataclasses import dataclass
 from brake_sim_ros.errors import FidelityError
 from brake_sim_ros.model import layout as L
 
-SIDES = ("left", "right")
+SIDES = L.SIDES
+# the solver presets by name (their schemes and steps: solvers/presets.py)
 ACCURACY_PRESETS = ("fast", "balanced", "accurate")
 
 # output name -> what it is (units) and what the contact-regime levels give for it

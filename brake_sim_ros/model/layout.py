@@ -17,6 +17,7 @@ P_CONTACT_DAMPING = 6
 P_FRICTION_COEFFICIENT = 7
 P_FRICTION_SMOOTHING_SPEED = 8
 P_RIGID_COUPLING = 9  # 1.0: flywheel and drum move as one body (no torsional mode)
+SIDES = ("left", "right")  # the shoes, in slot and column order: leading, trailing
 P_SHOE_BASE = 12  # first slot of the left shoe; the right shoe follows at +SHOE_STRIDE
 SHOE_STRIDE = 24
 

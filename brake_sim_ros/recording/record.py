@@ -17,9 +17,9 @@ from brake_sim_ros import stream
 from brake_sim_ros.recording import metadata
 from brake_sim_ros.recording.writer import McapRecorder, RecordingOptions
 from brake_sim_ros.scenarios import Scenario
-from brake_sim_ros.solvers.build import stepper_for
 from brake_sim_ros.stream import MessageSink
 from brake_sim_ros.stream import parameters as ros_params
+from brake_sim_ros.stream.build import stepper_for
 from brake_sim_ros.stream.offline import StreamSettings, offline_messages
 
 if TYPE_CHECKING:

@@ -1,7 +1,7 @@
 """ROS 2 adapter: the simulator as an rclpy node, and a recording replayed on ROS 2.
 
 The adapter translates, it holds no physics and no file format: the node steps the
-stepper :func:`brake_sim_ros.solvers.build.stepper_for` builds and publishes the stream of
+stepper :func:`brake_sim_ros.stream.build.stepper_for` builds and publishes the stream of
 :mod:`brake_sim_ros.stream`; it imports nothing from ``recording`` or ``viz`` (the
 composition roots in :mod:`brake_sim_ros.app` attach those as sinks).
 

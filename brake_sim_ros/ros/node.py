@@ -76,11 +76,11 @@ from brake_sim_ros.ros.diagnostics import RunStats, RunView, diagnostic_array, s
 from brake_sim_ros.ros.messages import message_class
 from brake_sim_ros.ros.pacing import Pacer, PacingMode
 from brake_sim_ros.scenarios import Scenario, load_scenario
-from brake_sim_ros.solvers.build import stepper_for
 from brake_sim_ros.solvers.fixed_step import FixedStepStepper
 from brake_sim_ros.solvers.realtime import calibrate_chunk_cost, check_realtime
 from brake_sim_ros.stream import MessageSink, Topic, conversion
 from brake_sim_ros.stream import parameters as ros_params
+from brake_sim_ros.stream.build import stepper_for
 
 NODE_NAME = "brake_sim"
 MAX_LAG_S = 0.5  # wall seconds of backlog that are caught up (see pacing)

@@ -31,11 +31,10 @@ from brake_sim_ros.model.defects import Defects, ShoeDefect
 from brake_sim_ros.model.fidelity import ACCURACY_PRESETS, LEVEL_BY_NAME, OUTPUTS, Needs, plan
 from brake_sim_ros.model.parameters import PARAMETER_GROUPS, BrakeParameters
 from brake_sim_ros.model.trajectory import BrakeSetup
+from brake_sim_ros.solvers.methods import FIXED_STEP_METHODS, SOLVER_METHODS
 from brake_sim_ros.solvers.presets import DEFAULT_PRESET, PRESETS
 
 BUILTIN_PACKAGE = "brake_sim_ros.scenarios.builtin"
-FIXED_STEP_METHODS = ("rk4", "rk4-located", "semi-implicit-euler")
-SOLVER_METHODS = (*FIXED_STEP_METHODS, "reference")
 # The output sample rate of a scenario that does not set one: 25.6 kHz, the common
 # condition-monitoring rate (a power-of-two number of samples per 10 ms chunk: 256).
 DEFAULT_SAMPLE_RATE_HZ = 25_600.0

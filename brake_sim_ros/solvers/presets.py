@@ -24,6 +24,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from brake_sim_ros.errors import ParameterError
+from brake_sim_ros.model.fidelity import ACCURACY_PRESETS
 
 
 @dataclass(frozen=True)
@@ -102,6 +103,8 @@ PRESETS: dict[str, Preset] = {
     )
 }
 DEFAULT_PRESET = "balanced"
+if tuple(PRESETS) != ACCURACY_PRESETS:  # the names are the fidelity plan's, defined once
+    raise ImportError(f"presets {list(PRESETS)} differ from the names {ACCURACY_PRESETS}")
 
 
 def get_preset(name: str) -> Preset:

@@ -22,6 +22,7 @@ from brake_sim_ros.errors import SimulationError
 from brake_sim_ros.model import kernel, standstill
 from brake_sim_ros.model import layout as L
 from brake_sim_ros.model.assembly import indentation_at, initial_state, pack
+from brake_sim_ros.model.layout import SIDES
 from brake_sim_ros.model.trajectory import BrakeSetup, SampleBlock
 
 SHOE_BASES = (L.P_SHOE_BASE, L.P_SHOE_BASE + L.SHOE_STRIDE)
@@ -237,7 +238,7 @@ def run_reference(
 
 
 def _flip(modes: list[int], shoe: int, t: float, result: ReferenceResult) -> None:
-    side = ("left", "right")[shoe]
+    side = SIDES[shoe]
     if modes[shoe] == L.CONTACT_OFF:
         modes[shoe] = L.CONTACT_ON
         result.onsets_s[side].append(t)

@@ -2,7 +2,7 @@
 
 :func:`offline_messages` steps a scenario exactly as :class:`~brake_sim_ros.ros.node.
 BrakeSimNode` does with its default run parameters and no actuation commands (the stepper
-from :func:`~brake_sim_ros.solvers.build.stepper_for`, same chunking, same state
+from :func:`~brake_sim_ros.stream.build.stepper_for`, same chunking, same state
 decimation, same /clock), so the sequence it yields equals what the node publishes for the
 same scenario, message for message. /diagnostics is the one
 topic it does not produce: that is a wall-clock report of a live node.
@@ -17,10 +17,10 @@ from typing import Any
 from brake_sim_ros import stream
 from brake_sim_ros.analysis.contact_events import ContactEventDetector
 from brake_sim_ros.scenarios import Scenario
-from brake_sim_ros.solvers.build import stepper_for
 from brake_sim_ros.solvers.fixed_step import FixedStepStepper
 from brake_sim_ros.stream import Topic, conversion
 from brake_sim_ros.stream import parameters as ros_params
+from brake_sim_ros.stream.build import stepper_for
 
 
 def _default(name: str):

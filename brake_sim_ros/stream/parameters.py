@@ -32,10 +32,10 @@ from typing import Any
 
 from brake_sim_ros.model.actuation import MAX_ACTUATION_FORCE_N, NOMINAL_PEAK_ACTUATION_N
 from brake_sim_ros.model.defects import Defects, ShoeDefect
+from brake_sim_ros.model.layout import SIDES
 from brake_sim_ros.model.parameters import PARAMETER_GROUPS, BrakeParameters
 from brake_sim_ros.model.trajectory import BrakeSetup
 
-SIDES = ("left", "right")
 DEFAULT_SCENARIO = "symmetric"
 
 # Fields that are initial conditions: a change applies at the next reset.

@@ -35,18 +35,19 @@ import numpy as np
 from scipy.optimize import minimize
 
 from brake_sim_ros.analysis.impacts import contact_regime_force, shoe_metrics
-from brake_sim_ros.analysis.validation import (
+from brake_sim_ros.errors import BrakeSimError
+from brake_sim_ros.model.defects import Defects, ShoeDefect
+from brake_sim_ros.model.layout import SIDES
+from brake_sim_ros.model.parameters import BrakeParameters
+from brake_sim_ros.model.trajectory import BrakeSetup
+from brake_sim_ros.solvers.contact_regime import run_contact_regime
+from brake_sim_ros.solvers.fixed_step import FixedStepStepper
+from brake_sim_ros.studies.validation import (
     BANDS,
     PUBLISHED_CASES,
     PUBLISHED_FIRST_IMPACT_ACTUATION_N,
     PUBLISHED_STOP_TIME_S,
 )
-from brake_sim_ros.errors import BrakeSimError
-from brake_sim_ros.model.defects import Defects, ShoeDefect
-from brake_sim_ros.model.parameters import BrakeParameters
-from brake_sim_ros.model.trajectory import BrakeSetup
-from brake_sim_ros.solvers.contact_regime import run_contact_regime
-from brake_sim_ros.solvers.fixed_step import FixedStepStepper
 
 IMPACT_SPAN_S = 0.34
 IMPACT_STEP_S = 2e-5
@@ -185,7 +186,7 @@ def contact_figures(params: BrakeParameters, defects: Defects) -> tuple[float, f
         contact_regime_force(
             run.samples.time_s, run.samples.pivot_force_magnitude(s), stop_time_s=run.stop_time_s
         )
-        for s in ("left", "right")
+        for s in SIDES
     ]
     return run.stop_time_s, forces[0], forces[1]
 

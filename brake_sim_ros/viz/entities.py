@@ -6,7 +6,8 @@ the messages' stamps, never the wall clock). Units are in the series names.
 
 from __future__ import annotations
 
-SIDES = ("left", "right")
+from brake_sim_ros.model.layout import SIDES
+
 TIMELINE = "sim_time"
 
 # full rate in files, a min/max envelope live (see rerun_sink.SinkSettings)

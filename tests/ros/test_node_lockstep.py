@@ -29,8 +29,8 @@ from brake_sim_ros.model.defects import Defects, ShoeDefect  # noqa: E402
 from brake_sim_ros.model.layout import COL  # noqa: E402
 from brake_sim_ros.ros.harness import NodeProcess, SimClient, domain_id_for  # noqa: E402
 from brake_sim_ros.scenarios import load_scenario  # noqa: E402
-from brake_sim_ros.solvers.build import stepper_for  # noqa: E402
 from brake_sim_ros.stream import conversion  # noqa: E402
+from brake_sim_ros.stream.build import stepper_for  # noqa: E402
 
 DOMAIN = domain_id_for(2)
 DT = 1 / 25_600  # the sample period

@@ -42,8 +42,8 @@ from brake_sim_ros.ros.harness import (  # noqa: E402
     ros_environment,
 )
 from brake_sim_ros.scenarios import load_scenario  # noqa: E402
-from brake_sim_ros.solvers.build import stepper_for  # noqa: E402
 from brake_sim_ros.stream import conversion  # noqa: E402
+from brake_sim_ros.stream.build import stepper_for  # noqa: E402
 
 DOMAIN = domain_id_for(1)
 RUN_S = 3.0

@@ -10,6 +10,7 @@ from __future__ import annotations
 from brake_sim_ros.model.trajectory import BrakeSetup
 from brake_sim_ros.scenarios.loader import Scenario
 from brake_sim_ros.solvers.fixed_step import FixedStepStepper
+from brake_sim_ros.solvers.methods import METHODS
 
 
 def stepper_for(scenario: Scenario, *, setup: BrakeSetup | None = None) -> FixedStepStepper:
@@ -27,9 +28,8 @@ def stepper_for(scenario: Scenario, *, setup: BrakeSetup | None = None) -> Fixed
         StepSizeError: the step limit of the setup is pathological (below
             :data:`~brake_sim_ros.solvers.fixed_step.MIN_PHYSICS_STEP_S`).
     """
-    return FixedStepStepper(
+    return METHODS[scenario.solver.fixed_step_scheme].stepper(
         scenario.setup if setup is None else setup,
         scenario.sample_period_s,
-        scheme=scenario.solver.fixed_step_scheme,
-        max_step_s=scenario.solver.max_step_s,
+        scenario.solver.max_step_s,
     )

@@ -1,6 +1,6 @@
 """Benchmark of the ROS node, run as a user would: a node process and a client over DDS.
 
-``python -m brake_sim_ros.ros.benchmark [--duration S] [--scenario NAME] [--afap-seconds S]``
+``python -m brake_sim_ros.studies.node_bench [--duration S] [--scenario NAME] [--afap-seconds S]``
 
 Prints:
     * CPU use of the node process at real-time factor 1, in % of one core, from
@@ -35,7 +35,7 @@ from brake_sim_ros.ros.harness import NodeProcess, SimClient, domain_id_for
 WARM_UP_S = 2.0
 
 
-def _cpu_seconds(pid: int) -> float:
+def cpu_seconds(pid: int) -> float:
     """User + system CPU time of a process, s (Linux /proc)."""
     fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
     ticks = int(fields[11]) + int(fields[12])  # utime, stime (fields 14 and 15 of stat)
@@ -51,7 +51,7 @@ class _Window:
         self.client, self.pid = client, pid
         self.diag0 = client.next_diagnostics()
         self.wall0 = time.monotonic()
-        self.cpu0 = _cpu_seconds(pid)
+        self.cpu0 = cpu_seconds(pid)
         self.samples0, self.gaps0 = client.sample_count, client.gaps
 
     def close(self) -> dict[str, float]:
@@ -61,7 +61,7 @@ class _Window:
         steps = int(diag1["samples_done"]) - int(self.diag0["samples_done"])
         return {
             "wall_s": wall,
-            "cpu_pct": 100.0 * (_cpu_seconds(self.pid) - self.cpu0) / wall,
+            "cpu_pct": 100.0 * (cpu_seconds(self.pid) - self.cpu0) / wall,
             "rtf": steps * dt / wall,
             "deadline_misses": int(diag1["deadline_misses"]) - int(self.diag0["deadline_misses"]),
             "chunks": int(diag1["chunks_published"]) - int(self.diag0["chunks_published"]),
@@ -172,7 +172,7 @@ def run(duration_s: float, scenario: str, afap_s: float, latency_count: int) -> 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
-        prog="python -m brake_sim_ros.ros.benchmark", description=__doc__.split("\n\n")[0]
+        prog="python -m brake_sim_ros.studies.node_bench", description=__doc__.split("\n\n")[0]
     )
     parser.add_argument(
         "--duration",

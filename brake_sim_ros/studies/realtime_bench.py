@@ -19,7 +19,6 @@ import numpy as np
 
 from brake_sim_ros.model import layout as L
 from brake_sim_ros.scenarios import load_scenario
-from brake_sim_ros.solvers.build import stepper_for
 from brake_sim_ros.solvers.realtime import (
     STEPPER_SHARE,
     CostStats,
@@ -27,6 +26,7 @@ from brake_sim_ros.solvers.realtime import (
     check_realtime,
 )
 from brake_sim_ros.stream import parameters as ros_params
+from brake_sim_ros.stream.build import stepper_for
 
 
 def _regime_of(block) -> str:

@@ -22,10 +22,10 @@ from pathlib import Path
 from brake_sim_ros import stream
 from brake_sim_ros.recording.record import record_offline
 from brake_sim_ros.recording.writer import RecordingOptions
-from brake_sim_ros.ros.benchmark import _cpu_seconds
 from brake_sim_ros.ros.harness import NodeProcess, domain_id_for
 from brake_sim_ros.scenarios import load_scenario
 from brake_sim_ros.stream.offline import offline_messages
+from brake_sim_ros.studies.node_bench import cpu_seconds
 
 
 def _stream_only(scenario, sim_s: float) -> tuple[float, int]:
@@ -50,9 +50,9 @@ def _node_cpu(scenario: str, seconds: float, record: Path | None, offset: int) -
                 raise RuntimeError(f"node did not start:\n{node.output()}")
             time.sleep(0.1)
         time.sleep(3.0)  # warm-up
-        cpu0, wall0 = _cpu_seconds(node.pid), time.monotonic()
+        cpu0, wall0 = cpu_seconds(node.pid), time.monotonic()
         time.sleep(seconds)
-        return 100.0 * (_cpu_seconds(node.pid) - cpu0) / (time.monotonic() - wall0)
+        return 100.0 * (cpu_seconds(node.pid) - cpu0) / (time.monotonic() - wall0)
     finally:
         node.stop()
 

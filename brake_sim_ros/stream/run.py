@@ -1,4 +1,8 @@
-"""Run a scenario to the end at the fidelity level its needs call for; one result type."""
+"""Run a scenario to the end at the fidelity level its needs call for; one result type.
+
+The method comes from the solver registry (:data:`~brake_sim_ros.solvers.methods.METHODS`);
+the fixed-step schemes build their stepper the way :func:`.build.stepper_for` does.
+"""
 
 from __future__ import annotations
 
@@ -15,11 +19,8 @@ from brake_sim_ros.model.assembly import SIDES, ModelOptions
 from brake_sim_ros.model.fidelity import Plan, plan
 from brake_sim_ros.model.trajectory import BrakeSetup, SampleBlock
 from brake_sim_ros.scenarios.loader import Scenario
-from brake_sim_ros.solvers.build import stepper_for
-from brake_sim_ros.solvers.contact_regime import run_contact_regime
-from brake_sim_ros.solvers.reference import run_reference
+from brake_sim_ros.solvers.methods import METHODS, MethodOptions
 
-CHUNK_SAMPLES = 100_000
 _IMPACT_COLUMNS = ("indentation_m", "pivot_fx_n", "pivot_fy_n", "actuation_force_n")
 
 
@@ -32,10 +33,8 @@ class RunResult:
         metrics: impacts, periods, peak and contact-regime forces, stop time; what the
             level does not deliver is empty or nan (stop time None).
         cpu_s: process CPU time spent integrating, s.
-        n_steps: physics steps taken (fixed-step schemes: samples x substeps),
-            right-hand-side evaluations (reference) or RK4 steps including substeps
-            (contact_regime).
-        method: the fixed-step scheme, "reference" or "contact_regime".
+        n_steps: the method's unit of work (``METHODS[method].counts``).
+        method: the name in :data:`~brake_sim_ros.solvers.methods.METHODS`.
         plan: the fidelity level and signals chosen for the scenario's needs.
         model_stop_time_s: the instant the model locked, s, even where the level does not
             deliver the stop time (for the fidelity study).
@@ -138,46 +137,25 @@ def run_scenario(
     else:
         scenario = scenario.with_solver(method=method)
         method = scenario.solver.method
+    options = MethodOptions(
+        sample_period_s=scenario.sample_period_s,
+        max_step_s=scenario.solver.max_step_s,
+        rtol=scenario.solver.rtol,
+        accuracy=chosen.accuracy,
+        keep=lambda block: _keep(block, chosen.columns),
+        progress=progress,
+    )
     start = time.process_time()
-    note = ""
-    if method == "contact_regime":
-        qs = run_contact_regime(setup, duration, accuracy=chosen.accuracy)
-        cpu = time.process_time() - start
-        samples, stop, n = _keep(qs.samples, chosen.columns), qs.stop_time_s, qs.n_substeps
-    elif method == "reference":
-        period = scenario.sample_period_s
-        grid = np.arange(round(duration / period)) * period  # the fixed-step schemes' samples
-        ref = run_reference(setup, duration, rtol=scenario.solver.rtol, sample_times=grid)
-        cpu = time.process_time() - start
-        uniform = SampleBlock(ref.samples.data, 0, period, ref.samples.columns)
-        samples, stop, n = _keep(uniform, chosen.columns), ref.stop_time_s, ref.n_rhs
-    else:
-        stepper = stepper_for(scenario, setup=setup)
-        total = round(duration / stepper.sample_period_s)
-        blocks, done, physics_steps = [], 0, 0
-        while done < total:  # keep only the planned columns, chunk by chunk
-            chunk = min(CHUNK_SAMPLES, total - done)
-            blocks.append(_keep(stepper.advance(chunk), chosen.columns))
-            done += chunk
-            physics_steps += chunk * stepper.substeps
-            if progress is not None:
-                progress(done / total)
-        cpu = time.process_time() - start
-        samples = (
-            SampleBlock.concatenate(blocks)
-            if blocks
-            else SampleBlock(
-                np.empty((0, len(chosen.columns))), 0, stepper.sample_period_s, chosen.columns
-            )
-        )
-        stop, n, note = stepper.stop_time_s, physics_steps, stepper.describe_step()
+    run = METHODS[method].integrate(setup, duration, options)
+    cpu = time.process_time() - start
+    samples, stop = run.samples, run.stop_time_s
     return RunResult(
         samples=samples,
         metrics=_metrics(samples, stop, chosen, scenario.setup.options.shoes),
         cpu_s=cpu,
-        n_steps=n,
+        n_steps=run.n_steps,
         method=method,
         plan=chosen,
         model_stop_time_s=stop,
-        step_note=note,
+        step_note=run.note,
     )

@@ -20,10 +20,10 @@ import numpy as np
 from brake_sim_ros.analysis.impacts import event_metrics
 from brake_sim_ros.model.actuation import Actuation, ForceProfile
 from brake_sim_ros.scenarios import load_scenario
-from brake_sim_ros.solvers.build import stepper_for
 from brake_sim_ros.solvers.presets import PRESETS
-from brake_sim_ros.solvers.run import run_scenario
-from brake_sim_ros.solvers.work_precision import compare
+from brake_sim_ros.stream.build import stepper_for
+from brake_sim_ros.stream.run import run_scenario
+from brake_sim_ros.studies.work_precision import compare
 
 SHIFTS_S = (0.0, 8e-6, 16e-6, 24e-6, 32e-6)
 METRICS = ("err_first_peak", "err_period", "err_stop_time", "err_contact_force")

@@ -22,9 +22,10 @@ from typing import Any
 from brake_sim_ros.analysis.comparison import metric_errors, relative_error
 from brake_sim_ros.analysis.energy import ENERGY_COLUMNS, energy_balance
 from brake_sim_ros.model.fidelity import LEVELS, Needs
+from brake_sim_ros.model.layout import SIDES
 from brake_sim_ros.scenarios import load_scenario
 from brake_sim_ros.scenarios.loader import Scenario
-from brake_sim_ros.solvers.run import RunResult, run_scenario
+from brake_sim_ros.stream.run import RunResult, run_scenario
 
 TARGET_CONTACT_X_REAL_TIME = 1000.0
 TARGET_CONTACT_REL = 0.01
@@ -60,7 +61,7 @@ def _best_run(scenario: Scenario, repeats: int) -> RunResult:
 def _row(
     scheme: str, setting: str, r: RunResult, ref: RunResult, duration: float, scenario: Scenario
 ) -> dict[str, Any]:
-    sides = tuple(s for s in ("left", "right") if s in r.plan.shoes)
+    sides = tuple(s for s in SIDES if s in r.plan.shoes)
     errors = metric_errors(r.metrics, ref.metrics, sides)
     impacts = "impacts" in r.plan.level.outputs
     cpu = r.cpu_s / duration
@@ -91,7 +92,7 @@ def fidelity_rows(
     duration = scenario.duration_s
     runs: list[tuple[str, str, Scenario]] = []
     for level in reversed(LEVELS):  # full first: it is the reference
-        forced = _forced(scenario, level.name, ("left", "right"))
+        forced = _forced(scenario, level.name, SIDES)
         if accuracy is not None:
             forced = dataclasses.replace(
                 forced, needs=dataclasses.replace(forced.needs, accuracy=accuracy)

@@ -287,7 +287,7 @@ def markdown_table(rows: list[WorkPrecisionRow]) -> str:
 
 def write_study(result: StudyResult, out_dir: Path) -> list[Path]:
     """Write ``work_precision.csv``, ``work_precision.md`` and ``work_precision.png``."""
-    from brake_sim_ros.analysis.work_precision_plot import plot_work_precision
+    from brake_sim_ros.studies.work_precision_plot import plot_work_precision
 
     out_dir.mkdir(parents=True, exist_ok=True)
     csv_path = out_dir / "work_precision.csv"

@@ -24,9 +24,10 @@ from brake_sim_ros.model import contact
 from brake_sim_ros.model import layout as L
 from brake_sim_ros.model.assembly import contact_arms, pack, place_shoe
 from brake_sim_ros.model.defects import Defects, ShoeDefect
+from brake_sim_ros.model.layout import SIDES
 from brake_sim_ros.model.parameters import BrakeParameters
 from brake_sim_ros.scenarios import load_scenario
-from brake_sim_ros.solvers.run import RunResult, run_scenario
+from brake_sim_ros.stream.run import RunResult, run_scenario
 
 SYMMETRIC = "symmetric"
 CASES: dict[str, tuple[str, str]] = {  # case number: (built-in scenario, shoe with the defect)
@@ -105,7 +106,7 @@ def pivot_sweep(
     :data:`SWEEP_PCT` (impacting regime only), keyed by side and change; 0 % is ``base``."""
     scenario = load_scenario(SYMMETRIC)
     out: dict[str, dict[float, EventMetrics]] = {}
-    for side in ("left", "right"):
+    for side in SIDES:
         out[side] = {0.0: base.metrics}
         for pct in SWEEP_PCT:
             if progress:
@@ -154,11 +155,9 @@ def figures(
         "symmetric": {
             "stop_time_s": base.stop_time_s,
             "first_impact_actuation_n": base.left.first_impact_actuation_n,
-            "first_impact_peak_fr_n": {
-                s: base.shoe(s).first_impact_peak_n for s in ("left", "right")
-            },
-            "period_s": {s: base.shoe(s).period_s for s in ("left", "right")},
-            "contact_fr_n": {s: base.shoe(s).contact_regime_force_n for s in ("left", "right")},
+            "first_impact_peak_fr_n": {s: base.shoe(s).first_impact_peak_n for s in SIDES},
+            "period_s": {s: base.shoe(s).period_s for s in SIDES},
+            "contact_fr_n": {s: base.shoe(s).contact_regime_force_n for s in SIDES},
         },
         "cases": {},
     }
@@ -386,7 +385,7 @@ def markdown(
         " | contact-regime F_r (N) |",
         "|---|---|---|---|---|---|",
     ]
-    for s in ("left", "right"):
+    for s in SIDES:
         m = base.shoe(s)
         lines.append(
             f"| {s} | {m.first_impact_peak_n:.0f} | {1e3 * m.period_s:.2f} | {m.n_impacts}"
@@ -636,7 +635,7 @@ def write_report(
     if json_path is not None:
         json_path.parent.mkdir(parents=True, exist_ok=True)
         json_path.write_text(json.dumps(fig, indent=2), encoding="utf-8")
-    from brake_sim_ros.analysis.plots import plot_pivot_sweep, plot_validation
+    from brake_sim_ros.studies.validation_plots import plot_pivot_sweep, plot_validation
 
     plot_validation(base, runs, out_dir)
     plot_pivot_sweep(fig["pivot_sweep"], out_dir)

@@ -20,11 +20,12 @@ from numba import njit
 from brake_sim_ros.analysis.impacts import EventMetrics, event_metrics
 from brake_sim_ros.model import kernel
 from brake_sim_ros.model import layout as L
+from brake_sim_ros.model.layout import SIDES
 from brake_sim_ros.scenarios import load_scenario
-from brake_sim_ros.solvers.build import stepper_for
 from brake_sim_ros.solvers.fixed_step import FixedStepStepper
 from brake_sim_ros.solvers.presets import PRESETS
-from brake_sim_ros.solvers.run import run_scenario
+from brake_sim_ros.stream.build import stepper_for
+from brake_sim_ros.stream.run import run_scenario
 
 TARGET_RTF = 50.0
 TARGET_IMPACT_REL = 0.01
@@ -54,7 +55,7 @@ def _best_cpu(fn, repeats: int) -> float:
 
 def _errors(m: EventMetrics, ref: EventMetrics) -> tuple[list[float], list[float], float]:
     """Relative errors, %: first-impact peak and period per shoe (left, right), stop time."""
-    sides = ("left", "right")
+    sides = SIDES
     peak = [
         100 * (m.shoe(s).first_impact_peak_n / ref.shoe(s).first_impact_peak_n - 1) for s in sides
     ]
