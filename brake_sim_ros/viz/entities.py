@@ -9,7 +9,7 @@ from __future__ import annotations
 SIDES = ("left", "right")
 TIMELINE = "sim_time"
 
-# full rate in files, a min/max envelope live (see rerun_sink.SinkSettings)
+# full rate in files, a min/max envelope live (see settings.SinkSettings)
 PIVOT_FORCE = "pivot_force"
 PIVOT_SERIES = ("magnitude", "fx", "fy")  # N, frame brake_backing_plate
 PIVOT_MESSAGE_FIELDS = {"magnitude": "magnitude_n", "fx": "fx_n", "fy": "fy_n"}
