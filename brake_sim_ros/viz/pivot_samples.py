@@ -66,8 +66,8 @@ class PivotChunk:
 
 
 class RecentPivotForces:
-    """The pivot-force samples of the chunks since the previous BrakeState (at least the
-    last chunk), per side (fx, fy, |F|) in N, looked up by sample index."""
+    """The pivot-force samples from the previous BrakeState's sample on (whole chunks, at
+    least the last one), per side (fx, fy, |F|) in N, looked up by sample index."""
 
     def __init__(self) -> None:
         self._chunks: deque[tuple[int, dict[str, tuple[np.ndarray, ...]]]] = deque()
@@ -87,7 +87,8 @@ class RecentPivotForces:
         self._chunks.clear()
 
     def keep_after(self, index: int) -> None:
-        """Drop the chunks that end at or before sample ``index``, keeping the last one."""
+        """Drop the chunks whose samples all precede sample ``index`` (the last chunk
+        stays)."""
         while len(self._chunks) > 1 and _chunk_end(self._chunks[0]) <= index:
             self._chunks.popleft()
 
