@@ -3,7 +3,7 @@
 Everything is in the ``brake_backing_plate`` frame (origin at the drum centre, x right,
 y up, metres) and computed from the core's parameters and defects with
 :func:`brake_sim_ros.model.assembly.place_shoe`, so the drawing is the geometry the
-physics uses. No Rerun here: :mod:`.rerun_sink` turns a :class:`Frame` into entities.
+physics uses. No Rerun here: :mod:`.scene` turns a :class:`Frame` into entities.
 
 The shoe outline (web and lining thickness) is illustrative: the model's shoe is a rigid
 body known by its pivot, lining arc and tip; the lining's friction surface, the pivot,

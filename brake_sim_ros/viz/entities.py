@@ -10,7 +10,7 @@ from brake_sim_ros.model.layout import SIDES
 
 TIMELINE = "sim_time"
 
-# full rate in files, a min/max envelope live (see rerun_sink.SinkSettings)
+# full rate in files, a min/max envelope live (see settings.SinkSettings)
 PIVOT_FORCE = "pivot_force"
 PIVOT_SERIES = ("magnitude", "fx", "fy")  # N, frame brake_backing_plate
 PIVOT_MESSAGE_FIELDS = {"magnitude": "magnitude_n", "fx": "fx_n", "fy": "fy_n"}
