@@ -18,8 +18,8 @@ from brake_sim_ros.analysis.comparison import (
 from brake_sim_ros.analysis.energy import ENERGY_COLUMNS, energy_balance
 from brake_sim_ros.analysis.impacts import EventMetrics, ShoeMetrics
 from brake_sim_ros.scenarios import load_scenario
-from brake_sim_ros.studies import fidelity as fidelity_study
 from brake_sim_ros.stream.run import RunResult
+from brake_sim_ros.studies import fidelity as fidelity_study
 from brake_sim_ros.studies.work_precision import compare
 
 

@@ -23,6 +23,7 @@ from typing import Any
 
 import rerun as rr
 
+from brake_sim_ros import stream
 from brake_sim_ros.model.defects import Defects
 from brake_sim_ros.model.parameters import BrakeParameters
 from brake_sim_ros.stream import Topic
@@ -50,12 +51,6 @@ __all__ = [
     "envelope_positions",
 ]
 
-_TYPE_CHUNK = "brake_sim_msgs/msg/PivotForceChunk"
-_TYPE_STATE = "brake_sim_msgs/msg/BrakeState"
-_TYPE_DEFECTS = "brake_sim_msgs/msg/DefectState"
-_TYPE_ACTUATION = "brake_sim_msgs/msg/ActuationCommand"
-_TYPE_DIAGNOSTICS = "diagnostic_msgs/msg/DiagnosticArray"
-_TYPE_CONTACT_EVENT = "brake_sim_msgs/msg/ContactEvent"
 _BUILT_IN_GEOMETRY = "the drawing uses the built-in brake geometry (none was given)"
 
 
@@ -124,22 +119,22 @@ class RerunSink:
         if self.closed:
             raise RerunSinkError("write() after close()")
         kind = topic.type_name
-        if kind == _TYPE_CHUNK:
+        if kind == stream.PIVOT_FORCES.type_name:
             self._on_chunk(PivotChunk.from_msg(msg))
-        elif kind == _TYPE_STATE:
+        elif kind == stream.STATE.type_name:
             self._on_state(msg)
-        elif kind == _TYPE_CONTACT_EVENT:
+        elif kind == stream.CONTACT_EVENTS.type_name:
             if self._contact.on_contact_event(msg, rate_hz=self._series.rate_hz):
                 self._seen(stamp_ns(msg))
-        elif kind == _TYPE_DEFECTS:
+        elif kind == stream.DEFECTS.type_name:
             ns = stamp_ns(msg)
             shoes = shoe_defects(msg)
             self._scene.set_defects(shoes, ns)
             log_defects(self.rec, msg, ns, shoes)
             self._seen(ns)
-        elif kind == _TYPE_ACTUATION:
+        elif kind == stream.ACTUATION.type_name:
             log_actuation_command(self.rec, msg, int(time_ns))
-        elif kind == _TYPE_DIAGNOSTICS:
+        elif kind == stream.DIAGNOSTICS.type_name:
             log_diagnostics(self.rec, msg, int(time_ns))
         # JointState repeats BrakeState; /clock carries no data to show
 
