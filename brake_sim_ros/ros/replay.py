@@ -7,12 +7,7 @@ messages go out like any other, so subscribers with ``use_sim_time`` follow the
 recording's simulated time; stamps inside messages are untouched. To a monitoring node a
 replay looks like the live run.
 
-Options:
-    --rate R            replay speed factor (default 1: the original timing)
-    --start-offset S    skip the first S seconds of the recording (log time)
-    --loop              start again at the end, until interrupted
-    --topics T [T ...]  replay only these topics (default: all)
-    --wait-for-subscribers N  wait (up to 10 s) until every topic has N matched subscribers
+Options (rate, start offset, loop, topics): :mod:`brake_sim_ros.app.replay`.
 
 Topics whose QoS keeps the last message for late joiners (transient local, e.g. the
 defect ground truth) get the newest message recorded before the start offset published
