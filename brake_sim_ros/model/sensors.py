@@ -23,17 +23,22 @@ times. Pure: numpy, scipy and numba only; deterministic.
 sample rate ``fs``:
 ``true x sensitivity_ratio x (gain faults) + noise`` -> mounted resonance (a lightly damped
 2nd-order peak) -> 3 dB bandwidth (2nd-order Butterworth low-pass, designed once with
-``scipy.signal.butter``) -> ``+ bias drift`` -> range (clipping at ``range_min``/
-``range_max`` and at an active saturation fault) -> ADC (``adc_bits`` over the range: step
-``(range_max - range_min) / 2^bits``) -> stuck / dropout -> every ``fs / rate_hz``-th sample.
-Resonance and low-pass are one continuous system integrated exactly per sample
-(:mod:`.lti`), so a resonance above the Nyquist frequency keeps its true tail in band.
+``scipy.signal.butter``) -> the DAQ's anti-alias filter (where the preset has one) ->
+``+ bias drift`` -> range (clipping at ``range_min``/``range_max`` and at an active
+saturation fault) -> ADC (``adc_bits`` over the range: step ``(range_max - range_min) /
+2^bits``) -> stuck / dropout -> every ``fs / rate_hz``-th sample. Resonance and filters are
+one continuous system integrated exactly per sample (:mod:`.lti`), so a resonance above
+the Nyquist frequency keeps its true tail in band.
 
-**Noise.** White, input-referred: ``noise_density x sqrt(fs / 2)`` times standard normal
-draws, so its one-sided density is ``noise_density`` up to ``fs / 2``; the path above then
-shapes it (the sensor's own bandwidth). Each channel has its own generator,
+**Noise.** White, input-referred, of one-sided density ``noise_density`` (the datasheet's
+figure), shaped by the path's own resonance and bandwidth. Through a path with dynamics it
+is discretised exactly (:func:`.lti.with_input_noise`: one standard normal draw per state
+of the path per sample), so the recorded noise has the continuous sensor's variance
+``N^2 int_0^inf |H(f)|^2 df`` even with a bandwidth near the Nyquist frequency; a path without
+dynamics adds ``N sqrt(fs / 2)`` times one standard normal draw per sample (white to the
+Nyquist frequency). Each channel has its own generator,
 ``np.random.Generator(np.random.PCG64(np.random.SeedSequence([seed, key])))`` with ``key``
-the first 8 bytes of SHA-256 of the channel's name, and draws one value per sample of the
+the first 8 bytes of SHA-256 of the channel's name, and draws for every sample of the
 scenario rate, in sample order, block after block. So: one seed gives the same bits; two
 seeds, or two channels, independent noise; a stream in blocks the same bits as one block;
 adding or reordering channels does not change another channel's noise.
@@ -42,7 +47,10 @@ adding or reordering channels does not change another channel's noise.
 
 * accelerometer ``adxl1002_class`` (industrial MEMS, ADXL1002 datasheet): 25 ug/sqrt(Hz),
   +-50 g, 3 dB bandwidth 11 kHz, mounted resonance 21 kHz; damping ratio of the resonance
-  0.05 (assumed: Q = 10); a 24-bit DAQ over the range (TESTBED: 16-24 bits).
+  0.05 (assumed: Q = 10); a DAQ with 24 bits over the range (TESTBED: 16-24 bits) and an
+  anti-alias filter (4th-order Butterworth at 0.45 of the output rate, assumed: what a
+  condition-monitoring DAQ does below its Nyquist frequency). Without it the noise of the
+  21 kHz resonance folds into the band at 25.6 kHz.
 * accelerometer ``consumer_imu_class`` (MPU-9250-like): 300 ug/sqrt(Hz), about 1 kHz
   bandwidth, +-16 g with 16 bits (that IMU's widest range and its ADC); no resonance in band.
 * ``pressure_transducer``: 0-250 bar, bandwidth 1 kHz (TESTBED), noise 0.003 bar/sqrt(Hz)
@@ -69,7 +77,7 @@ from scipy import signal
 from brake_sim_ros.errors import ParameterError
 from brake_sim_ros.model import sensor_faults as sf
 from brake_sim_ros.model.layout import SIDES
-from brake_sim_ros.model.lti import LtiState, SampledLti, foh_discretise
+from brake_sim_ros.model.lti import LtiState, SampledLti, foh_discretise, with_input_noise
 from brake_sim_ros.model.sensor_faults import SensorFault
 from brake_sim_ros.model.structure import AXES, Structure, StructureParameters
 from brake_sim_ros.model.trajectory import SampleBlock
@@ -110,6 +118,8 @@ class Transducer:
         resonance_damping_ratio: its damping ratio (dimensionless).
         range_min, range_max: the output saturates outside, channel unit (+-inf: never).
         adc_bits: quantisation over the range (None: none; needs a finite range).
+        antialias_fraction: the DAQ's anti-alias filter, a 4th-order Butterworth low-pass
+            at this fraction of the channel's output rate (None: none).
     """
 
     name: str = "ideal"
@@ -120,6 +130,7 @@ class Transducer:
     range_min: float = -math.inf
     range_max: float = math.inf
     adc_bits: int | None = None
+    antialias_fraction: float | None = None
 
     def check(self, channel: str) -> None:
         if not (
@@ -130,6 +141,10 @@ class Transducer:
             value = getattr(self, what)
             if value is not None and not (math.isfinite(value) and value > 0):
                 raise _bad(channel, what, value, "a frequency > 0 Hz, or none")
+        if self.antialias_fraction is not None and not 0.0 < self.antialias_fraction < 0.5:
+            raise _bad(
+                channel, "antialias_fraction", self.antialias_fraction, "> 0 and < 0.5, or none"
+            )
         if not 0.0 < self.resonance_damping_ratio < 1.0:
             raise _bad(
                 channel, "resonance_damping_ratio", self.resonance_damping_ratio, "> 0 and < 1"
@@ -150,12 +165,13 @@ class Transducer:
         return (self.range_max - self.range_min) / 2.0**self.adc_bits
 
     def continuous(
-        self, resonance_factor: float = 1.0
+        self, rate_hz: float, resonance_factor: float = 1.0
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None:
-        """``(A, B, C, D)`` of resonance then low-pass, single input and output; None when
-        the path has neither. ``resonance_factor`` scales the resonance frequency (a loose
-        mount). The resonance's states are physical (``[z, z']``, ``z'' = wr^2 (u - z) -
-        2 zeta wr z'``), so a loose mount can change its frequency with the state kept."""
+        """``(A, B, C, D)`` of resonance, low-pass and anti-alias filter (for an output
+        rate ``rate_hz``), single input and output; None when the path has none.
+        ``resonance_factor`` scales the resonance frequency (a loose mount). The
+        resonance's states are physical (``[z, z']``, ``z'' = wr^2 (u - z) - 2 zeta wr z'``),
+        so a loose mount can change its frequency with the state kept."""
         stages = []
         if self.resonance_hz is not None:
             wr = 2.0 * math.pi * self.resonance_hz * resonance_factor
@@ -171,6 +187,9 @@ class Transducer:
         if self.bandwidth_hz is not None:
             num, den = signal.butter(2, 2.0 * math.pi * self.bandwidth_hz, analog=True)
             stages.append(signal.tf2ss(num, den))
+        if self.antialias_fraction is not None:
+            cutoff = 2.0 * math.pi * self.antialias_fraction * rate_hz
+            stages.append(signal.zpk2ss(*signal.butter(4, cutoff, analog=True, output="zpk")))
         if not stages:
             return None
         a, b, c, d = (np.atleast_2d(np.asarray(m, dtype=float)) for m in stages[0])
@@ -190,7 +209,15 @@ class Transducer:
         return a, b, c, d
 
 
-def _accel(name: str, noise_ug: float, bw: float | None, res: float | None, fs_g: float, bits: int):
+def _accel(
+    name: str,
+    noise_ug: float,
+    bw: float | None,
+    res: float | None,
+    fs_g: float,
+    bits: int,
+    antialias: float | None,
+) -> Transducer:
     return Transducer(
         name=name,
         noise_density_per_sqrt_hz=noise_ug * 1e-6 * STANDARD_GRAVITY_M_S2,
@@ -199,14 +226,15 @@ def _accel(name: str, noise_ug: float, bw: float | None, res: float | None, fs_g
         range_min=-fs_g * STANDARD_GRAVITY_M_S2,
         range_max=fs_g * STANDARD_GRAVITY_M_S2,
         adc_bits=bits,
+        antialias_fraction=antialias,
     )
 
 
 IDEAL = Transducer()
 TRANSDUCER_PRESETS: dict[str, dict[str, Transducer]] = {
     "accelerometer": {
-        "adxl1002_class": _accel("adxl1002_class", 25.0, 11_000.0, 21_000.0, 50.0, 24),
-        "consumer_imu_class": _accel("consumer_imu_class", 300.0, 1_000.0, None, 16.0, 16),
+        "adxl1002_class": _accel("adxl1002_class", 25.0, 11_000.0, 21_000.0, 50.0, 24, 0.45),
+        "consumer_imu_class": _accel("consumer_imu_class", 300.0, 1_000.0, None, 16.0, 16, None),
         "ideal": IDEAL,
     },
     "load_pin": {
@@ -442,21 +470,31 @@ class AnalogPath:
     """The analog signal path of one channel (module docstring) with its carried state:
     the dynamics' state, the noise generator, the stuck-value hold."""
 
-    def __init__(self, channel: SensorChannel, sample_period_s: float, seed: int) -> None:
+    def __init__(
+        self, channel: SensorChannel, sample_period_s: float, seed: int, decimation: int = 1
+    ) -> None:
         self.channel = channel
         self.sample_period_s = sample_period_s
         self.rng = np.random.Generator(np.random.PCG64(channel_seed(seed, channel.name)))
         t = channel.transducer
-        self.noise_scale = t.noise_density_per_sqrt_hz * math.sqrt(0.5 / sample_period_s)
+        self.noise = t.noise_density_per_sqrt_hz
         self.systems: dict[bool, SampledLti] = {}
-        nominal = t.continuous()
         self.state: LtiState | None = None
-        if nominal is not None:
-            self.systems[False] = foh_discretise(*nominal, sample_period_s)
-            loose = sf.of_kind(channel.faults, "loose_mount")
-            if loose:
-                self.systems[True] = foh_discretise(*t.continuous(loose[0].size), sample_period_s)
+        for loose, factor in (
+            (False, 1.0),
+            *((True, f.size) for f in sf.of_kind(channel.faults, "loose_mount")),
+        ):
+            chain = t.continuous(1.0 / (sample_period_s * decimation), factor)
+            if chain is not None:
+                system = foh_discretise(*chain, sample_period_s)
+                if self.noise > 0.0:
+                    system = with_input_noise(system, self.noise)
+                self.systems[loose] = system
+        if self.systems:
             self.state = LtiState(self.systems[False])
+            self.n_draws = self.systems[False].a.shape[0]  # one per state and sample
+        else:
+            self.n_draws = 1
         self.hold = sf.HoldState()
 
     def advance(self, time_s: np.ndarray, true: np.ndarray) -> np.ndarray:
@@ -465,10 +503,13 @@ class AnalogPath:
         ch, t = self.channel, self.channel.transducer
         faults = ch.faults
         x = true * ch.sensitivity_ratio * sf.gain_factor(faults, time_s)
-        if self.noise_scale > 0.0:
-            x = x + self.noise_scale * self.rng.standard_normal(time_s.shape[0])
+        draws = None
+        if self.noise > 0.0:
+            draws = self.rng.standard_normal((time_s.shape[0], self.n_draws))
         if self.state is not None:
-            x = self._dynamics(time_s, x)
+            x = self._dynamics(time_s, x, draws)
+        elif draws is not None:  # white to the Nyquist frequency: density N
+            x = x + self.noise * math.sqrt(0.5 / self.sample_period_s) * draws[:, 0]
         x = x + sf.bias(faults, time_s)
         limit = sf.saturation_limit(faults, time_s)
         x = np.clip(x, np.maximum(t.range_min, -limit), np.minimum(t.range_max, limit))
@@ -478,11 +519,11 @@ class AnalogPath:
             x = t.range_min + codes * step
         return sf.apply_hold(faults, time_s, x, self.hold)
 
-    def _dynamics(self, time_s: np.ndarray, x: np.ndarray) -> np.ndarray:
+    def _dynamics(self, time_s: np.ndarray, x: np.ndarray, draws: np.ndarray | None) -> np.ndarray:
         assert self.state is not None
         loose, _ = sf.loose(self.channel.faults, time_s)
         y = np.empty((x.shape[0], 1))
-        u = x.reshape(-1, 1)
+        u = x.reshape(-1, 1) if draws is None else np.column_stack([x, draws])
         # runs of constant mounting, each with its system; the state carries across
         cuts = np.flatnonzero(np.diff(loose.astype(np.int8))) + 1
         for lo, hi in zip(np.r_[0, cuts], np.r_[cuts, x.shape[0]], strict=True):
