@@ -5,12 +5,14 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import subprocess
+import sys
 
 import numpy as np
 import pytest
 from scipy import signal
 
-from brake_sim_ros.errors import ParameterError
+from brake_sim_ros.errors import ParameterError, ScenarioError
 from brake_sim_ros.model import sensor_faults as sf
 from brake_sim_ros.model.sensor_faults import SensorFault
 from brake_sim_ros.model.sensors import (
@@ -24,7 +26,9 @@ from brake_sim_ros.model.sensors import (
     accelerometer,
     default_channels,
 )
+from brake_sim_ros.model.structure import Mode
 from brake_sim_ros.model.trajectory import SampleBlock
+from brake_sim_ros.scenarios import load_scenario, parse_scenario
 from tests.conftest import IMPACTING_S
 
 FS = 25_600.0
@@ -325,3 +329,94 @@ def test_faults_a_channel_cannot_have_are_refused(fault, channel, match):
 def test_invalid_faults_are_refused(args):
     with pytest.raises(ParameterError, match="sensor fault"):
         SensorFault(*args)
+
+
+# --- scenario tables ------------------------------------------------------------------------
+_HEAD = 'name = "t"\n'
+_SENSORS = """
+[structure]
+mounts = ["plate", "arm"]
+[[structure.modes]]
+direction = "y"
+frequency_hz = 2000.0
+damping_ratio = 0.03
+modal_mass_kg = 3.0
+left_pin = 1.0
+right_pin = 0.5
+at_mounts = [1.0, 0.2]
+
+[[sensors]]
+name = "plate_y"
+kind = "accelerometer"
+preset = "consumer_imu_class"
+location = "plate"
+axis = "y"
+rate_hz = 3200.0
+bandwidth_hz = 0
+adc_bits = 12
+[[sensors.faults]]
+kind = "bias_drift"
+onset_s = 1.0
+size = 0.5
+duration_s = 2.0
+
+[[sensors]]
+name = "wheel"
+kind = "wheel_speed"
+location = "tone_ring"
+tone_ring_teeth = 44
+"""
+
+
+def test_the_built_in_scenarios_carry_the_default_sensor_set():
+    assert load_scenario("symmetric").sensors == SensorSet()
+
+
+def test_structure_and_sensor_tables_are_read():
+    scenario = parse_scenario(_HEAD + _SENSORS)
+    s = scenario.sensors
+    assert s.structure.mounts == ("plate", "arm")
+    assert s.structure.modes == (Mode("y", 2000.0, 0.03, 3.0, 1.0, 0.5, (1.0, 0.2)),)
+    plate, wheel = s.channels
+    assert plate.transducer.bandwidth_hz is None and plate.transducer.adc_bits == 12
+    assert plate.transducer.noise_density_per_sqrt_hz == pytest.approx(300e-6 * G0)
+    assert plate.rate_hz == 3200.0
+    assert plate.faults == (SensorFault("bias_drift", 1.0, 0.5, 2.0),)
+    assert wheel.tone_ring_teeth == 44
+    assert parse_scenario(_HEAD + "sensors = []\n").sensors.channels == ()
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        (('axis = "y"', 'axis = "z"'), r"\[sensors\[0\]\].*axis"),
+        (("rate_hz = 3200.0", "colour = 1"), r"key 'sensors\[0\]\.colour'.*unknown key"),
+        (('kind = "bias_drift"', 'kind = "rust"'), r"key 'sensors\[0\]\.faults\[0\]\.kind'"),
+        (('preset = "consumer_imu_class"', 'preset = "adxl9"'), r"sensors\[0\]\.preset"),
+        (("adc_bits = 12", "adc_bits = 1.5"), r"sensors\[0\]\.adc_bits.*integer"),
+        (('location = "plate"', 'location = "hub"'), r"\[sensors\].*mount point"),
+        (("damping_ratio = 0.03", "damping_ratio = 1.5"), r"\[structure\.modes\[0\]\]"),
+        (("at_mounts = [1.0, 0.2]", "at_mounts = [1.0]"), r"\[structure\].*one value per mount"),
+        (('name = "wheel"', 'name = "plate_y"'), r"used twice"),
+    ],
+)
+def test_bad_sensor_tables_are_refused_with_the_table_and_key(change, message):
+    old, new = change
+    assert old in _SENSORS
+    with pytest.raises(ScenarioError, match=message) as info:
+        parse_scenario(_HEAD + _SENSORS.replace(old, new, 1), "my.toml")
+    assert str(info.value).startswith("my.toml: ")
+    assert "\n" not in str(info.value)
+
+
+def test_the_sensor_models_import_no_adapter_libraries():
+    code = (
+        "import sys\n"
+        "import brake_sim_ros.model.sensors, brake_sim_ros.model.sensor_faults,"
+        " brake_sim_ros.model.structure, brake_sim_ros.scenarios.sensors\n"
+        "bad = [m for m in sys.modules if m.split('.')[0] in"
+        " ('rclpy', 'mcap', 'mcap_ros2', 'rerun', 'matplotlib', 'brake_sim_msgs', 'pyarrow')]\n"
+        "sys.exit(1 if bad else 0)\n"
+    )
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stdout + r.stderr
