@@ -68,6 +68,7 @@ assumed; the published 1300 N is then 46 bar).
 from __future__ import annotations
 
 import hashlib
+import itertools
 import math
 from dataclasses import dataclass, field, replace
 
@@ -521,12 +522,16 @@ class AnalogPath:
 
     def _dynamics(self, time_s: np.ndarray, x: np.ndarray, draws: np.ndarray | None) -> np.ndarray:
         assert self.state is not None
-        loose, _ = sf.loose(self.channel.faults, time_s)
         y = np.empty((x.shape[0], 1))
         u = x.reshape(-1, 1) if draws is None else np.column_stack([x, draws])
+        if len(self.systems) == 1:
+            self.state.advance(u, y)
+            return y[:, 0]
+        loose, _ = sf.loose(self.channel.faults, time_s)
         # runs of constant mounting, each with its system; the state carries across
         cuts = np.flatnonzero(np.diff(loose.astype(np.int8))) + 1
-        for lo, hi in zip(np.r_[0, cuts], np.r_[cuts, x.shape[0]], strict=True):
+        bounds = np.concatenate(([0], cuts, [x.shape[0]]))
+        for lo, hi in itertools.pairwise(bounds):
             if hi > lo:
                 self.state.system = self.systems[bool(loose[lo])]
                 self.state.advance(u[lo:hi], y[lo:hi])
@@ -553,8 +558,8 @@ class ToneRing:
         index = (turns - np.floor(turns) < 0.5 / teeth).astype(float)
         t_all, p_all = time_s, phase
         if self.last is not None:
-            t_all = np.r_[self.last[0], time_s]
-            p_all = np.r_[self.last[1], phase]
+            t_all = np.concatenate(([self.last[0]], time_s))
+            p_all = np.concatenate(([self.last[1]], phase))
         edges = np.empty(0)
         if t_all.shape[0] > 1:
             count = np.floor(p_all)
