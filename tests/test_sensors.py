@@ -420,3 +420,26 @@ def test_the_sensor_models_import_no_adapter_libraries():
     )
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert r.returncode == 0, r.stdout + r.stderr
+
+
+def test_an_empty_block_changes_nothing(stop):
+    sensors = _faulted_set()
+    whole = SensorBank(sensors, FS, seed=4).advance(stop)
+    bank = SensorBank(sensors, FS, seed=4)
+    n = len(stop) // 2
+    frames = []
+    for lo, hi in ((0, n), (n, n), (n, len(stop))):
+        frames.append(
+            bank.advance(SampleBlock(stop.data[lo:hi], lo, stop.sample_period_s, stop.columns))
+        )
+    joined = SensorFrame.concatenate(frames)
+    for name, s in whole.series.items():
+        assert np.array_equal(s.values, joined[name].values, equal_nan=True)
+
+
+def test_the_sensor_study_is_registered_and_prints_its_figures(capsys):
+    from brake_sim_ros.studies import BENCHMARKS
+
+    assert BENCHMARKS["sensors"].run(["--duration", "0.3", "--repeats", "1", "--no-cases"]) == 0
+    out = capsys.readouterr().out
+    assert "x real time" in out and "sensor set + structure" in out

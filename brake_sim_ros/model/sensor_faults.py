@@ -154,6 +154,8 @@ def apply_hold(
 ) -> np.ndarray:
     """Stuck and dropout, applied to the reported ``values`` of one block (a copy)."""
     out = values.copy()
+    if values.shape[0] == 0:
+        return out
     stuck = np.zeros(time_s.shape[0], dtype=bool)
     for f in of_kind(faults, "stuck"):
         stuck |= f.active(time_s)
@@ -168,9 +170,8 @@ def apply_hold(
         out[stuck] = held[stuck]
         if stuck[-1]:
             state.held = float(held[-1])
-    if values.shape[0]:
-        state.last_value = float(values[-1])
-        state.was_stuck = bool(stuck[-1])
+    state.last_value = float(values[-1])
+    state.was_stuck = bool(stuck[-1])
     for f in of_kind(faults, "dropout"):
         out[f.active(time_s)] = np.nan
     return out
