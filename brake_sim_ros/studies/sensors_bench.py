@@ -20,7 +20,6 @@ another brake (no unit-to-unit scatter is modelled).
 from __future__ import annotations
 
 import argparse
-import time
 
 import numpy as np
 from scipy import signal
@@ -30,19 +29,11 @@ from brake_sim_ros.model.structure import Structure
 from brake_sim_ros.model.trajectory import SampleBlock
 from brake_sim_ros.scenarios import builtin_names, load_scenario
 from brake_sim_ros.stream.run import run_scenario
+from brake_sim_ros.studies.core_bench import _best_cpu
 
 NOISE_BAND_HZ = (850.0, 4600.0)  # drum brake noise (TESTBED.md)
 IMPACT_WINDOW_S = (0.2, 0.4)
 AXES_CHANNELS = ("backing_plate_accel_x", "backing_plate_accel_y")
-
-
-def _best_cpu(fn, repeats: int) -> float:
-    best = float("inf")
-    for _ in range(repeats):
-        start = time.process_time()
-        fn()
-        best = min(best, time.process_time() - start)
-    return best
 
 
 def _chunks(block: SampleBlock, size: int) -> list[SampleBlock]:
