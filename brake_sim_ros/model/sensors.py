@@ -63,6 +63,13 @@ The default set (:func:`default_sensor_set`): an ``adxl1002_class`` acceleromete
 in-plane axis at the backing plate, the wheel speed (48 teeth: TESTBED 40-50) and the line
 pressure (a 19.05 mm, 3/4 in, wheel-cylinder piston: a common passenger-car rear drum size,
 assumed; the published 1300 N is then 46 bar).
+
+What they give in the published event (``brake-sim bench sensors``, tests/test_sensors.py):
+a noise floor of about 2.8 mg rms per accelerometer axis; first impacts that exceed the
++-50 g range at the backing plate (the y axis reaches about 93 g before the sensor), so
+they are reported clipped for a few samples, as a real ADXL1002 there would (widen
+``range_min``/``range_max`` to keep them); below the actuation the line pressure reads a
+few hundredths of a bar, its noise clipped at 0 bar.
 """
 
 from __future__ import annotations
