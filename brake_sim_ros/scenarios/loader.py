@@ -30,7 +30,9 @@ from brake_sim_ros.model.assembly import SIDES, ModelOptions, pack
 from brake_sim_ros.model.defects import Defects, ShoeDefect
 from brake_sim_ros.model.fidelity import ACCURACY_PRESETS, LEVEL_BY_NAME, OUTPUTS, Needs, plan
 from brake_sim_ros.model.parameters import PARAMETER_GROUPS, BrakeParameters
+from brake_sim_ros.model.sensors import SensorSet, default_sensor_set
 from brake_sim_ros.model.trajectory import BrakeSetup
+from brake_sim_ros.scenarios.sensors import parse_sensors
 from brake_sim_ros.solvers.methods import FIXED_STEP_METHODS, SOLVER_METHODS
 from brake_sim_ros.solvers.presets import DEFAULT_PRESET, PRESETS
 
@@ -119,6 +121,7 @@ class Scenario:
     source: str = "<built-in>"
     text: str = ""
     needs: Needs | None = None  # None: the full model, every signal
+    sensors: SensorSet = field(default_factory=default_sensor_set)  # [structure], [[sensors]]
 
     @property
     def digest(self) -> str:
@@ -388,6 +391,8 @@ def parse_scenario(text: str, source: str = "<string>") -> Scenario:
             "parameters",
             "model",
             "needs",
+            "structure",
+            "sensors",
         },
     )
     if "name" not in top:
@@ -427,6 +432,7 @@ def parse_scenario(text: str, source: str = "<string>") -> Scenario:
         source=source,
         text=text,
         needs=needs,
+        sensors=parse_sensors(ctx, top.get("structure"), top.get("sensors")),
     )
 
 

@@ -64,6 +64,12 @@ def _realtime(argv: list[str]) -> int:
     return realtime_bench.main(argv)
 
 
+def _sensors(argv: list[str]) -> int:
+    from brake_sim_ros.studies import sensors_bench
+
+    return sensors_bench.main(argv)
+
+
 def _fidelity(argv: list[str]) -> int:
     from brake_sim_ros.studies import fidelity
 
@@ -95,6 +101,11 @@ BENCHMARKS: dict[str, Study] = {
         ),
         Study(
             "fidelity", "cost and error of each fidelity level against the full model", _fidelity
+        ),
+        Study(
+            "sensors",
+            "cost of the structure and sensors; which cases the measured acceleration separates",
+            _sensors,
         ),
     )
 }

@@ -1,0 +1,650 @@
+"""Sensor models as data: what a monitoring algorithm receives from a brake.
+
+A :class:`SensorSet` is the structure (:mod:`.structure`) and a tuple of
+:class:`SensorChannel`; a :class:`SensorBank` turns a stream of sample blocks into the
+channels' measured values, their per-sample sensor-fault labels and the tone-ring edge
+times. Pure: numpy, scipy and numba only; deterministic.
+
+**Kinds of channel** (``SensorChannel.kind``):
+
+* ``accelerometer``: acceleration along ``axis`` (x or y, frame brake_backing_plate) at a
+  mount point of the structure, m/s^2.
+* ``load_pin``: the force on the structure at one pivot pin (``location`` left or right)
+  along ``axis``, N: the opposite of the pivot columns, what the plate receives.
+* ``line_pressure``: brake line pressure, bar: the mean of the two actuation forces (one
+  wheel cylinder pushes both shoes; a share defect keeps their sum) over the piston area
+  ``pi d^2 / 4``.
+* ``wheel_speed``: an ABS tone ring of ``tone_ring_teeth`` teeth read from the drum angle:
+  a pulse channel (1 while a tooth is under the sensor, half of each pitch), a
+  once-per-revolution index channel ``<name>_index`` (1 for half a tooth pitch after
+  angle 0 of each revolution) and the rising-edge times (interpolated between samples).
+
+**The analog signal path** of the other kinds, in order, every step at the scenario's
+sample rate ``fs``:
+``true x sensitivity_ratio x (gain faults) + noise`` -> mounted resonance (a lightly damped
+2nd-order peak) -> 3 dB bandwidth (2nd-order Butterworth low-pass, designed once with
+``scipy.signal.butter``) -> the DAQ's anti-alias filter (where the preset has one) ->
+``+ bias drift`` -> range (clipping at ``range_min``/``range_max`` and at an active
+saturation fault) -> ADC (``adc_bits`` over the range: step ``(range_max - range_min) /
+2^bits``) -> stuck / dropout -> every ``fs / rate_hz``-th sample. Resonance and filters are
+one continuous system integrated exactly per sample (:mod:`.lti`), so a resonance above
+the Nyquist frequency keeps its true tail in band.
+
+**Noise.** White, input-referred, of one-sided density ``noise_density`` (the datasheet's
+figure), shaped by the path's own resonance and bandwidth. Through a path with dynamics it
+is discretised exactly (:func:`.lti.with_input_noise`: one standard normal draw per state
+of the path per sample), so the recorded noise has the continuous sensor's variance
+``N^2 int_0^inf |H(f)|^2 df`` even with a bandwidth near the Nyquist frequency; a path without
+dynamics adds ``N sqrt(fs / 2)`` times one standard normal draw per sample (white to the
+Nyquist frequency). Each channel has its own generator,
+``np.random.Generator(np.random.PCG64(np.random.SeedSequence([seed, key])))`` with ``key``
+the first 8 bytes of SHA-256 of the channel's name, and draws for every sample of the
+scenario rate, in sample order, block after block. So: one seed gives the same bits; two
+seeds, or two channels, independent noise; a stream in blocks the same bits as one block;
+adding or reordering channels does not change another channel's noise.
+
+**Preset classes** (:data:`TRANSDUCER_PRESETS`, figures from TESTBED.md where it gives them):
+
+* accelerometer ``adxl1002_class`` (industrial MEMS, ADXL1002 datasheet): 25 ug/sqrt(Hz),
+  +-50 g, 3 dB bandwidth 11 kHz, mounted resonance 21 kHz; damping ratio of the resonance
+  0.05 (assumed: Q = 10); a DAQ with 24 bits over the range (TESTBED: 16-24 bits) and an
+  anti-alias filter (4th-order Butterworth at 0.45 of the output rate, assumed: what a
+  condition-monitoring DAQ does below its Nyquist frequency). Without it the noise of the
+  21 kHz resonance folds into the band at 25.6 kHz.
+* accelerometer ``consumer_imu_class`` (MPU-9250-like): 300 ug/sqrt(Hz), about 1 kHz
+  bandwidth, +-16 g with 16 bits (that IMU's widest range and its ADC); no resonance in band.
+* ``pressure_transducer``: 0-250 bar, bandwidth 1 kHz (TESTBED), noise 0.003 bar/sqrt(Hz)
+  (assumed: about 0.1 bar rms over 1 kHz, 0.04 % of the span), 16 bits (assumed).
+* ``strain_gauge_pin``: +-20 kN, bandwidth 2 kHz, noise 0.2 N/sqrt(Hz), 16 bits (all
+  assumed: a research-rig load pin with its amplifier).
+* ``ideal`` for every kind: the true value, no noise, no dynamics, no range, no ADC.
+
+The default set (:func:`default_sensor_set`): an ``adxl1002_class`` accelerometer per
+in-plane axis at the backing plate, the wheel speed (48 teeth: TESTBED 40-50) and the line
+pressure (a 19.05 mm, 3/4 in, wheel-cylinder piston: a common passenger-car rear drum size,
+assumed; the published 1300 N is then 46 bar).
+
+What they give in the published event (``brake-sim bench sensors``, tests/test_sensors.py):
+a noise floor of about 2.8 mg rms per accelerometer axis; first impacts that exceed the
++-50 g range at the backing plate (the y axis reaches about 93 g before the sensor), so
+they are reported clipped for a few samples, as a real ADXL1002 there would (widen
+``range_min``/``range_max`` to keep them); below the actuation the line pressure reads a
+few hundredths of a bar, its noise clipped at 0 bar.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import itertools
+import math
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+from scipy import signal
+
+from brake_sim_ros.errors import ParameterError
+from brake_sim_ros.model import sensor_faults as sf
+from brake_sim_ros.model.layout import SIDES
+from brake_sim_ros.model.lti import LtiState, SampledLti, foh_discretise, with_input_noise
+from brake_sim_ros.model.sensor_faults import SensorFault
+from brake_sim_ros.model.structure import AXES, Structure, StructureParameters
+from brake_sim_ros.model.trajectory import SampleBlock
+
+STANDARD_GRAVITY_M_S2 = 9.80665
+KINDS: tuple[str, ...] = ("accelerometer", "load_pin", "line_pressure", "wheel_speed")
+UNITS: dict[str, str] = {
+    "accelerometer": "m/s^2",
+    "load_pin": "N",
+    "line_pressure": "bar",
+    "wheel_speed": "1",
+}
+LINE_PRESSURE_LOCATION = "wheel_cylinder"
+TONE_RING_LOCATION = "tone_ring"
+PA_PER_BAR = 1e5
+# the faults each kind can carry (an ideal transducer has no resonance to loosen)
+FAULTS_OF_KIND: dict[str, tuple[str, ...]] = {
+    "accelerometer": sf.FAULT_KINDS,
+    "load_pin": tuple(k for k in sf.FAULT_KINDS if k != "loose_mount"),
+    "line_pressure": tuple(k for k in sf.FAULT_KINDS if k != "loose_mount"),
+    "wheel_speed": ("dropout", "stuck"),
+}
+
+
+def _bad(channel: str, what: str, value: object, allowed: str) -> ParameterError:
+    return ParameterError(f"sensor {channel!r}: {what} = {value!r} is invalid: allowed {allowed}")
+
+
+@dataclass(frozen=True)
+class Transducer:
+    """The signal path of an analog channel, in the channel's unit (m/s^2, N, bar).
+
+    Attributes:
+        name: the preset class it came from (informative).
+        noise_density_per_sqrt_hz: input-referred white noise, channel unit / sqrt(Hz).
+        bandwidth_hz: 3 dB frequency of a 2nd-order Butterworth low-pass, Hz (None: none).
+        resonance_hz: mounted resonance, Hz (None: none).
+        resonance_damping_ratio: its damping ratio (dimensionless).
+        range_min, range_max: the output saturates outside, channel unit (+-inf: never).
+        adc_bits: quantisation over the range (None: none; needs a finite range).
+        antialias_fraction: the DAQ's anti-alias filter, a 4th-order Butterworth low-pass
+            at this fraction of the channel's output rate (None: none).
+    """
+
+    name: str = "ideal"
+    noise_density_per_sqrt_hz: float = 0.0
+    bandwidth_hz: float | None = None
+    resonance_hz: float | None = None
+    resonance_damping_ratio: float = 0.05
+    range_min: float = -math.inf
+    range_max: float = math.inf
+    adc_bits: int | None = None
+    antialias_fraction: float | None = None
+
+    def check(self, channel: str) -> None:
+        if not (
+            math.isfinite(self.noise_density_per_sqrt_hz) and self.noise_density_per_sqrt_hz >= 0
+        ):
+            raise _bad(channel, "noise density", self.noise_density_per_sqrt_hz, "a number >= 0")
+        for what in ("bandwidth_hz", "resonance_hz"):
+            value = getattr(self, what)
+            if value is not None and not (math.isfinite(value) and value > 0):
+                raise _bad(channel, what, value, "a frequency > 0 Hz, or none")
+        if self.antialias_fraction is not None and not 0.0 < self.antialias_fraction < 0.5:
+            raise _bad(
+                channel, "antialias_fraction", self.antialias_fraction, "> 0 and < 0.5, or none"
+            )
+        if not 0.0 < self.resonance_damping_ratio < 1.0:
+            raise _bad(
+                channel, "resonance_damping_ratio", self.resonance_damping_ratio, "> 0 and < 1"
+            )
+        if not self.range_min < self.range_max or math.isnan(self.range_min):
+            raise _bad(channel, "range", (self.range_min, self.range_max), "min < max")
+        if self.adc_bits is not None:
+            if not 1 <= self.adc_bits <= 32:
+                raise _bad(channel, "adc_bits", self.adc_bits, "1 to 32 bits, or none")
+            if not (math.isfinite(self.range_min) and math.isfinite(self.range_max)):
+                raise _bad(channel, "adc_bits", self.adc_bits, "none with an unbounded range")
+
+    @property
+    def adc_step(self) -> float:
+        """The quantisation step, channel unit (0: no ADC)."""
+        if self.adc_bits is None:
+            return 0.0
+        return (self.range_max - self.range_min) / 2.0**self.adc_bits
+
+    def continuous(
+        self, rate_hz: float, resonance_factor: float = 1.0
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None:
+        """``(A, B, C, D)`` of resonance, low-pass and anti-alias filter (for an output
+        rate ``rate_hz``), single input and output; None when the path has none.
+        ``resonance_factor`` scales the resonance frequency (a loose mount). The
+        resonance's states are physical (``[z, z']``, ``z'' = wr^2 (u - z) - 2 zeta wr z'``),
+        so a loose mount can change its frequency with the state kept."""
+        stages = []
+        if self.resonance_hz is not None:
+            wr = 2.0 * math.pi * self.resonance_hz * resonance_factor
+            zr = self.resonance_damping_ratio
+            stages.append(
+                (
+                    np.array([[0.0, 1.0], [-(wr**2), -2.0 * zr * wr]]),
+                    np.array([[0.0], [wr**2]]),
+                    np.array([[1.0, 0.0]]),
+                    np.zeros((1, 1)),
+                )
+            )
+        if self.bandwidth_hz is not None:
+            num, den = signal.butter(2, 2.0 * math.pi * self.bandwidth_hz, analog=True)
+            stages.append(signal.tf2ss(num, den))
+        if self.antialias_fraction is not None:
+            cutoff = 2.0 * math.pi * self.antialias_fraction * rate_hz
+            stages.append(signal.zpk2ss(*signal.butter(4, cutoff, analog=True, output="zpk")))
+        if not stages:
+            return None
+        a, b, c, d = (np.atleast_2d(np.asarray(m, dtype=float)) for m in stages[0])
+        for a2, b2, c2, d2 in stages[1:]:  # series: stage 2 driven by stage 1's output
+            a2, b2, c2, d2 = (np.atleast_2d(np.asarray(m, dtype=float)) for m in (a2, b2, c2, d2))
+            n1, n2 = a.shape[0], a2.shape[0]
+            big = np.zeros((n1 + n2, n1 + n2))
+            big[:n1, :n1] = a
+            big[n1:, :n1] = b2 @ c
+            big[n1:, n1:] = a2
+            a, b, c, d = (
+                big,
+                np.vstack([b, b2 @ d]),
+                np.hstack([d2 @ c, c2]),
+                d2 @ d,
+            )
+        return a, b, c, d
+
+
+def _accel(
+    name: str,
+    noise_ug: float,
+    bw: float | None,
+    res: float | None,
+    fs_g: float,
+    bits: int,
+    antialias: float | None,
+) -> Transducer:
+    return Transducer(
+        name=name,
+        noise_density_per_sqrt_hz=noise_ug * 1e-6 * STANDARD_GRAVITY_M_S2,
+        bandwidth_hz=bw,
+        resonance_hz=res,
+        range_min=-fs_g * STANDARD_GRAVITY_M_S2,
+        range_max=fs_g * STANDARD_GRAVITY_M_S2,
+        adc_bits=bits,
+        antialias_fraction=antialias,
+    )
+
+
+IDEAL = Transducer()
+TRANSDUCER_PRESETS: dict[str, dict[str, Transducer]] = {
+    "accelerometer": {
+        "adxl1002_class": _accel("adxl1002_class", 25.0, 11_000.0, 21_000.0, 50.0, 24, 0.45),
+        "consumer_imu_class": _accel("consumer_imu_class", 300.0, 1_000.0, None, 16.0, 16, None),
+        "ideal": IDEAL,
+    },
+    "load_pin": {
+        "strain_gauge_pin": Transducer(
+            "strain_gauge_pin", 0.2, 2_000.0, None, 0.05, -20_000.0, 20_000.0, 16
+        ),
+        "ideal": IDEAL,
+    },
+    "line_pressure": {
+        "pressure_transducer": Transducer(
+            "pressure_transducer", 0.003, 1_000.0, None, 0.05, 0.0, 250.0, 16
+        ),
+        "ideal": IDEAL,
+    },
+    "wheel_speed": {"abs_tone_ring": IDEAL, "ideal": IDEAL},
+}
+DEFAULT_PRESET: dict[str, str] = {
+    "accelerometer": "adxl1002_class",
+    "load_pin": "strain_gauge_pin",
+    "line_pressure": "pressure_transducer",
+    "wheel_speed": "abs_tone_ring",
+}
+DEFAULT_TONE_RING_TEETH = 48
+DEFAULT_PISTON_DIAMETER_M = 0.01905
+
+
+@dataclass(frozen=True)
+class SensorChannel:
+    """One sensor.
+
+    Attributes:
+        name: the channel's name (unique in a set).
+        kind: one of :data:`KINDS`.
+        location: a mount point of the structure (accelerometer), a side (load pin),
+            ``wheel_cylinder`` (line pressure) or ``tone_ring`` (wheel speed).
+        axis: x or y (accelerometer, load pin), frame brake_backing_plate; "" otherwise.
+        transducer: the signal path (a preset from :data:`TRANSDUCER_PRESETS`, possibly
+            with fields changed).
+        rate_hz: output rate, Hz; a whole fraction of the scenario's (None: the scenario's).
+        sensitivity_ratio: reported per true value (1.0: calibrated), dimensionless.
+        tone_ring_teeth: teeth of the tone ring (wheel speed).
+        piston_diameter_m: wheel-cylinder piston diameter, m (line pressure).
+        faults: sensor faults injected on this channel.
+    """
+
+    name: str
+    kind: str
+    location: str
+    axis: str = ""
+    transducer: Transducer = IDEAL
+    rate_hz: float | None = None
+    sensitivity_ratio: float = 1.0
+    tone_ring_teeth: int = DEFAULT_TONE_RING_TEETH
+    piston_diameter_m: float = DEFAULT_PISTON_DIAMETER_M
+    faults: tuple[SensorFault, ...] = ()
+
+    def __post_init__(self) -> None:
+        name = self.name
+        if not name or not isinstance(name, str):
+            raise _bad(name, "name", name, "a non-empty string")
+        if self.kind not in KINDS:
+            raise _bad(name, "kind", self.kind, f"one of {list(KINDS)}")
+        if self.kind in ("accelerometer", "load_pin"):
+            if self.axis not in AXES:
+                raise _bad(name, "axis", self.axis, f"one of {list(AXES)}")
+        elif self.axis:
+            raise _bad(name, "axis", self.axis, f"none for a {self.kind} channel")
+        if self.kind == "load_pin" and self.location not in SIDES:
+            raise _bad(name, "location", self.location, f"one of {list(SIDES)}")
+        fixed = {"line_pressure": LINE_PRESSURE_LOCATION, "wheel_speed": TONE_RING_LOCATION}
+        if self.kind in fixed and self.location != fixed[self.kind]:
+            raise _bad(name, "location", self.location, f"{fixed[self.kind]!r}")
+        self.transducer.check(name)
+        if self.rate_hz is not None and not (math.isfinite(self.rate_hz) and self.rate_hz > 0):
+            raise _bad(name, "rate_hz", self.rate_hz, "a rate > 0 Hz, or none")
+        if not (math.isfinite(self.sensitivity_ratio) and self.sensitivity_ratio > 0):
+            raise _bad(name, "sensitivity_ratio", self.sensitivity_ratio, "> 0")
+        if not 1 <= self.tone_ring_teeth <= 1000:
+            raise _bad(name, "tone_ring_teeth", self.tone_ring_teeth, "1 to 1000")
+        if not (math.isfinite(self.piston_diameter_m) and 1e-3 <= self.piston_diameter_m <= 0.1):
+            raise _bad(name, "piston_diameter_m", self.piston_diameter_m, "1 mm to 100 mm")
+        for fault in self.faults:
+            if fault.kind not in FAULTS_OF_KIND[self.kind]:
+                raise _bad(name, "fault", fault.kind, f"one of {list(FAULTS_OF_KIND[self.kind])}")
+            if fault.kind == "loose_mount" and self.transducer.resonance_hz is None:
+                raise _bad(name, "fault", fault.kind, "a transducer with a mounted resonance")
+        if len(sf.of_kind(self.faults, "loose_mount")) > 1:
+            raise _bad(name, "faults", "loose_mount x2", "at most one loose mount")
+
+    @property
+    def unit(self) -> str:
+        return UNITS[self.kind]
+
+    @property
+    def output_names(self) -> tuple[str, ...]:
+        """The sampled series this channel gives (a wheel speed also its index)."""
+        return (self.name, f"{self.name}_index") if self.kind == "wheel_speed" else (self.name,)
+
+    def decimation(self, sample_rate_hz: float) -> int:
+        """Scenario samples per output sample; refuses a rate that does not divide it."""
+        if self.rate_hz is None:
+            return 1
+        ratio = sample_rate_hz / self.rate_hz
+        whole = round(ratio)
+        if whole < 1 or abs(ratio - whole) > 1e-9 * ratio:
+            raise _bad(
+                self.name,
+                "rate_hz",
+                self.rate_hz,
+                f"the scenario's rate {sample_rate_hz:g} Hz divided by a whole number",
+            )
+        return whole
+
+    def with_faults(self, *faults: SensorFault) -> SensorChannel:
+        return replace(self, faults=self.faults + faults)
+
+
+def accelerometer(
+    name: str, mount: str, axis: str, preset: str = "adxl1002_class", **changes: object
+) -> SensorChannel:
+    """An accelerometer channel from a preset class (``changes``: SensorChannel fields)."""
+    return SensorChannel(
+        name, "accelerometer", mount, axis, TRANSDUCER_PRESETS["accelerometer"][preset], **changes
+    )
+
+
+def default_channels() -> tuple[SensorChannel, ...]:
+    return (
+        accelerometer("backing_plate_accel_x", "backing_plate", "x"),
+        accelerometer("backing_plate_accel_y", "backing_plate", "y"),
+        SensorChannel("wheel_speed", "wheel_speed", TONE_RING_LOCATION),
+        SensorChannel(
+            "line_pressure",
+            "line_pressure",
+            LINE_PRESSURE_LOCATION,
+            transducer=TRANSDUCER_PRESETS["line_pressure"]["pressure_transducer"],
+        ),
+    )
+
+
+@dataclass(frozen=True)
+class SensorSet:
+    """The structure and the channels measured on it."""
+
+    structure: StructureParameters = field(default_factory=StructureParameters)
+    channels: tuple[SensorChannel, ...] = field(default_factory=default_channels)
+
+    def __post_init__(self) -> None:
+        names = [n for c in self.channels for n in c.output_names]
+        dup = sorted({n for n in names if names.count(n) > 1})
+        if dup:
+            raise ParameterError(f"sensor names {dup} are used twice: allowed distinct names")
+        for c in self.channels:
+            if c.kind == "accelerometer" and c.location not in self.structure.mounts:
+                raise _bad(
+                    c.name, "location", c.location, f"a mount point {list(self.structure.mounts)}"
+                )
+
+    @property
+    def needs_structure(self) -> bool:
+        return any(c.kind == "accelerometer" for c in self.channels)
+
+
+def default_sensor_set() -> SensorSet:
+    return SensorSet()
+
+
+def channel_seed(seed: int, name: str) -> np.random.SeedSequence:
+    """The noise seed of channel ``name`` in a run seeded ``seed`` (module docstring)."""
+    key = int.from_bytes(hashlib.sha256(name.encode()).digest()[:8], "little")
+    return np.random.SeedSequence([seed, key])
+
+
+# --- the run-time side ----------------------------------------------------------------------
+@dataclass(frozen=True)
+class ChannelSamples:
+    """One output series of one block.
+
+    Attributes:
+        name, unit: the series' name and unit.
+        time_s: sample times (simulated), s, shape (k,).
+        values: measured values, shape (k,); NaN where the channel dropped out.
+        fault_label: per-sample OR of ``sensor_faults.FAULT_BIT`` (0: healthy), uint8.
+    """
+
+    name: str
+    unit: str
+    time_s: np.ndarray
+    values: np.ndarray
+    fault_label: np.ndarray
+
+
+@dataclass(frozen=True)
+class SensorFrame:
+    """What the sensors give for one sample block.
+
+    Attributes:
+        series: every output series by name (:class:`ChannelSamples`).
+        edges_s: rising-edge times of each wheel-speed channel in this block, s.
+        structure_names, structure: the structure's true accelerations (m/s^2) and
+            displacements (m) at its mounts, shape (n, len(names)), at the scenario rate;
+            empty when no accelerometer needs it.
+    """
+
+    series: dict[str, ChannelSamples]
+    edges_s: dict[str, np.ndarray]
+    structure_names: tuple[str, ...]
+    structure: np.ndarray
+
+    def __getitem__(self, name: str) -> ChannelSamples:
+        return self.series[name]
+
+    @staticmethod
+    def concatenate(frames: list[SensorFrame]) -> SensorFrame:
+        first = frames[0]
+        series = {
+            name: ChannelSamples(
+                name,
+                s.unit,
+                *(
+                    np.concatenate([getattr(f.series[name], a) for f in frames])
+                    for a in ("time_s", "values", "fault_label")
+                ),
+            )
+            for name, s in first.series.items()
+        }
+        edges = {n: np.concatenate([f.edges_s[n] for f in frames]) for n in first.edges_s}
+        structure = np.concatenate([f.structure for f in frames])
+        return SensorFrame(series, edges, first.structure_names, structure)
+
+
+class AnalogPath:
+    """The analog signal path of one channel (module docstring) with its carried state:
+    the dynamics' state, the noise generator, the stuck-value hold."""
+
+    def __init__(
+        self, channel: SensorChannel, sample_period_s: float, seed: int, decimation: int = 1
+    ) -> None:
+        self.channel = channel
+        self.sample_period_s = sample_period_s
+        self.rng = np.random.Generator(np.random.PCG64(channel_seed(seed, channel.name)))
+        t = channel.transducer
+        self.noise = t.noise_density_per_sqrt_hz
+        self.systems: dict[bool, SampledLti] = {}
+        self.state: LtiState | None = None
+        for loose, factor in (
+            (False, 1.0),
+            *((True, f.size) for f in sf.of_kind(channel.faults, "loose_mount")),
+        ):
+            chain = t.continuous(1.0 / (sample_period_s * decimation), factor)
+            if chain is not None:
+                system = foh_discretise(*chain, sample_period_s)
+                if self.noise > 0.0:
+                    system = with_input_noise(system, self.noise)
+                self.systems[loose] = system
+        if self.systems:
+            self.state = LtiState(self.systems[False])
+            self.n_draws = self.systems[False].a.shape[0]  # one per state and sample
+        else:
+            self.n_draws = 1
+        self.hold = sf.HoldState()
+
+    def advance(self, time_s: np.ndarray, true: np.ndarray) -> np.ndarray:
+        """Measured values at the scenario rate for the true values ``true`` (channel unit)
+        at ``time_s``."""
+        ch, t = self.channel, self.channel.transducer
+        faults = ch.faults
+        x = true * ch.sensitivity_ratio * sf.gain_factor(faults, time_s)
+        draws = None
+        if self.noise > 0.0:
+            draws = self.rng.standard_normal((time_s.shape[0], self.n_draws))
+        if self.state is not None:
+            x = self._dynamics(time_s, x, draws)
+        elif draws is not None:  # white to the Nyquist frequency: density N
+            x = x + self.noise * math.sqrt(0.5 / self.sample_period_s) * draws[:, 0]
+        x = x + sf.bias(faults, time_s)
+        limit = sf.saturation_limit(faults, time_s)
+        x = np.clip(x, np.maximum(t.range_min, -limit), np.minimum(t.range_max, limit))
+        if t.adc_bits is not None:
+            step = t.adc_step
+            codes = np.clip(np.round((x - t.range_min) / step), 0.0, 2.0**t.adc_bits - 1.0)
+            x = t.range_min + codes * step
+        return sf.apply_hold(faults, time_s, x, self.hold)
+
+    def _dynamics(self, time_s: np.ndarray, x: np.ndarray, draws: np.ndarray | None) -> np.ndarray:
+        assert self.state is not None
+        y = np.empty((x.shape[0], 1))
+        u = x.reshape(-1, 1) if draws is None else np.column_stack([x, draws])
+        if len(self.systems) == 1:
+            self.state.advance(u, y)
+            return y[:, 0]
+        loose, _ = sf.loose(self.channel.faults, time_s)
+        # runs of constant mounting, each with its system; the state carries across
+        cuts = np.flatnonzero(np.diff(loose.astype(np.int8))) + 1
+        bounds = np.concatenate(([0], cuts, [x.shape[0]]))
+        for lo, hi in itertools.pairwise(bounds):
+            if hi > lo:
+                self.state.system = self.systems[bool(loose[lo])]
+                self.state.advance(u[lo:hi], y[lo:hi])
+        return y[:, 0]
+
+
+class ToneRing:
+    """A wheel-speed sensor over a tone ring, with the last sample carried for edges."""
+
+    def __init__(self, channel: SensorChannel) -> None:
+        self.channel = channel
+        self.last: tuple[float, float] | None = None  # (time, tooth phase) of the last sample
+        self.hold = sf.HoldState()
+        self.index_hold = sf.HoldState()
+
+    def advance(
+        self, time_s: np.ndarray, drum_angle_rad: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Pulse and index values and the rising-edge times, s, of one block."""
+        teeth = self.channel.tone_ring_teeth
+        turns = drum_angle_rad / (2.0 * math.pi)
+        phase = teeth * turns
+        pulse = (phase - np.floor(phase) < 0.5).astype(float)
+        index = (turns - np.floor(turns) < 0.5 / teeth).astype(float)
+        t_all, p_all = time_s, phase
+        if self.last is not None:
+            t_all = np.concatenate(([self.last[0]], time_s))
+            p_all = np.concatenate(([self.last[1]], phase))
+        edges = np.empty(0)
+        if t_all.shape[0] > 1:
+            count = np.floor(p_all)
+            k = np.flatnonzero(count[1:] > count[:-1])  # a tooth's leading edge passed
+            crossing = count[k + 1]  # one edge per sample at most: << 1 tooth per sample
+            frac = (crossing - p_all[k]) / (p_all[k + 1] - p_all[k])
+            edges = t_all[k] + frac * (t_all[k + 1] - t_all[k])
+        if time_s.shape[0]:
+            self.last = (float(time_s[-1]), float(phase[-1]))
+        faults = self.channel.faults
+        pulse = sf.apply_hold(faults, time_s, pulse, self.hold)
+        index = sf.apply_hold(faults, time_s, index, self.index_hold)
+        dropped = np.zeros(time_s.shape[0], dtype=bool)
+        for f in sf.of_kind(faults, "dropout"):
+            dropped |= f.active(time_s)
+        if dropped.any() and edges.shape[0]:  # no edges reported while the sensor is out
+            at = np.searchsorted(time_s, edges)
+            edges = edges[~dropped[np.minimum(at, time_s.shape[0] - 1)]]
+        return pulse, index, edges
+
+
+class SensorBank:
+    """A :class:`SensorSet` at a scenario's sample rate and seed, fed sample blocks in order.
+
+    ``advance(block)`` returns the :class:`SensorFrame` of that block; state (structure,
+    dynamics, noise generators, holds, tone-ring phase) is carried to the next block, so
+    a stream in blocks equals one block bit for bit.
+    """
+
+    def __init__(self, sensors: SensorSet, sample_rate_hz: float, seed: int) -> None:
+        self.sensors = sensors
+        self.sample_rate_hz = float(sample_rate_hz)
+        self.sample_period_s = 1.0 / self.sample_rate_hz
+        self.decimation = {c.name: c.decimation(self.sample_rate_hz) for c in sensors.channels}
+        self.structure = (
+            Structure(sensors.structure, self.sample_period_s) if sensors.needs_structure else None
+        )
+        self.paths: dict[str, AnalogPath | ToneRing] = {}
+        for c in sensors.channels:
+            self.paths[c.name] = (
+                ToneRing(c)
+                if c.kind == "wheel_speed"
+                else AnalogPath(c, self.sample_period_s, seed)
+            )
+
+    def true_value(
+        self, channel: SensorChannel, block: SampleBlock, structure: np.ndarray
+    ) -> np.ndarray:
+        """What the channel measures, before its signal path, channel unit."""
+        if channel.kind == "accelerometer":
+            assert self.structure is not None
+            col = self.structure.names.index(f"{channel.location}_accel_{channel.axis}_m_s2")
+            return structure[:, col]
+        if channel.kind == "load_pin":  # the force on the plate: opposite of the pin's
+            return -block[f"{channel.location}_pivot_f{channel.axis}_n"]
+        area_m2 = math.pi * channel.piston_diameter_m**2 / 4.0
+        mean_force = 0.5 * (block["left_actuation_force_n"] + block["right_actuation_force_n"])
+        return mean_force / area_m2 / PA_PER_BAR
+
+    def advance(self, block: SampleBlock) -> SensorFrame:
+        time_s = block.time_s
+        if self.structure is not None:
+            structure = self.structure.advance(block)
+            names = self.structure.names
+        else:
+            structure, names = np.empty((len(block), 0)), ()
+        series: dict[str, ChannelSamples] = {}
+        edges: dict[str, np.ndarray] = {}
+        index = block.first_index + np.arange(len(block))
+        for c in self.sensors.channels:
+            keep = index % self.decimation[c.name] == 0
+            label = sf.labels(c.faults, time_s)[keep]
+            path = self.paths[c.name]
+            if isinstance(path, ToneRing):
+                pulse, idx, edges[c.name] = path.advance(time_s, block["drum_angle_rad"])
+                outputs = (pulse, idx)
+            else:
+                outputs = (path.advance(time_s, self.true_value(c, block, structure)),)
+            for name, values in zip(c.output_names, outputs, strict=True):
+                series[name] = ChannelSamples(name, c.unit, time_s[keep], values[keep], label)
+        return SensorFrame(series, edges, names, structure)
