@@ -6,11 +6,17 @@ Every command exits 0 on success and non-zero with a one-line reason on failure.
 from __future__ import annotations
 
 import argparse
+import contextlib
+import dataclasses
+import itertools
 import json
+import math
+import os
 import sys
 import time
+from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, NoReturn
 
 import numpy as np
 
@@ -25,6 +31,7 @@ if TYPE_CHECKING:  # the CLI imports the numerics only when a command needs them
     from brake_sim_ros.analysis.impacts import ShoeMetrics
     from brake_sim_ros.scenarios.loader import Scenario
     from brake_sim_ros.stream.run import RunResult
+    from brake_sim_ros.viz.targets import RerunTarget
 
 EXIT_ERROR = 2
 
@@ -44,7 +51,206 @@ def _progress(label: str):
 
 
 # --- simulate ---------------------------------------------------------------------------------
-def _write_history(path: Path, result, scenario) -> None:
+# The longest run ``simulate`` takes, s (the node and ``brake-sim live`` stream longer ones).
+MAX_SIMULATE_DURATION_S = 3600.0
+# The history ``simulate`` may keep in memory (samples x kept columns x 8 bytes): 2 GiB,
+# e.g. 276 s of the full model at the default 25.6 kHz. The whole run is kept to be
+# analysed and written, so this, not the duration, is what a long or fast-sampled run meets.
+MAX_HISTORY_BYTES = 2 * 1024**3
+# --out formats: suffix -> what it is
+HISTORY_FORMATS = {
+    ".npz": "numpy; pandas via pd.DataFrame(dict(np.load(f)))",
+    ".csv": "comma-separated with a header line",
+}
+
+
+@dataclass(frozen=True)
+class SimulateJob:
+    """A ``simulate`` command line, checked: what to run and where to write it."""
+
+    scenario: Scenario  # with the command line's solver and sample-rate overrides
+    duration_s: float
+    inputs: tuple[Path, ...]  # the files read (the scenario file): never an output
+    outputs: dict[str, Path]  # "--out", "--mcap" -> its path (--rerun save: in ``rerun``)
+    rerun: tuple[RerunTarget, ...]
+    overwrite: bool
+    quiet: bool
+    mcap_compression: str
+
+    def atomic(self, option: str, path: Path | None = None):
+        """The output of ``option`` (or its ``path``), written whole or not at all."""
+        from brake_sim_ros.recording.output import atomic_output
+
+        return atomic_output(
+            self.outputs[option] if path is None else path,
+            inputs=self.inputs,
+            overwrite=self.overwrite,
+            option=option,
+            make_parents=False,
+        )
+
+
+def load_simulation(args: argparse.Namespace) -> SimulateJob:
+    """Step 1 of ``simulate``: the scenario, every option and every output checked before
+    anything runs or is written (a refusal is a BrakeSimError of one line)."""
+    from brake_sim_ros.scenarios import load_scenario
+
+    if args.dt is not None:
+        raise BrakeSimError(
+            "--dt is gone: the output sample rate belongs to the scenario (--sample-rate HZ,"
+            " default 25600) and the physics step is chosen below the step limit (--max-step S"
+            " bounds it)"
+        )
+    scenario = load_scenario(args.scenario)
+    # the overrides go into the scenario once: every output below runs the same stepper
+    for option, key, value in (
+        ("--preset", "preset", args.preset),
+        ("--method", "method", args.method),
+        ("--max-step", "max_step_s", args.max_step),
+        ("--sample-rate", "sample_rate_hz", args.sample_rate),
+    ):
+        if value is not None:
+            try:
+                scenario = scenario.with_solver(**{key: value})
+            except BrakeSimError as exc:
+                raise BrakeSimError(f"{option}: {exc}") from None
+    if args.method == "reference" and (args.mcap or args.rerun):
+        raise BrakeSimError(
+            "--mcap and --rerun take the node's fixed-step stream: drop --method reference"
+        )
+    rerun = tuple(_rerun_targets(args))
+    inputs = (Path(args.scenario),) if os.path.lexists(args.scenario) else ()
+    return SimulateJob(
+        scenario=scenario,
+        duration_s=_simulated_duration(args.duration, scenario),
+        inputs=inputs,
+        outputs=_checked_outputs(args, rerun, inputs),
+        rerun=rerun,
+        overwrite=args.overwrite,
+        quiet=args.quiet,
+        mcap_compression=args.mcap_compression,
+    )
+
+
+def _simulated_duration(duration: float | None, scenario: Scenario) -> float:
+    """The run's duration, s (``--duration`` or the scenario's): finite, > 0, at most
+    MAX_SIMULATE_DURATION_S, one sample or more, a history within MAX_HISTORY_BYTES."""
+    from brake_sim_ros.model.fidelity import plan
+    from brake_sim_ros.solvers.contact_regime import macro_step
+    from brake_sim_ros.stream.run import planned_setup
+
+    where = "--duration" if duration is not None else f"{scenario.source}: duration_s"
+    value = scenario.duration_s if duration is None else duration
+    if not (math.isfinite(value) and 0.0 < value <= MAX_SIMULATE_DURATION_S):
+        raise BrakeSimError(
+            f"{where} {value!r} s: allowed a time > 0 s and at most {MAX_SIMULATE_DURATION_S:g} s"
+            " (simulate keeps the whole run in memory; brake-sim live streams longer runs)"
+        )
+    chosen = plan(scenario.needs, model_shoes=scenario.setup.options.shoes)
+    if chosen.level.quasi_static_shoes:  # the contact-regime levels sample their macro step
+        period = macro_step(planned_setup(scenario.setup, chosen), chosen.accuracy)
+    else:
+        period = scenario.sample_period_s
+    samples = round(value / period)
+    if samples < 1:
+        raise BrakeSimError(
+            f"{where} {value:g} s is shorter than one sample: allowed at least {period:.3g} s"
+        )
+    size = samples * len(chosen.columns) * 8
+    if size > MAX_HISTORY_BYTES:
+        raise BrakeSimError(
+            f"{where} {value:g} s keeps {samples} samples x {len(chosen.columns)} columns"
+            f" ({size / 1e9:.1f} GB) in memory: allowed at most {MAX_HISTORY_BYTES / 1e9:.1f}"
+            " GB; shorten the run, lower --sample-rate, ask for fewer outputs ([needs]) or"
+            " stream it with brake-sim live"
+        )
+    return value
+
+
+def _checked_outputs(
+    args: argparse.Namespace, rerun: tuple[RerunTarget, ...], inputs: tuple[Path, ...]
+) -> dict[str, Path]:
+    """The --out and --mcap paths, by option. Every output (--rerun save too) is refused
+    unless it names its own file, has an allowed suffix, and
+    :func:`~brake_sim_ros.recording.output.probe_output`'s rules hold (not the scenario
+    file, not a link, not an existing file without --overwrite, nor a non-regular one; an
+    existing directory that takes a new file)."""
+    from brake_sim_ros.recording.output import OutputError, check_output, probe_output
+    from brake_sim_ros.recording.records import describe_path
+
+    named = [("--out", args.out, tuple(HISTORY_FORMATS)), ("--mcap", args.mcap, (".mcap",))]
+    named += [("--rerun save", t.arg, (".rrd",)) for t in rerun if t.kind == "save"]
+    named = [(option, path, suffixes) for option, path, suffixes in named if path is not None]
+    for (option, path, _), (other, other_path, _) in itertools.combinations(named, 2):
+        if _same_file(path, other_path):
+            raise OutputError(
+                f"{option} {describe_path(path)} and {other} {describe_path(other_path)} name"
+                " the same file: give each output its own path"
+            )
+    checked = {}
+    for option, path, suffixes in named:
+        rules = {"inputs": inputs, "overwrite": args.overwrite, "option": option}
+        check_output(path, make_parents=False, **rules)  # the scenario file, a link: first
+        if Path(path).suffix not in suffixes:
+            allowed = " or ".join(
+                f"{s} ({HISTORY_FORMATS[s]})" if s in HISTORY_FORMATS else s for s in suffixes
+            )
+            raise OutputError(f"{option} {describe_path(path)}: allowed a path ending in {allowed}")
+        checked[option] = probe_output(path, **rules)
+    checked.pop("--rerun save", None)  # the path is the target's
+    return checked
+
+
+def _same_file(a: str, b: str) -> bool:
+    """Whether two output paths name one file (the same directory and name, or the same
+    existing file through another path)."""
+    pa, pb = Path(a), Path(b)
+    if (os.path.realpath(pa.parent), pa.name) == (os.path.realpath(pb.parent), pb.name):
+        return True
+    try:
+        sa, sb = os.stat(pa), os.stat(pb)
+    except OSError:
+        return False
+    return (sa.st_dev, sa.st_ino) == (sb.st_dev, sb.st_ino)
+
+
+def _rerun_targets(args: argparse.Namespace) -> list[RerunTarget]:
+    """``simulate --rerun ...`` targets, checked before the run (empty without the option)."""
+    if not args.rerun:
+        return []
+    from brake_sim_ros.viz.commands import parse_targets
+
+    return parse_targets(args.rerun)
+
+
+def run_simulation(job: SimulateJob) -> RunResult:
+    """Step 2 of ``simulate``: integrate the scenario and analyse the run."""
+    from brake_sim_ros.stream.run import run_scenario
+
+    progress = None if job.quiet else _progress(f"simulating {job.scenario.name}")
+    return run_scenario(job.scenario, duration_s=job.duration_s, progress=progress)
+
+
+def write_simulation(job: SimulateJob, result: RunResult) -> list[str]:
+    """Step 3 of ``simulate``: the history (--out) and the node's stream (--mcap, --rerun),
+    each file written whole or not at all. Returns a line per output written."""
+    lines = []
+    if "--out" in job.outputs:
+        _write_history(job, result)
+        lines.append(
+            f"time history: {job.outputs['--out']} ({len(result.samples)} samples x"
+            f" {result.samples.data.shape[1]} columns)"
+        )
+    if "--mcap" in job.outputs or job.rerun:
+        lines += _write_stream(job)
+    return lines
+
+
+def _write_history(job: SimulateJob, result: RunResult) -> None:
+    from brake_sim_ros.recording.output import OutputError
+    from brake_sim_ros.recording.records import describe_path
+
+    path, scenario = job.outputs["--out"], job.scenario
     columns = result.samples.as_dict()
     meta = {
         "scenario": scenario.name,
@@ -58,18 +264,78 @@ def _write_history(path: Path, result, scenario) -> None:
         "step": result.step_note,
         "scenario_toml": scenario.text,
     }
-    path.parent.mkdir(parents=True, exist_ok=True)
-    if path.suffix == ".npz":
-        np.savez_compressed(path, **columns, metadata=np.array(json.dumps(meta)))
-    elif path.suffix == ".csv":
-        names = list(columns)
-        data = np.column_stack([columns[n] for n in names])
-        np.savetxt(path, data, delimiter=",", header=",".join(names), comments="", fmt="%.10g")
-    else:
-        raise BrakeSimError(
-            f"output file {path}: allowed suffixes .npz (numpy; pandas via"
-            " pd.DataFrame(dict(np.load(f)))) or .csv"
-        )
+    with job.atomic("--out") as partial:
+        try:
+            if path.suffix == ".npz":
+                with open(partial, "wb") as f:
+                    np.savez_compressed(f, **columns, metadata=np.array(json.dumps(meta)))
+            else:
+                names = list(columns)
+                data = np.column_stack([columns[n] for n in names])
+                np.savetxt(
+                    partial, data, delimiter=",", header=",".join(names), comments="", fmt="%.10g"
+                )
+        except OSError as exc:
+            raise OutputError(
+                f"--out {describe_path(path)}: cannot write it ({exc.strerror or exc})"
+            ) from None
+
+
+def _write_stream(job: SimulateJob) -> list[str]:
+    """The node's stream, produced offline once, into the MCAP file and the Rerun targets;
+    the files are written under temporary names and renamed when complete."""
+    from brake_sim_ros.viz.targets import RerunTarget
+
+    with contextlib.ExitStack() as stack:
+        mcap = stack.enter_context(job.atomic("--mcap")) if "--mcap" in job.outputs else None
+        targets = [
+            RerunTarget("save", str(stack.enter_context(job.atomic("--rerun save", Path(t.arg)))))
+            if t.kind == "save"
+            else t
+            for t in job.rerun
+        ]
+        lines = _stream(job, mcap, targets)
+    return lines
+
+
+def _stream(job: SimulateJob, mcap: Path | None, targets: list[RerunTarget]) -> list[str]:
+    from brake_sim_ros.viz.commands import finish_simulation_sinks, open_simulation_sinks
+
+    scenario, lines = job.scenario, []
+    sinks = open_simulation_sinks(scenario, targets) if targets else []
+    try:
+        if mcap is not None:
+            from brake_sim_ros.recording.record import record_offline
+            from brake_sim_ros.recording.writer import RecordingOptions
+
+            options = RecordingOptions(compression=job.mcap_compression, durable=False)
+            recording = record_offline(
+                scenario, mcap, duration_s=job.duration_s, options=options, also=sinks
+            )
+            lines.append(dataclasses.replace(recording, path=str(job.outputs["--mcap"])).describe())
+        else:
+            from brake_sim_ros.stream.offline import offline_messages
+
+            for topic, msg, ns in offline_messages(scenario, duration_s=job.duration_s):
+                for sink in sinks:
+                    sink.write(topic, msg, ns)
+    except BaseException:
+        for sink in sinks:
+            sink.close()
+        raise
+    if sinks:
+        lines.append(finish_simulation_sinks(sinks, list(job.rerun)))
+    return lines
+
+
+def cmd_simulate(args: argparse.Namespace) -> int:
+    """``brake-sim simulate``: load and check, run, summarise, write."""
+    job = load_simulation(args)
+    result = run_simulation(job)
+    print(simulate_summary(result, job.scenario))
+    for line in write_simulation(job, result):
+        print(line)
+    return 0
 
 
 def _shoe_summary(shoe: ShoeMetrics) -> str:
@@ -129,90 +395,12 @@ def simulate_summary(result: RunResult, scenario: Scenario) -> str:
     return "\n".join(lines)
 
 
-def cmd_simulate(args: argparse.Namespace) -> int:
-    from brake_sim_ros.scenarios import load_scenario
-    from brake_sim_ros.stream.run import run_scenario
-
-    if args.dt is not None:
-        raise BrakeSimError(
-            "--dt is gone: the output sample rate belongs to the scenario (--sample-rate HZ,"
-            " default 25600) and the physics step is chosen below the step limit (--max-step S"
-            " bounds it)"
-        )
-    # the overrides go into the scenario once: every output below runs the same stepper
-    scenario = load_scenario(args.scenario).with_solver(
-        preset=args.preset,
-        method=args.method,
-        max_step_s=args.max_step,
-        sample_rate_hz=args.sample_rate,
-    )
-    rerun_targets = _rerun_targets(args)
-    progress = _progress(f"simulating {scenario.name}") if not args.quiet else None
-    result = run_scenario(scenario, duration_s=args.duration, progress=progress)
-    print(simulate_summary(result, scenario))
-    if args.out:
-        _write_history(Path(args.out), result, scenario)
-        print(
-            f"time history: {args.out} ({len(result.samples)} samples x"
-            f" {result.samples.data.shape[1]} columns)"
-        )
-    if args.mcap or rerun_targets:
-        _write_stream(args, scenario, rerun_targets)
-    return 0
-
-
-def _write_stream(args: argparse.Namespace, scenario, rerun_targets: list) -> None:
-    """The node's stream, produced offline once, into the MCAP file and the Rerun targets
-    (``scenario`` carries the command line's solver and sample-rate overrides)."""
-    if not args.mcap:
-        from brake_sim_ros.viz.commands import simulate_to_rerun
-
-        print(simulate_to_rerun(scenario, rerun_targets, duration_s=args.duration))
-        return
-    from brake_sim_ros.recording.record import record_offline
-    from brake_sim_ros.recording.writer import RecordingOptions
-
-    if args.method == "reference":
-        raise BrakeSimError("--mcap records the node's fixed-step stream: drop --method reference")
-    sinks = []
-    if rerun_targets:
-        from brake_sim_ros.viz.commands import finish_simulation_sinks, open_simulation_sinks
-
-        sinks = open_simulation_sinks(scenario, rerun_targets)
-    options = RecordingOptions(compression=args.mcap_compression, durable=False)
-    try:
-        recording = record_offline(
-            scenario, args.mcap, duration_s=args.duration, options=options, also=sinks
-        )
-    except BaseException:
-        for sink in sinks:
-            sink.close()
-        raise
-    print(recording.describe())
-    if sinks:
-        print(finish_simulation_sinks(sinks, rerun_targets))
-
-
 # --- recover ---------------------------------------------------------------------------------
 def cmd_recover(args: argparse.Namespace) -> int:
     from brake_sim_ros.recording.recover import recover
 
     print(recover(args.broken, args.fixed, overwrite=args.overwrite).describe())
     return 0
-
-
-def _rerun_targets(args: argparse.Namespace) -> list:
-    """``simulate --rerun ...`` targets, checked before the run (empty without the option)."""
-    if not args.rerun:
-        return []
-    if args.method == "reference":
-        raise BrakeSimError(
-            "--rerun logs the fixed-step stream the node publishes: it cannot be combined"
-            " with --method reference"
-        )
-    from brake_sim_ros.viz.commands import parse_targets
-
-    return parse_targets(args.rerun)
 
 
 def cmd_view(args: argparse.Namespace) -> int:
@@ -326,15 +514,38 @@ def run_replay(argv: list[str]) -> int:
     return replay_main(["brake-sim replay", *argv]) or 0
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse, but a bad command line is one line on stderr (exit 2), not the usage."""
+
+    def error(self, message: str) -> NoReturn:
+        text = " ".join(message.split())
+        text = "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)
+        if len(text) > 500:
+            text = text[:400] + " ... " + text[-60:]
+        self.exit(EXIT_ERROR, f"{self.prog}: error: {text} (see {self.prog} --help)\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="brake-sim", description=__doc__.splitlines()[0])
+    parser = _Parser(prog="brake-sim", description=__doc__.splitlines()[0])
     parser.add_argument("--version", action="version", version=f"brake-sim-ros {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
 
-    p = sub.add_parser("simulate", help="run a scenario offline and summarise it")
+    p = sub.add_parser(
+        "simulate",
+        help="run a scenario offline and summarise it",
+        description="Run a scenario offline and summarise it. Everything is checked before"
+        " the run: outputs go to new files in existing directories (--overwrite replaces a"
+        " file; never a link, never the scenario file), each written whole or not at all.",
+    )
     p.add_argument("scenario", help="built-in scenario name or path to a .toml file")
     p.add_argument("--out", help="write the full time history (.npz or .csv)")
-    p.add_argument("--duration", type=float, help="simulated seconds (default: the scenario's)")
+    p.add_argument(
+        "--duration",
+        type=float,
+        metavar="S",
+        help=f"simulated seconds, > 0 and at most {MAX_SIMULATE_DURATION_S:g} (default: the"
+        f" scenario's); the kept history may take at most {MAX_HISTORY_BYTES / 1e9:.1f} GB",
+    )
     p.add_argument(
         "--preset",
         choices=tuple(PRESETS),
@@ -350,7 +561,8 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="HZ",
         help="override the scenario's output sample rate (default 25600 Hz)",
     )
-    p.add_argument("--dt", type=float, help=argparse.SUPPRESS)  # retired: a one-line pointer
+    # retired: a one-line pointer, whatever follows it
+    p.add_argument("--dt", nargs="?", const="", help=argparse.SUPPRESS)
     p.add_argument("--quiet", action="store_true", help="no progress output")
     p.add_argument(
         "--rerun",
@@ -362,6 +574,9 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("--mcap", help="also write the node's message stream to this MCAP file")
     p.add_argument("--mcap-compression", choices=("zstd", "none"), default="zstd")
+    p.add_argument(
+        "--overwrite", action="store_true", help="replace existing output files (never a link)"
+    )
     p.set_defaults(func=cmd_simulate)
 
     p = sub.add_parser("view", help="show an MCAP recording in Rerun, or convert it to .rrd")

@@ -51,12 +51,14 @@ def test_simulate_csv(tmp_path):
 def test_simulate_runs_at_the_scenarios_sample_rate_for_every_preset_and_defect(tmp_path):
     """The sample rate is the scenario's: the preset and a defect that needs a smaller step
     (case 2's leading pivot 3 % inward: limit 9 us) change the physics step, not the rate."""
-    for args in (
-        ("case2_left_pivot_in", "--preset", "fast"),
-        ("case2_left_pivot_in", "--preset", "accurate"),
-        ("symmetric", "--preset", "accurate", "--sample-rate", "10000"),
+    for i, args in enumerate(
+        (
+            ("case2_left_pivot_in", "--preset", "fast"),
+            ("case2_left_pivot_in", "--preset", "accurate"),
+            ("symmetric", "--preset", "accurate", "--sample-rate", "10000"),
+        )
     ):
-        out = tmp_path / "run.npz"
+        out = tmp_path / f"run{i}.npz"  # an existing output is refused without --overwrite
         r = _cli("simulate", *args, "--duration", "0.05", "--out", str(out), "--quiet")
         assert r.returncode == 0, r.stderr
         rate = float(args[-1]) if "--sample-rate" in args else 25_600.0

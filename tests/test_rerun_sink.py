@@ -79,6 +79,7 @@ def check_run(path: Path, *, n_samples: int, n_states: int) -> None:
 
 def test_simulate_rerun_save_holds_every_sample(tmp_path: Path, capsys):
     out = tmp_path / "sub" / "symmetric.rrd"
+    out.parent.mkdir()  # simulate writes into existing directories only
     code = main(
         ["simulate", "symmetric", "--duration", str(RUN_S), "--quiet", "--rerun", "save", str(out)]
     )

@@ -63,7 +63,7 @@ shoes = ["left"]
         ),
         ("[parameters.friction]\ncoefficient = nan", "parameters.friction.coefficient", "finite"),
         ("[parameters.shoe]\nmass_kg = inf", "parameters.shoe.mass_kg", "finite"),
-        ("[solver]\nmax_step_s = -1e-5", "solver.max_step_s", "> 0"),
+        ("[solver]\nmax_step_s = -1e-5", "solver.max_step_s", ">= 1e-08"),
         ("[solver]\nmax_step = 1", "solver.max_step", "unknown key"),
         ("[solver]\ndt_s = 4e-5", "solver.dt_s", "sample_rate_hz"),  # retired
         ("sample_rate_hz = 0", "sample_rate_hz", ">= 1"),

@@ -1,6 +1,6 @@
 """Files a command writes: checked before anything is written, whole or not at all.
 
-Rules (``recover FIXED``, ``view --save FILE.rrd``):
+Rules (``recover FIXED``, ``view --save FILE.rrd``, ``simulate --out/--mcap/--rerun save``):
 
 * an existing output is refused unless ``overwrite`` (``--overwrite``);
 * an output that is a symbolic link is refused, even with ``overwrite`` (nothing is ever
@@ -9,7 +9,10 @@ Rules (``recover FIXED``, ``view --save FILE.rrd``):
   names it (the same device and inode: another path, a hard link, a link to it);
 * an output that exists and is not a regular file (a directory, a device) is refused;
 * the directory must be writable (missing directories are created, and removed again if
-  the command fails).
+  the command fails; with ``make_parents=False`` a missing directory is refused);
+* :func:`probe_output` also proves it: it creates and removes a file there, so a directory
+  that looks writable but takes no file (``/proc``, a full or read-only file system) is
+  refused before any work is done.
 
 All of this is checked before the first byte is written. The file is then written under a
 temporary name in the target directory (``.NAME.XXXX.partial.SUFFIX``), fsync'ed and
@@ -62,6 +65,7 @@ def check_output(
     overwrite: bool = False,
     suffix: str | None = None,
     option: str = "output",
+    make_parents: bool = True,
 ) -> Path:
     """Apply the module's rules to ``path`` (nothing is written).
 
@@ -69,6 +73,7 @@ def check_output(
         inputs: the files the command reads; the output may be none of them.
         suffix: the required suffix (``".mcap"``), or None.
         option: how the output is named in messages (``"--save"``, ``"FIXED"``).
+        make_parents: False to refuse a directory that does not exist (else it is made).
 
     Raises:
         OutputError: the first rule that refuses ``path``.
@@ -105,6 +110,11 @@ def check_output(
             raise OutputError(f"{option} {name} exists: pass --overwrite to replace it")
     parent = out.parent
     missing = _missing_parents(parent)
+    if missing and not make_parents:
+        raise OutputError(
+            f"{option} {name}: directory {describe_path(missing[-1])} does not exist: allowed a"
+            " path in an existing directory"
+        )
     existing = missing[0].parent if missing else parent
     if not existing.is_dir():
         raise OutputError(f"{option} {name}: {describe_path(existing)} is not a directory")
@@ -123,6 +133,7 @@ def atomic_output(
     overwrite: bool = False,
     suffix: str | None = None,
     option: str = "output",
+    make_parents: bool = True,
 ) -> Iterator[Path]:
     """Check ``path`` (:func:`check_output`), then yield a temporary path beside it to write.
 
@@ -133,7 +144,8 @@ def atomic_output(
     Raises:
         OutputError: a rule refuses ``path``, or the file cannot be created or renamed.
     """
-    out = check_output(path, inputs=inputs, overwrite=overwrite, suffix=suffix, option=option)
+    rules = {"inputs": inputs, "overwrite": overwrite, "suffix": suffix, "option": option}
+    out = check_output(path, make_parents=make_parents, **rules)
     name = describe_path(path)
     made = _missing_parents(out.parent)
     tmp: Path | None = None
@@ -147,7 +159,7 @@ def atomic_output(
                 f"{option} {name}: cannot write there ({exc.strerror or exc})"
             ) from None
         yield tmp
-        check_output(path, inputs=inputs, overwrite=overwrite, suffix=suffix, option=option)
+        check_output(path, make_parents=make_parents, **rules)
         try:
             with open(tmp, "rb+") as f:
                 os.fsync(f.fileno())
@@ -168,6 +180,38 @@ def atomic_output(
             with contextlib.suppress(OSError):
                 directory.rmdir()  # only if still empty
         raise
+
+
+def probe_output(
+    path: str | os.PathLike[str],
+    *,
+    inputs: Sequence[str | os.PathLike[str]] = (),
+    overwrite: bool = False,
+    suffix: str | None = None,
+    option: str = "output",
+) -> Path:
+    """:func:`check_output` with ``make_parents=False``, then prove the directory takes a
+    new file: an empty temporary file is created beside ``path`` and removed at once.
+
+    For a command that works long before it writes (``simulate``): a directory that looks
+    writable but is not (``/proc``, a full or read-only file system; root passes every
+    permission check) is refused before the work starts. Nothing is left behind.
+
+    Raises:
+        OutputError: a rule refuses ``path``, or no file can be created in its directory.
+    """
+    out = check_output(
+        path, inputs=inputs, overwrite=overwrite, suffix=suffix, option=option, make_parents=False
+    )
+    try:
+        tmp = _create_temporary(out)
+    except OSError as exc:
+        raise OutputError(
+            f"{option} {describe_path(path)}: cannot write there ({exc.strerror or exc})"
+        ) from None
+    with contextlib.suppress(OSError):
+        tmp.unlink()
+    return out
 
 
 def _create_temporary(out: Path) -> Path:

@@ -6,6 +6,14 @@ from brake_sim_ros.scenarios.loader import (
     builtin_names,
     load_scenario,
     parse_scenario,
+    read_scenario_file,
 )
 
-__all__ = ["Scenario", "SolverSettings", "builtin_names", "load_scenario", "parse_scenario"]
+__all__ = [
+    "Scenario",
+    "SolverSettings",
+    "builtin_names",
+    "load_scenario",
+    "parse_scenario",
+    "read_scenario_file",
+]

@@ -6,6 +6,11 @@ optionally what it needs (``[needs]``: outputs, shoes, accuracy,
 forced level; see :mod:`brake_sim_ros.model.fidelity`). Loading is strict: an unknown key,
 a wrong type, or a non-finite or out-of-range value is an error that names the file, the
 key, the value and what is allowed. See ``builtin/symmetric.toml`` for a commented example.
+
+A scenario file is hostile input until checked: :func:`read_scenario_file` is the one way a
+file is read (regular files only, size, encoding and nesting limits, see there), and every
+error is a :class:`~brake_sim_ros.errors.ScenarioError` of one line that quotes no more of
+the file than a value or key of a few characters.
 """
 
 from __future__ import annotations
@@ -14,10 +19,12 @@ import dataclasses
 import hashlib
 import itertools
 import math
+import os
+import re
+import stat
 import tomllib
 from dataclasses import dataclass, field
 from importlib import resources
-from pathlib import Path
 from typing import Any
 
 from brake_sim_ros.errors import BrakeSimError, ScenarioError
@@ -33,6 +40,7 @@ from brake_sim_ros.model.parameters import PARAMETER_GROUPS, BrakeParameters
 from brake_sim_ros.model.sensors import SensorSet, default_sensor_set
 from brake_sim_ros.model.trajectory import BrakeSetup
 from brake_sim_ros.scenarios.sensors import parse_sensors
+from brake_sim_ros.solvers.fixed_step import MIN_PHYSICS_STEP_S
 from brake_sim_ros.solvers.methods import FIXED_STEP_METHODS, SOLVER_METHODS
 from brake_sim_ros.solvers.presets import DEFAULT_PRESET, PRESETS
 
@@ -41,6 +49,19 @@ BUILTIN_PACKAGE = "brake_sim_ros.scenarios.builtin"
 # condition-monitoring rate (a power-of-two number of samples per 10 ms chunk: 256).
 DEFAULT_SAMPLE_RATE_HZ = 25_600.0
 SAMPLE_RATE_RANGE_HZ = (1.0, 1e6)
+# The largest physics step a scenario or the command line may set, s: from the smallest step
+# the stepper takes (a smaller bound would ask for billions of substeps) to 10 ms.
+MAX_STEP_RANGE_S = (MIN_PHYSICS_STEP_S, 1e-2)
+
+# Limits of a scenario file (read_scenario_file): a real scenario is a few kB, four levels
+# deep and has a short name.
+MAX_SCENARIO_BYTES = 1024 * 1024
+MAX_NESTING = 32  # tables and arrays inside one another
+MAX_NAME_CHARS = 255  # a file name's limit on common file systems
+# a value or key is quoted in an error message only up to this many characters (its repr);
+# a longer one is described ("a string of 300 characters"): messages never echo the file
+SHOWN_CHARS = 24
+_MISSING = object()
 # the key that set step and sample rate together before the sample rate became the
 # scenario's: refused with a pointer to what replaced it
 _RETIRED_STEP_KEY = (
@@ -99,9 +120,10 @@ class SolverSettings:
                 raise ScenarioError(f"solver method {method!r}: allowed one of {SOLVER_METHODS}")
             out = dataclasses.replace(out, method=method)
         if max_step_s is not None:
-            if not (math.isfinite(max_step_s) and 0.0 < max_step_s <= 1e-2):
+            lo, hi = MAX_STEP_RANGE_S
+            if not (math.isfinite(max_step_s) and lo <= max_step_s <= hi):
                 raise ScenarioError(
-                    f"largest physics step {max_step_s!r} s: allowed a step > 0 and <= 0.01 s"
+                    f"largest physics step {max_step_s!r} s: allowed a step from {lo:g} to {hi:g} s"
                 )
             out = dataclasses.replace(out, max_step_s=float(max_step_s))
         return out
@@ -161,13 +183,61 @@ class Scenario:
 
 
 # --- strict value checks --------------------------------------------------------------------
+def _kind(value: Any) -> str:
+    """What ``value`` is, without quoting it."""
+    if isinstance(value, dict):
+        return f"a table of {len(value)} key{'s' * (len(value) != 1)}"
+    if isinstance(value, list):
+        return f"an array of {len(value)} item{'s' * (len(value) != 1)}"
+    if isinstance(value, str):
+        return f"a string of {len(value)} characters"
+    if isinstance(value, int) and not isinstance(value, bool):
+        return f"an integer of {len(str(abs(value)))} digits"
+    return f"a {type(value).__name__} value"
+
+
+def _short(value: Any) -> bool:
+    """Whether ``value``'s repr is cheap and possibly short (no deep or long content)."""
+    if isinstance(value, str):
+        return len(value) <= SHOWN_CHARS
+    if isinstance(value, int) and not isinstance(value, bool):
+        return abs(value) < 10**SHOWN_CHARS
+    if isinstance(value, dict):
+        return len(value) <= 8 and all(_short(k) and _short_scalar(v) for k, v in value.items())
+    if isinstance(value, list):
+        return len(value) <= 8 and all(_short_scalar(v) for v in value)
+    return True
+
+
+def _short_scalar(value: Any) -> bool:
+    return not isinstance(value, dict | list) and _short(value)
+
+
+def show_value(value: Any) -> str:
+    """``value`` for a one-line message: its repr when short and printable (at most
+    :data:`SHOWN_CHARS` characters), else what it is ("a string of 300 characters")."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    text = repr(value) if _short(value) else ""
+    return text if 0 < len(text) <= SHOWN_CHARS and text.isprintable() else _kind(value)
+
+
+def _show_key(key: str) -> str:
+    """A key of the file for a message (keys longer than 40 characters are described)."""
+    if len(key) <= 40 and key.isprintable():
+        return key
+    return f"<a key of {len(key)} characters>"
+
+
 class _Ctx:
     def __init__(self, source: str) -> None:
         self.source = source
 
     def fail(self, key: str, value: Any, allowed: str) -> ScenarioError:
+        if value is _MISSING:
+            return ScenarioError(f"{self.source}: key '{key}' is missing: allowed {allowed}")
         return ScenarioError(
-            f"{self.source}: key '{key}' = {value!r} is invalid: allowed {allowed}"
+            f"{self.source}: key '{key}' = {show_value(value)} is invalid: allowed {allowed}"
         )
 
     def table(self, data: Any, key: str, allowed_keys: set[str]) -> dict[str, Any]:
@@ -175,7 +245,7 @@ class _Ctx:
             raise self.fail(key, data, "a table")
         for k in data:
             if k not in allowed_keys:
-                where = f"{key}.{k}" if key else k
+                where = f"{key}.{_show_key(k)}" if key else _show_key(k)
                 raise self.fail(
                     where, data[k], f"one of the keys {sorted(allowed_keys)} (unknown key)"
                 )
@@ -312,8 +382,8 @@ def _options(ctx: _Ctx, data: Any) -> ModelOptions:
     if (
         not isinstance(shoes, list)
         or not shoes
+        or any(not isinstance(s, str) or s not in SIDES for s in shoes)
         or len(set(shoes)) != len(shoes)
-        or any(s not in SIDES for s in shoes)
     ):
         raise ctx.fail("model.shoes", shoes, f"a non-empty list of distinct names from {SIDES}")
     return ModelOptions(rigid_coupling=rigid, shoes=tuple(s for s in SIDES if s in shoes))
@@ -326,7 +396,7 @@ def _solver(ctx: _Ctx, data: Any) -> SolverSettings:
     the scenario's, not the solver's."""
     if isinstance(data, dict) and "dt_s" in data:
         raise ScenarioError(
-            f"{ctx.source}: key 'solver.dt_s' = {data['dt_s']!r} {_RETIRED_STEP_KEY}"
+            f"{ctx.source}: key 'solver.dt_s' = {show_value(data['dt_s'])} {_RETIRED_STEP_KEY}"
         )
     data = ctx.table(data, "solver", {"preset", "method", "max_step_s", "rtol"})
     name = ctx.string(data.get("preset", DEFAULT_PRESET), "solver.preset", tuple(PRESETS))
@@ -334,7 +404,7 @@ def _solver(ctx: _Ctx, data: Any) -> SolverSettings:
     method = ctx.string(data.get("method", preset.scheme), "solver.method", SOLVER_METHODS)
     max_step = preset.max_step_s
     if "max_step_s" in data:
-        max_step = ctx.number(data["max_step_s"], "solver.max_step_s", 0.0, 1e-2, lo_open=True)
+        max_step = ctx.number(data["max_step_s"], "solver.max_step_s", *MAX_STEP_RANGE_S)
     return SolverSettings(
         method=method,
         max_step_s=max_step,
@@ -346,15 +416,15 @@ def _solver(ctx: _Ctx, data: Any) -> SolverSettings:
 def _needs(ctx: _Ctx, data: Any, model_shoes: tuple[str, ...]) -> Needs:
     data = ctx.table(data, "needs", {"outputs", "shoes", "accuracy", "level"})
     if "outputs" not in data:
-        raise ctx.fail("needs.outputs", None, f"a list of outputs from {list(OUTPUTS)}")
+        raise ctx.fail("needs.outputs", _MISSING, f"a list of outputs from {list(OUTPUTS)}")
     lists = {}
     for key, vocabulary in (("outputs", tuple(OUTPUTS)), ("shoes", SIDES)):
         value = data.get(key, list(model_shoes))
         if (
             not isinstance(value, list)
             or not value
-            or len(set(map(str, value))) != len(value)
-            or any(v not in vocabulary for v in value)
+            or any(not isinstance(v, str) or v not in vocabulary for v in value)
+            or len(set(value)) != len(value)
         ):
             raise ctx.fail(
                 f"needs.{key}", value, f"a non-empty list of distinct names from {list(vocabulary)}"
@@ -369,13 +439,121 @@ def _needs(ctx: _Ctx, data: Any, model_shoes: tuple[str, ...]) -> Needs:
     return Needs(outputs=lists["outputs"], shoes=lists["shoes"], accuracy=accuracy, level=level)
 
 
-def parse_scenario(text: str, source: str = "<string>") -> Scenario:
-    """Parse scenario TOML text; errors name ``source``."""
-    ctx = _Ctx(source)
+# a detail tomllib quotes from the file ("Cannot declare ('a', 'b') twice"): kept when short
+_TOML_DETAIL = re.compile(r"\(.*\)|'.*?'|\".*?\"")
+
+
+def _toml_reason(exc: tomllib.TOMLDecodeError) -> str:
+    """tomllib's message (reason and line/column) with any long quoted detail elided."""
+
+    def short(match: re.Match[str]) -> str:
+        text = match.group(0)
+        return text if len(text) <= SHOWN_CHARS and text.isprintable() else "(...)"
+
+    text = " ".join(str(exc).split())
+    where = re.search(r" \(at (line \d+, column \d+|end of document)\)$", text)
+    reason = text[: where.start()] if where else text
+    return _TOML_DETAIL.sub(short, reason) + (where.group(0) if where else "")
+
+
+# what the nesting scan looks at: strings and comments (skipped whole), brackets, dots and
+# the characters that end a key (a value's dots: one per number)
+_TOKENS = re.compile(
+    r'"""(?:\\.|[^\\])*?"""|\'\'\'.*?\'\'\'|"(?:\\.|[^"\\\n])*"|\'[^\'\n]*\'|#[^\n]*|[\[\]{}.=,\n]',
+    re.DOTALL,
+)
+
+
+def _too_deep(text: str) -> bool:
+    """Whether ``text`` nests brackets, or dots a key, more than :data:`MAX_NESTING` deep.
+
+    Scanned before tomllib sees the text: tomllib recurses once per bracket (a few
+    thousand are a RecursionError) and takes memory quadratic in the parts of a dotted key
+    (100000 parts: over 20 GB)."""
+    depth = dots = 0
+    for match in _TOKENS.finditer(text):
+        c = match.group(0)[0]
+        if c in "\"'#":
+            continue
+        if c == ".":
+            dots += 1
+            if dots >= MAX_NESTING:  # a key of more than MAX_NESTING parts
+                return True
+            continue
+        dots = 0
+        if c in "[{":
+            depth += 1
+            if depth > MAX_NESTING:
+                return True
+        elif c in "]}":
+            depth = max(0, depth - 1)
+    return False
+
+
+def _toml(text: str, source: str) -> dict[str, Any]:
+    """``text`` parsed as TOML, at most :data:`MAX_NESTING` tables and arrays deep."""
+    too_deep = ScenarioError(
+        f"{source}: nested too deeply: allowed at most {MAX_NESTING} levels of tables and"
+        " arrays inside one another (brackets, or parts of a dotted key)"
+    )
+    if _too_deep(text):
+        raise too_deep
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
-        raise ScenarioError(f"{source}: not valid TOML: {exc}") from exc
+        raise ScenarioError(f"{source}: not valid TOML: {_toml_reason(exc)}") from None
+    except ValueError as exc:  # an integer of more than sys.get_int_max_str_digits() digits
+        what = "a number with too many digits" if "digits" in str(exc) else "a value"
+        raise ScenarioError(f"{source}: not valid TOML: {what} that cannot be read") from None
+    stack: list[tuple[Any, int]] = [(data, 1)]  # walked without recursion
+    while stack:
+        value, depth = stack.pop()
+        if depth > MAX_NESTING:
+            raise too_deep
+        items = value.values() if isinstance(value, dict) else value
+        stack.extend((v, depth + 1) for v in items if isinstance(v, dict | list))
+    return data
+
+
+def parse_scenario(text: str, source: str = "<string>") -> Scenario:
+    """Parse scenario TOML text; errors name ``source``.
+
+    Raises:
+        ScenarioError: anything wrong, in one line (a text over
+            :data:`MAX_SCENARIO_BYTES` characters, TOML, nesting, keys, types, values, and
+            the physics the values describe); never another exception type.
+    """
+    if len(text) > MAX_SCENARIO_BYTES:
+        raise ScenarioError(
+            f"{source}: {len(text)} characters: allowed at most {MAX_SCENARIO_BYTES} bytes"
+        )
+    try:
+        return _parse(_toml(text, source), text, source)
+    except ScenarioError:
+        raise
+    except BrakeSimError as exc:  # a check of the model (parameters, profile, defects)
+        raise ScenarioError(f"{source}: {exc}") from exc
+
+
+def _name(ctx: _Ctx, value: Any) -> str:
+    """The scenario's name: 1 to MAX_NAME_CHARS printable characters, no path separator."""
+    if (
+        not isinstance(value, str)
+        or not 0 < len(value) <= MAX_NAME_CHARS
+        or not value.isprintable()
+        or any(sep in value for sep in ("/", "\\"))
+        or value in (".", "..")
+    ):
+        raise ctx.fail(
+            "name",
+            value,
+            f"a string of 1 to {MAX_NAME_CHARS} printable characters without '/' or '\\'",
+        )
+    return value
+
+
+def _parse(data: dict[str, Any], text: str, source: str) -> Scenario:
+    ctx = _Ctx(source)
     top = ctx.table(
         data,
         "",
@@ -396,8 +574,8 @@ def parse_scenario(text: str, source: str = "<string>") -> Scenario:
         },
     )
     if "name" not in top:
-        raise ctx.fail("name", None, "a scenario name (string) is required")
-    name = ctx.string(top["name"], "name")
+        raise ctx.fail("name", _MISSING, "a scenario name (string); it is required")
+    name = _name(ctx, top["name"])
     seed = top.get("seed", 0)
     if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed < 2**63:
         raise ctx.fail("seed", seed, "an integer from 0 to 2^63 - 1")
@@ -442,19 +620,129 @@ def builtin_names() -> list[str]:
     return sorted(f.name[:-5] for f in files if f.name.endswith(".toml"))
 
 
-def load_scenario(name_or_path: str | Path) -> Scenario:
-    """Load a built-in scenario by name, or a scenario file by path."""
-    path = Path(name_or_path)
-    if path.suffix == ".toml" or path.exists():
-        try:
-            text = path.read_text(encoding="utf-8")
-        except OSError as exc:
-            raise ScenarioError(f"{path}: cannot read the scenario file: {exc.strerror}") from exc
-        return parse_scenario(text, str(path))
+def _describe(path: str | os.PathLike[str]) -> str:
+    """A path for a message: as given when printable and short, else its repr, cut."""
+    text = os.fspath(path)
+    if isinstance(text, bytes):
+        text = os.fsdecode(text)
+    shown = text if text.isprintable() else repr(text)
+    return shown if len(shown) <= 300 else f"{shown[:150]}...{shown[-100:]}"
+
+
+_FILE_TYPES = (
+    (stat.S_ISDIR, "a directory"),
+    (stat.S_ISFIFO, "a FIFO (named pipe)"),
+    (stat.S_ISCHR, "a character device"),
+    (stat.S_ISBLK, "a block device"),
+    (stat.S_ISSOCK, "a socket"),
+)
+
+
+def read_scenario_file(path: str | os.PathLike[str]) -> Scenario:
+    """Read and parse one scenario file, as hostile input.
+
+    The one function that reads a scenario file (``brake-sim simulate FILE.toml``, the
+    node's ``--scenario`` and its ``~/reset`` service, through :func:`load_scenario`).
+    Limits, each checked before the next step:
+
+    * a regular file (a symbolic link to one is followed; a link loop, a directory, a FIFO,
+      a device or a socket is refused, and opening never waits for a FIFO's writer);
+    * at most :data:`MAX_SCENARIO_BYTES` (1 MiB; a real scenario is a few kB);
+    * UTF-8 text (a leading byte-order mark is dropped);
+    * TOML, at most :data:`MAX_NESTING` (32) tables and arrays inside one another;
+    * then :func:`parse_scenario`'s checks: known keys, types, ranges, a ``name`` of 1 to
+      :data:`MAX_NAME_CHARS` (255) printable characters without ``/`` or ``\\``, and the
+      physics of the values.
+
+    Raises:
+        ScenarioError: the first limit or check that fails, in one line naming the file.
+            The message never quotes the file beyond a value or key of at most
+            :data:`SHOWN_CHARS` characters, and no other exception type escapes.
+    """
+    name = _describe(path)
+    try:
+        # O_NONBLOCK: opening a FIFO does not wait for a writer; it is refused below
+        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | os.O_CLOEXEC)
+    except FileNotFoundError:
+        raise ScenarioError(f"{name}: cannot read the scenario file: no such file") from None
+    except OSError as exc:
+        raise ScenarioError(
+            f"{name}: cannot read the scenario file: {exc.strerror or exc}"
+        ) from None
+    except (ValueError, TypeError):  # a NUL byte in the path, not a path at all
+        raise ScenarioError(f"{name}: cannot read the scenario file: not a valid path") from None
+    try:
+        info = os.fstat(fd)
+        for test, what in _FILE_TYPES:
+            if test(info.st_mode):
+                raise ScenarioError(
+                    f"{name}: cannot read the scenario file: it is {what}; allowed a regular file"
+                )
+        if not stat.S_ISREG(info.st_mode):
+            raise ScenarioError(
+                f"{name}: cannot read the scenario file: not a regular file; allowed one"
+            )
+        too_big = ScenarioError(
+            f"{name}: the scenario file is larger than {MAX_SCENARIO_BYTES} bytes (1 MiB):"
+            " allowed at most that"
+        )
+        if info.st_size > MAX_SCENARIO_BYTES:
+            raise too_big
+        chunks, size = [], 0
+        while size <= MAX_SCENARIO_BYTES:  # the file may grow after fstat
+            chunk = os.read(fd, MAX_SCENARIO_BYTES + 1 - size)
+            if not chunk:
+                break
+            chunks.append(chunk)
+            size += len(chunk)
+        if size > MAX_SCENARIO_BYTES:
+            raise too_big
+    except OSError as exc:
+        raise ScenarioError(
+            f"{name}: cannot read the scenario file: {exc.strerror or exc}"
+        ) from None
+    finally:
+        os.close(fd)
+    data = b"".join(chunks)
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = data.count(b"\n", 0, exc.start) + 1
+        column = exc.start - (data.rfind(b"\n", 0, exc.start) + 1) + 1
+        raise ScenarioError(
+            f"{name}: not UTF-8 text (a byte that is not UTF-8 at line {line}, column"
+            f" {column}): allowed a UTF-8 TOML file"
+        ) from None
+    return parse_scenario(text.removeprefix("\ufeff"), name)
+
+
+def _is_path(name_or_path: str | os.PathLike[str]) -> bool:
+    """Whether ``load_scenario`` reads a file: a Path, a name ending in .toml, or a name an
+    existing file or directory has (so that it is refused as one, not as a name)."""
+    if not isinstance(name_or_path, str):
+        return True
+    if name_or_path.endswith(".toml") or "/" in name_or_path or os.sep in name_or_path:
+        return True
+    try:
+        return os.path.lexists(name_or_path)
+    except (OSError, ValueError):
+        return False
+
+
+def load_scenario(name_or_path: str | os.PathLike[str]) -> Scenario:
+    """Load a built-in scenario by name, or a scenario file by path
+    (:func:`read_scenario_file`, with its limits).
+
+    Raises:
+        ScenarioError: an unknown name, or a file that cannot be read or parsed (one line).
+    """
+    if _is_path(name_or_path):
+        return read_scenario_file(name_or_path)
     name = str(name_or_path)
     if name not in builtin_names():
+        shown = show_value(name) if name else "''"
         raise ScenarioError(
-            f"unknown scenario '{name}': allowed a path to a .toml file or one of"
+            f"unknown scenario {shown}: allowed a path to a .toml file or one of"
             f" the built-in scenarios {builtin_names()}"
         )
     text = resources.files(BUILTIN_PACKAGE).joinpath(f"{name}.toml").read_text(encoding="utf-8")
