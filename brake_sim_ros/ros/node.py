@@ -1,14 +1,9 @@
-"""The simulator as a ROS 2 node: ``python -m brake_sim_ros.ros.node [options] [--ros-args ...]``.
+"""The simulator as a ROS 2 node: the class :class:`BrakeSimNode` (a leaf adapter).
 
-Options (they override ``--ros-args -p`` values of the same parameters):
-    --scenario NAME_OR_PATH   built-in scenario name or .toml path (default "symmetric")
-    --duration S              simulated seconds of the free run (default: the scenario's)
-    --exit-at-end             print a summary and exit 0 when the duration is reached
-    --record PATH             record the stream and accepted commands to an MCAP file
-                              (see brake_sim_ros.recording; --record-compression,
-                              --record-flush-s tune it)
-
-SIGINT and SIGTERM end the node cleanly: recordings are closed with every message.
+Run it with ``python -m brake_sim_ros.app.node`` or ``brake-sim node``: the composition
+root :mod:`brake_sim_ros.app.node` parses the options, handles signals and wires the
+recorder and Rerun sinks in through ``sink_openers``. This module imports neither
+recording nor viz.
 
 Topics (node name ``brake_sim``; ``~`` = ``/brake_sim``; QoS in :mod:`.qos`):
     ~/pivot_forces   brake_sim_msgs/PivotForceChunk   every physics sample, in chunks
@@ -38,15 +33,11 @@ Timers run on the steady wall clock, whatever ``use_sim_time`` says. Parameters:
 
 from __future__ import annotations
 
-import argparse
 import dataclasses
 import math
-import signal
-import sys
 import time
 from collections.abc import Callable, Iterable
 
-import rclpy
 from brake_sim_msgs.msg import (
     ActuationCommand,
 )
@@ -54,11 +45,8 @@ from brake_sim_msgs.srv import ResetSimulation, StepSimulation
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.clock import Clock, ClockType
 from rclpy.exceptions import ParameterException, ParameterNotDeclaredException
-from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
-from rclpy.signals import SignalHandlerOptions
-from rclpy.utilities import remove_ros_args
 
 from brake_sim_ros import stream
 from brake_sim_ros.analysis.contact_events import ContactEventDetector
@@ -86,7 +74,6 @@ NODE_NAME = "brake_sim"
 MAX_LAG_S = 0.5  # wall seconds of backlog that are caught up (see pacing)
 AFAP_TICK_BUDGET_S = 0.02  # wall time per tick as fast as possible (stays responsive)
 MAX_STEP_REQUEST_S = 60.0  # simulated time one ~/step call may advance
-EXIT_LINGER_S = 0.3  # keep spinning this long before exiting, so the last messages go out
 
 
 class BrakeSimNode(Node):
@@ -783,140 +770,3 @@ class BrakeSimNode(Node):
 
     def summary(self) -> str:
         return summary(self.run_view(), self.stats)
-
-
-# -- command line ----------------------------------------------------------------------------
-def _parse_cli(argv: list[str], prog: str) -> argparse.Namespace:
-    parser = argparse.ArgumentParser(
-        prog=prog,
-        description="Drum-brake simulator as a ROS 2 node. ROS parameters go after"
-        " --ros-args (-p name:=value); the options below override them.",
-    )
-    parser.add_argument("--scenario", help="built-in scenario name or path to a .toml file")
-    parser.add_argument(
-        "--duration",
-        type=float,
-        metavar="S",
-        help="simulated seconds of the free run (default: the scenario's)",
-    )
-    parser.add_argument(
-        "--exit-at-end",
-        action="store_true",
-        help="print a summary and exit 0 when the duration is reached",
-    )
-    parser.add_argument(
-        "--rerun",
-        action="append",
-        nargs="+",
-        metavar="TARGET",
-        help="log to Rerun: spawn | connect [URL] | serve | save FILE.rrd (repeatable)",
-    )
-    parser.add_argument("--record", metavar="PATH", help="record to this MCAP file")
-    parser.add_argument("--record-compression", choices=("zstd", "none"), default="zstd")
-    parser.add_argument(
-        "--record-flush-s",
-        type=float,
-        default=1.0,
-        metavar="S",
-        help="simulated seconds between chunk writes: bounds a crash's loss (default 1)",
-    )
-    args = parser.parse_args(argv)
-    if args.rerun:
-        from brake_sim_ros.viz.commands import parse_targets
-
-        try:
-            args.rerun = parse_targets(args.rerun)
-        except BrakeSimError as exc:
-            parser.error(str(exc))
-    if args.duration is not None and not (math.isfinite(args.duration) and args.duration > 0):
-        parser.error(f"--duration {args.duration}: allowed a finite time > 0 s")
-    if not (math.isfinite(args.record_flush_s) and args.record_flush_s > 0):
-        parser.error(f"--record-flush-s {args.record_flush_s}: allowed a finite time > 0 s")
-    return args
-
-
-class _StopRequest:
-    """SIGINT/SIGTERM set a flag the spin loop checks (a second one interrupts at once).
-
-    rclpy's own handlers would raise KeyboardInterrupt wherever the node is, also inside a
-    recorder's write; a flag lets the loop end between callbacks and close the sinks.
-    """
-
-    def __init__(self) -> None:
-        self.requested = False
-        self._previous = {
-            sig: signal.signal(sig, self._handle) for sig in (signal.SIGINT, signal.SIGTERM)
-        }
-
-    def _handle(self, signum: int, _frame) -> None:
-        if self.requested:
-            raise KeyboardInterrupt
-        self.requested = True
-
-    def restore(self) -> None:
-        for sig, handler in self._previous.items():
-            signal.signal(sig, handler)
-
-
-def main(args: list[str] | None = None) -> int:
-    """Run the node until shutdown (or the end of the run with --exit-at-end).
-
-    Args:
-        args: command line like ``sys.argv`` (program name first); default ``sys.argv``.
-
-    Returns:
-        0 on a clean exit, 1 when the node refused to start, 2 for bad options.
-    """
-    argv = list(sys.argv if args is None else args)
-    stripped = remove_ros_args(argv)
-    # the program name as invoked: "brake-sim node" from the CLI, the module otherwise
-    prog = argv[0] if argv and argv[0] == "brake-sim node" else "python -m brake_sim_ros.ros.node"
-    cli = _parse_cli(stripped[1:], prog)
-    overrides = []
-    if cli.scenario is not None:
-        overrides.append(Parameter("scenario", value=cli.scenario))
-    if cli.duration is not None:
-        overrides.append(Parameter("duration_s", value=float(cli.duration)))
-    if cli.exit_at_end:
-        overrides.append(Parameter("exit_at_end", value=True))
-    openers = []
-    if cli.record:
-        from brake_sim_ros.recording.record import open_node_recorder
-
-        openers.append(open_node_recorder(cli.record, cli.record_compression, cli.record_flush_s))
-    if cli.rerun:
-        from brake_sim_ros.viz.commands import rerun_openers
-
-        openers.extend(rerun_openers(cli.rerun))
-    rclpy.init(args=argv, signal_handler_options=SignalHandlerOptions.NO)
-    stop = _StopRequest()
-    node = None
-    try:
-        try:
-            node = BrakeSimNode(parameter_overrides=overrides, sink_openers=openers)
-        except BrakeSimError as exc:
-            print(f"brake_sim: refused to start: {exc}", file=sys.stderr)
-            return 1
-        executor = SingleThreadedExecutor()
-        executor.add_node(node)
-        while not node.done and rclpy.ok() and not stop.requested:
-            executor.spin_once(timeout_sec=0.1)
-        if node.done:
-            linger_end = time.monotonic() + EXIT_LINGER_S
-            while time.monotonic() < linger_end and rclpy.ok():
-                executor.spin_once(timeout_sec=0.05)
-        if node.done or stop.requested:
-            print(node.summary(), flush=True)
-        return 0
-    except (KeyboardInterrupt, ExternalShutdownException):
-        return 0
-    finally:
-        if node is not None:
-            node.close_sinks()
-            node.destroy_node()
-        rclpy.try_shutdown()
-        stop.restore()
-
-
-if __name__ == "__main__":
-    sys.exit(main())
