@@ -15,6 +15,7 @@ import statistics
 import time
 
 from brake_sim_ros import stream
+from brake_sim_ros.analysis.contact_events import ContactEventDetector
 from brake_sim_ros.errors import BrakeSimError
 from brake_sim_ros.model.trajectory import SampleBlock
 from brake_sim_ros.ros import qos
@@ -77,8 +78,20 @@ def _median_cost(action, repeats: int = _REPEATS) -> float:
 
 
 def measure_publishing(node, block: SampleBlock, step_per_sample_s: float) -> PipelineCosts:
-    """Publishing costs measured on hidden publishers of ``node``, with ``block``."""
-    topics = (stream.PIVOT_FORCES, stream.STATE, stream.JOINT_STATES, stream.CLOCK)
+    """Publishing costs measured on hidden publishers of ``node``, with ``block``.
+
+    The whole per-chunk pipeline (:func:`~brake_sim_ros.stream.block_messages`: the chunk,
+    the contact events the block holds, one state row, the clock) is timed on ``block``;
+    a state row (BrakeState + JointState) and a one-sample chunk separately, so that the
+    cost can be scaled to other chunk sizes and state rates.
+    """
+    topics = (
+        stream.PIVOT_FORCES,
+        stream.CONTACT_EVENTS,
+        stream.STATE,
+        stream.JOINT_STATES,
+        stream.CLOCK,
+    )
     pubs = {
         t: node.create_publisher(
             message_class(t.type_name), f"~/_budget/{t.name.rsplit('/', 1)[-1]}", qos.for_topic(t)
@@ -87,14 +100,14 @@ def measure_publishing(node, block: SampleBlock, step_per_sample_s: float) -> Pi
     }
     try:
         n = len(block)
-        one = dataclasses.replace(block, data=block.data[:1])
 
-        def chunk(b: SampleBlock) -> None:
-            pubs[stream.PIVOT_FORCES].publish(conversion.pivot_force_chunk(b))
-            pubs[stream.CLOCK].publish(conversion.clock(0))
+        def pipeline(b: SampleBlock) -> None:
+            detector = ContactEventDetector()
+            for topic, msg, _ns in stream.block_messages(
+                b, len(b), with_clock=True, contact_events=detector
+            ):
+                pubs[topic].publish(msg)
 
-        full = _median_cost(lambda: chunk(block))
-        small = _median_cost(lambda: chunk(one))
         rows = min(_STATE_ROWS, n)
 
         def states() -> None:
@@ -103,11 +116,13 @@ def measure_publishing(node, block: SampleBlock, step_per_sample_s: float) -> Pi
                 pubs[stream.JOINT_STATES].publish(conversion.joint_state(block, row))
 
         state_row = _median_cost(states) / rows
+        full = _median_cost(lambda: pipeline(block))
+        one = _median_cost(lambda: pipeline(dataclasses.replace(block, data=block.data[:1])))
     finally:
         for pub in pubs.values():
             node.destroy_publisher(pub)
-    per_sample = max(0.0, (full - small) / max(1, n - 1))
-    fixed = max(0.0, full - per_sample * n)
+    per_sample = max(0.0, (full - one) / max(1, n - 1))
+    fixed = max(0.0, full - per_sample * n - state_row)  # the one state row is priced apart
     return PipelineCosts(
         step_per_sample_s=step_per_sample_s,
         chunk_fixed_s=fixed,

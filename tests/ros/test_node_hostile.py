@@ -237,3 +237,55 @@ def test_refuses_to_start_with_hostile_parameters(args, message):
     assert proc.returncode == 1, proc.stdout + proc.stderr
     lines = [line for line in proc.stderr.splitlines() if line.startswith("brake_sim:")]
     assert len(lines) == 1 and message in lines[0], proc.stderr
+
+
+def test_heard_chunks_are_not_counted_as_unheard(sim):
+    first = sim.next_diagnostics()
+    sim.spin_for(0.5)
+    later = sim.next_diagnostics()
+    assert int(later["chunks_published"]) > int(first["chunks_published"])
+    assert later["chunks_unheard"] == first["chunks_unheard"], (first, later)
+    assert later["publish_failures"] == "0"
+
+
+def test_chunks_nobody_subscribes_to_are_counted(tmp_path):
+    """A listener of /diagnostics only: every chunk the node published went to nobody."""
+    from diagnostic_msgs.msg import DiagnosticArray
+    from rclpy.context import Context
+    from rclpy.executors import SingleThreadedExecutor
+
+    from brake_sim_ros import stream
+    from brake_sim_ros.ros import qos
+
+    domain = domain_id_for(19)
+    node = NodeProcess.start(
+        ["--ros-args", "-p", "diagnostics_period_s:=0.1"],
+        domain_id=domain,
+        log_path=tmp_path / "node.log",
+    )
+    context = Context()
+    rclpy.init(context=context, domain_id=domain)
+    listener = rclpy.create_node("diagnostics_listener", context=context)
+    seen: list[dict[str, str]] = []
+
+    def on_diagnostics(msg: DiagnosticArray) -> None:
+        for status in msg.status:
+            if status.hardware_id == "brake_sim":
+                seen.append({kv.key: kv.value for kv in status.values})
+
+    listener.create_subscription(
+        DiagnosticArray, "/diagnostics", on_diagnostics, qos.for_topic(stream.DIAGNOSTICS)
+    )
+    executor = SingleThreadedExecutor(context=context)
+    executor.add_node(listener)
+    try:
+        end = time.monotonic() + 30.0
+        while not (seen and int(seen[-1]["chunks_published"]) >= 10):
+            assert time.monotonic() < end, node.output()
+            executor.spin_once(timeout_sec=0.1)
+        assert seen[-1]["chunks_unheard"] == seen[-1]["chunks_published"], seen[-1]
+    finally:
+        executor.shutdown(timeout_sec=1.0)
+        listener.destroy_node()
+        rclpy.try_shutdown(context=context)
+        assert node.stop() == 0, node.output()
