@@ -218,6 +218,34 @@ def test_a_step_request_is_bounded_by_its_wall_time(sim):
 
 
 @pytest.mark.parametrize(
+    "request_fields",
+    [
+        {"duration_s": math.nan},
+        {"duration_s": math.inf},
+        {"duration_s": -math.inf},
+        {"duration_s": -1.0},
+        {"duration_s": 1e-300},
+        {"duration_s": 1e-9},
+        {"duration_s": 1e300},
+        {"steps": 2**64 - 1},
+        {"steps": 10, "duration_s": 1.0},
+        {},
+    ],
+)
+def test_hostile_step_requests_are_refused(sim, request_fields):
+    assert sim.set_parameter("paused", True).successful
+    try:
+        start = time.monotonic()
+        response = sim.step(**request_fields, timeout_s=REPLY_TIMEOUT_S)
+        assert time.monotonic() - start < 1.0
+        assert not response.success and "\n" not in response.message, response.message
+    finally:
+        assert sim.set_parameter("paused", False).successful
+    chunks = sim.chunk_count
+    sim.wait_for(lambda: sim.chunk_count > chunks, 1.0, "pivot-force chunk after the refusal")
+
+
+@pytest.mark.parametrize(
     ("args", "message"),
     [
         (["-p", "chunk_rate_hzz:=5.0"], "did you mean chunk_rate_hz"),
