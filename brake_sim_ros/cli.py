@@ -451,7 +451,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
 
 def run_node(argv: list[str]) -> int:
     """``brake-sim node ...``: the node parses its own options and ``--ros-args``."""
-    from brake_sim_ros.ros.node import main as node_main
+    from brake_sim_ros.app.node import main as node_main
 
     return node_main(["brake-sim node", *argv]) or 0
 
@@ -463,7 +463,7 @@ def run_live(argv: list[str]) -> int:
     """``brake-sim live [SCENARIO]``: the main job. The node streams the scenario in real time
     over ROS 2, records what it publishes to MCAP and writes a Rerun recording beside it
     (and opens a viewer where a display exists); then it says where both are."""
-    from brake_sim_ros.ros.node import main as node_main
+    from brake_sim_ros.app.node import main as node_main
     from brake_sim_ros.viz.targets import has_display
 
     parser = argparse.ArgumentParser(

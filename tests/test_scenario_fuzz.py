@@ -337,7 +337,7 @@ def test_size_limit_before_parsing(tmp_path):
     [
         (b'name = "x"\ndescription = "\xff\xfe"\n', "not UTF-8 text"),
         ('name = "x"\n'.encode("utf-16"), "not UTF-8 text"),
-        (b"\x00" * 100, "not valid TOML"),
+        (b"\x00" * 100, "contains NUL characters"),
         (b"\x7fELF\x02\x01\x01" + bytes(range(256)), "not UTF-8 text"),
         (b"", "key 'name' is missing"),
         (b"a = " + b"1" * 5000, "too many digits"),

@@ -39,6 +39,15 @@ def test_substeps_are_the_fewest_whole_ones_within_the_bound():
     assert substeps_for(1e-4, math.inf) == 1
 
 
+def test_a_tiny_accuracy_bound_ends_at_once_and_is_refused():
+    """A step far below the period once looped for ever (n and n - 1 gave equal quotients);
+    the stepper refuses an accuracy bound below the smallest step it takes."""
+    assert substeps_for(1e-3, 1e-300) >= math.ceil(1e-3 / 1e-300) - 1  # and returns
+    for max_step_s in (1e-300, 0.5 * MIN_PHYSICS_STEP_S):
+        with pytest.raises(StepSizeError, match="allowed a physics step of at least"):
+            FixedStepStepper(BrakeSetup(), PERIOD, max_step_s=max_step_s)
+
+
 def test_a_sample_period_above_the_limit_is_split_into_whole_substeps():
     """The sample period is never refused for the step limit: the physics step divides it."""
     setup = BrakeSetup()

@@ -168,7 +168,7 @@ class ShoeGeometry:
             (self.tip_x_m, self.tip_y_m),
             "a point inside the drum",
         )
-        _require(self.mass_kg >= 0, "mass_kg", self.mass_kg, ">= 0")
+        _require(self.mass_kg > 0, "mass_kg", self.mass_kg, "> 0")
         _require(
             self.inertia_about_pivot_kg_m2 > 0,
             "inertia_about_pivot_kg_m2",

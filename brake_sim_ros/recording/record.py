@@ -11,7 +11,7 @@ import os
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import Any, Protocol
 
 from brake_sim_ros import stream
 from brake_sim_ros.recording import metadata
@@ -22,8 +22,25 @@ from brake_sim_ros.stream import parameters as ros_params
 from brake_sim_ros.stream.build import stepper_for
 from brake_sim_ros.stream.offline import StreamSettings, offline_messages
 
-if TYPE_CHECKING:
-    from brake_sim_ros.ros.node import BrakeSimNode
+
+class RecordedNode(Protocol):
+    """What :func:`node_recorder` reads of a live node (``ros.node.BrakeSimNode`` has it).
+
+    A protocol, not an import: recording sits beside ros, below the composition root, and
+    imports nothing of it.
+    """
+
+    @property
+    def scenario(self) -> Scenario: ...
+
+    @property
+    def stepper(self) -> Any: ...
+
+    def run_view(self) -> Any: ...
+
+    def get_parameters_by_prefix(self, prefix: str) -> dict[str, Any]: ...
+
+    def get_fully_qualified_name(self) -> str: ...
 
 
 def _custom_data(scenario: Scenario, seed: int, mode: str) -> dict[str, str]:
@@ -127,7 +144,7 @@ def record_offline(
 
 
 def node_recorder(
-    node: BrakeSimNode,
+    node: RecordedNode,
     path: str | os.PathLike[str],
     options: RecordingOptions | None = None,
     *,
@@ -186,14 +203,14 @@ class _NodeRecorder(McapRecorder):
 
 def open_node_recorder(
     path: str | os.PathLike[str], compression: str = "zstd", flush_interval_s: float = 1.0
-) -> Callable[[BrakeSimNode], McapRecorder]:
+) -> Callable[[RecordedNode], McapRecorder]:
     """A ``sink_openers`` entry for :class:`~brake_sim_ros.ros.node.BrakeSimNode` (``--record``).
 
     Bad options raise RecordingError at once; the file is opened when the node calls it.
     """
     options = RecordingOptions(compression=compression, flush_interval_s=flush_interval_s)
 
-    def open_for(node: BrakeSimNode) -> McapRecorder:
+    def open_for(node: RecordedNode) -> McapRecorder:
         return node_recorder(node, path, options, recorder_class=_NodeRecorder)
 
     return open_for

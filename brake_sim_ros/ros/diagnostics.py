@@ -19,6 +19,18 @@ Counters (cumulative since the node started; a reset does not clear them):
         after the end or a failure of the run, or cleared by a reset).
     parameter_changes_accepted / parameter_changes_refused: set-parameter requests
         (external ones; the node's own updates are not counted).
+    sink_failures: recorders/viewers that raised and were dropped (their later messages
+        are lost to them).
+    publish_failures: messages the node did not publish because rclpy's publish raised.
+    chunks_unheard: pivot-force chunks published while the publisher had no matched
+        subscription (``get_subscription_count() == 0``): nobody could have received them.
+
+    What these counters cannot see: losses inside DDS. A best-effort subscriber that
+    falls behind, a full history queue (``depth``) or a lost UDP fragment drops messages
+    without the publisher knowing; rclpy exposes no event for it on the publishing side.
+    A subscriber sees such a loss as a gap in ``first_sample_index`` (as
+    ``harness.SimClient.gaps`` counts). A node that falls behind does not skip samples
+    either: ``slips`` re-anchor the pacing, the stream stays complete.
 """
 
 from __future__ import annotations
@@ -50,6 +62,8 @@ class RunStats:
     last_command_rejection: str = ""
     last_parameter_refusal: str = ""
     sink_failures: int = 0  # recorders/viewers that failed and were dropped
+    publish_failures: int = 0  # messages not published: the publisher raised
+    chunks_unheard: int = 0  # chunks published while no subscriber was matched
     free_run_sim_s: float = 0.0  # simulated time advanced by the paced free run
     free_run_wall_s: float = 0.0  # wall time spent in the paced free run
 
@@ -132,6 +146,8 @@ def diagnostic_array(
         "parameter_changes_refused": str(stats.parameter_changes_refused),
         "last_parameter_refusal": stats.last_parameter_refusal,
         "sink_failures": str(stats.sink_failures),
+        "publish_failures": str(stats.publish_failures),
+        "chunks_unheard": str(stats.chunks_unheard),
         "actuation_source": view.actuation_source,
         "stop_time_s": "" if view.stop_time_s is None else f"{view.stop_time_s:.6f}",
         "physics_step_s": f"{view.physics_step_s:.9g}",

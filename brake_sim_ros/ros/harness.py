@@ -1,7 +1,7 @@
 """Start a brake_sim node in its own process and talk to it over real DDS.
 
 Used by the ROS tests and the benchmark; also a worked example of every interface of the
-node. :class:`NodeProcess` starts ``python -m brake_sim_ros.ros.node`` as a user would,
+node. :class:`NodeProcess` starts ``python -m brake_sim_ros.app.node`` as a user would,
 isolated on its own ROS domain (localhost only). :class:`SimClient` is an rclpy node in
 its own context that subscribes to everything the simulator publishes, publishes
 commands, and calls its services and parameter services with bounded waits.
@@ -66,7 +66,7 @@ def ros_environment(domain_id: int) -> dict[str, str]:
 
 @dataclass
 class NodeProcess:
-    """``python -m brake_sim_ros.ros.node ARGS`` in a subprocess, output to ``log_path``."""
+    """``python -m brake_sim_ros.app.node ARGS`` in a subprocess, output to ``log_path``."""
 
     proc: subprocess.Popen
     log_path: Path
@@ -78,7 +78,7 @@ class NodeProcess:
         log_path.parent.mkdir(parents=True, exist_ok=True)
         with log_path.open("w") as log:
             proc = subprocess.Popen(
-                [python, "-m", "brake_sim_ros.ros.node", *args],
+                [python, "-m", "brake_sim_ros.app.node", *args],
                 stdout=log,
                 stderr=subprocess.STDOUT,
                 env=ros_environment(domain_id),

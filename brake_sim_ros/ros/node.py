@@ -1,14 +1,9 @@
-"""The simulator as a ROS 2 node: ``python -m brake_sim_ros.ros.node [options] [--ros-args ...]``.
+"""The simulator as a ROS 2 node: the class :class:`BrakeSimNode` (a leaf adapter).
 
-Options (they override ``--ros-args -p`` values of the same parameters):
-    --scenario NAME_OR_PATH   built-in scenario name or .toml path (default "symmetric")
-    --duration S              simulated seconds of the free run (default: the scenario's)
-    --exit-at-end             print a summary and exit 0 when the duration is reached
-    --record PATH             record the stream and accepted commands to an MCAP file
-                              (see brake_sim_ros.recording; --record-compression,
-                              --record-flush-s tune it)
-
-SIGINT and SIGTERM end the node cleanly: recordings are closed with every message.
+Run it with ``python -m brake_sim_ros.app.node`` or ``brake-sim node``: the composition
+root :mod:`brake_sim_ros.app.node` parses the options, handles signals and wires the
+recorder and Rerun sinks in through ``sink_openers``. This module imports neither
+recording nor viz.
 
 Topics (node name ``brake_sim``; ``~`` = ``/brake_sim``; QoS in :mod:`.qos`):
     ~/pivot_forces   brake_sim_msgs/PivotForceChunk   every physics sample, in chunks
@@ -38,33 +33,28 @@ Timers run on the steady wall clock, whatever ``use_sim_time`` says. Parameters:
 
 from __future__ import annotations
 
-import argparse
 import dataclasses
+import difflib
 import math
-import signal
-import sys
 import time
 from collections.abc import Callable, Iterable
 
-import rclpy
 from brake_sim_msgs.msg import (
     ActuationCommand,
 )
 from brake_sim_msgs.srv import ResetSimulation, StepSimulation
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.clock import Clock, ClockType
-from rclpy.exceptions import ParameterException, ParameterNotDeclaredException
-from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.exceptions import ParameterException
 from rclpy.node import Node
 from rclpy.parameter import Parameter
-from rclpy.signals import SignalHandlerOptions
-from rclpy.utilities import remove_ros_args
 
 from brake_sim_ros import stream
 from brake_sim_ros.analysis.contact_events import ContactEventDetector
-from brake_sim_ros.errors import BrakeSimError, ParameterError
+from brake_sim_ros.errors import BrakeSimError, ParameterError, ScenarioError
 from brake_sim_ros.model.trajectory import BrakeSetup, SampleBlock
 from brake_sim_ros.ros import qos
+from brake_sim_ros.ros.budget import measure_publishing, measure_stepping
 from brake_sim_ros.ros.commands import (
     ActuationPlanner,
     CommandPolicy,
@@ -76,8 +66,14 @@ from brake_sim_ros.ros.diagnostics import RunStats, RunView, diagnostic_array, s
 from brake_sim_ros.ros.messages import message_class
 from brake_sim_ros.ros.pacing import Pacer, PacingMode
 from brake_sim_ros.scenarios import Scenario, load_scenario
+from brake_sim_ros.scenarios.requested import allowed_dirs, load_requested_scenario
 from brake_sim_ros.solvers.fixed_step import FixedStepStepper
-from brake_sim_ros.solvers.realtime import calibrate_chunk_cost, check_realtime
+from brake_sim_ros.solvers.realtime import (
+    PipelineCosts,
+    RealtimeVerdict,
+    check_chunk_work,
+    check_pipeline,
+)
 from brake_sim_ros.stream import MessageSink, Topic, conversion
 from brake_sim_ros.stream import parameters as ros_params
 from brake_sim_ros.stream.build import stepper_for
@@ -86,7 +82,11 @@ NODE_NAME = "brake_sim"
 MAX_LAG_S = 0.5  # wall seconds of backlog that are caught up (see pacing)
 AFAP_TICK_BUDGET_S = 0.02  # wall time per tick as fast as possible (stays responsive)
 MAX_STEP_REQUEST_S = 60.0  # simulated time one ~/step call may advance
-EXIT_LINGER_S = 0.3  # keep spinning this long before exiting, so the last messages go out
+# wall time one ~/step call may hold the executor (stepping and publishing, measured costs)
+STEP_CALL_WALL_S = 0.5
+# parameters rclpy declares or reads for any node: never "unknown"
+_ROS_PARAMETER_PREFIXES = ("qos_overrides.",)
+_SHOWN_CHARS = 64  # at most this much of a caller's text is echoed back
 
 
 class BrakeSimNode(Node):
@@ -124,11 +124,17 @@ class BrakeSimNode(Node):
         # -- parameters and the model they describe ---------------------------------------
         self._run_specs = {s.name: s for s in ros_params.run_parameter_specs()}
         self._declare(self._run_specs.values())
+        try:  # fixed at start: where ~/reset requests may read scenario files
+            self._scenario_dirs = allowed_dirs([self._param("scenario_dirs")])
+        except ScenarioError as exc:
+            raise ParameterError(str(exc)) from None
+        # the operator's choice (command line or parameter): any file, not a request
         self.scenario: Scenario = load_scenario(self._param("scenario"))
         self._seed = self.scenario.seed
         self._duration_explicit = self._param("duration_s") > 0.0
         self._max_force_explicit = self._param("max_actuation_force_n") > 0.0
         self._model_names = self._declare_model(self.scenario)
+        self._refuse_unknown_overrides()
         # the scenario's values and any --ros-args overrides, checked by the core here
         values = self._model_values()
         scenario_values = ros_params.model_values(
@@ -142,7 +148,7 @@ class BrakeSimNode(Node):
         }
         params, defects = ros_params.build_model({**values, **implied})
         setup = dataclasses.replace(self.scenario.setup, params=params, defects=defects)
-        self._stepper = self._make_stepper(setup, self.scenario)
+        self._stepper = self._make_stepper(setup, self.scenario, self._param("chunk_rate_hz"))
         self._run_initial_angles = self._initial_angles(setup)
         self._double_names = {
             name
@@ -171,6 +177,8 @@ class BrakeSimNode(Node):
         self._publish_clock = bool(self._param("publish_clock"))
         self._chunk_samples = self._samples_per(self._param("chunk_rate_hz"))
         self._state_stride = self._samples_per(self._param("state_rate_hz"))
+        self._costs = self._measure_costs()
+        self._observed_sample_cost_s = 0.0  # moving average over whole chunks, s
         self._check_keeps_up()
         # open contact episodes carried between published blocks; reset with the stepper
         self._contact_events = ContactEventDetector()
@@ -231,28 +239,73 @@ class BrakeSimNode(Node):
         """The stepper in use (read it; the node alone advances and changes it)."""
         return self._stepper
 
-    def _check_keeps_up(self) -> None:
-        """Refuse to start when this machine cannot step the chunks in real time.
+    def _measure_costs(self) -> PipelineCosts:
+        """Stepping and publishing costs on this machine, measured now (some ms).
 
-        A calibration of a few ms measures the stepper's per-chunk cost here, driven by
-        max_actuation_force_n (so at the substeps that force needs); the budget logic is
-        :func:`brake_sim_ros.solvers.realtime.check_realtime`.
+        Stepping: a calibration of the stepper at max_actuation_force_n (at the substeps that
+        force needs; :func:`~brake_sim_ros.ros.budget.measure_stepping` also refuses chunks
+        too large for one callback). Publishing: on hidden publishers, no subscriber.
         """
-        factor = self._pacer.real_time_factor
-        if factor == 0.0:
+        costs = self._step_costs(self._stepper, self.scenario.name, self._chunk_samples, None)
+        self.get_logger().info(
+            f"measured costs: stepping {1e6 * costs.step_per_sample_s:.2f} us per sample;"
+            f" publishing a chunk {1e6 * costs.chunk_fixed_s:.0f} us +"
+            f" {1e6 * costs.chunk_per_sample_s:.2f} us per sample, a state row"
+            f" {1e6 * costs.state_row_s:.0f} us"
+        )
+        return costs
+
+    def _step_costs(
+        self,
+        stepper: FixedStepStepper,
+        name: str,
+        chunk_samples: int,
+        publishing: PipelineCosts | None,
+    ) -> PipelineCosts:
+        """Calibrate ``stepper``; publishing measured too unless ``publishing`` is given."""
+        try:
+            per_sample, block = measure_stepping(
+                stepper.fresh(),
+                chunk_samples,
+                force_n=float(self._param("max_actuation_force_n")),
+            )
+        except BrakeSimError as exc:
+            raise BrakeSimError(f"scenario '{name}': {exc}") from None
+        if publishing is None:
+            return measure_publishing(self, block, per_sample)
+        return dataclasses.replace(publishing, step_per_sample_s=per_sample)
+
+    def _pipeline_verdict(
+        self,
+        *,
+        costs: PipelineCosts | None = None,
+        sample_period_s: float | None = None,
+        chunk_samples: int | None = None,
+        state_stride: int | None = None,
+        real_time_factor: float | None = None,
+        label: str | None = None,
+    ) -> RealtimeVerdict:
+        """The budget check for these settings (the current ones where None)."""
+        return check_pipeline(
+            costs or self._costs,
+            sample_period_s=sample_period_s or self._stepper.sample_period_s,
+            chunk_samples=chunk_samples or self._chunk_samples,
+            state_stride=state_stride or self._state_stride,
+            real_time_factor=(
+                self._pacer.real_time_factor if real_time_factor is None else real_time_factor
+            ),
+            label=label or f"scenario '{self.scenario.name}'",
+        )
+
+    def _check_keeps_up(self) -> None:
+        """Refuse to start when this machine cannot step and publish the chunks in real time.
+
+        The figures are measured at start (:meth:`_measure_costs`); the budget logic is
+        :func:`brake_sim_ros.solvers.realtime.check_pipeline`.
+        """
+        if self._pacer.real_time_factor == 0.0:
             return  # as fast as possible: nothing to keep up with
-        cost = calibrate_chunk_cost(
-            self._stepper.fresh(),
-            self._chunk_samples,
-            force_n=float(self._param("max_actuation_force_n")),
-        )
-        verdict = check_realtime(
-            cost.median_s,
-            sample_period_s=self._stepper.sample_period_s,
-            chunk_samples=self._chunk_samples,
-            real_time_factor=factor,
-            label=f"scenario '{self.scenario.name}'",
-        )
+        verdict = self._pipeline_verdict()
         if not verdict.ok:
             raise BrakeSimError(
                 f"cannot keep real time: {verdict.message} (real_time_factor:=0.0 runs as"
@@ -260,9 +313,66 @@ class BrakeSimNode(Node):
             )
         self.get_logger().info(f"real-time check: {verdict.message}")
 
+    def _rates_refusal(self, changes: dict) -> str | None:
+        """Why new chunk/state rates or real-time factor cannot be held, or None."""
+        chunk = self._samples_per(changes.get("chunk_rate_hz", self._param("chunk_rate_hz")))
+        stride = self._samples_per(changes.get("state_rate_hz", self._param("state_rate_hz")))
+        factor = changes.get("real_time_factor", self._pacer.real_time_factor)
+        work = check_chunk_work(self._stepper.substeps, chunk, self._stepper.physics_step_s)
+        if work:
+            return work
+        if factor == 0.0:
+            return None
+        verdict = self._pipeline_verdict(
+            chunk_samples=chunk, state_stride=stride, real_time_factor=factor
+        )
+        return None if verdict.ok else f"cannot keep real time: {verdict.message}"
+
+    def _step_sample_cost_s(self) -> float:
+        """Wall cost of one sample, stepped and published: the larger of the start-up
+        estimate (no subscriber) and what whole chunks have cost so far (with the real
+        subscribers, contact events and sinks)."""
+        estimate = self._costs.per_sample_s(self._chunk_samples, self._state_stride)
+        return max(estimate, self._observed_sample_cost_s)
+
+    def _max_step_samples(self) -> int:
+        """Most samples one ~/step call may advance: STEP_CALL_WALL_S of measured work (at
+        least one chunk), at most MAX_STEP_REQUEST_S of simulated time."""
+        per_sample = self._step_sample_cost_s()
+        by_wall = max(self._chunk_samples, int(STEP_CALL_WALL_S / per_sample))
+        return min(by_wall, math.floor(MAX_STEP_REQUEST_S / self._stepper.sample_period_s))
+
     # -- parameter plumbing ----------------------------------------------------------------------
     def _param(self, name: str):
         return self.get_parameter(name).value
+
+    def _unknown_reason(self, names: list[str]) -> str:
+        """One line naming unknown parameters and the closest known names."""
+        known = list(self._parameters)
+        parts = []
+        for name in names:
+            shown = name if len(name) <= _SHOWN_CHARS else name[:_SHOWN_CHARS] + "..."
+            close = difflib.get_close_matches(name, known, n=3)
+            hint = f" (did you mean {', '.join(close)}?)" if close else ""
+            parts.append(f"{shown!r}{hint}")
+        return (
+            f"unknown parameter {'; '.join(parts)}: not declared by this node"
+            " (ros2 param list shows those it has)"
+        )
+
+    def _refuse_unknown_overrides(self) -> None:
+        """A ``--ros-args -p`` name this node does not declare is a typo: refuse to start.
+
+        rclpy keeps the overrides it was given (``/**`` ones too) in ``_parameter_overrides``
+        and ignores undeclared ones silently; there is no public accessor.
+        """
+        unknown = sorted(
+            name
+            for name in getattr(self, "_parameter_overrides", {})
+            if not self.has_parameter(name) and not name.startswith(_ROS_PARAMETER_PREFIXES)
+        )
+        if unknown:
+            raise ParameterError(f"--ros-args override refused: {self._unknown_reason(unknown)}")
 
     def _declare_model(self, scenario: Scenario) -> list[str]:
         specs = ros_params.model_parameter_specs(scenario.setup.params, scenario.setup.defects)
@@ -290,10 +400,16 @@ class BrakeSimNode(Node):
             self._internal_update = False
 
     @staticmethod
-    def _make_stepper(setup: BrakeSetup, scenario: Scenario) -> FixedStepStepper:
+    def _make_stepper(
+        setup: BrakeSetup, scenario: Scenario, chunk_rate_hz: float
+    ) -> FixedStepStepper:
         """The scenario's stepper (:func:`stepper_for`) for ``setup`` (its values with any
-        ROS parameter overrides)."""
+        ROS parameter overrides), refused when one chunk would be too much work."""
         stepper = stepper_for(scenario, setup=setup)
+        chunk = max(1, round(1.0 / (stepper.sample_period_s * chunk_rate_hz)))
+        reason = check_chunk_work(stepper.substeps, chunk, stepper.physics_step_s)
+        if reason:
+            raise BrakeSimError(f"scenario '{scenario.name}': {reason}")
         stepper.advance(0)  # loads the compiled kernel now (ms), not during the first chunk
         return stepper
 
@@ -352,12 +468,12 @@ class BrakeSimNode(Node):
 
     def set_parameters_atomically(self, parameter_list):
         """Count every refused external change (descriptor checks included)."""
-        try:
-            result = super().set_parameters_atomically(parameter_list)
-        except ParameterNotDeclaredException:
-            unknown = [p.name for p in parameter_list if not self.has_parameter(p.name)]
-            self._count_parameter_result(False, f"undeclared parameter(s): {unknown}")
-            raise
+        unknown = [p.name for p in parameter_list if not self.has_parameter(p.name)]
+        if unknown:  # rclpy would raise, with an empty list in the message
+            reason = self._unknown_reason(unknown)
+            self._count_parameter_result(False, reason)
+            return SetParametersResult(successful=False, reason=reason)
+        result = super().set_parameters_atomically(parameter_list)
         self._count_parameter_result(result.successful, result.reason)
         return result
 
@@ -410,14 +526,25 @@ class BrakeSimNode(Node):
             return SetParametersResult(
                 successful=False, reason="duration_s must be > 0 s at run time"
             )
+        if changes.keys() & {"chunk_rate_hz", "state_rate_hz", "real_time_factor"}:
+            reason = self._rates_refusal(changes)
+            if reason:
+                return SetParametersResult(successful=False, reason=reason)
         model_changes = {k: v for k, v in changes.items() if k in self._model_names}
         if model_changes:
+            old_setup = self._stepper.setup
             try:
                 params, defects = ros_params.build_model(self._model_values(model_changes))
-                setup = dataclasses.replace(self._stepper.setup, params=params, defects=defects)
+                setup = dataclasses.replace(old_setup, params=params, defects=defects)
                 self._stepper.replace_setup(setup)  # validates, or changes nothing
             except BrakeSimError as exc:
                 return SetParametersResult(successful=False, reason=str(exc))
+            work = check_chunk_work(
+                self._stepper.substeps, self._chunk_samples, self._stepper.physics_step_s
+            )
+            if work:
+                self._stepper.replace_setup(old_setup)
+                return SetParametersResult(successful=False, reason=work)
             self._log_step_change("new model parameters")
         self._apply_run_changes(changes, policy)
         if model_changes:
@@ -538,6 +665,7 @@ class BrakeSimNode(Node):
 
     def _advance_and_publish(self, n_steps: int, *, free_run: bool) -> bool:
         """Take ``n_steps`` samples (at most one chunk) and publish them. False on failure."""
+        wall0 = self._wall()
         step0 = self._stepper.sample_index
         blocks = []
         try:
@@ -559,6 +687,10 @@ class BrakeSimNode(Node):
             )
             return False
         self._publish_block(block)
+        if n_steps == self._chunk_samples:  # whole chunks: the cost ~/step bounds use
+            cost = (self._wall() - wall0) / n_steps
+            previous = self._observed_sample_cost_s or cost
+            self._observed_sample_cost_s = 0.8 * previous + 0.2 * cost
         return True
 
     def _publish_block(self, block: SampleBlock) -> None:
@@ -577,9 +709,22 @@ class BrakeSimNode(Node):
         self.stats.states_published += states
 
     def _emit(self, topic: Topic, msg, ns: int) -> None:
-        """Publish ``msg`` on ``topic`` and hand it to every sink, at simulated time ``ns``."""
+        """Publish ``msg`` on ``topic`` and hand it to every sink, at simulated time ``ns``.
+
+        A publisher that raises costs that message, counted in ``publish_failures``; a
+        chunk published while nothing subscribes is counted in ``chunks_unheard``.
+        """
         pub, resolved = self._outputs[topic]
-        pub.publish(msg)
+        try:
+            if topic is stream.PIVOT_FORCES and pub.get_subscription_count() == 0:
+                self.stats.chunks_unheard += 1
+            pub.publish(msg)
+        except Exception as exc:  # the simulation and the sinks go on without it
+            self.stats.publish_failures += 1
+            self.get_logger().error(
+                f"publishing on {resolved.name} failed: {type(exc).__name__}",
+                throttle_duration_sec=1.0,
+            )
         self._to_sinks(resolved, msg, ns)
 
     def _to_sinks(self, topic: Topic, msg, ns: int) -> None:
@@ -641,13 +786,19 @@ class BrakeSimNode(Node):
             error = f"duration_s={duration!r}: allowed a finite time >= 0 s"
         else:
             steps = steps or round(duration / dt)
+            most = self._max_step_samples()
             if steps < 1:
                 error = f"duration_s={duration:g} s is shorter than half a sample ({dt:g} s)"
-            elif steps * dt > MAX_STEP_REQUEST_S:
+            elif steps > most:
+                per_sample = self._step_sample_cost_s()
                 error = (
-                    f"{steps} samples = {steps * dt:g} s: allowed at most"
-                    f" {MAX_STEP_REQUEST_S:g} s of simulated time per call"
+                    f"{steps} samples = {steps * dt:g} s: allowed at most {most} samples ="
+                    f" {most * dt:g} s per call (one call may hold the node for"
+                    f" {STEP_CALL_WALL_S:g} s of wall time, a sample costs"
+                    f" {1e6 * per_sample:.1f} us here, and at most {MAX_STEP_REQUEST_S:g} s"
+                    " of simulated time); call ~/step again for more"
                 )
+        wall0 = self._wall()
         if not error:
             done = 0
             while done < steps:
@@ -658,7 +809,10 @@ class BrakeSimNode(Node):
                 done += n
         response.success = not error
         index = self._stepper.sample_index
-        response.message = error or f"advanced {steps} samples to t = {index * dt:.9g} s"
+        response.message = error or (
+            f"advanced {steps} samples to t = {index * dt:.9g} s in"
+            f" {self._wall() - wall0:.3f} s of wall time"
+        )
         response.sample_index = max(0, index - 1)
         response.sim_time_s = index * dt
         return response
@@ -671,12 +825,18 @@ class BrakeSimNode(Node):
             if seed < -1:
                 raise BrakeSimError(f"seed={seed}: allowed -1 (keep) or a seed >= 0")
             if request.scenario:
-                self._switch_scenario(load_scenario(request.scenario), request.scenario)
+                scenario = load_requested_scenario(request.scenario, self._scenario_dirs)
+                self._switch_scenario(scenario, request.scenario)
             else:
                 self._stepper.reset()
                 self._log_step_change("reset")
         except BrakeSimError as exc:
             response.success, response.message = False, f"reset refused: {exc}"
+            return response
+        except Exception as exc:  # a bug, not the request: the node must run on
+            self.get_logger().error(f"~/reset failed: {type(exc).__name__}")
+            response.success = False
+            response.message = f"reset refused: internal error ({type(exc).__name__})"
             return response
         self._contact_events.reset()
         if seed >= 0:
@@ -699,8 +859,29 @@ class BrakeSimNode(Node):
         return response
 
     def _switch_scenario(self, scenario: Scenario, name_or_path: str) -> None:
-        """Replace scenario, stepper and timing; on error nothing changes."""
-        stepper = self._make_stepper(scenario.setup, scenario)
+        """Replace scenario, stepper and timing; on error nothing changes.
+
+        The new scenario's stepping is calibrated (some ms) and checked against the work
+        bounds and, in real time, against the budget (the publishing costs measured at
+        start); a scenario the node cannot hold is refused.
+        """
+        chunk_rate = self._param("chunk_rate_hz")
+        stepper = self._make_stepper(scenario.setup, scenario, chunk_rate)
+        dt = stepper.sample_period_s
+        chunk = max(1, round(1.0 / (dt * chunk_rate)))
+        stride = max(1, round(1.0 / (dt * self._param("state_rate_hz"))))
+        costs = self._step_costs(stepper, scenario.name, chunk, self._costs)
+        if self._pacer.real_time_factor > 0.0:
+            verdict = self._pipeline_verdict(
+                costs=costs,
+                sample_period_s=dt,
+                chunk_samples=chunk,
+                state_stride=stride,
+                label=f"scenario '{scenario.name}'",
+            )
+            if not verdict.ok:
+                raise BrakeSimError(f"cannot keep real time: {verdict.message}")
+        self._costs = costs
         self.scenario, self._stepper, self._seed = scenario, stepper, scenario.seed
         values = ros_params.model_values(scenario.setup.params, scenario.setup.defects)
         values["scenario"] = name_or_path
@@ -709,7 +890,6 @@ class BrakeSimNode(Node):
             values["duration_s"] = scenario.duration_s
         self._set_internal(values)
         self._log_step_change(f"scenario '{scenario.name}'")
-        dt = stepper.sample_period_s
         self._planner.sample_period_s = dt
         self._pacer = Pacer(
             dt,
@@ -783,140 +963,3 @@ class BrakeSimNode(Node):
 
     def summary(self) -> str:
         return summary(self.run_view(), self.stats)
-
-
-# -- command line ----------------------------------------------------------------------------
-def _parse_cli(argv: list[str], prog: str) -> argparse.Namespace:
-    parser = argparse.ArgumentParser(
-        prog=prog,
-        description="Drum-brake simulator as a ROS 2 node. ROS parameters go after"
-        " --ros-args (-p name:=value); the options below override them.",
-    )
-    parser.add_argument("--scenario", help="built-in scenario name or path to a .toml file")
-    parser.add_argument(
-        "--duration",
-        type=float,
-        metavar="S",
-        help="simulated seconds of the free run (default: the scenario's)",
-    )
-    parser.add_argument(
-        "--exit-at-end",
-        action="store_true",
-        help="print a summary and exit 0 when the duration is reached",
-    )
-    parser.add_argument(
-        "--rerun",
-        action="append",
-        nargs="+",
-        metavar="TARGET",
-        help="log to Rerun: spawn | connect [URL] | serve | save FILE.rrd (repeatable)",
-    )
-    parser.add_argument("--record", metavar="PATH", help="record to this MCAP file")
-    parser.add_argument("--record-compression", choices=("zstd", "none"), default="zstd")
-    parser.add_argument(
-        "--record-flush-s",
-        type=float,
-        default=1.0,
-        metavar="S",
-        help="simulated seconds between chunk writes: bounds a crash's loss (default 1)",
-    )
-    args = parser.parse_args(argv)
-    if args.rerun:
-        from brake_sim_ros.viz.commands import parse_targets
-
-        try:
-            args.rerun = parse_targets(args.rerun)
-        except BrakeSimError as exc:
-            parser.error(str(exc))
-    if args.duration is not None and not (math.isfinite(args.duration) and args.duration > 0):
-        parser.error(f"--duration {args.duration}: allowed a finite time > 0 s")
-    if not (math.isfinite(args.record_flush_s) and args.record_flush_s > 0):
-        parser.error(f"--record-flush-s {args.record_flush_s}: allowed a finite time > 0 s")
-    return args
-
-
-class _StopRequest:
-    """SIGINT/SIGTERM set a flag the spin loop checks (a second one interrupts at once).
-
-    rclpy's own handlers would raise KeyboardInterrupt wherever the node is, also inside a
-    recorder's write; a flag lets the loop end between callbacks and close the sinks.
-    """
-
-    def __init__(self) -> None:
-        self.requested = False
-        self._previous = {
-            sig: signal.signal(sig, self._handle) for sig in (signal.SIGINT, signal.SIGTERM)
-        }
-
-    def _handle(self, signum: int, _frame) -> None:
-        if self.requested:
-            raise KeyboardInterrupt
-        self.requested = True
-
-    def restore(self) -> None:
-        for sig, handler in self._previous.items():
-            signal.signal(sig, handler)
-
-
-def main(args: list[str] | None = None) -> int:
-    """Run the node until shutdown (or the end of the run with --exit-at-end).
-
-    Args:
-        args: command line like ``sys.argv`` (program name first); default ``sys.argv``.
-
-    Returns:
-        0 on a clean exit, 1 when the node refused to start, 2 for bad options.
-    """
-    argv = list(sys.argv if args is None else args)
-    stripped = remove_ros_args(argv)
-    # the program name as invoked: "brake-sim node" from the CLI, the module otherwise
-    prog = argv[0] if argv and argv[0] == "brake-sim node" else "python -m brake_sim_ros.ros.node"
-    cli = _parse_cli(stripped[1:], prog)
-    overrides = []
-    if cli.scenario is not None:
-        overrides.append(Parameter("scenario", value=cli.scenario))
-    if cli.duration is not None:
-        overrides.append(Parameter("duration_s", value=float(cli.duration)))
-    if cli.exit_at_end:
-        overrides.append(Parameter("exit_at_end", value=True))
-    openers = []
-    if cli.record:
-        from brake_sim_ros.recording.record import open_node_recorder
-
-        openers.append(open_node_recorder(cli.record, cli.record_compression, cli.record_flush_s))
-    if cli.rerun:
-        from brake_sim_ros.viz.commands import rerun_openers
-
-        openers.extend(rerun_openers(cli.rerun))
-    rclpy.init(args=argv, signal_handler_options=SignalHandlerOptions.NO)
-    stop = _StopRequest()
-    node = None
-    try:
-        try:
-            node = BrakeSimNode(parameter_overrides=overrides, sink_openers=openers)
-        except BrakeSimError as exc:
-            print(f"brake_sim: refused to start: {exc}", file=sys.stderr)
-            return 1
-        executor = SingleThreadedExecutor()
-        executor.add_node(node)
-        while not node.done and rclpy.ok() and not stop.requested:
-            executor.spin_once(timeout_sec=0.1)
-        if node.done:
-            linger_end = time.monotonic() + EXIT_LINGER_S
-            while time.monotonic() < linger_end and rclpy.ok():
-                executor.spin_once(timeout_sec=0.05)
-        if node.done or stop.requested:
-            print(node.summary(), flush=True)
-        return 0
-    except (KeyboardInterrupt, ExternalShutdownException):
-        return 0
-    finally:
-        if node is not None:
-            node.close_sinks()
-            node.destroy_node()
-        rclpy.try_shutdown()
-        stop.restore()
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -490,8 +490,13 @@ def _too_deep(text: str) -> bool:
     return False
 
 
-def _toml(text: str, source: str) -> dict[str, Any]:
-    """``text`` parsed as TOML, at most :data:`MAX_NESTING` tables and arrays deep."""
+def parse_toml(text: str, source: str) -> dict[str, Any]:
+    """``text`` parsed as TOML, at most :data:`MAX_NESTING` tables and arrays deep (the
+    depth is scanned before tomllib sees the text).
+
+    Raises:
+        ScenarioError: not TOML (reason and position), or nested too deeply.
+    """
     too_deep = ScenarioError(
         f"{source}: nested too deeply: allowed at most {MAX_NESTING} levels of tables and"
         " arrays inside one another (brackets, or parts of a dotted key)"
@@ -528,7 +533,7 @@ def parse_scenario(text: str, source: str = "<string>") -> Scenario:
             f"{source}: {len(text)} characters: allowed at most {MAX_SCENARIO_BYTES} bytes"
         )
     try:
-        return _parse(_toml(text, source), text, source)
+        return _parse(parse_toml(text, source), text, source)
     except ScenarioError:
         raise
     except BrakeSimError as exc:  # a check of the model (parameters, profile, defects)
@@ -660,9 +665,28 @@ def read_scenario_file(path: str | os.PathLike[str]) -> Scenario:
             :data:`SHOWN_CHARS` characters, and no other exception type escapes.
     """
     name = _describe(path)
+    return parse_scenario(read_scenario_text(path), name)
+
+
+def read_scenario_text(path: str | os.PathLike[str], *, follow_symlinks: bool = True) -> str:
+    """The text of a scenario file, read as hostile input: the file-level limits of
+    :func:`read_scenario_file` (a regular file that is never waited on, at most
+    :data:`MAX_SCENARIO_BYTES`, UTF-8 without NUL characters), checked on the open file.
+
+    Args:
+        follow_symlinks: False refuses a final symbolic link (O_NOFOLLOW): for paths
+            resolved and checked before opening, so a link swapped in later is not followed.
+
+    Raises:
+        ScenarioError: one line naming the file and the rule; never the file's content.
+    """
+    name = _describe(path)
     try:
         # O_NONBLOCK: opening a FIFO does not wait for a writer; it is refused below
-        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | os.O_CLOEXEC)
+        flags = os.O_RDONLY | os.O_NONBLOCK | os.O_CLOEXEC
+        if not follow_symlinks:
+            flags |= getattr(os, "O_NOFOLLOW", 0)
+        fd = os.open(path, flags)
     except FileNotFoundError:
         raise ScenarioError(f"{name}: cannot read the scenario file: no such file") from None
     except OSError as exc:
@@ -713,7 +737,9 @@ def read_scenario_file(path: str | os.PathLike[str]) -> Scenario:
             f"{name}: not UTF-8 text (a byte that is not UTF-8 at line {line}, column"
             f" {column}): allowed a UTF-8 TOML file"
         ) from None
-    return parse_scenario(text.removeprefix("\ufeff"), name)
+    if "\x00" in text:
+        raise ScenarioError(f"{name}: contains NUL characters: allowed a UTF-8 TOML file")
+    return text.removeprefix("\ufeff")
 
 
 def _is_path(name_or_path: str | os.PathLike[str]) -> bool:

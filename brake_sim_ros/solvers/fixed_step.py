@@ -69,7 +69,9 @@ def substeps_for(sample_period_s: float, max_step_s: float) -> int:
     if not max_step_s < math.inf:
         return 1
     n = max(1, math.ceil(sample_period_s / max_step_s))
-    while n > 1 and sample_period_s / (n - 1) <= max_step_s:  # ceil of a rounded quotient
+    # ceil of a rounded quotient is at most one too many; one check, not a loop: for a
+    # step far below the period, n and n - 1 give the same quotient and a loop never ends
+    if n > 1 and sample_period_s / (n - 1) <= max_step_s:
         n -= 1
     return n
 
@@ -120,6 +122,11 @@ class FixedStepStepper:
                 isinstance(value, float | int) and math.isfinite(value) and value > 0
             ):
                 raise StepSizeError(f"{name} {value!r} is invalid: allowed a finite step > 0 s")
+        if check_step and max_step_s is not None and max_step_s < MIN_PHYSICS_STEP_S:
+            raise StepSizeError(
+                f"max_step_s {max_step_s:g} s: allowed a physics step of at least"
+                f" {MIN_PHYSICS_STEP_S:g} s (the smallest step taken)"
+            )
         self.sample_period_s = float(sample_period_s)
         self.max_step_s = None if max_step_s is None else float(max_step_s)
         self.check_step = check_step

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from brake_sim_ros.solvers.fixed_step import FixedStepStepper
+from brake_sim_ros.solvers.fixed_step import MIN_PHYSICS_STEP_S, FixedStepStepper
 
 # Share of a chunk's wall period the stepper may use. Publishing a 256-sample chunk and
 # its state messages costs the same order as stepping it in rclpy, so half the period is
@@ -184,3 +184,121 @@ def calibrate_chunk_cost(
         actuation_n=force,
     )
     return CostStats.of(costs)
+
+
+# -- the whole pipeline: stepping and publishing ------------------------------------------------
+# Share of a chunk's wall period stepping and publishing together may use; the rest is the
+# executor's (timer ticks, services) and scheduling jitter.
+PIPELINE_SHARE = 0.7
+# Work bounds of one chunk, whatever the pacing: a chunk is stepped in one go inside one
+# executor callback, so it must stay short and small.
+MAX_CHUNK_SAMPLES = 65_536  # a SampleBlock of this many samples is about 20 MB
+MAX_PHYSICS_STEPS_PER_CHUNK = 200_000  # about 0.3 s at 1.3 us per step (rk4-located, here)
+MAX_CHUNK_WALL_S = 0.1  # measured cost of stepping one chunk, s
+
+
+@dataclass(frozen=True)
+class PipelineCosts:
+    """Measured wall costs of what one chunk causes, s.
+
+    Attributes:
+        step_per_sample_s: stepping, per sample (calibration median / chunk samples).
+        chunk_fixed_s: converting and publishing one PivotForceChunk and one Clock, the
+            part independent of the chunk's length.
+        chunk_per_sample_s: the same, per sample of the chunk.
+        state_row_s: converting and publishing one BrakeState and one JointState.
+    """
+
+    step_per_sample_s: float
+    chunk_fixed_s: float = 0.0
+    chunk_per_sample_s: float = 0.0
+    state_row_s: float = 0.0
+
+    def publish_s(self, chunk_samples: int, state_stride: int) -> float:
+        """Publishing cost of one chunk with a state row every ``state_stride`` samples."""
+        rows = math.ceil(chunk_samples / max(1, state_stride))
+        return (
+            self.chunk_fixed_s + self.chunk_per_sample_s * chunk_samples + self.state_row_s * rows
+        )
+
+    def per_sample_s(self, chunk_samples: int, state_stride: int) -> float:
+        """Stepping and publishing, per sample, at these settings."""
+        return self.step_per_sample_s + self.publish_s(chunk_samples, state_stride) / max(
+            1, chunk_samples
+        )
+
+
+def check_chunk_work(substeps: int, chunk_samples: int, physics_step_s: float) -> str | None:
+    """Why one chunk of ``chunk_samples`` samples of ``substeps`` physics steps each is too
+    much work for one executor callback, or None when it is not."""
+    if not physics_step_s >= MIN_PHYSICS_STEP_S:
+        return (
+            f"a physics step of {physics_step_s:.3g} s: allowed at least {MIN_PHYSICS_STEP_S:g} s"
+            " (solver max_step_s of the scenario)"
+        )
+    if chunk_samples > MAX_CHUNK_SAMPLES:
+        return (
+            f"{chunk_samples} samples per chunk: allowed at most {MAX_CHUNK_SAMPLES} (raise"
+            " chunk_rate_hz, or use a lower sample rate)"
+        )
+    steps = substeps * chunk_samples
+    if steps > MAX_PHYSICS_STEPS_PER_CHUNK:
+        return (
+            f"{chunk_samples} samples x {substeps} physics steps = {steps} steps per chunk:"
+            f" allowed at most {MAX_PHYSICS_STEPS_PER_CHUNK} (a larger solver max_step_s, a"
+            " lower sample rate or a higher chunk_rate_hz)"
+        )
+    return None
+
+
+def check_pipeline(
+    costs: PipelineCosts,
+    *,
+    sample_period_s: float,
+    chunk_samples: int,
+    state_stride: int,
+    real_time_factor: float,
+    label: str = "",
+) -> RealtimeVerdict:
+    """Whether stepping and publishing one chunk fit its wall period at ``real_time_factor``.
+
+    Two budgets: stepping alone within :data:`STEPPER_SHARE` of the period (as
+    :func:`check_realtime`), and stepping plus publishing within :data:`PIPELINE_SHARE`.
+    The message gives every figure.
+    """
+    step_s = costs.step_per_sample_s * chunk_samples
+    publish_s = costs.publish_s(chunk_samples, state_stride)
+    stepping = check_realtime(
+        step_s,
+        sample_period_s=sample_period_s,
+        chunk_samples=chunk_samples,
+        real_time_factor=real_time_factor,
+        label=label,
+    )
+    sim_s = chunk_samples * sample_period_s
+    total = step_s + publish_s
+    max_factor = min(stepping.max_real_time_factor, PIPELINE_SHARE * sim_s / total)
+    if real_time_factor == 0:
+        return RealtimeVerdict(True, total, math.inf, math.inf, max_factor, "")
+    period = sim_s / real_time_factor
+    budget = PIPELINE_SHARE * period
+    ok = stepping.ok and total <= budget
+    rows = math.ceil(chunk_samples / max(1, state_stride))
+    what = f" for {label}" if label else ""
+    message = (
+        f"one chunk of {chunk_samples} samples of {sample_period_s:g} s{what} costs"
+        f" {1e6 * step_s:.0f} us stepping + {1e6 * publish_s:.0f} us publishing ({rows} state"
+        f" rows of {1e6 * costs.state_row_s:.0f} us, the chunk"
+        f" {1e6 * (costs.chunk_fixed_s + costs.chunk_per_sample_s * chunk_samples):.0f} us)"
+        f" on this machine; at real_time_factor {real_time_factor:g} a chunk spans"
+        f" {1e6 * period:.0f} us, of which stepping may use {100 * STEPPER_SHARE:.0f} % and"
+        f" both {100 * PIPELINE_SHARE:.0f} % ({1e6 * budget:.0f} us)"
+    )
+    if ok:
+        message += f": fits (up to real_time_factor {max_factor:.3g})"
+    else:
+        message += (
+            f": too slow. Lower real_time_factor to at most {max_factor:.3g}, or lower"
+            " state_rate_hz or chunk_rate_hz, or use a faster solver preset"
+        )
+    return RealtimeVerdict(ok, total, period, budget, max_factor, message)

@@ -130,6 +130,13 @@ def run_parameter_specs() -> list[ParamSpec]:
             "Switch it with the ~/reset service (its 'scenario' field). " + fixed,
         ),
         ParamSpec(
+            "scenario_dirs",
+            "",
+            "Directories (separated by ':') from which ~/reset requests may load .toml "
+            "scenario files; empty = none, a request may only name a built-in scenario. "
+            "Symlinks and '..' are resolved before the check. " + fixed,
+        ),
+        ParamSpec(
             "duration_s",
             0.0,
             "Simulated time after which the free run ends (s); 0 at start-up = the "
@@ -199,7 +206,7 @@ def run_parameter_specs() -> list[ParamSpec]:
     ]
 
 
-FIXED_AT_START = frozenset({"scenario", "exit_at_end", "max_actuation_force_n"})
+FIXED_AT_START = frozenset({"scenario", "scenario_dirs", "exit_at_end", "max_actuation_force_n"})
 
 
 # -- model parameters ---------------------------------------------------------------------------

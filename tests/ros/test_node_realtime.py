@@ -296,7 +296,7 @@ def test_a_defect_and_a_force_that_need_small_steps_are_not_refused():
         [
             sys.executable,
             "-m",
-            "brake_sim_ros.ros.node",
+            "brake_sim_ros.app.node",
             "--scenario",
             "symmetric",
             "--duration",
@@ -339,7 +339,7 @@ def test_a_defect_and_a_force_that_need_small_steps_are_not_refused():
 def test_refuses_to_start_with_a_one_line_reason(args, message, tmp_path):
     start = time.monotonic()
     proc = subprocess.run(
-        [sys.executable, "-m", "brake_sim_ros.ros.node", *args],
+        [sys.executable, "-m", "brake_sim_ros.app.node", *args],
         env=ros_environment(domain_id_for(4)),
         capture_output=True,
         text=True,

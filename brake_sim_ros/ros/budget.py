@@ -1,0 +1,131 @@
+"""Measure what a chunk costs on this machine: stepping, and converting plus publishing.
+
+The node measures at start (and steps a new scenario's calibration at each ``~/reset``)
+and refuses settings it cannot hold (:func:`~brake_sim_ros.solvers.realtime.check_pipeline`).
+Publishing is timed on hidden publishers (``~/_budget/...``, same types and QoS as the
+real topics) with no subscriber: what it measures is the Python conversion and rclpy
+serialisation, the bulk of the cost; delivery to many subscribers costs more and is not
+included.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import statistics
+import time
+
+from brake_sim_ros import stream
+from brake_sim_ros.analysis.contact_events import ContactEventDetector
+from brake_sim_ros.errors import BrakeSimError
+from brake_sim_ros.model.trajectory import SampleBlock
+from brake_sim_ros.ros import qos
+from brake_sim_ros.ros.messages import message_class
+from brake_sim_ros.solvers.fixed_step import FixedStepStepper
+from brake_sim_ros.solvers.realtime import (
+    MAX_CHUNK_WALL_S,
+    PipelineCosts,
+    calibrate_chunk_cost,
+    check_chunk_work,
+)
+from brake_sim_ros.stream import conversion
+
+_REPEATS = 5
+_STATE_ROWS = 16
+
+
+def measure_stepping(
+    stepper: FixedStepStepper, chunk_samples: int, *, force_n: float
+) -> tuple[float, SampleBlock]:
+    """Stepping cost per sample, s, and a block of ``chunk_samples`` samples to publish.
+
+    ``stepper`` is a throwaway (``fresh()``). A probe of one sample first: work bounds
+    (:func:`check_chunk_work`, at the substeps the force needs) and an estimate of the
+    chunk's cost are checked before any whole chunk is stepped.
+
+    Raises:
+        BrakeSimError: one chunk would be more work than one executor callback may do.
+    """
+    force = (force_n, force_n)
+    stepper.advance(1, actuation_n=force)  # kernel loaded, substeps picked for the force
+    reason = check_chunk_work(stepper.substeps, chunk_samples, stepper.physics_step_s)
+    if reason:
+        raise BrakeSimError(reason)
+    t0 = time.perf_counter()
+    stepper.advance(1, actuation_n=force)
+    estimate = (time.perf_counter() - t0) * chunk_samples
+    if estimate > 2 * MAX_CHUNK_WALL_S:  # one sample's timing is noisy: a wide margin
+        raise BrakeSimError(
+            f"one chunk of {chunk_samples} samples would take about {estimate:.2g} s of wall"
+            f" time to step: allowed at most {MAX_CHUNK_WALL_S:g} s"
+        )
+    cost = calibrate_chunk_cost(stepper, chunk_samples, force_n=force_n)
+    if cost.median_s > MAX_CHUNK_WALL_S:
+        raise BrakeSimError(
+            f"one chunk of {chunk_samples} samples takes {cost.median_s:.2g} s of wall time to"
+            f" step: allowed at most {MAX_CHUNK_WALL_S:g} s"
+        )
+    block = stepper.advance(chunk_samples, actuation_n=force)
+    return cost.median_s / chunk_samples, block
+
+
+def _median_cost(action, repeats: int = _REPEATS) -> float:
+    costs = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        action()
+        costs.append(time.perf_counter() - t0)
+    return statistics.median(costs)
+
+
+def measure_publishing(node, block: SampleBlock, step_per_sample_s: float) -> PipelineCosts:
+    """Publishing costs measured on hidden publishers of ``node``, with ``block``.
+
+    The whole per-chunk pipeline (:func:`~brake_sim_ros.stream.block_messages`: the chunk,
+    the contact events the block holds, one state row, the clock) is timed on ``block``;
+    a state row (BrakeState + JointState) and a one-sample chunk separately, so that the
+    cost can be scaled to other chunk sizes and state rates.
+    """
+    topics = (
+        stream.PIVOT_FORCES,
+        stream.CONTACT_EVENTS,
+        stream.STATE,
+        stream.JOINT_STATES,
+        stream.CLOCK,
+    )
+    pubs = {
+        t: node.create_publisher(
+            message_class(t.type_name), f"~/_budget/{t.name.rsplit('/', 1)[-1]}", qos.for_topic(t)
+        )
+        for t in topics
+    }
+    try:
+        n = len(block)
+
+        def pipeline(b: SampleBlock) -> None:
+            detector = ContactEventDetector()
+            for topic, msg, _ns in stream.block_messages(
+                b, len(b), with_clock=True, contact_events=detector
+            ):
+                pubs[topic].publish(msg)
+
+        rows = min(_STATE_ROWS, n)
+
+        def states() -> None:
+            for row in range(rows):
+                pubs[stream.STATE].publish(conversion.brake_state(block, row))
+                pubs[stream.JOINT_STATES].publish(conversion.joint_state(block, row))
+
+        state_row = _median_cost(states) / rows
+        full = _median_cost(lambda: pipeline(block))
+        one = _median_cost(lambda: pipeline(dataclasses.replace(block, data=block.data[:1])))
+    finally:
+        for pub in pubs.values():
+            node.destroy_publisher(pub)
+    per_sample = max(0.0, (full - one) / max(1, n - 1))
+    fixed = max(0.0, full - per_sample * n - state_row)  # the one state row is priced apart
+    return PipelineCosts(
+        step_per_sample_s=step_per_sample_s,
+        chunk_fixed_s=fixed,
+        chunk_per_sample_s=per_sample,
+        state_row_s=state_row,
+    )

@@ -1,0 +1,162 @@
+"""The package graph points one way: model <- solvers <- scenarios <- stream <- (ros,
+recording, viz), with app, studies and the CLI on top.
+
+Every ``import`` of every module counts, also those inside functions (lazy imports) and
+under ``if TYPE_CHECKING:``: a dependency deferred is still a dependency.
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+PACKAGE = "brake_sim_ros"
+ROOT = Path(__file__).resolve().parents[1] / PACKAGE
+
+_BASE = {"errors", "__init__"}  # brake_sim_ros/errors.py and the package's own __init__
+_CORE = _BASE | {"model"}
+_SOLVERS = _CORE | {"analysis", "solvers"}
+_LIBRARY = _SOLVERS | {"scenarios"}
+_STREAM = _LIBRARY | {"stream"}
+_ADAPTERS = {"ros", "recording", "viz"}
+
+# Which top-level units of the package each one may import (itself always allowed):
+# model <- (analysis, solvers) <- scenarios <- stream <- (ros, recording, viz) <- the top.
+ALLOWED: dict[str, set[str]] = {
+    "__init__": set(),
+    "errors": set(),
+    "model": _BASE,
+    "analysis": _CORE,
+    "solvers": _CORE | {"analysis"},
+    "scenarios": _SOLVERS,  # a scenario names its solver preset and method
+    "stream": _LIBRARY,
+    "ros": _STREAM,  # never recording or viz: the node is a leaf adapter
+    "recording": _STREAM,
+    "viz": _STREAM | {"recording"},  # the viewer reads MCAP recordings
+    "studies": _STREAM | _ADAPTERS,
+    "app": _STREAM | _ADAPTERS,
+    "cli": _STREAM | _ADAPTERS | {"app", "studies"},
+}
+
+
+def _module_name(path: Path) -> str:
+    parts = path.relative_to(ROOT.parent).with_suffix("").parts
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def _modules() -> dict[str, Path]:
+    return {_module_name(p): p for p in sorted(ROOT.rglob("*.py"))}
+
+
+MODULES = _modules()
+
+
+def _imports(module: str, path: Path) -> set[str]:
+    """Package modules imported anywhere in ``path`` (resolved to modules, not names)."""
+    tree = ast.parse(path.read_text(encoding="utf-8"), str(path))
+    is_package = path.name == "__init__.py"
+    out: set[str] = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            names = [alias.name for alias in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = module.split(".")
+                base = base if is_package else base[:-1]
+                base = base[: len(base) - (node.level - 1)]
+                parent = ".".join(base + ([node.module] if node.module else []))
+            else:
+                parent = node.module or ""
+            # "from pkg import sub" imports the module pkg.sub when it is one
+            names = [
+                f"{parent}.{alias.name}" if f"{parent}.{alias.name}" in MODULES else parent
+                for alias in node.names
+            ]
+        else:
+            continue
+        for name in names:
+            if name == PACKAGE or name.startswith(PACKAGE + "."):
+                while name not in MODULES:  # "import a.b.c" where c is a name
+                    name = name.rsplit(".", 1)[0]
+                out.add(name)
+    out.discard(module)
+    return out
+
+
+def _unit(module: str) -> str:
+    parts = module.split(".")
+    return "__init__" if len(parts) == 1 else parts[1]
+
+
+GRAPH = {m: _imports(m, p) for m, p in MODULES.items()}
+
+
+def test_every_unit_is_in_the_allowed_graph():
+    units = {_unit(m) for m in MODULES}
+    assert units <= ALLOWED.keys(), f"units missing from ALLOWED: {units - ALLOWED.keys()}"
+
+
+def test_no_package_imports_one_above_it():
+    bad = []
+    for module, imported in GRAPH.items():
+        unit = _unit(module)
+        for target in imported:
+            other = _unit(target)
+            if other == unit or other in ALLOWED[unit]:
+                continue
+            bad.append(f"{module} imports {target} ({unit} may import {sorted(ALLOWED[unit])})")
+    assert not bad, "\n".join(sorted(bad))
+
+
+def test_ros_imports_neither_recording_nor_viz():
+    bad = [
+        f"{m} imports {t}"
+        for m, imported in GRAPH.items()
+        if _unit(m) == "ros"
+        for t in imported
+        if _unit(t) in ("recording", "viz")
+    ]
+    assert not bad, bad
+
+
+def test_no_import_cycle_between_modules():
+    """Depth-first search over the module graph; reports the first cycle found."""
+    state: dict[str, int] = {}  # 1 = on the stack, 2 = done
+    stack: list[str] = []
+
+    def visit(module: str) -> list[str] | None:
+        state[module] = 1
+        stack.append(module)
+        for target in sorted(GRAPH.get(module, ())):
+            if state.get(target) == 1:
+                return [*stack[stack.index(target) :], target]
+            if target in GRAPH and state.get(target) is None:
+                found = visit(target)
+                if found:
+                    return found
+        stack.pop()
+        state[module] = 2
+        return None
+
+    for module in sorted(GRAPH):
+        if state.get(module) is None:
+            cycle = visit(module)
+            assert cycle is None, " -> ".join(cycle)
+
+
+@pytest.mark.parametrize(
+    ("source", "expected"),
+    [
+        ("from brake_sim_ros.recording.record import x", "brake_sim_ros.recording.record"),
+        ("def f():\n    from brake_sim_ros.viz import commands", "brake_sim_ros.viz.commands"),
+        ("from ..viz import commands", "brake_sim_ros.viz.commands"),
+        ("import brake_sim_ros.ros.node", "brake_sim_ros.ros.node"),
+    ],
+)
+def test_the_parser_sees_every_kind_of_import(tmp_path, source, expected):
+    """The check itself can fail: lazy, relative and plain imports are all found."""
+    fake = tmp_path / "node.py"
+    fake.write_text(source)
+    assert expected in _imports("brake_sim_ros.ros.commands", fake)
