@@ -175,14 +175,19 @@ def _checked_outputs(
     :func:`~brake_sim_ros.recording.output.probe_output`'s rules hold (not the scenario
     file, not a link, not an existing file without --overwrite, nor a non-regular one; an
     existing directory that takes a new file)."""
-    from brake_sim_ros.recording.output import OutputError, check_output, probe_output
+    from brake_sim_ros.recording.output import (
+        OutputError,
+        check_output,
+        probe_output,
+        same_file,
+    )
     from brake_sim_ros.recording.records import describe_path
 
     named = [("--out", args.out, tuple(HISTORY_FORMATS)), ("--mcap", args.mcap, (".mcap",))]
     named += [("--rerun save", t.arg, (".rrd",)) for t in rerun if t.kind == "save"]
     named = [(option, path, suffixes) for option, path, suffixes in named if path is not None]
     for (option, path, _), (other, other_path, _) in itertools.combinations(named, 2):
-        if _same_file(path, other_path):
+        if same_file(path, other_path):
             raise OutputError(
                 f"{option} {describe_path(path)} and {other} {describe_path(other_path)} name"
                 " the same file: give each output its own path"
@@ -199,19 +204,6 @@ def _checked_outputs(
         checked[option] = probe_output(path, **rules)
     checked.pop("--rerun save", None)  # the path is the target's
     return checked
-
-
-def _same_file(a: str, b: str) -> bool:
-    """Whether two output paths name one file (the same directory and name, or the same
-    existing file through another path)."""
-    pa, pb = Path(a), Path(b)
-    if (os.path.realpath(pa.parent), pa.name) == (os.path.realpath(pb.parent), pb.name):
-        return True
-    try:
-        sa, sb = os.stat(pa), os.stat(pb)
-    except OSError:
-        return False
-    return (sa.st_dev, sa.st_ino) == (sb.st_dev, sb.st_ino)
 
 
 def _rerun_targets(args: argparse.Namespace) -> list[RerunTarget]:

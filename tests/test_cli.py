@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 import re
 import subprocess
 import sys
@@ -198,3 +199,42 @@ def test_node_help_names_the_command_the_user_typed(capsys):
         main(["node", "--help"])
     assert exit_info.value.code == 0
     assert capsys.readouterr().out.startswith("usage: brake-sim node ")
+
+
+@pytest.mark.parametrize("case", ["exists", "link", "input", "rrd exists"])
+def test_node_refuses_its_outputs_before_starting(tmp_path, capsys, case):
+    """--record / --rerun save: an existing file (without --overwrite), a link (even with
+    it), the scenario file under another name (a hard link, even with it) is refused in
+    one line before the node starts, and the file is left as it was."""
+    from brake_sim_ros.app.node import _parse_cli
+
+    scenario = tmp_path / "s.toml"
+    scenario.write_text("keep")
+    existing = tmp_path / "old.mcap"
+    existing.write_bytes(b"keep")
+    (tmp_path / "link.mcap").symlink_to(existing)
+    os.link(scenario, tmp_path / "hard.mcap")
+    (tmp_path / "old.rrd").write_bytes(b"keep")
+    argv = {
+        "exists": ["--record", str(existing)],
+        "link": ["--record", str(tmp_path / "link.mcap"), "--overwrite"],
+        "input": ["--scenario", str(scenario), "--record", str(tmp_path / "hard.mcap"),
+                  "--overwrite"],
+        "rrd exists": ["--rerun", "save", str(tmp_path / "old.rrd")],
+    }[case]  # fmt: skip
+    with pytest.raises(SystemExit) as exit_info:
+        _parse_cli(argv, "brake-sim node")
+    assert exit_info.value.code == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err[-1].startswith("brake-sim node: error: "), err  # argparse: usage, then one line
+    assert existing.read_bytes() == scenario.read_bytes() == b"keep"
+    assert (tmp_path / "old.rrd").read_bytes() == b"keep"
+
+
+def test_node_overwrite_replaces_an_existing_recording_path(tmp_path):
+    from brake_sim_ros.app.node import _parse_cli
+
+    existing = tmp_path / "old.mcap"
+    existing.write_bytes(b"old")
+    args = _parse_cli(["--record", str(existing), "--overwrite"], "brake-sim node")
+    assert args.record == str(existing)

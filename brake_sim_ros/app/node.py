@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 import signal
 import sys
 import time
@@ -74,7 +75,13 @@ def _parse_cli(argv: list[str], prog: str) -> argparse.Namespace:
         metavar="S",
         help="simulated seconds between chunk writes: bounds a crash's loss (default 1)",
     )
+    parser.add_argument(
+        "--overwrite",
+        action="store_true",
+        help="replace an existing --record or --rerun save file (never a link or an input)",
+    )
     args = parser.parse_args(argv)
+    _check_outputs(parser, args)
     if args.rerun:
         # imported only when asked for: importing rerun costs about a second at start-up
         from brake_sim_ros.viz.commands import parse_targets
@@ -88,6 +95,28 @@ def _parse_cli(argv: list[str], prog: str) -> argparse.Namespace:
     if not (math.isfinite(args.record_flush_s) and args.record_flush_s > 0):
         parser.error(f"--record-flush-s {args.record_flush_s}: allowed a finite time > 0 s")
     return args
+
+
+def _check_outputs(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
+    """The files the node will write, refused before it starts: an existing file without
+    --overwrite, a link, the scenario file under any name, an unwritable place
+    (``recording/output.py``'s rules; the two suffixes differ, so they are two files)."""
+    from brake_sim_ros.recording.output import OutputError, check_output
+
+    inputs = [args.scenario] if args.scenario and os.path.lexists(args.scenario) else []
+    outputs = []
+    if args.record:
+        outputs.append(("--record", args.record, ".mcap"))
+    for target in args.rerun or []:
+        if target[:1] == ["save"] and len(target) == 2:
+            outputs.append(("--rerun save", target[1], ".rrd"))
+    try:
+        for option, path, suffix in outputs:
+            check_output(
+                path, inputs=inputs, overwrite=args.overwrite, suffix=suffix, option=option
+            )
+    except OutputError as exc:
+        parser.error(str(exc))
 
 
 class _StopRequest:

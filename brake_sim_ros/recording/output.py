@@ -58,6 +58,19 @@ def _missing_parents(directory: Path) -> list[Path]:
     return missing[::-1]
 
 
+def same_file(a: str | os.PathLike[str], b: str | os.PathLike[str]) -> bool:
+    """Whether two output paths name one file (the same directory and name, or the same
+    existing file through another path)."""
+    pa, pb = Path(a), Path(b)
+    if (os.path.realpath(pa.parent), pa.name) == (os.path.realpath(pb.parent), pb.name):
+        return True
+    try:
+        sa, sb = os.stat(pa), os.stat(pb)
+    except OSError:
+        return False
+    return (sa.st_dev, sa.st_ino) == (sb.st_dev, sb.st_ino)
+
+
 def check_output(
     path: str | os.PathLike[str],
     *,

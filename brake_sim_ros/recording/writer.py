@@ -139,7 +139,10 @@ class _DirectFile:
     """
 
     def __init__(self, path: Path) -> None:
-        self._fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o644)
+        # never through a symbolic link; whether an existing file may be replaced is the
+        # caller's rule (recording/output.py's check_output, applied before the run)
+        flags = os.O_WRONLY | os.O_CREAT | os.O_TRUNC | getattr(os, "O_NOFOLLOW", 0)
+        self._fd = os.open(path, flags, 0o644)
         self._position = 0
 
     def write(self, data: bytes | memoryview) -> int:

@@ -452,7 +452,7 @@ class BrakeSimNode(Node):
         return conversion.sample_rate_hz(self._stepper.sample_period_s)
 
     def _samples_per(self, rate_hz: float) -> int:
-        return max(1, round(self._sample_rate_hz() / rate_hz))
+        return stream.samples_per(rate_hz, self._stepper.sample_period_s)
 
     def _tick_period_s(self) -> float:
         if self._pacer.mode is PacingMode.REAL_TIME:

@@ -8,7 +8,7 @@ the Rerun sink and the dataset writer all consume this one stream; nothing here 
 rclpy's transport, a file format or a viewer.
 """
 
-from brake_sim_ros.stream.samples import MessageSink, block_messages
+from brake_sim_ros.stream.samples import MessageSink, block_messages, samples_per
 from brake_sim_ros.stream.topics import (
     ACTUATION,
     CLOCK,
@@ -35,4 +35,5 @@ __all__ = [
     "MessageSink",
     "Topic",
     "block_messages",
+    "samples_per",
 ]

@@ -35,10 +35,6 @@ class StreamSettings:
     state_rate_hz: float = _default("state_rate_hz")
     publish_clock: bool = _default("publish_clock")
 
-    def samples_per(self, rate_hz: float, sample_period_s: float) -> int:
-        """Samples per ``rate_hz`` period, as the node rounds it (at least 1)."""
-        return max(1, round(conversion.sample_rate_hz(sample_period_s) / rate_hz))
-
 
 def offline_messages(
     scenario: Scenario,
@@ -62,8 +58,8 @@ def offline_messages(
     period = stepper.sample_period_s
     duration = scenario.duration_s if duration_s is None else duration_s
     end = round(duration / period)
-    chunk = settings.samples_per(settings.chunk_rate_hz, period)
-    stride = settings.samples_per(settings.state_rate_hz, period)
+    chunk = stream.samples_per(settings.chunk_rate_hz, period)
+    stride = stream.samples_per(settings.state_rate_hz, period)
     setup = stepper.setup
     initial_angles = (setup.defects.left.initial_angle_deg, setup.defects.right.initial_angle_deg)
     yield (

@@ -26,6 +26,12 @@ from brake_sim_ros.stream.topics import (
 )
 
 
+def samples_per(rate_hz: float, sample_period_s: float) -> int:
+    """Samples per period of ``rate_hz`` (chunks, state messages), at least 1: how the
+    node and the offline stream both cut the sample stream."""
+    return max(1, round(conversion.sample_rate_hz(sample_period_s) / rate_hz))
+
+
 class MessageSink(Protocol):
     """Receives every message the simulator publishes or accepts, in order.
 
