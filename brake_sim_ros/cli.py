@@ -307,10 +307,9 @@ def _stream(job: SimulateJob, mcap: Path | None, targets: list[RerunTarget]) -> 
             lines.append(dataclasses.replace(recording, path=str(job.outputs["--mcap"])).describe())
         else:
             from brake_sim_ros.stream.offline import offline_messages
+            from brake_sim_ros.stream.samples import deliver
 
-            for topic, msg, ns in offline_messages(scenario, duration_s=job.duration_s):
-                for sink in sinks:
-                    sink.write(topic, msg, ns)
+            deliver(offline_messages(scenario, duration_s=job.duration_s), sinks)
     except BaseException:
         for sink in sinks:
             sink.close()

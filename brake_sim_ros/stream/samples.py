@@ -10,7 +10,7 @@ simulated, integer nanoseconds.
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator, Sequence
 from typing import Any, Protocol
 
 from brake_sim_ros.analysis.contact_events import ContactEventDetector
@@ -30,6 +30,16 @@ def samples_per(rate_hz: float, sample_period_s: float) -> int:
     """Samples per period of ``rate_hz`` (chunks, state messages), at least 1: how the
     node and the offline stream both cut the sample stream."""
     return max(1, round(conversion.sample_rate_hz(sample_period_s) / rate_hz))
+
+
+def deliver(messages: Iterable[tuple[Topic, Any, int]], sinks: Sequence[MessageSink]) -> None:
+    """Write every ``(topic, message, time_ns)`` to every sink, in order (offline runs).
+
+    A sink that raises stops the delivery; closing the sinks is the caller's (it knows
+    how each must be finished)."""
+    for topic, msg, ns in messages:
+        for sink in sinks:
+            sink.write(topic, msg, ns)
 
 
 class MessageSink(Protocol):

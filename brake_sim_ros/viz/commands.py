@@ -88,12 +88,11 @@ def simulate_to_rerun(
         One line saying what was logged where.
     """
     from brake_sim_ros.stream.offline import offline_messages
+    from brake_sim_ros.stream.samples import deliver
 
     sinks = open_simulation_sinks(scenario, targets)
     try:
-        for topic, msg, ns in offline_messages(scenario, duration_s=duration_s):
-            for sink in sinks:
-                sink.write(topic, msg, ns)
+        deliver(offline_messages(scenario, duration_s=duration_s), sinks)
     except BaseException:
         for sink in sinks:
             sink.close()

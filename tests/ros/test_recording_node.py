@@ -12,8 +12,10 @@
 
 from __future__ import annotations
 
+import os
 import re
 import signal
+import sys
 import time
 from pathlib import Path
 
@@ -267,25 +269,48 @@ def test_sigkill_then_recover_loses_less_than_the_flush_interval(tmp_path):
     assert lost_samples * dt < FLUSH_NS / 1e9 + 0.0101  # + the last chunk's own 10 ms
 
 
-@pytest.mark.parametrize(
-    ("target", "cause"),
-    [("/dev/full", "No space left on device"), ("/dev/null/sub/x.mcap", "Not a directory")],
-    ids=["full-disk", "bad-path"],
-)
-def test_recording_failure_is_reported_and_the_node_streams_on(tmp_path, target, cause):
-    if target == "/dev/full" and not Path("/dev/full").exists():
-        pytest.skip("no /dev/full")
+def test_recording_failure_is_reported_and_the_node_streams_on(tmp_path):
+    """The file system refuses a write in the middle of the run (a file-size limit of
+    64 KiB on the node process; Python ignores SIGXFSZ, so the write fails with EFBIG):
+    the node reports it, drops the recorder and streams on to the end."""
+    wrapper = tmp_path / "limited-python"
+    wrapper.write_text(f'#!/bin/sh\nulimit -f 128\nexec "{sys.executable}" "$@"\n')
+    wrapper.chmod(0o755)
+    target = tmp_path / "limited.mcap"
     node = NodeProcess.start(
-        ["--scenario", SCENARIO, "--duration", "0.5", "--exit-at-end", "--record", target,
-         "--ros-args", "-p", "real_time_factor:=0.0"],
-        domain_id=domain_id_for(60), log_path=tmp_path / "node.log",
+        ["--scenario", SCENARIO, "--duration", "2", "--exit-at-end", "--record", str(target),
+         "--record-flush-s", "0.25", "--ros-args", "-p", "real_time_factor:=0.0"],
+        domain_id=domain_id_for(60), log_path=tmp_path / "node.log", python=str(wrapper),
     )  # fmt: skip
     try:
         assert node.wait(120) == 0, node.output()
     finally:
         node.stop()
     out = node.output()
-    assert f"cannot record to {target}: {cause}" in out, out
-    assert "the node runs on without it" in out
-    assert "published 12800 samples in 50 chunks" in out
+    assert "File too large" in out, out
+    assert "the chunks written before are in the file" in out
+    assert "the simulation goes on" in out
+    assert "published 51200 samples in 200 chunks" in out
     assert "1 recorder/viewer failure(s)" in out
+
+
+@pytest.mark.parametrize(
+    ("target", "cause"),
+    [("fifo.mcap", "not a regular file"), ("/dev/null/sub/x.mcap", "")],
+    ids=["fifo", "bad-path"],
+)
+def test_an_unusable_record_path_is_refused_before_the_node_starts(tmp_path, target, cause):
+    if target == "fifo.mcap":
+        target = str(tmp_path / target)
+        os.mkfifo(target)
+    node = NodeProcess.start(
+        ["--scenario", SCENARIO, "--duration", "0.5", "--exit-at-end", "--record", target],
+        domain_id=domain_id_for(61), log_path=tmp_path / "node.log",
+    )  # fmt: skip
+    try:
+        assert node.wait(60) == 2, node.output()
+    finally:
+        node.stop()
+    last = node.output().strip().splitlines()[-1]
+    assert last.startswith("python -m brake_sim_ros.app.node: error: --record"), last
+    assert cause in last
