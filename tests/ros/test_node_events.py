@@ -4,6 +4,8 @@ One node process, started paused, is stepped with step sizes unlike the offline 
 10 ms chunks, reset in the middle of a contact episode and switched to another scenario:
 each time the ContactEvents received equal those of :func:`offline_messages`, field for
 field, so the node's detector state follows resets and does not depend on the chunking.
+The node runs with a ``run_id`` parameter, which every run keeps across resets and the
+offline stream is given.
 """
 
 from __future__ import annotations
@@ -28,6 +30,7 @@ from brake_sim_ros.stream.offline import offline_messages  # noqa: E402
 DOMAIN = domain_id_for(8)
 N_STEPS = 7680  # 0.3 s of 25.6 kHz samples: every bounce of the symmetric run, contact starts
 LOSSLESS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
+RUN_ID = "events-test.run_1"  # the node's run_id parameter: kept across resets
 FIELDS = (
     "sample_index",
     "shoe",
@@ -35,6 +38,7 @@ FIELDS = (
     "peak_pivot_force_n",
     "peak_sample_index",
     "duration_s",
+    "run_id",  # last: the tests read the fields above by position
 )
 
 
@@ -45,7 +49,9 @@ def as_tuple(msg) -> tuple:
 
 def offline_events(scenario_name: str, n_steps: int) -> list[tuple]:
     scenario = load_scenario(scenario_name)
-    messages = offline_messages(scenario, duration_s=n_steps * scenario.sample_period_s)
+    messages = offline_messages(
+        scenario, duration_s=n_steps * scenario.sample_period_s, run_id=RUN_ID
+    )
     return [as_tuple(msg) for topic, msg, _ in messages if topic is stream.CONTACT_EVENTS]
 
 
@@ -53,7 +59,7 @@ def offline_events(scenario_name: str, n_steps: int) -> list[tuple]:
 def sim(tmp_path_factory):
     log = tmp_path_factory.mktemp("node") / "node.log"
     node = NodeProcess.start(
-        ["--ros-args", "-p", "paused:=true"],
+        ["--ros-args", "-p", "paused:=true", "-p", f"run_id:={RUN_ID}"],
         domain_id=DOMAIN,
         log_path=log,
     )
@@ -83,6 +89,8 @@ def received(sim: SimClient) -> list[tuple]:
 
 
 def test_node_publishes_the_offline_events_whatever_the_steps_and_resets(sim):
+    sim.wait_for(lambda: sim.rx.defects, 5.0, "the latched ground truth")
+    assert {d.run_id for d in sim.rx.defects} == {RUN_ID}
     expected = offline_events("symmetric", N_STEPS)
     assert len(expected) >= 28  # measured: 15 onsets and 13 separations
     step_all(sim, [1234, 1, 77, 5000], N_STEPS)
@@ -95,7 +103,8 @@ def test_node_publishes_the_offline_events_whatever_the_steps_and_resets(sim):
     sim.forget()
     step_all(sim, [onset + 2], onset + 2)
     assert [e[1] for e in received(sim)] == [onset, onset]  # both shoes touch at once
-    assert sim.reset().success
+    response = sim.reset()
+    assert response.success and f"run id {RUN_ID}" in response.message, response.message
     sim.forget()
     step_all(sim, [256], N_STEPS)  # the offline chunking
     assert received(sim) == expected
