@@ -59,11 +59,7 @@ def history_table(
         fields.append(pa.field(name, pa.float64()))
     if sensors is not None:
         frame = sensors.advance(samples)
-        decimation = {
-            out: sensors.decimation[c.name]
-            for c in sensors.sensors.channels
-            for out in c.output_names
-        }
+        decimation = sensors.output_decimation
         for name, series in frame.series.items():
             step = decimation[name]
             rows = np.flatnonzero(index % step == 0)

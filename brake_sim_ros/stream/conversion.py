@@ -33,7 +33,7 @@ from brake_sim_ros.analysis import contact_events
 from brake_sim_ros.analysis.onsets import in_contact
 from brake_sim_ros.model.defects import Defects
 from brake_sim_ros.model.parameters import BrakeParameters
-from brake_sim_ros.model.sensors import SensorBank, SensorFrame
+from brake_sim_ros.model.sensors import SensorFrame
 from brake_sim_ros.model.trajectory import SampleBlock
 
 FRAME_ID = "brake_backing_plate"
@@ -114,17 +114,11 @@ def pivot_force_chunk(block: SampleBlock) -> PivotForceChunk:
     )
 
 
-def output_decimation(bank: SensorBank) -> dict[str, int]:
-    """Scenario samples per sample of each output series of ``bank`` (a wheel speed's index
-    series is sampled with it)."""
-    return {name: bank.decimation[c.name] for c in bank.sensors.channels for name in c.output_names}
-
-
 def measured_chunk(
     block: SampleBlock, frame: SensorFrame, decimation: dict[str, int]
 ) -> MeasuredChunk:
     """What the sensors measured over ``block`` (``frame``: the bank's output for it;
-    ``decimation``: :func:`output_decimation` of the bank), channel-major; stamp = time of
+    ``decimation``: the bank's ``output_decimation``), channel-major; stamp = time of
     the block's first sample."""
     series = list(frame.series.values())
     values = array.array("d")

@@ -75,7 +75,7 @@ def block_messages(
         frame = sensors.advance(block)
         yield (
             MEASURED,
-            conversion.measured_chunk(block, frame, conversion.output_decimation(sensors)),
+            conversion.measured_chunk(block, frame, sensors.output_decimation),
             conversion.stamp_ns(block.first_index, dt),
         )
     for event in contact_events.feed(block):
