@@ -163,8 +163,7 @@ class SimClient:
             f"{node}/state",
             f"{node}/joint_states",
             f"{node}/contact_events",
-            f"{node}/measured",
-        )
+        )  # ~/measured too, but only when the node's publish_measured is on: not waited for
         n.create_subscription(PivotForceChunk, f"{node}/pivot_forces", self._on_chunk, stream_qos)
         n.create_subscription(BrakeState, f"{node}/state", self._on_state, stream_qos)
         n.create_subscription(JointState, f"{node}/joint_states", self.rx.joints.append, stream_qos)

@@ -197,7 +197,7 @@ class BrakeSimNode(Node):
         # canonical topic -> (publisher, the topic under the name this node resolved)
         self._outputs: dict[Topic, tuple] = {}
         for topic in stream.TOPICS:
-            if topic.published:
+            if topic.published and (topic is not stream.MEASURED or self._publish_measured):
                 pub = self.create_publisher(
                     message_class(topic.type_name), topic.relative, qos.for_topic(topic)
                 )

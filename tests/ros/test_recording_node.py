@@ -151,11 +151,13 @@ def test_live_equals_offline_for_every_scheme(tmp_path, method):
 
 def test_the_recording_holds_the_qos_the_node_offers(tmp_path):
     """Each recorded channel's offered_qos_profiles equals what the running node's
-    publisher offers, as DDS discovery reports it to another participant."""
+    publisher offers, as DDS discovery reports it to another participant (every topic:
+    ~/measured switched on)."""
     path = tmp_path / "rec.mcap"
     domain = domain_id_for(47)
     node = NodeProcess.start(
-        ["--scenario", SCENARIO, "--duration", "3", "--exit-at-end", "--record", str(path)],
+        ["--scenario", SCENARIO, "--duration", "3", "--exit-at-end", "--record", str(path),
+         "--ros-args", "-p", "publish_measured:=true"],
         domain_id=domain, log_path=tmp_path / "node.log",
     )  # fmt: skip
     context = rclpy.context.Context()
