@@ -189,7 +189,7 @@ def run_parameter_specs() -> list[ParamSpec]:
             "Run the scenario's sensors (noise, dynamics, faults; seeded from the run's seed) "
             "and publish what they measure on ~/measured (MeasuredChunk), with each "
             "pivot-force chunk. Off by default: the sensors cost about 0.8 ms of CPU per "
-            "10 ms chunk, some 20 % more than the node without them. " + fixed,
+            "10 ms chunk, a third more CPU than the node without them. " + fixed,
         ),
         ParamSpec(
             "diagnostics_period_s", 1.0, "Wall-time period of /diagnostics (s).", (0.05, 60.0)
