@@ -61,6 +61,7 @@ MAX_HISTORY_BYTES = 2 * 1024**3
 HISTORY_FORMATS = {
     ".npz": "numpy; pandas via pd.DataFrame(dict(np.load(f)))",
     ".csv": "comma-separated with a header line",
+    ".parquet": "Apache Parquet: samples and the scenario's measured sensor channels",
 }
 
 
@@ -258,7 +259,17 @@ def _write_history(job: SimulateJob, result: RunResult) -> None:
     }
     with job.atomic("--out") as partial:
         try:
-            if path.suffix == ".npz":
+            if path.suffix == ".parquet":
+                from brake_sim_ros.datasets import parquet
+                from brake_sim_ros.stream.build import sensor_bank_for
+
+                meta["seed"] = scenario.seed
+                meta["duration_s"] = job.duration_s
+                table = parquet.history_table(
+                    result.samples, sensor_bank_for(scenario), {**meta, "columns": "units in names"}
+                )
+                parquet.write_history(partial, table)
+            elif path.suffix == ".npz":
                 with open(partial, "wb") as f:
                     np.savez_compressed(f, **columns, metadata=np.array(json.dumps(meta)))
             else:
@@ -430,9 +441,28 @@ def cmd_validate(args: argparse.Namespace) -> int:
 def cmd_scenarios(args: argparse.Namespace) -> int:
     from brake_sim_ros.scenarios import builtin_names, load_scenario
 
+    if args.channels is not None:
+        print(channels_text(load_scenario(args.channels)))
+        return 0
     for name in builtin_names():
         print(f"{name:24s} {load_scenario(name).description}")
     return 0
+
+
+def channels_text(scenario: Scenario) -> str:
+    """The measured series of ``scenario``'s sensors: name, unit, rate, what and where,
+    the transducer class and any sensor faults, a line each."""
+    rate = scenario.sample_rate_hz
+    lines = [f"scenario {scenario.name}: sensors at {rate:g} Hz samples (unit, rate, kind)"]
+    for c in scenario.sensors.channels:
+        where = f"{c.location} {c.axis}".strip()
+        faults = ", ".join(f"{f.kind} from {f.onset_s:g} s" for f in c.faults) or "no faults"
+        for name in c.output_names:
+            lines.append(
+                f"  {name:28s} {c.unit:6s} {rate / c.decimation(rate):9g} Hz  {c.kind} at"
+                f" {where}, {c.transducer.name}; {faults}"
+            )
+    return "\n".join(lines)
 
 
 # --- bench ---------------------------------------------------------------------------
@@ -529,7 +559,11 @@ def build_parser() -> argparse.ArgumentParser:
         " file; never a link, never the scenario file), each written whole or not at all.",
     )
     p.add_argument("scenario", help="built-in scenario name or path to a .toml file")
-    p.add_argument("--out", help="write the full time history (.npz or .csv)")
+    p.add_argument(
+        "--out",
+        help="write the full time history (.npz, .csv, or .parquet with the measured sensor"
+        " channels)",
+    )
     p.add_argument(
         "--duration",
         type=float,
@@ -590,6 +624,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_validate)
 
     p = sub.add_parser("scenarios", help="list the built-in scenarios")
+    p.add_argument(
+        "--channels",
+        metavar="NAME",
+        help="list the measured sensor channels of scenario NAME (built-in or .toml), with"
+        " units and rates",
+    )
     p.set_defaults(func=cmd_scenarios)
 
     p = sub.add_parser(

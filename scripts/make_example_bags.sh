@@ -5,6 +5,6 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 SIM=.venv/bin/brake-sim
 for scenario in symmetric case1_left_pivot_out case5_left_tilted; do
-  "$SIM" simulate "$scenario" --quiet --mcap "bags/$scenario.mcap"
+  "$SIM" simulate "$scenario" --quiet --overwrite --mcap "bags/$scenario.mcap"
 done
 ls -l bags/*.mcap

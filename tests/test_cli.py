@@ -238,3 +238,71 @@ def test_node_overwrite_replaces_an_existing_recording_path(tmp_path):
     existing.write_bytes(b"old")
     args = _parse_cli(["--record", str(existing), "--overwrite"], "brake-sim node")
     assert args.record == str(existing)
+
+
+def test_simulate_parquet_holds_samples_and_the_measured_channels(tmp_path):
+    """``--out run.parquet``: read back by pyarrow, every sample, the measured channels
+    with units in their names, the same bits as the stream's ~/measured, and the run's
+    parameters and seed in the file's metadata."""
+    pq = pytest.importorskip("pyarrow.parquet")
+    out = tmp_path / "run.parquet"
+    r = _cli("simulate", "symmetric", "--duration", "0.2", "--out", str(out), "--quiet")
+    assert r.returncode == 0, r.stderr
+    table = pq.read_table(out)
+    n = round(0.2 * 25_600)
+    assert table.num_rows == n
+    np.testing.assert_array_equal(table["sample_index"].to_numpy(), np.arange(n))
+    assert table["left_pivot_fx_n"].type == "double"
+    scenario = load_scenario("symmetric")
+    meta = json.loads(table.schema.metadata[b"brake_sim"])
+    assert meta["seed"] == scenario.seed and meta["scenario"] == "symmetric"
+    assert meta["sample_rate_hz"] == 25_600.0 and meta["fault_bits"]["dropout"] == 4
+    field = table.schema.field("measured:line_pressure [bar]")
+    assert field.metadata[b"unit"] == b"bar" and field.metadata[b"rate_hz"] == b"25600.0"
+    pytest.importorskip("brake_sim_msgs", reason="ROS interfaces not built")
+    from brake_sim_ros import stream
+    from brake_sim_ros.stream.offline import StreamSettings, offline_messages
+
+    sent: dict[str, list[float]] = {}
+    messages = offline_messages(
+        scenario, duration_s=0.2, settings=StreamSettings(publish_measured=True)
+    )
+    for topic, msg, _ns in messages:
+        if topic is stream.MEASURED:
+            start = 0
+            for name, unit, count in zip(
+                msg.channel_names, msg.units, msg.channel_sample_counts, strict=True
+            ):
+                sent.setdefault(f"measured:{name} [{unit}]", []).extend(
+                    msg.values[start : start + count]
+                )
+                start += count
+    assert sent and all(name in table.column_names for name in sent)
+    for name, values in sent.items():
+        assert table[name].to_numpy().tobytes() == np.asarray(values).tobytes(), name
+
+
+def test_a_slower_channel_is_null_between_its_samples():
+    pytest.importorskip("pyarrow")
+    from brake_sim_ros.datasets.parquet import history_table
+    from brake_sim_ros.model.sensors import SensorBank, SensorSet, accelerometer
+
+    scenario = load_scenario("symmetric")
+    run = run_scenario(scenario, duration_s=0.05)
+    slow = accelerometer("slow_x", "backing_plate", "x", rate_hz=6400.0)
+    bank = SensorBank(SensorSet(channels=(slow,)), scenario.sample_rate_hz, seed=3)
+    table = history_table(run.samples, bank, {"seed": 3})
+    values = table["measured:slow_x [m/s^2]"]
+    assert values.null_count == len(run.samples) - len(run.samples) // 4
+    assert values.to_pylist()[0] is not None and values.to_pylist()[1] is None
+    assert table["fault:slow_x"].null_count == values.null_count
+
+
+def test_scenarios_lists_the_channels_with_units_and_rates():
+    r = _cli("scenarios", "--channels", "symmetric")
+    assert r.returncode == 0, r.stderr
+    lines = {line.split()[0]: line for line in r.stdout.splitlines()[1:]}
+    assert "m/s^2" in lines["backing_plate_accel_x"] and "25600 Hz" in lines["line_pressure"]
+    assert "bar" in lines["line_pressure"] and "wheel_speed_index" in lines
+    r = _cli("scenarios", "--channels", "no_such")
+    assert r.returncode != 0 and "unknown scenario" in r.stderr

@@ -169,7 +169,7 @@ REFUSED_OUTPUTS = {
     "/dev/null": (["--out", "/dev/null"], "exists and is not a regular file"),
     "a FIFO": (["--out", "{tmp}/fifo.npz"], "exists and is not a regular file"),
     "/proc takes no file": (["--out", "/proc/brake-sim-test.npz"], "--out /proc/brake"),
-    "parquet": (["--out", "{tmp}/x.parquet"], "allowed a path ending in .npz"),
+    "parquet-like": (["--out", "{tmp}/x.pq"], "allowed a path ending in .npz"),
     "upper-case suffix": (["--out", "{tmp}/x.NPZ"], "allowed a path ending in .npz"),
     "no suffix": (["--out", "{tmp}/x"], "allowed a path ending in .npz"),
     "mcap not .mcap": (["--mcap", "{tmp}/x.npz"], "--mcap {tmp}/x.npz: allowed a path ending"),
@@ -342,7 +342,7 @@ HOSTILE = {
     "--out": st.one_of(
         _path(["missing/", "/proc/", "/sys/", *_GOOD_DIRS], _GOOD_NAMES, [".npz"]),
         _path(_GOOD_DIRS, ["exists", "link", "dangling", "fifo", "s"], [".npz", ".csv"]),
-        _path(_GOOD_DIRS, _GOOD_NAMES, [".mcap", ".parquet", "", ".NPZ", ".npz/", ".toml"]),
+        _path(_GOOD_DIRS, _GOOD_NAMES, [".mcap", ".pq", "", ".NPZ", ".npz/", ".toml"]),
         st.sampled_from(["/dev/full", "/dev/null", ".", "dir", "run.rrd"]),
     ),
     "--rerun": st.one_of(

@@ -35,9 +35,10 @@ ALLOWED: dict[str, set[str]] = {
     "ros": _STREAM,  # never recording or viz: the node is a leaf adapter
     "recording": _STREAM,
     "viz": _STREAM | {"recording"},  # the viewer reads MCAP recordings
+    "datasets": _STREAM,  # tables of runs (Parquet)
     "studies": _STREAM | _ADAPTERS,
     "app": _STREAM | _ADAPTERS,
-    "cli": _STREAM | _ADAPTERS | {"app", "studies"},
+    "cli": _STREAM | _ADAPTERS | {"app", "studies", "datasets"},
 }
 
 

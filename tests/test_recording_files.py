@@ -50,6 +50,7 @@ from brake_sim_ros.stream.offline import offline_messages  # noqa: E402
 
 SCENARIO = "case7_left_actuation"
 DURATION_S = 2.5
+RUN_ID = "5b1c0e7a9d2f4c6e8a0b1d3f5e7c9a2b"  # given to both: the stream and its recording
 RERUN = Path(sys.executable).with_name("rerun")
 
 
@@ -61,14 +62,14 @@ def scenario():
 @pytest.fixture(scope="module")
 def source(scenario):
     """The stream as produced: (topic, message, time ns), in order."""
-    return list(offline_messages(scenario, duration_s=DURATION_S))
+    return list(offline_messages(scenario, duration_s=DURATION_S, run_id=RUN_ID))
 
 
 @pytest.fixture(scope="module", params=["zstd", "none"])
 def recording(request, scenario, tmp_path_factory) -> Path:
     path = tmp_path_factory.mktemp("rec") / f"{SCENARIO}_{request.param}.mcap"
     options = RecordingOptions(compression=request.param, durable=False)
-    record_offline(scenario, path, duration_s=DURATION_S, options=options)
+    record_offline(scenario, path, duration_s=DURATION_S, options=options, run_id=RUN_ID)
     return path
 
 
@@ -192,6 +193,7 @@ def test_metadata_explains_the_recording(recording, scenario):
     assert records[metadata.SCENARIO]["name"] == scenario.name
     run = records[metadata.RUN]
     assert run["mode"] == "offline"
+    assert run["run_id"] == RUN_ID
     assert ast.literal_eval(run["seed"]) == scenario.seed
     stepper = stepper_for(scenario)
     assert ast.literal_eval(run["sample_rate_hz"]) == scenario.sample_rate_hz == 25_600.0
@@ -414,3 +416,34 @@ def test_record_offline_feeds_other_sinks_the_same_stream(tmp_path: Path):
             (c.topic, m.log_time) for _s, c, m in make_reader(f).iter_messages(log_time_order=False)
         ]
     assert sink.seen == recorded
+
+
+def test_measured_channels_are_recorded_and_read_back_checked(tmp_path: Path):
+    """With publish_measured the MCAP holds ~/measured; the project's checked reader
+    accepts its payloads and decodes them to what the stream sent, value for value."""
+    from brake_sim_ros.recording import cdr
+    from brake_sim_ros.recording.reader import open_recording
+    from brake_sim_ros.stream.offline import StreamSettings
+
+    scenario = load_scenario("symmetric")
+    settings = StreamSettings(publish_measured=True)
+    path = tmp_path / "measured.mcap"
+    record_offline(scenario, path, duration_s=0.2, settings=settings, run_id=RUN_ID)
+    sent = [
+        m
+        for t, m, _ns in offline_messages(
+            scenario, duration_s=0.2, settings=settings, run_id=RUN_ID
+        )
+        if t is stream.MEASURED
+    ]
+    recording = open_recording(path)
+    decode = cdr.decoder(stream.MEASURED.type_name)
+    got = [decode(m.data) for m in recording.messages(topics=[stream.MEASURED.name])]
+    assert len(got) == len(sent) == 20
+    for a, b in zip(got, sent, strict=True):
+        assert list(a.channel_names) == list(b.channel_names)
+        assert list(a.units) == list(b.units)
+        np.testing.assert_array_equal(np.asarray(a.values), np.asarray(b.values))
+        assert bytes(a.fault_labels) == bytes(b.fault_labels)
+        assert list(a.decimation) == list(b.decimation)
+        assert a.first_sample_index == b.first_sample_index

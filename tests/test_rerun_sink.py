@@ -303,3 +303,50 @@ def test_view_refuses_what_it_cannot_show(tmp_path: Path, capsys, monkeypatch):
     write_mcap(good, "symmetric", 0.01, with_model=True)
     assert main(["view", str(good)]) == 2
     assert "use --save FILE.rrd" in capsys.readouterr().err
+
+
+def test_measured_channels_are_plotted_with_their_sensor_faults(tmp_path: Path):
+    """Every measured value at its sample's time under measured/<channel> (a channel at a
+    quarter of the rate too), and an event where a sensor fault starts and ends."""
+    import dataclasses
+
+    from brake_sim_ros.model.sensor_faults import SensorFault
+    from brake_sim_ros.model.sensors import SensorSet, accelerometer, default_channels
+
+    slow = accelerometer("slow_x", "backing_plate", "x", rate_hz=SAMPLE_RATE_HZ / 4)
+    pressure = next(c for c in default_channels() if c.kind == "line_pressure")
+    faulty = pressure.with_faults(SensorFault("dropout", 0.1, duration_s=0.05))
+    base = load_scenario("symmetric")
+    scenario = dataclasses.replace(base, sensors=SensorSet(channels=(slow, faulty)))
+    path = tmp_path / "measured.rrd"
+    rec = rr.RecordingStream("brake_sim_test")
+    rec.save(path)
+    sink = RerunSink(rec, params=scenario.setup.params)
+    sent: dict[str, list[float]] = {"slow_x": [], "line_pressure": []}
+    measured = StreamSettings(publish_measured=True)
+    for topic, msg, ns in offline_messages(scenario, duration_s=0.3, settings=measured):
+        sink.write(topic, msg, ns)
+        if topic is stream.MEASURED:
+            start = 0
+            for name, count in zip(msg.channel_names, msg.channel_sample_counts, strict=True):
+                sent[name] += list(msg.values[start : start + count])
+                start += count
+    sink.close()
+    verify(path)
+    c = read(path)
+    n = round(0.3 * SAMPLE_RATE_HZ)
+    np.testing.assert_array_equal(
+        c.times(f"{E.MEASURED}/slow_x"), [stamp(k) for k in range(0, n, 4)]
+    )
+    np.testing.assert_array_equal(
+        c.times(f"{E.MEASURED}/line_pressure"), [stamp(k) for k in range(n)]
+    )
+    for name, values in sent.items():
+        got = c.values(f"{E.MEASURED}/{name}")
+        np.testing.assert_array_equal(np.sort(got), np.sort(np.asarray(values)))  # NaN last
+    dropped = round(0.05 * SAMPLE_RATE_HZ)  # [0.1 s, 0.15 s]: both ends sampled
+    assert np.isnan(sent["line_pressure"]).sum() in (dropped, dropped + 1)
+    events = c.texts[E.EVENTS]
+    assert "sensor line_pressure: fault dropout" in events
+    assert "sensor line_pressure: fault none" in events
+    assert not any("slow_x: fault" in e for e in events)

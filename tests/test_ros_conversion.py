@@ -7,12 +7,14 @@ where they are not installed.
 from __future__ import annotations
 
 import math
+import uuid
 
 import numpy as np
 import pytest
 
 pytest.importorskip("brake_sim_msgs", reason="brake_sim_msgs not built (run scripts/setup.sh)")
 
+from brake_sim_ros import stream
 from brake_sim_ros.model.defects import Defects, ShoeDefect
 from brake_sim_ros.model.layout import COL, N_COLUMNS
 from brake_sim_ros.model.parameters import BrakeParameters
@@ -26,6 +28,7 @@ from brake_sim_ros.ros.diagnostics import (
 from brake_sim_ros.scenarios import load_scenario
 from brake_sim_ros.solvers.fixed_step import FixedStepStepper
 from brake_sim_ros.stream import conversion
+from brake_sim_ros.stream.offline import offline_messages
 
 DT = 4e-5
 
@@ -149,8 +152,9 @@ def test_defect_state_is_the_ground_truth_in_force():
         defects=defects,
         initial_angles_deg=(-2.0, 0.0),
         ns=1_500_000_000,
+        run_id="abc",
     )
-    assert msg.scenario == "mine" and not msg.healthy
+    assert msg.scenario == "mine" and not msg.healthy and msg.run_id == "abc"
     nominal = BrakeParameters().shoe.pivot_radius_m
     assert msg.left_pivot_radius_m == pytest.approx(nominal * 1.03)
     assert msg.right_pivot_radius_m == nominal
@@ -165,9 +169,30 @@ def test_defect_state_is_the_ground_truth_in_force():
         defects=Defects(left=ShoeDefect(initial_angle_deg=-1.0)),
         initial_angles_deg=(0.0, 0.0),
         ns=0,
+        run_id="abc",
     )
     assert pending.healthy and pending.left_initial_angle_rad == 0.0
     assert list(pending.active_defects) == []
+
+
+def test_every_offline_run_has_its_own_run_id_in_all_its_ground_truth():
+    """A run id is 32 hex digits (a UUID4), one per run, in its DefectState and every
+    ContactEvent; a given one is used as it is."""
+    scenario = load_scenario("symmetric")
+    duration = 0.3  # the first bounces: ContactEvents
+
+    def run_ids(**kwargs) -> set[str]:
+        messages = offline_messages(scenario, duration_s=duration, **kwargs)
+        truth = [m for t, m, _ in messages if t in (stream.DEFECTS, stream.CONTACT_EVENTS)]
+        assert len(truth) > 10 and type(truth[0]).__name__ == "DefectState"
+        return {m.run_id for m in truth}
+
+    (first,), (second,) = run_ids(), run_ids()
+    assert first != second
+    for run_id in (first, second):
+        assert len(run_id) == 32 and uuid.UUID(hex=run_id).version == 4
+        assert run_id == uuid.UUID(hex=run_id).hex  # lower case, no dashes
+    assert run_ids(run_id="given") == {"given"}
 
 
 def view(**changes) -> RunView:
@@ -190,6 +215,7 @@ def view(**changes) -> RunView:
         step_limit_force_n=2600.0,
         max_actuation_force_n=2600.0,
         seed=0,
+        run_id="0123456789abcdef0123456789abcdef",
     )
     values.update(changes)
     return RunView(**values)
@@ -253,3 +279,47 @@ def test_summary_is_one_paragraph_with_the_figures():
         "real-time factor achieved 1.000",
     ):
         assert fragment in text
+
+
+def _measured(scenario, **settings) -> dict[str, np.ndarray]:
+    """Every measured series of 0.2 s of ``scenario``'s stream, concatenated over chunks."""
+    from brake_sim_ros.stream.offline import StreamSettings
+
+    out: dict[str, list[float]] = {}
+    labels: dict[str, list[int]] = {}
+    settings = {"publish_measured": True, **settings}
+    messages = offline_messages(scenario, duration_s=0.2, settings=StreamSettings(**settings))
+    for topic, msg, _ns in messages:
+        if topic is not stream.MEASURED:
+            continue
+        assert len(msg.values) == len(msg.fault_labels) == sum(msg.channel_sample_counts)
+        start = 0
+        for name, count in zip(msg.channel_names, msg.channel_sample_counts, strict=True):
+            out.setdefault(name, []).extend(msg.values[start : start + count])
+            labels.setdefault(name, []).extend(msg.fault_labels[start : start + count])
+            start += count
+    return {n: np.asarray(v) for n, v in out.items()} | {
+        f"{n}/labels": np.asarray(v) for n, v in labels.items()
+    }
+
+
+def test_measured_stream_same_seed_same_bits_other_seed_other_noise():
+    """The sensors run in the stream: one seed gives the same bits whatever the chunking
+    (the bank carries its state between blocks), another seed other noise; the measured
+    series cover every sample, with the scenario's sensors' names and units."""
+    import dataclasses
+
+    scenario = load_scenario("symmetric")
+    a = _measured(scenario)
+    b = _measured(scenario, chunk_rate_hz=37.0)  # other chunks: 692 samples, not 256
+    assert a.keys() == b.keys()
+    for name in a:
+        assert a[name].tobytes() == b[name].tobytes(), name
+    n = round(0.2 * scenario.sample_rate_hz)
+    names = [name for c in scenario.sensors.channels for name in c.output_names]
+    assert [k for k in a if "/" not in k] == names
+    assert all(a[name].size == n for name in names)
+    other = _measured(dataclasses.replace(scenario, seed=scenario.seed + 1))
+    assert a["backing_plate_accel_x"].tobytes() != other["backing_plate_accel_x"].tobytes()
+    assert a["wheel_speed"].tobytes() == other["wheel_speed"].tobytes()  # no noise there
+    assert _measured(scenario, publish_measured=False) == {}

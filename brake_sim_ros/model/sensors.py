@@ -612,6 +612,15 @@ class SensorBank:
                 else AnalogPath(c, self.sample_period_s, seed)
             )
 
+    @property
+    def output_decimation(self) -> dict[str, int]:
+        """Scenario samples per sample of each output series (a wheel speed's index series
+        is sampled with it): series k of a block is taken at the sample indices that are
+        multiples of this."""
+        return {
+            name: self.decimation[c.name] for c in self.sensors.channels for name in c.output_names
+        }
+
     def true_value(
         self, channel: SensorChannel, block: SampleBlock, structure: np.ndarray
     ) -> np.ndarray:

@@ -11,14 +11,16 @@ Metadata records (MCAP ``Metadata``; every value a string):
     ``name``, ``source`` (file path or ``<built-in NAME>``), ``toml`` (the scenario file's
     text), ``sha256`` (of that text), ``description``.
 ``brake_sim_run``
-    ``seed``, ``software_version``, ``sample_rate_hz`` and ``sample_period_s`` (the
+    ``run_id`` (of the ground-truth messages at the start of the recording; a live run
+    makes a new one at each ~/reset, which its DefectState then carries), ``seed``,
+    ``software_version``, ``sample_rate_hz`` and ``sample_period_s`` (the
     scenario's), the stepper at the start of the recording (``scheme``, ``preset``,
     ``physics_step_s``, ``substeps_per_sample``, ``step_limit_s``; a live run may re-pick
     the substeps later, which its /diagnostics and log say), ``mode`` (``live`` or
     ``offline``), ``duration_s``, the stream settings (``chunk_rate_hz``,
-    ``state_rate_hz``, ``publish_clock``), ``time_base`` and ``model_note``; a live run
-    adds its node name and ``real_time_factor``; values are ``repr()`` of the Python value
-    except strings, which are given as they are.
+    ``state_rate_hz``, ``publish_clock``, ``publish_measured``), ``time_base`` and
+    ``model_note``; a live run adds its node name and ``real_time_factor``; values are
+    ``repr()`` of the Python value except strings, which are given as they are.
 ``brake_sim_ros_parameters`` (live runs)
     every ROS parameter of the node at the start of the recording, ``repr()`` of its value.
 ``rosbag2`` (written when the file is closed)
@@ -105,6 +107,7 @@ def scenario_record(scenario: Scenario) -> dict[str, str]:
 def run_record(
     *,
     mode: str,
+    run_id: str,
     seed: int,
     scenario: Scenario,
     stepper: FixedStepStepper,
@@ -112,6 +115,7 @@ def run_record(
     chunk_rate_hz: float,
     state_rate_hz: float,
     publish_clock: bool,
+    publish_measured: bool,
     extra: Mapping[str, Any] | None = None,
 ) -> dict[str, str]:
     """The ``brake_sim_run`` record (see the module doc); ``stepper`` as it is now."""
@@ -119,6 +123,7 @@ def run_record(
         raise ValueError(f"mode={mode!r}: allowed 'live' or 'offline'")
     values: dict[str, Any] = {
         "mode": mode,
+        "run_id": run_id,
         "seed": seed,
         "software_version": software_version(),
         "sample_rate_hz": scenario.sample_rate_hz,
@@ -132,6 +137,7 @@ def run_record(
         "chunk_rate_hz": chunk_rate_hz,
         "state_rate_hz": state_rate_hz,
         "publish_clock": publish_clock,
+        "publish_measured": publish_measured,
         "time_base": TIME_BASE,
         "model_note": (
             "brake_sim_model holds the model at the start of the recording; changes made"

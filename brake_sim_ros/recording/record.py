@@ -17,7 +17,7 @@ from brake_sim_ros import stream
 from brake_sim_ros.recording import metadata
 from brake_sim_ros.recording.writer import McapRecorder, RecordingOptions
 from brake_sim_ros.scenarios import Scenario
-from brake_sim_ros.stream import MessageSink
+from brake_sim_ros.stream import MessageSink, conversion
 from brake_sim_ros.stream import parameters as ros_params
 from brake_sim_ros.stream.build import stepper_for
 from brake_sim_ros.stream.offline import StreamSettings, offline_messages
@@ -43,8 +43,9 @@ class RecordedNode(Protocol):
     def get_fully_qualified_name(self) -> str: ...
 
 
-def _custom_data(scenario: Scenario, seed: int, mode: str) -> dict[str, str]:
+def _custom_data(scenario: Scenario, seed: int, mode: str, run_id: str) -> dict[str, str]:
     return {
+        "brake_sim_run_id": run_id,
         "brake_sim_scenario": scenario.name,
         "brake_sim_seed": str(seed),
         "brake_sim_mode": mode,
@@ -82,15 +83,21 @@ def record_offline(
     options: RecordingOptions | None = None,
     settings: StreamSettings | None = None,
     also: Sequence[MessageSink] = (),
+    run_id: str | None = None,
 ) -> OfflineRecording:
     """Write the node's stream for ``scenario`` (minus /diagnostics) to ``path``, as fast as
     the CPU goes.
+
+    ``run_id`` is the id in the ground-truth messages and the ``brake_sim_run`` record:
+    default a fresh one; give a live run's (its recording's ``brake_sim_run`` record says
+    it) to write the same bytes as that run.
 
     Raises:
         RecordingError: the file cannot be written (nothing else is left half done: the
             partial file holds every chunk written before the failure).
     """
     settings = settings or StreamSettings()
+    run_id = conversion.new_run_id() if run_id is None else run_id
     duration = scenario.duration_s if duration_s is None else duration_s
     stepper = stepper_for(scenario)
     dt = stepper.sample_period_s
@@ -100,6 +107,7 @@ def record_offline(
         metadata.SCENARIO: metadata.scenario_record(scenario),
         metadata.RUN: metadata.run_record(
             mode="offline",
+            run_id=run_id,
             seed=scenario.seed,
             scenario=scenario,
             stepper=stepper,
@@ -107,9 +115,12 @@ def record_offline(
             chunk_rate_hz=settings.chunk_rate_hz,
             state_rate_hz=settings.state_rate_hz,
             publish_clock=settings.publish_clock,
+            publish_measured=settings.publish_measured,
         ),
     }
-    topics = [t for t in stream.TOPICS if t not in (stream.DIAGNOSTICS, stream.ACTUATION)]
+    live_only = (stream.DIAGNOSTICS, stream.ACTUATION)
+    off = () if settings.publish_measured else (stream.MEASURED,)
+    topics = [t for t in stream.TOPICS if t not in live_only + off]
     cpu0, wall0 = time.process_time(), time.perf_counter()
     samples = 0
     recorder = McapRecorder(
@@ -117,11 +128,11 @@ def record_offline(
         records=records,
         options=options or RecordingOptions(durable=False),
         topics=topics,
-        custom_data=_custom_data(scenario, scenario.seed, "offline"),
+        custom_data=_custom_data(scenario, scenario.seed, "offline", run_id),
     )
     try:
         messages = offline_messages(
-            scenario, duration_s=duration, settings=settings, stepper=stepper
+            scenario, duration_s=duration, settings=settings, stepper=stepper, run_id=run_id
         )
         for topic, msg, ns in messages:
             recorder.write(topic, msg, ns)
@@ -168,6 +179,7 @@ def node_recorder(
         metadata.SCENARIO: metadata.scenario_record(scenario),
         metadata.RUN: metadata.run_record(
             mode="live",
+            run_id=view.run_id,
             seed=view.seed,
             scenario=scenario,
             stepper=node.stepper,
@@ -175,6 +187,7 @@ def node_recorder(
             chunk_rate_hz=values["chunk_rate_hz"],
             state_rate_hz=values["state_rate_hz"],
             publish_clock=values["publish_clock"],
+            publish_measured=values["publish_measured"],
             extra={
                 "node": node.get_fully_qualified_name(),
                 "real_time_factor": values["real_time_factor"],
@@ -187,7 +200,7 @@ def node_recorder(
         path,
         records=records,
         options=options,
-        custom_data=_custom_data(scenario, view.seed, "live"),
+        custom_data=_custom_data(scenario, view.seed, "live", view.run_id),
     )
 
 

@@ -17,6 +17,7 @@ import time
 from brake_sim_ros import stream
 from brake_sim_ros.analysis.contact_events import ContactEventDetector
 from brake_sim_ros.errors import BrakeSimError
+from brake_sim_ros.model.sensors import SensorBank
 from brake_sim_ros.model.trajectory import SampleBlock
 from brake_sim_ros.ros import qos
 from brake_sim_ros.ros.messages import message_class
@@ -31,6 +32,7 @@ from brake_sim_ros.stream import conversion
 
 _REPEATS = 5
 _STATE_ROWS = 16
+_BUDGET_RUN_ID = "0" * 32  # the messages priced are never seen: any id of the right size
 
 
 def measure_stepping(
@@ -77,16 +79,20 @@ def _median_cost(action, repeats: int = _REPEATS) -> float:
     return statistics.median(costs)
 
 
-def measure_publishing(node, block: SampleBlock, step_per_sample_s: float) -> PipelineCosts:
+def measure_publishing(
+    node, block: SampleBlock, step_per_sample_s: float, sensors: SensorBank | None = None
+) -> PipelineCosts:
     """Publishing costs measured on hidden publishers of ``node``, with ``block``.
 
     The whole per-chunk pipeline (:func:`~brake_sim_ros.stream.block_messages`: the chunk,
-    the contact events the block holds, one state row, the clock) is timed on ``block``;
+    with ``sensors`` (a bank used for this only) the measured chunk, the contact events
+    the block holds, one state row, the clock) is timed on ``block``;
     a state row (BrakeState + JointState) and a one-sample chunk separately, so that the
     cost can be scaled to other chunk sizes and state rates.
     """
     topics = (
         stream.PIVOT_FORCES,
+        stream.MEASURED,
         stream.CONTACT_EVENTS,
         stream.STATE,
         stream.JOINT_STATES,
@@ -104,7 +110,12 @@ def measure_publishing(node, block: SampleBlock, step_per_sample_s: float) -> Pi
         def pipeline(b: SampleBlock) -> None:
             detector = ContactEventDetector()
             for topic, msg, _ns in stream.block_messages(
-                b, len(b), with_clock=True, contact_events=detector
+                b,
+                len(b),
+                with_clock=True,
+                contact_events=detector,
+                run_id=_BUDGET_RUN_ID,
+                sensors=sensors,
             ):
                 pubs[topic].publish(msg)
 

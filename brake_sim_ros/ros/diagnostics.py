@@ -95,6 +95,7 @@ class RunView:
     step_limit_force_n: float  # the actuation force the step limit is computed for
     max_actuation_force_n: float
     seed: int
+    run_id: str  # of the run in progress (changes at each ~/reset unless fixed)
 
 
 def _level(view: RunView, stats: RunStats, new_misses: int) -> tuple[bytes, str]:
@@ -156,6 +157,7 @@ def diagnostic_array(
         "step_limit_force_n": f"{view.step_limit_force_n:g}",
         "max_actuation_force_n": f"{view.max_actuation_force_n:g}",
         "seed": str(view.seed),
+        "run_id": view.run_id,
         "failure": view.message if view.state == "failed" else "",
     }
     status = DiagnosticStatus(
@@ -183,7 +185,7 @@ def summary(view: RunView, stats: RunStats) -> str:
     if stats.sink_failures:
         failed += f" {stats.sink_failures} recorder/viewer failure(s): see the log."
     return (
-        f"brake_sim: scenario '{view.scenario}' ended at simulated time"
+        f"brake_sim: run {view.run_id}, scenario '{view.scenario}' ended at simulated time"
         f" {view.sim_time_s:.4f} s ({view.sample_index} samples at {view.sample_rate_hz:g} Hz);"
         f" published {stats.samples_published} samples in {stats.chunks_published} chunks and"
         f" {stats.states_published} states; commands accepted {stats.commands_accepted},"

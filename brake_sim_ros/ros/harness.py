@@ -25,6 +25,7 @@ from brake_sim_msgs.msg import (
     BrakeState,
     ContactEvent,
     DefectState,
+    MeasuredChunk,
     PivotForceChunk,
 )
 from brake_sim_msgs.srv import ResetSimulation, StepSimulation
@@ -116,6 +117,7 @@ class Received:
     state_times: list[float] = field(default_factory=list)
     joints: list[JointState] = field(default_factory=list)
     contact_events: list[ContactEvent] = field(default_factory=list)
+    measured: list[MeasuredChunk] = field(default_factory=list)
     defects: list[DefectState] = field(default_factory=list)
     clocks: list[Clock] = field(default_factory=list)
     diagnostics: list[DiagnosticArray] = field(default_factory=list)
@@ -151,6 +153,7 @@ class SimClient:
         self.rx = Received()
         self.keep_chunks = keep_chunks
         self.chunk_count = 0
+        self.measured_count = 0
         self.sample_count = 0
         self.gaps = 0
         self._next_index: int | None = None
@@ -160,10 +163,11 @@ class SimClient:
             f"{node}/state",
             f"{node}/joint_states",
             f"{node}/contact_events",
-        )
+        )  # ~/measured too, but only when the node's publish_measured is on: not waited for
         n.create_subscription(PivotForceChunk, f"{node}/pivot_forces", self._on_chunk, stream_qos)
         n.create_subscription(BrakeState, f"{node}/state", self._on_state, stream_qos)
         n.create_subscription(JointState, f"{node}/joint_states", self.rx.joints.append, stream_qos)
+        n.create_subscription(MeasuredChunk, f"{node}/measured", self._on_measured, stream_qos)
         # reliable like the node's publisher: every label matters (see stream.topics.EVENTS_QOS)
         n.create_subscription(
             ContactEvent,
@@ -204,6 +208,11 @@ class SimClient:
         if self.keep_chunks:
             self.rx.chunks.append(msg)
             self.rx.chunk_times.append(now)
+
+    def _on_measured(self, msg: MeasuredChunk) -> None:
+        self.measured_count += 1
+        if self.keep_chunks:
+            self.rx.measured.append(msg)
 
     def _on_state(self, msg: BrakeState) -> None:
         self.rx.states.append(msg)

@@ -7,6 +7,8 @@ recording nor viz.
 
 Topics (node name ``brake_sim``; ``~`` = ``/brake_sim``; QoS in :mod:`.qos`):
     ~/pivot_forces   brake_sim_msgs/PivotForceChunk   every physics sample, in chunks
+    ~/measured       brake_sim_msgs/MeasuredChunk     the scenario's sensors, the same samples
+                                                      (publish_measured)
     ~/state          brake_sim_msgs/BrakeState        at state_rate_hz (simulated)
     ~/joint_states   sensor_msgs/JointState           flywheel, drum, left_shoe, right_shoe
     ~/contact_events brake_sim_msgs/ContactEvent      every contact onset and separation of
@@ -52,6 +54,7 @@ from rclpy.parameter import Parameter
 from brake_sim_ros import stream
 from brake_sim_ros.analysis.contact_events import ContactEventDetector
 from brake_sim_ros.errors import BrakeSimError, ParameterError, ScenarioError
+from brake_sim_ros.model.sensors import SensorBank
 from brake_sim_ros.model.trajectory import BrakeSetup, SampleBlock
 from brake_sim_ros.ros import qos
 from brake_sim_ros.ros.budget import measure_publishing, measure_stepping
@@ -76,7 +79,7 @@ from brake_sim_ros.solvers.realtime import (
 )
 from brake_sim_ros.stream import MessageSink, Topic, conversion
 from brake_sim_ros.stream import parameters as ros_params
-from brake_sim_ros.stream.build import stepper_for
+from brake_sim_ros.stream.build import sensor_bank_for, stepper_for
 
 NODE_NAME = "brake_sim"
 MAX_LAG_S = 0.5  # wall seconds of backlog that are caught up (see pacing)
@@ -131,6 +134,9 @@ class BrakeSimNode(Node):
         # the operator's choice (command line or parameter): any file, not a request
         self.scenario: Scenario = load_scenario(self._param("scenario"))
         self._seed = self.scenario.seed
+        # the run id of the ground truth: the parameter's, or a fresh one per run (reset)
+        self._run_id_fixed = ros_params.check_run_id(self._param("run_id"))
+        self.run_id = self._run_id_fixed or conversion.new_run_id()
         self._duration_explicit = self._param("duration_s") > 0.0
         self._max_force_explicit = self._param("max_actuation_force_n") > 0.0
         self._model_names = self._declare_model(self.scenario)
@@ -149,6 +155,8 @@ class BrakeSimNode(Node):
         params, defects = ros_params.build_model({**values, **implied})
         setup = dataclasses.replace(self.scenario.setup, params=params, defects=defects)
         self._stepper = self._make_stepper(setup, self.scenario, self._param("chunk_rate_hz"))
+        self._publish_measured = bool(self._param("publish_measured"))
+        self._sensors = self._new_sensor_bank()  # carried between blocks, new at each reset
         self._run_initial_angles = self._initial_angles(setup)
         self._double_names = {
             name
@@ -189,7 +197,7 @@ class BrakeSimNode(Node):
         # canonical topic -> (publisher, the topic under the name this node resolved)
         self._outputs: dict[Topic, tuple] = {}
         for topic in stream.TOPICS:
-            if topic.published:
+            if topic.published and (topic is not stream.MEASURED or self._publish_measured):
                 pub = self.create_publisher(
                     message_class(topic.type_name), topic.relative, qos.for_topic(topic)
                 )
@@ -228,7 +236,7 @@ class BrakeSimNode(Node):
             self._emit(stream.CLOCK, conversion.clock(0), 0)
         self._substeps_logged = self._stepper.substeps
         self.get_logger().info(
-            f"scenario '{self.scenario.name}' ({self.scenario.source}):"
+            f"run {self.run_id}, scenario '{self.scenario.name}' ({self.scenario.source}):"
             f" {self._stepper.describe_step()}; max_actuation_force_n"
             f" {self._param('max_actuation_force_n'):g} N, duration {self._duration_s():g} s,"
             f" {self._chunk_samples} samples per chunk"
@@ -272,7 +280,7 @@ class BrakeSimNode(Node):
         except BrakeSimError as exc:
             raise BrakeSimError(f"scenario '{name}': {exc}") from None
         if publishing is None:
-            return measure_publishing(self, block, per_sample)
+            return measure_publishing(self, block, per_sample, self._new_sensor_bank())
         return dataclasses.replace(publishing, step_per_sample_s=per_sample)
 
     def _pipeline_verdict(
@@ -412,6 +420,13 @@ class BrakeSimNode(Node):
             raise BrakeSimError(f"scenario '{scenario.name}': {reason}")
         stepper.advance(0)  # loads the compiled kernel now (ms), not during the first chunk
         return stepper
+
+    def _new_sensor_bank(self) -> SensorBank | None:
+        """The scenario's sensors from sample 0, seeded with the run's seed (None when
+        publish_measured is off), as the offline stream builds them."""
+        if not self._publish_measured:
+            return None
+        return sensor_bank_for(self.scenario, seed=self._seed)
 
     def _max_force_n(self, setup: BrakeSetup) -> float:
         """max_actuation_force_n: as set at start-up, or 2 x the scenario's peak."""
@@ -700,6 +715,8 @@ class BrakeSimNode(Node):
             self._state_stride,
             with_clock=self._publish_clock,
             contact_events=self._contact_events,
+            run_id=self.run_id,
+            sensors=self._sensors,
         )
         for topic, msg, ns in messages:
             self._emit(topic, msg, ns)
@@ -839,8 +856,10 @@ class BrakeSimNode(Node):
             response.message = f"reset refused: internal error ({type(exc).__name__})"
             return response
         self._contact_events.reset()
+        self.run_id = self._run_id_fixed or conversion.new_run_id()
         if seed >= 0:
             self._seed = seed
+        self._sensors = self._new_sensor_bank()
         if self._planner.clear():
             self.stats.commands_dropped += 1
         now = self._wall()
@@ -854,7 +873,8 @@ class BrakeSimNode(Node):
             self._emit(stream.CLOCK, conversion.clock(0), 0)
         response.success = True
         response.message = (
-            f"reset to t = 0 with scenario '{self.scenario.name}' (seed {self._seed})"
+            f"reset to t = 0 with scenario '{self.scenario.name}' (seed {self._seed}),"
+            f" run id {self.run_id}"
         )
         return response
 
@@ -911,6 +931,7 @@ class BrakeSimNode(Node):
             defects=setup.defects,
             initial_angles_deg=self._run_initial_angles,
             ns=ns,
+            run_id=self.run_id,
         )
         self._emit(stream.DEFECTS, msg, ns)
 
@@ -944,6 +965,7 @@ class BrakeSimNode(Node):
             step_limit_force_n=stepper.limit_force_n,
             max_actuation_force_n=float(self._param("max_actuation_force_n")),
             seed=self._seed,
+            run_id=self.run_id,
         )
 
     def _on_diagnostics(self) -> None:

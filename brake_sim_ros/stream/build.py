@@ -7,6 +7,7 @@ sample rate with the same substeps, and give the same numbers for the same scena
 
 from __future__ import annotations
 
+from brake_sim_ros.model.sensors import SensorBank
 from brake_sim_ros.model.trajectory import BrakeSetup
 from brake_sim_ros.scenarios.loader import Scenario
 from brake_sim_ros.solvers.fixed_step import FixedStepStepper
@@ -32,4 +33,13 @@ def stepper_for(scenario: Scenario, *, setup: BrakeSetup | None = None) -> Fixed
         scenario.setup if setup is None else setup,
         scenario.sample_period_s,
         scenario.solver.max_step_s,
+    )
+
+
+def sensor_bank_for(scenario: Scenario, *, seed: int | None = None) -> SensorBank:
+    """The scenario's sensors (``scenario.sensors``) at its sample rate, their noise seeded
+    from ``seed`` (default: the scenario's). The node and the offline stream build their
+    bank here, at start and at each reset, so they measure the same bits."""
+    return SensorBank(
+        scenario.sensors, scenario.sample_rate_hz, scenario.seed if seed is None else seed
     )

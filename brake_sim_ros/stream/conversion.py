@@ -12,11 +12,18 @@ from __future__ import annotations
 import array
 import dataclasses
 import math
+import uuid
 from collections.abc import Callable
 from fractions import Fraction
 
 import numpy as np
-from brake_sim_msgs.msg import BrakeState, ContactEvent, DefectState, PivotForceChunk
+from brake_sim_msgs.msg import (
+    BrakeState,
+    ContactEvent,
+    DefectState,
+    MeasuredChunk,
+    PivotForceChunk,
+)
 from builtin_interfaces.msg import Time
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
@@ -26,6 +33,7 @@ from brake_sim_ros.analysis import contact_events
 from brake_sim_ros.analysis.onsets import in_contact
 from brake_sim_ros.model.defects import Defects
 from brake_sim_ros.model.parameters import BrakeParameters
+from brake_sim_ros.model.sensors import SensorFrame
 from brake_sim_ros.model.trajectory import SampleBlock
 
 FRAME_ID = "brake_backing_plate"
@@ -47,6 +55,12 @@ PIVOT_CHUNK_ARRAYS = (
     "left_magnitude_n",
     "right_magnitude_n",
 )
+
+
+def new_run_id() -> str:
+    """A fresh run id: a UUID4 as 32 lower-case hexadecimal digits (``run_id`` of the
+    ground-truth messages)."""
+    return uuid.uuid4().hex
 
 
 def stamp_ns(sample_index: int, period_s: float) -> int:
@@ -97,6 +111,32 @@ def pivot_force_chunk(block: SampleBlock) -> PivotForceChunk:
         right_fy_n=_doubles(ry),
         left_magnitude_n=_doubles(np.hypot(lx, ly)),
         right_magnitude_n=_doubles(np.hypot(rx, ry)),
+    )
+
+
+def measured_chunk(
+    block: SampleBlock, frame: SensorFrame, decimation: dict[str, int]
+) -> MeasuredChunk:
+    """What the sensors measured over ``block`` (``frame``: the bank's output for it;
+    ``decimation``: the bank's ``output_decimation``), channel-major; stamp = time of
+    the block's first sample."""
+    series = list(frame.series.values())
+    values = array.array("d")
+    labels = array.array("B")
+    for s in series:
+        values.frombytes(np.ascontiguousarray(s.values, dtype=np.float64).tobytes())
+        labels.frombytes(np.ascontiguousarray(s.fault_label, dtype=np.uint8).tobytes())
+    return MeasuredChunk(
+        header=header(stamp_ns(block.first_index, block.sample_period_s)),
+        first_sample_index=int(block.first_index),
+        sample_count=len(block),
+        sample_rate_hz=sample_rate_hz(block.sample_period_s),
+        channel_names=[s.name for s in series],
+        units=[s.unit for s in series],
+        decimation=array.array("I", [decimation[s.name] for s in series]),
+        channel_sample_counts=array.array("I", [len(s.values) for s in series]),
+        values=values,
+        fault_labels=labels,
     )
 
 
@@ -169,11 +209,12 @@ def joint_state(block: SampleBlock, row: int) -> JointState:
     )
 
 
-def contact_event(event: contact_events.ContactEvent, dt_s: float) -> ContactEvent:
-    """``event`` as a ContactEvent message; header stamp = time of its sample (``dt_s``: the
-    sample period, s)."""
+def contact_event(event: contact_events.ContactEvent, dt_s: float, *, run_id: str) -> ContactEvent:
+    """``event`` as a ContactEvent message of run ``run_id``; header stamp = time of its
+    sample (``dt_s``: the sample period, s)."""
     return ContactEvent(
         header=header(stamp_ns(event.sample_index, dt_s)),
+        run_id=run_id,
         sample_index=int(event.sample_index),
         shoe=int(event.shoe),
         kind=int(event.kind),
@@ -194,6 +235,7 @@ def defect_state(
     defects: Defects,
     initial_angles_deg: tuple[float, float],
     ns: int,
+    run_id: str,
 ) -> DefectState:
     """Ground truth of the defects in force from simulated time ``ns`` on.
 
@@ -204,6 +246,8 @@ def defect_state(
         initial_angles_deg: (left, right) starting angles of the run in progress, deg.
             They differ from ``defects`` after a run-time change of
             ``initial_angle_deg``, which applies at the next reset.
+        ns: simulated time from which it applies, ns.
+        run_id: the run's id (:func:`new_run_id`, or the node's ``run_id`` parameter).
     """
     left = dataclasses.replace(defects.left, initial_angle_deg=initial_angles_deg[0])
     right = dataclasses.replace(defects.right, initial_angle_deg=initial_angles_deg[1])
@@ -211,6 +255,7 @@ def defect_state(
     nominal = params.shoe.pivot_radius_m
     return DefectState(
         header=header(ns),
+        run_id=run_id,
         scenario=scenario,
         healthy=in_force.is_healthy,
         left_pivot_radius_m=nominal * (1.0 + left.pivot_radius_change_pct / 100.0),

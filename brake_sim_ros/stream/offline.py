@@ -20,7 +20,7 @@ from brake_sim_ros.scenarios import Scenario
 from brake_sim_ros.solvers.fixed_step import FixedStepStepper
 from brake_sim_ros.stream import Topic, conversion
 from brake_sim_ros.stream import parameters as ros_params
-from brake_sim_ros.stream.build import stepper_for
+from brake_sim_ros.stream.build import sensor_bank_for, stepper_for
 
 
 def _default(name: str):
@@ -34,6 +34,7 @@ class StreamSettings:
     chunk_rate_hz: float = _default("chunk_rate_hz")
     state_rate_hz: float = _default("state_rate_hz")
     publish_clock: bool = _default("publish_clock")
+    publish_measured: bool = _default("publish_measured")
 
 
 def offline_messages(
@@ -42,16 +43,22 @@ def offline_messages(
     duration_s: float | None = None,
     settings: StreamSettings | None = None,
     stepper: FixedStepStepper | None = None,
+    run_id: str | None = None,
 ) -> Iterator[tuple[Topic, Any, int]]:
     """Every message the node would publish for ``scenario``, with its simulated time (ns).
 
     Args:
         scenario: the scenario, actuated by its own force profile.
         duration_s: simulated seconds (default: the scenario's duration).
-        settings: chunk and state rates, /clock on or off (default: the node's defaults).
+        settings: chunk and state rates, /clock and ~/measured on or off (default: the
+            node's defaults).
         stepper: a stepper to use (default :func:`stepper_for` the scenario, as the node
             builds it); it is reset first.
+        run_id: the run id of the ground-truth messages (DefectState, ContactEvent);
+            default a fresh one (:func:`~brake_sim_ros.stream.conversion.new_run_id`).
+            Give the node's to reproduce its stream byte for byte.
     """
+    run_id = conversion.new_run_id() if run_id is None else run_id
     settings = settings or StreamSettings()
     stepper = stepper or stepper_for(scenario)
     stepper.reset()
@@ -70,14 +77,21 @@ def offline_messages(
             defects=setup.defects,
             initial_angles_deg=initial_angles,
             ns=0,
+            run_id=run_id,
         ),
         0,
     )
     if settings.publish_clock:
         yield stream.CLOCK, conversion.clock(0), 0
     detector = ContactEventDetector()
+    sensors = sensor_bank_for(scenario) if settings.publish_measured else None
     while stepper.sample_index < end:
         block = stepper.advance(min(chunk, end - stepper.sample_index))
         yield from stream.block_messages(
-            block, stride, with_clock=settings.publish_clock, contact_events=detector
+            block,
+            stride,
+            with_clock=settings.publish_clock,
+            contact_events=detector,
+            run_id=run_id,
+            sensors=sensors,
         )

@@ -14,12 +14,14 @@ from collections.abc import Iterable, Iterator, Sequence
 from typing import Any, Protocol
 
 from brake_sim_ros.analysis.contact_events import ContactEventDetector
+from brake_sim_ros.model.sensors import SensorBank
 from brake_sim_ros.model.trajectory import SampleBlock
 from brake_sim_ros.stream import conversion
 from brake_sim_ros.stream.topics import (
     CLOCK,
     CONTACT_EVENTS,
     JOINT_STATES,
+    MEASURED,
     PIVOT_FORCES,
     STATE,
     Topic,
@@ -61,18 +63,23 @@ def block_messages(
     *,
     with_clock: bool,
     contact_events: ContactEventDetector,
+    run_id: str,
+    sensors: SensorBank | None = None,
 ) -> Iterator[tuple[Topic, Any, int]]:
     """The messages one published block produces, in publishing order.
 
-    A PivotForceChunk (stamped with its first sample), the ContactEvents whose sample lies
+    A PivotForceChunk (stamped with its first sample), with ``sensors`` a MeasuredChunk of
+    the same samples (the bank is fed the block and carries its state to the next one:
+    filters, noise generators, faults' holds), the ContactEvents whose sample lies
     in the block (from ``contact_events``, which is fed the block and carries open contact
     episodes to the next one; each stamped with its own sample), one BrakeState and one
     JointState per sample index that is a multiple of ``state_stride``, and with
     ``with_clock`` a Clock at the time just after the block's last sample (the next
-    sample's time).
+    sample's time). ``run_id`` goes into every ContactEvent (the run's id, as in its
+    DefectState).
 
-    The detector is fed when the generator reaches the events, so consume the whole
-    generator once per block, in order.
+    The bank and the detector are fed when the generator reaches their messages, so
+    consume the whole generator once per block, in order.
     """
     dt = block.sample_period_s
     yield (
@@ -80,8 +87,15 @@ def block_messages(
         conversion.pivot_force_chunk(block),
         conversion.stamp_ns(block.first_index, dt),
     )
+    if sensors is not None:
+        frame = sensors.advance(block)
+        yield (
+            MEASURED,
+            conversion.measured_chunk(block, frame, sensors.output_decimation),
+            conversion.stamp_ns(block.first_index, dt),
+        )
     for event in contact_events.feed(block):
-        msg = conversion.contact_event(event, dt)
+        msg = conversion.contact_event(event, dt, run_id=run_id)
         yield CONTACT_EVENTS, msg, conversion.stamp_ns(event.sample_index, dt)
     for row in conversion.state_rows(block, state_stride):
         ns = conversion.stamp_ns(block.first_index + row, dt)

@@ -10,12 +10,12 @@ publish raw data with the system-default QoS (reliable, volatile) and its *consu
 subscribe with the sensor-data QoS (best effort, volatile, small keep-last depth). The
 simulated brake is such a driver, so:
 
-* ``pivot_forces``, ``state``, ``joint_states`` (:data:`STREAM_QOS`): reliable, volatile,
-  keep last 10. A reliable publisher matches both reliable subscribers (rosbag2, rqt_plot,
-  a lossless recorder) and best-effort ones, whereas a best-effort publisher would be
-  invisible to reliable subscribers. The small depth bounds memory and latency; it never
-  blocks the publisher. Consumers should use :data:`STREAM_CONSUMER_QOS` (=
-  ``qos_profile_sensor_data``): a slow consumer then loses samples (visible as a jump of
+* ``pivot_forces``, ``measured``, ``state``, ``joint_states`` (:data:`STREAM_QOS`):
+  reliable, volatile, keep last 10. A reliable publisher matches both reliable subscribers
+  (rosbag2, rqt_plot, a lossless recorder) and best-effort ones, whereas a best-effort
+  publisher would be invisible to reliable subscribers. The small depth bounds memory and
+  latency; it never blocks the publisher. Consumers should use :data:`STREAM_CONSUMER_QOS`
+  (= ``qos_profile_sensor_data``): a slow consumer then loses samples (visible as a jump of
   ``first_sample_index``) instead of slowing anything down.
 * ``contact_events`` (:data:`EVENTS_QOS`): reliable, volatile, keep last 100. Each message
   is a labelled event, not one sample of a signal a consumer can afford to thin out, and a
@@ -142,6 +142,13 @@ DEFECTS = Topic(
     "at start, reset and each change of a model parameter (latched)",
     "~/defects",
 )
+MEASURED = Topic(
+    "/brake_sim/measured",
+    "brake_sim_msgs/msg/MeasuredChunk",
+    STREAM_QOS,
+    "with each pivot-force chunk, the same samples (parameter publish_measured)",
+    "~/measured",
+)
 CLOCK = Topic(
     "/clock",
     "rosgraph_msgs/msg/Clock",
@@ -174,6 +181,7 @@ TOPICS = (
     DIAGNOSTICS,
     ACTUATION,
     CONTACT_EVENTS,
+    MEASURED,
 )
 TOPIC_BY_NAME = {t.name: t for t in TOPICS}
 TOPIC_BY_TYPE = {t.type_name: t for t in TOPICS}  # each type has one topic

@@ -1,6 +1,7 @@
 """Benchmark of the ROS node, run as a user would: a node process and a client over DDS.
 
-``python -m brake_sim_ros.studies.node_bench [--duration S] [--scenario NAME] [--afap-seconds S]``
+``python -m brake_sim_ros.studies.node_bench [--duration S] [--scenario NAME] [--afap-seconds S]
+[--no-measured]``
 
 Prints:
     * CPU use of the node process at real-time factor 1, in % of one core, from
@@ -105,13 +106,18 @@ def _sustained(factor: float, check: dict) -> bool:
     )
 
 
-def run(duration_s: float, scenario: str, afap_s: float, latency_count: int) -> str:
+def run(
+    duration_s: float, scenario: str, afap_s: float, latency_count: int, measured: bool = True
+) -> str:
     load_before = os.getloadavg()[0]  # other work on the machine skews every figure
     domain = domain_id_for(90)
     log = Path(tempfile.mkdtemp(prefix="brake_sim_bench_")) / "node.log"
     node = NodeProcess.start(
-        ["--scenario", scenario, "--duration", "86400"], domain_id=domain, log_path=log
-    )
+        ["--scenario", scenario, "--duration", "86400", "--ros-args", "-p",
+         f"publish_measured:={'true' if measured else 'false'}"],
+        domain_id=domain,
+        log_path=log,
+    )  # fmt: skip
     client = SimClient(domain, keep_chunks=False)
     try:
         client.wait_for_node(60.0)
@@ -142,7 +148,8 @@ def run(duration_s: float, scenario: str, afap_s: float, latency_count: int) -> 
     lat_ms = sorted(1e3 * x for x in lat)
     p95 = lat_ms[min(len(lat_ms) - 1, math.ceil(0.95 * len(lat_ms)) - 1)]
     lines = [
-        f"brake_sim node benchmark: scenario '{scenario}', {os.cpu_count()} CPUs, load average"
+        f"brake_sim node benchmark: scenario '{scenario}', sensors (~/measured)"
+        f" {'on' if measured else 'off'}, {os.cpu_count()} CPUs, load average"
         f" {load_before:.2f} before the start, node exit code {code}",
         f"  real-time factor 1 for {rt['wall_s']:.1f} s: CPU {rt['cpu_pct']:.1f} % of one core;"
         f" real-time factor {rt['rtf']:.4f}; deadline misses {rt['deadline_misses']}, slips"
@@ -190,8 +197,20 @@ def main(argv: list[str] | None = None) -> int:
         help="wall seconds of the as-fast-as-possible and check runs",
     )
     parser.add_argument("--latency-samples", type=int, default=20)
+    parser.add_argument(
+        "--no-measured",
+        action="store_true",
+        help="run the node with publish_measured:=false (no sensors, no ~/measured)",
+    )
     args = parser.parse_args(argv)
-    print(run(args.duration, args.scenario, args.afap_seconds, args.latency_samples), flush=True)
+    text = run(
+        args.duration,
+        args.scenario,
+        args.afap_seconds,
+        args.latency_samples,
+        measured=not args.no_measured,
+    )
+    print(text, flush=True)
     return 0
 
 

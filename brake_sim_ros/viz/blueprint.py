@@ -14,7 +14,7 @@ def brake_blueprint() -> rrb.Blueprint:
     arrows), the defect ground truth and the event log (impacts, regime changes).
     Right column: pivot force magnitudes with impact markers, pivot force components,
     drum and flywheel speeds, shoe angles and indentations, contact flags and regime,
-    contact and actuation forces.
+    contact and actuation forces, defect values and what the sensors measured (tabs).
     """
     left = rrb.Vertical(
         rrb.Spatial2DView(origin=E.DRAWING, name="Brake (backing plate, m)"),
@@ -45,6 +45,7 @@ def brake_blueprint() -> rrb.Blueprint:
                 rrb.TimeSeriesView(origin=E.ACTUATION, name="Actuation (N)"),
                 rrb.TimeSeriesView(origin=E.CONTACT_FORCE, name="Contact forces (N)"),
                 rrb.TimeSeriesView(origin=E.DEFECTS, name="Defect values"),
+                rrb.TimeSeriesView(origin=E.MEASURED, name="Measured (sensors)"),
             ),
         ),
         row_shares=[3, 3, 2, 2],

@@ -37,6 +37,9 @@ CONTACT_FORCE = "contact_force"  # contact_force/<side>/{normal,friction}, N
 ACTUATION = "actuation"  # actuation/<side> applied (N); actuation/command/<side> accepted
 CONTACT = "contact"  # contact/<side> flag 0/1, contact/regime 0..3
 
+# what the sensors measured (MeasuredChunk): measured/<channel>, in the channel's unit
+MEASURED = "measured"
+
 # events, ground truth, drawing
 EVENTS = "events"  # TextLog: impacts, regime changes, resets, lost samples, diagnostics
 DEFECTS = "defects"  # defects/ground_truth (markdown), defects/<side>/<field> scalars

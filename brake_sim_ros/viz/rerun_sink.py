@@ -8,6 +8,7 @@ timeline taken from the messages' stamps: :mod:`.timeline`):
 
 * :mod:`.series`: pivot forces at every sample (or their envelope live) and the
   BrakeState scalars, sent as columns;
+* :mod:`.measured`: what the sensors measured, a series per channel, sensor-fault events;
 * :mod:`.contact`: impacts (markers and events), separations, regime changes;
 * :mod:`.scene`: the 2-D drawing at ``drawing_rate_hz`` of simulated time;
 * :mod:`.annotations`: the defect ground truth, actuation commands, diagnostics.
@@ -35,6 +36,7 @@ from brake_sim_ros.viz.annotations import (
     shoe_defects,
 )
 from brake_sim_ros.viz.contact import ContactMarkers
+from brake_sim_ros.viz.measured import MeasuredSeries
 from brake_sim_ros.viz.pivot_samples import PivotChunk, RecentPivotForces
 from brake_sim_ros.viz.scene import BrakeScene
 from brake_sim_ros.viz.series import TimeSeries, envelope_positions
@@ -84,6 +86,7 @@ class RerunSink:
             recording, batch_s=settings.batch_s, force_envelope_hz=settings.force_envelope_hz
         )
         self._contact = ContactMarkers(recording, self._recent)
+        self._measured = MeasuredSeries(recording, envelope_hz=settings.force_envelope_hz)
         self._scene = BrakeScene(
             recording,
             params=params or BrakeParameters(),
@@ -121,6 +124,9 @@ class RerunSink:
         kind = topic.type_name
         if kind == stream.PIVOT_FORCES.type_name:
             self._on_chunk(PivotChunk.from_msg(msg))
+        elif kind == stream.MEASURED.type_name:
+            self._measured.on_chunk(msg)
+            self._seen(stamp_ns(msg))
         elif kind == stream.STATE.type_name:
             self._on_state(msg)
         elif kind == stream.CONTACT_EVENTS.type_name:
@@ -158,6 +164,7 @@ class RerunSink:
             self._series.flush(final=True)
             self._recent.clear()
             self._contact.restart()
+            self._measured.restart()
             self._scene.restart()
             msg = f"simulation restarted at sample {first} (reset)"
             log_event(self.rec, chunk.start_ns, msg, "WARN")

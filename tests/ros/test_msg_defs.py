@@ -30,7 +30,9 @@ rclpy = pytest.importorskip("rclpy", reason="rclpy not installed (run scripts/se
 from brake_sim_msgs.msg import (  # noqa: E402
     ActuationCommand,
     BrakeState,
+    ContactEvent,
     DefectState,
+    MeasuredChunk,
     PivotForceChunk,
 )
 from brake_sim_msgs.srv import ResetSimulation, StepSimulation  # noqa: E402
@@ -87,6 +89,7 @@ EXPECTED_FIELDS = {
     },
     DefectState: {
         "header": "std_msgs/Header",
+        "run_id": "string",
         "scenario": "string",
         "healthy": "boolean",
         "left_pivot_radius_m": "double",
@@ -98,6 +101,28 @@ EXPECTED_FIELDS = {
         "left_actuation_share": "double",
         "right_actuation_share": "double",
         "active_defects": "sequence<string>",
+    },
+    ContactEvent: {
+        "header": "std_msgs/Header",
+        "run_id": "string",
+        "sample_index": "uint64",
+        "shoe": "uint8",
+        "kind": "uint8",
+        "peak_pivot_force_n": "double",
+        "peak_sample_index": "uint64",
+        "duration_s": "double",
+    },
+    MeasuredChunk: {
+        "header": "std_msgs/Header",
+        "first_sample_index": "uint64",
+        "sample_count": "uint32",
+        "sample_rate_hz": "double",
+        "channel_names": "sequence<string>",
+        "units": "sequence<string>",
+        "decimation": "sequence<uint32>",
+        "channel_sample_counts": "sequence<uint32>",
+        "values": "sequence<double>",
+        "fault_labels": "sequence<uint8>",
     },
     StepSimulation.Request: {"steps": "uint64", "duration_s": "double"},
     StepSimulation.Response: {
@@ -126,6 +151,12 @@ def test_regime_constants():
         BrakeState.REGIME_CONTACT,
         BrakeState.REGIME_STOPPED,
     ) == (0, 1, 2, 3)
+
+
+def test_measured_fault_bits_are_the_core_s():
+    from brake_sim_ros.model.sensor_faults import FAULT_BIT
+
+    assert {k: getattr(MeasuredChunk, f"FAULT_{k.upper()}") for k in FAULT_BIT} == FAULT_BIT
 
 
 def test_defaults_and_type_checks():

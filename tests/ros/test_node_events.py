@@ -4,10 +4,16 @@ One node process, started paused, is stepped with step sizes unlike the offline 
 10 ms chunks, reset in the middle of a contact episode and switched to another scenario:
 each time the ContactEvents received equal those of :func:`offline_messages`, field for
 field, so the node's detector state follows resets and does not depend on the chunking.
+The node runs with a ``run_id`` parameter, which every run keeps across resets and the
+offline stream is given, and with its sensors on: after a reset with a new seed, what it
+measures equals the offline stream of the scenario with that seed, bit for bit.
 """
 
 from __future__ import annotations
 
+import dataclasses
+
+import numpy as np
 import pytest
 
 pytestmark = [
@@ -23,11 +29,12 @@ from brake_sim_ros import stream  # noqa: E402
 from brake_sim_ros.analysis import contact_events as ce  # noqa: E402
 from brake_sim_ros.ros.harness import NodeProcess, SimClient, domain_id_for  # noqa: E402
 from brake_sim_ros.scenarios import load_scenario  # noqa: E402
-from brake_sim_ros.stream.offline import offline_messages  # noqa: E402
+from brake_sim_ros.stream.offline import StreamSettings, offline_messages  # noqa: E402
 
 DOMAIN = domain_id_for(8)
 N_STEPS = 7680  # 0.3 s of 25.6 kHz samples: every bounce of the symmetric run, contact starts
 LOSSLESS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
+RUN_ID = "events-test.run_1"  # the node's run_id parameter: kept across resets
 FIELDS = (
     "sample_index",
     "shoe",
@@ -35,6 +42,7 @@ FIELDS = (
     "peak_pivot_force_n",
     "peak_sample_index",
     "duration_s",
+    "run_id",  # last: the tests read the fields above by position
 )
 
 
@@ -45,7 +53,9 @@ def as_tuple(msg) -> tuple:
 
 def offline_events(scenario_name: str, n_steps: int) -> list[tuple]:
     scenario = load_scenario(scenario_name)
-    messages = offline_messages(scenario, duration_s=n_steps * scenario.sample_period_s)
+    messages = offline_messages(
+        scenario, duration_s=n_steps * scenario.sample_period_s, run_id=RUN_ID
+    )
     return [as_tuple(msg) for topic, msg, _ in messages if topic is stream.CONTACT_EVENTS]
 
 
@@ -53,7 +63,15 @@ def offline_events(scenario_name: str, n_steps: int) -> list[tuple]:
 def sim(tmp_path_factory):
     log = tmp_path_factory.mktemp("node") / "node.log"
     node = NodeProcess.start(
-        ["--ros-args", "-p", "paused:=true"],
+        [
+            "--ros-args",
+            "-p",
+            "paused:=true",
+            "-p",
+            f"run_id:={RUN_ID}",
+            "-p",
+            "publish_measured:=true",
+        ],
         domain_id=DOMAIN,
         log_path=log,
     )
@@ -83,6 +101,8 @@ def received(sim: SimClient) -> list[tuple]:
 
 
 def test_node_publishes_the_offline_events_whatever_the_steps_and_resets(sim):
+    sim.wait_for(lambda: sim.rx.defects, 5.0, "the latched ground truth")
+    assert {d.run_id for d in sim.rx.defects} == {RUN_ID}
     expected = offline_events("symmetric", N_STEPS)
     assert len(expected) >= 28  # measured: 15 onsets and 13 separations
     step_all(sim, [1234, 1, 77, 5000], N_STEPS)
@@ -95,7 +115,8 @@ def test_node_publishes_the_offline_events_whatever_the_steps_and_resets(sim):
     sim.forget()
     step_all(sim, [onset + 2], onset + 2)
     assert [e[1] for e in received(sim)] == [onset, onset]  # both shoes touch at once
-    assert sim.reset().success
+    response = sim.reset()
+    assert response.success and f"run id {RUN_ID}" in response.message, response.message
     sim.forget()
     step_all(sim, [256], N_STEPS)  # the offline chunking
     assert received(sim) == expected
@@ -115,5 +136,52 @@ def test_scenario_switch_resets_the_events(sim):
         expected = offline_events("case5_left_tilted", N_STEPS)
         assert expected
         assert received(sim) == expected
+    finally:
+        assert sim.reset(scenario="symmetric").success
+
+
+def measured_series(chunks) -> dict[str, bytes]:
+    """Each measured series (values and fault labels) over ``chunks``, concatenated."""
+    out: dict[str, bytearray] = {}
+    for msg in chunks:
+        start = 0
+        for name, count in zip(msg.channel_names, msg.channel_sample_counts, strict=True):
+            values = np.asarray(msg.values[start : start + count], dtype=np.float64)
+            labels = np.asarray(msg.fault_labels[start : start + count], dtype=np.uint8)
+            out.setdefault(name, bytearray()).extend(values.tobytes())
+            out.setdefault(f"{name}/labels", bytearray()).extend(labels.tobytes())
+            start += count
+    return {k: bytes(v) for k, v in out.items()}
+
+
+def test_measured_after_a_reset_with_a_seed_equals_offline(sim):
+    """The node's sensor bank restarts at each reset with the run's seed: chunked by
+    unlike ~/step sizes, the series equal the offline stream's for that seed."""
+    seed, n_steps = 5, 2560
+    try:
+        assert sim.reset(seed=seed).success
+        sim.forget()
+        step_all(sim, [1000, 3, 700], n_steps)
+        sim.wait_for(
+            lambda: sum(m.sample_count for m in sim.rx.measured) == n_steps, 5.0, "measured"
+        )
+        scenario = dataclasses.replace(load_scenario("symmetric"), seed=seed)
+        messages = offline_messages(
+            scenario,
+            duration_s=n_steps * scenario.sample_period_s,
+            settings=StreamSettings(publish_measured=True),
+            run_id=RUN_ID,
+        )
+        expected = measured_series(m for t, m, _ in messages if t is stream.MEASURED)
+        got = measured_series(sim.rx.measured)
+        assert got.keys() == expected.keys() and len(got) >= 10
+        assert got == expected
+        other_seed = dataclasses.replace(scenario, seed=seed + 1)
+        other = offline_messages(
+            other_seed,
+            duration_s=n_steps * scenario.sample_period_s,
+            settings=StreamSettings(publish_measured=True),
+        )
+        assert measured_series(m for t, m, _ in other if t is stream.MEASURED) != got
     finally:
         assert sim.reset(scenario="symmetric").success

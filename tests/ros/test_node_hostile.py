@@ -256,6 +256,8 @@ def test_hostile_step_requests_are_refused(sim, request_fields):
         (["-p", "shoe.mass_kg:=0.0"], "mass_kg=0.0 is invalid"),
         (["-p", "scenario_dirs:=/no/such/dir"], "allowed an existing directory"),
         (["-p", "chunk_rate_hz:=1000.0", "-p", "state_rate_hz:=10000.0"], "cannot keep real"),
+        (["-p", "run_id:=a/b"], "run_id='a/b': allowed empty"),
+        (["-p", f"run_id:={'x' * 65}"], "1 to 64 characters"),
     ],
 )
 def test_refuses_to_start_with_hostile_parameters(args, message):

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import uuid
 
 import numpy as np
 import pytest
@@ -412,6 +413,28 @@ def test_step_service_refusals(sim):
         assert "paused" in sim.step(steps=1).message
     finally:
         assert sim.set_parameter("paused", True).successful
+
+
+def test_each_reset_makes_a_new_run_id(sim):
+    """Without a run_id parameter every run (start, each ~/reset) has a fresh 32-hex UUID4
+    id, said in the reply, the DefectState, /diagnostics and the ContactEvents."""
+    ids = []
+    for _ in range(2):
+        n_truth = len(sim.rx.defects)
+        response = sim.reset()
+        assert response.success, response.message
+        sim.wait_for(lambda n=n_truth: len(sim.rx.defects) > n, 5.0, "new ground truth")
+        run_id = sim.rx.defects[-1].run_id
+        assert len(run_id) == 32 and uuid.UUID(hex=run_id).version == 4
+        assert f"run id {run_id}" in response.message
+        assert sim.next_diagnostics()["run_id"] == run_id
+        ids.append(run_id)
+    assert ids[0] != ids[1]
+    sim.forget()
+    step(sim, steps=7680)  # the first bounces: contact events
+    sim.spin_for(0.2)
+    assert sim.rx.contact_events
+    assert {e.run_id for e in sim.rx.contact_events} == {ids[1]}
 
 
 def test_reset_to_another_scenario_and_seed(sim):

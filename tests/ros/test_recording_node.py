@@ -41,6 +41,7 @@ from brake_sim_ros.ros.harness import NodeProcess, SimClient, domain_id_for  # n
 from brake_sim_ros.scenarios import load_scenario  # noqa: E402
 from brake_sim_ros.solvers.methods import FIXED_STEP_METHODS  # noqa: E402
 from brake_sim_ros.stream import conversion  # noqa: E402
+from brake_sim_ros.stream.offline import StreamSettings  # noqa: E402
 
 SCENARIO = "symmetric"
 SCENARIOS = Path(__file__).parents[2] / "brake_sim_ros" / "scenarios" / "builtin"
@@ -72,6 +73,16 @@ def _decoded(path: Path) -> dict[str, list]:
         reader.close()
 
 
+def _run_id(path: Path) -> str:
+    """The run id a recording's ``brake_sim_run`` record gives (its DefectState's too)."""
+    with path.open("rb") as f:
+        records = {m.name: m.metadata for m in make_reader(f).iter_metadata()}
+    run_id = records["brake_sim_run"]["run_id"]
+    (defects,) = _decoded(path)[stream.DEFECTS.name]
+    assert defects.run_id == run_id and len(run_id) == 32
+    return run_id
+
+
 def _wait_for_line(node: NodeProcess, text: str, timeout_s: float) -> None:
     end = time.monotonic() + timeout_s
     while text not in node.output():
@@ -84,7 +95,7 @@ def test_live_recording_equals_offline_recording(tmp_path):
     live = tmp_path / "live.mcap"
     node = NodeProcess.start(
         ["--scenario", SCENARIO, "--duration", "1.5", "--exit-at-end", "--record", str(live),
-         "--ros-args", "-p", "real_time_factor:=0.0"],
+         "--ros-args", "-p", "real_time_factor:=0.0", "-p", "publish_measured:=true"],
         domain_id=domain_id_for(40), log_path=tmp_path / "node.log",
     )  # fmt: skip
     try:
@@ -92,11 +103,20 @@ def test_live_recording_equals_offline_recording(tmp_path):
     finally:
         node.stop()
     offline = tmp_path / "offline.mcap"
-    record_offline(load_scenario(SCENARIO), offline, duration_s=1.5)
+    # the live run's id, given to the offline run: then every byte must be equal
+    record_offline(
+        load_scenario(SCENARIO),
+        offline,
+        duration_s=1.5,
+        run_id=_run_id(live),
+        settings=StreamSettings(publish_measured=True),
+    )
     live_msgs = [m for m in _messages(live) if m[0] != stream.DIAGNOSTICS.name]
     offline_msgs = _messages(offline)
     assert len(live_msgs) == len(offline_msgs) > 0
     assert live_msgs == offline_msgs  # topic, log time and CDR bytes, one by one
+    # the sensors too: the node's bank and the offline one measure the same bits
+    assert sum(m[0] == stream.MEASURED.name for m in live_msgs) == 150  # a chunk per 10 ms
     with live.open("rb") as f:
         records = {m.name: m.metadata for m in make_reader(f).iter_metadata()}
     assert records["brake_sim_run"]["mode"] == "live"
@@ -124,7 +144,7 @@ def test_live_equals_offline_for_every_scheme(tmp_path, method):
     offline = tmp_path / "offline.mcap"
     scenario = load_scenario(str(scenario_file))
     assert scenario.solver.method == method
-    record_offline(scenario, offline, duration_s=0.8)
+    record_offline(scenario, offline, duration_s=0.8, run_id=_run_id(live))
     live_msgs = [m for m in _messages(live) if m[0] != stream.DIAGNOSTICS.name]
     offline_msgs = _messages(offline)
     assert len(live_msgs) == len(offline_msgs) > 0
@@ -133,11 +153,13 @@ def test_live_equals_offline_for_every_scheme(tmp_path, method):
 
 def test_the_recording_holds_the_qos_the_node_offers(tmp_path):
     """Each recorded channel's offered_qos_profiles equals what the running node's
-    publisher offers, as DDS discovery reports it to another participant."""
+    publisher offers, as DDS discovery reports it to another participant (every topic:
+    ~/measured switched on)."""
     path = tmp_path / "rec.mcap"
     domain = domain_id_for(47)
     node = NodeProcess.start(
-        ["--scenario", SCENARIO, "--duration", "3", "--exit-at-end", "--record", str(path)],
+        ["--scenario", SCENARIO, "--duration", "3", "--exit-at-end", "--record", str(path),
+         "--ros-args", "-p", "publish_measured:=true"],
         domain_id=domain, log_path=tmp_path / "node.log",
     )  # fmt: skip
     context = rclpy.context.Context()
