@@ -11,6 +11,7 @@ Modules:
     qos: rclpy profiles of the topic table's QoS.
     messages: the message class of each type of the topic table.
     descriptors: ROS parameter descriptors of the node's parameter specs.
+    budget: what a chunk costs on this machine (stepping, publishing), measured at start.
     pacing: real time, real-time factor, as fast as possible, paused (pure logic).
     commands: actuation-command checks and the command timeout behaviours (pure logic).
     diagnostics: run counters, the /diagnostics status and the end-of-run summary.
