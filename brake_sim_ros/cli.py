@@ -8,7 +8,6 @@ from __future__ import annotations
 import argparse
 import contextlib
 import dataclasses
-import itertools
 import json
 import math
 import os
@@ -176,33 +175,15 @@ def _checked_outputs(
     :func:`~brake_sim_ros.recording.output.probe_output`'s rules hold (not the scenario
     file, not a link, not an existing file without --overwrite, nor a non-regular one; an
     existing directory that takes a new file)."""
-    from brake_sim_ros.recording.output import (
-        OutputError,
-        check_output,
-        probe_output,
-        same_file,
-    )
-    from brake_sim_ros.recording.records import describe_path
+    from brake_sim_ros.recording.output import check_outputs
 
-    named = [("--out", args.out, tuple(HISTORY_FORMATS)), ("--mcap", args.mcap, (".mcap",))]
-    named += [("--rerun save", t.arg, (".rrd",)) for t in rerun if t.kind == "save"]
-    named = [(option, path, suffixes) for option, path, suffixes in named if path is not None]
-    for (option, path, _), (other, other_path, _) in itertools.combinations(named, 2):
-        if same_file(path, other_path):
-            raise OutputError(
-                f"{option} {describe_path(path)} and {other} {describe_path(other_path)} name"
-                " the same file: give each output its own path"
-            )
-    checked = {}
-    for option, path, suffixes in named:
-        rules = {"inputs": inputs, "overwrite": args.overwrite, "option": option}
-        check_output(path, make_parents=False, **rules)  # the scenario file, a link: first
-        if Path(path).suffix not in suffixes:
-            allowed = " or ".join(
-                f"{s} ({HISTORY_FORMATS[s]})" if s in HISTORY_FORMATS else s for s in suffixes
-            )
-            raise OutputError(f"{option} {describe_path(path)}: allowed a path ending in {allowed}")
-        checked[option] = probe_output(path, **rules)
+    named = [("--out", args.out, HISTORY_FORMATS), ("--mcap", args.mcap, {".mcap": ""})]
+    named += [("--rerun save", t.arg, {".rrd": ""}) for t in rerun if t.kind == "save"]
+    checked = check_outputs(
+        [(option, path, suffixes) for option, path, suffixes in named if path is not None],
+        inputs=inputs,
+        overwrite=args.overwrite,
+    )
     checked.pop("--rerun save", None)  # the path is the target's
     return checked
 

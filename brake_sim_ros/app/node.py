@@ -98,23 +98,21 @@ def _parse_cli(argv: list[str], prog: str) -> argparse.Namespace:
 
 
 def _check_outputs(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
-    """The files the node will write, refused before it starts: an existing file without
-    --overwrite, a link, the scenario file under any name, an unwritable place
-    (``recording/output.py``'s rules; the two suffixes differ, so they are two files)."""
-    from brake_sim_ros.recording.output import OutputError, check_output
+    """The files the node will write, refused before it starts by the rules every command
+    follows (:func:`~brake_sim_ros.recording.output.check_outputs`): an existing file
+    without --overwrite, a link, the scenario file under any name, a directory that does
+    not exist or takes no new file."""
+    from brake_sim_ros.recording.output import OutputError, check_outputs
 
     inputs = [args.scenario] if args.scenario and os.path.lexists(args.scenario) else []
-    outputs = []
-    if args.record:
-        outputs.append(("--record", args.record, ".mcap"))
-    for target in args.rerun or []:
-        if target[:1] == ["save"] and len(target) == 2:
-            outputs.append(("--rerun save", target[1], ".rrd"))
+    named = [("--record", args.record, {".mcap": ""})] if args.record else []
+    named += [
+        ("--rerun save", target[1], {".rrd": ""})
+        for target in args.rerun or []
+        if target[:1] == ["save"] and len(target) == 2
+    ]
     try:
-        for option, path, suffix in outputs:
-            check_output(
-                path, inputs=inputs, overwrite=args.overwrite, suffix=suffix, option=option
-            )
+        check_outputs(named, inputs=inputs, overwrite=args.overwrite)
     except OutputError as exc:
         parser.error(str(exc))
 

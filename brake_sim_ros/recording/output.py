@@ -25,10 +25,11 @@ from __future__ import annotations
 
 import contextlib
 import errno
+import itertools
 import os
 import secrets
 import stat
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from pathlib import Path
 
 from brake_sim_ros.errors import BrakeSimError
@@ -64,11 +65,8 @@ def same_file(a: str | os.PathLike[str], b: str | os.PathLike[str]) -> bool:
     pa, pb = Path(a), Path(b)
     if (os.path.realpath(pa.parent), pa.name) == (os.path.realpath(pb.parent), pb.name):
         return True
-    try:
-        sa, sb = os.stat(pa), os.stat(pb)
-    except OSError:
-        return False
-    return (sa.st_dev, sa.st_ino) == (sb.st_dev, sb.st_ino)
+    ia = _identity(pa)
+    return ia is not None and ia == _identity(pb)
 
 
 def check_output(
@@ -225,6 +223,42 @@ def probe_output(
     with contextlib.suppress(OSError):
         tmp.unlink()
     return out
+
+
+def check_outputs(
+    named: Sequence[tuple[str, str | os.PathLike[str], Mapping[str, str]]],
+    *,
+    inputs: Sequence[str | os.PathLike[str]] = (),
+    overwrite: bool = False,
+) -> dict[str, Path]:
+    """Every output of one command, checked before the command works: each names its own
+    file, ends in one of its suffixes and passes :func:`probe_output`.
+
+    Args:
+        named: ``(option, path, {suffix: what it is})`` per output; an empty description
+            shows the bare suffix in the refusal.
+
+    Returns:
+        The checked path by option.
+
+    Raises:
+        OutputError: the first output a rule refuses.
+    """
+    for (option, path, _), (other, other_path, _) in itertools.combinations(named, 2):
+        if same_file(path, other_path):
+            raise OutputError(
+                f"{option} {describe_path(path)} and {other} {describe_path(other_path)} name"
+                " the same file: give each output its own path"
+            )
+    checked = {}
+    for option, path, suffixes in named:
+        rules = {"inputs": inputs, "overwrite": overwrite, "option": option}
+        check_output(path, make_parents=False, **rules)  # the scenario file, a link: first
+        if Path(path).suffix not in suffixes:
+            allowed = " or ".join(f"{s} ({what})" if what else s for s, what in suffixes.items())
+            raise OutputError(f"{option} {describe_path(path)}: allowed a path ending in {allowed}")
+        checked[option] = probe_output(path, **rules)
+    return checked
 
 
 def _create_temporary(out: Path) -> Path:
