@@ -113,3 +113,29 @@ def test_brake_state_flags_are_the_shared_rule(symmetric_impacting):
         expected = in_contact(symmetric_impacting[f"{side}_indentation_m"][list(rows)])
         assert flags == expected.tolist()
         assert any(flags) and not all(flags)
+
+
+def test_each_right_shoe_column_sits_at_its_stated_offset():
+    """The compiled kernels write the right shoe at RIGHT_OF_* from the left shoe's column;
+    the named layout must agree for every per-shoe column they write."""
+    from brake_sim_ros.model import layout as L
+
+    scalar = {
+        L.C_INDENTATION: "indentation_m",
+        L.C_NORMAL_FORCE: "normal_force_n",
+        L.C_FRICTION_FORCE: "friction_force_n",
+        L.C_ACTUATION_FORCE: "actuation_force_n",
+        L.C_INDENTATION_RATE: "indentation_rate_m_s",
+        L.C_SLIDING_SPEED: "sliding_speed_m_s",
+        L.C_SHOE_REGIME: "regime",
+    }
+    vector = {
+        L.C_PIVOT_FX: "pivot_fx_n",
+        L.C_PIVOT_FY: "pivot_fy_n",
+        L.C_CONTACT_X: "contact_x_m",
+        L.C_CONTACT_Y: "contact_y_m",
+    }
+    for offset, columns in ((L.RIGHT_OF_SCALAR, scalar), (L.RIGHT_OF_VECTOR, vector)):
+        for left, name in columns.items():
+            assert L.COLUMNS[left] == f"left_{name}"
+            assert L.COLUMNS[left + offset] == f"right_{name}"

@@ -87,9 +87,3 @@ def history_table(
 def write_history(path: str | os.PathLike[str], table: pa.Table) -> None:
     """Write ``table`` to ``path`` (zstd-compressed Parquet)."""
     pq.write_table(table, path, compression="zstd")
-
-
-def read_metadata(path: str | os.PathLike[str]) -> dict[str, Any]:
-    """The ``brake_sim`` metadata of a file written by :func:`write_history`."""
-    schema = pq.read_schema(path)
-    return json.loads((schema.metadata or {})[METADATA_KEY])

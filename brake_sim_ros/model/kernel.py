@@ -103,15 +103,15 @@ def evaluate(y, p, fe_left, fe_right, stuck, mode_left, mode_right, dydt, out, r
     for i in range(8):
         o[L.C_STATE + i] = y[i]
     for i, sh in enumerate((sl, sr)):
-        o[L.C_INDENTATION + i] = sh[contact.E_EPS]
-        o[L.C_NORMAL_FORCE + i] = sh[contact.E_FN]
-        o[L.C_FRICTION_FORCE + i] = sh[contact.E_FF]
-        o[L.C_INDENTATION_RATE + i] = sh[contact.E_EPS_DOT]
-        o[L.C_SLIDING_SPEED + i] = sh[contact.E_V_SLIDE]
-        o[L.C_CONTACT_X + 2 * i] = sh[contact.E_CONTACT_X]
-        o[L.C_CONTACT_Y + 2 * i] = sh[contact.E_CONTACT_Y]
+        o[L.C_INDENTATION + L.RIGHT_OF_SCALAR * i] = sh[contact.E_EPS]
+        o[L.C_NORMAL_FORCE + L.RIGHT_OF_SCALAR * i] = sh[contact.E_FN]
+        o[L.C_FRICTION_FORCE + L.RIGHT_OF_SCALAR * i] = sh[contact.E_FF]
+        o[L.C_INDENTATION_RATE + L.RIGHT_OF_SCALAR * i] = sh[contact.E_EPS_DOT]
+        o[L.C_SLIDING_SPEED + L.RIGHT_OF_SCALAR * i] = sh[contact.E_V_SLIDE]
+        o[L.C_CONTACT_X + L.RIGHT_OF_VECTOR * i] = sh[contact.E_CONTACT_X]
+        o[L.C_CONTACT_Y + L.RIGHT_OF_VECTOR * i] = sh[contact.E_CONTACT_Y]
     o[L.C_ACTUATION_FORCE] = fe_left
-    o[L.C_ACTUATION_FORCE + 1] = fe_right
+    o[L.C_ACTUATION_FORCE + L.RIGHT_OF_SCALAR] = fe_right
     rlx, rly = _pivot_force(
         p,
         bl,
@@ -134,8 +134,8 @@ def evaluate(y, p, fe_left, fe_right, stuck, mode_left, mode_right, dydt, out, r
     )
     o[L.C_PIVOT_FX] = rlx
     o[L.C_PIVOT_FY] = rly
-    o[L.C_PIVOT_FX + 2] = rrx
-    o[L.C_PIVOT_FY + 2] = rry
+    o[L.C_PIVOT_FX + L.RIGHT_OF_VECTOR] = rrx
+    o[L.C_PIVOT_FY + L.RIGHT_OF_VECTOR] = rry
     for i in range(4):
         o[L.C_ENERGY + i] = y[L.Y_FRICTION_WORK + i]
     o[L.C_DRUM_STICKING] = 1.0 if stuck else 0.0
@@ -534,7 +534,7 @@ def fixed_step_advance(
             rl = kstate[L.K_LEFT_REGIME]
             rr = kstate[L.K_RIGHT_REGIME]
             o[L.C_SHOE_REGIME] = rl
-            o[L.C_SHOE_REGIME + 1] = rr
+            o[L.C_SHOE_REGIME + L.RIGHT_OF_SCALAR] = rr
             if stuck:
                 o[L.C_REGIME] = L.REGIME_STOPPED
             elif rl == L.REGIME_IMPACTING or rr == L.REGIME_IMPACTING:

@@ -242,22 +242,22 @@ def _record(o, t, y, p, fel, fer, stuck, cache, fstate):
     any_contact = False
     for i in range(2):
         o[L.C_STATE + L.Y_LEFT_ANGLE + i] = cache[i, C_THETA]
-        o[L.C_INDENTATION + i] = cache[i, C_OUT + contact.E_EPS]
-        o[L.C_NORMAL_FORCE + i] = cache[i, C_OUT + contact.E_FN]
-        o[L.C_FRICTION_FORCE + i] = cache[i, C_OUT + contact.E_FF]
-        o[L.C_ACTUATION_FORCE + i] = fel if i == 0 else fer
+        o[L.C_INDENTATION + L.RIGHT_OF_SCALAR * i] = cache[i, C_OUT + contact.E_EPS]
+        o[L.C_NORMAL_FORCE + L.RIGHT_OF_SCALAR * i] = cache[i, C_OUT + contact.E_FN]
+        o[L.C_FRICTION_FORCE + L.RIGHT_OF_SCALAR * i] = cache[i, C_OUT + contact.E_FF]
+        o[L.C_ACTUATION_FORCE + L.RIGHT_OF_SCALAR * i] = fel if i == 0 else fer
         # a shoe at rest: the pin holds it against contact, friction and actuation
-        o[L.C_PIVOT_FX + 2 * i] = -cache[i, C_OUT + contact.E_APPLIED_X]
-        o[L.C_PIVOT_FY + 2 * i] = -cache[i, C_OUT + contact.E_APPLIED_Y]
-        o[L.C_CONTACT_X + 2 * i] = cache[i, C_OUT + contact.E_CONTACT_X]
-        o[L.C_CONTACT_Y + 2 * i] = cache[i, C_OUT + contact.E_CONTACT_Y]
-        o[L.C_SLIDING_SPEED + i] = cache[i, C_OUT + contact.E_V_SLIDE]
+        o[L.C_PIVOT_FX + L.RIGHT_OF_VECTOR * i] = -cache[i, C_OUT + contact.E_APPLIED_X]
+        o[L.C_PIVOT_FY + L.RIGHT_OF_VECTOR * i] = -cache[i, C_OUT + contact.E_APPLIED_Y]
+        o[L.C_CONTACT_X + L.RIGHT_OF_VECTOR * i] = cache[i, C_OUT + contact.E_CONTACT_X]
+        o[L.C_CONTACT_Y + L.RIGHT_OF_VECTOR * i] = cache[i, C_OUT + contact.E_CONTACT_Y]
+        o[L.C_SLIDING_SPEED + L.RIGHT_OF_SCALAR * i] = cache[i, C_OUT + contact.E_V_SLIDE]
         torque += cache[i, C_OUT + contact.E_DRUM_TORQUE]
         regime = L.REGIME_FREE
         if cache[i, C_OUT + contact.E_FN] > 0.0:
             regime = L.REGIME_CONTACT
             any_contact = True
-        o[L.C_SHOE_REGIME + i] = regime
+        o[L.C_SHOE_REGIME + L.RIGHT_OF_SCALAR * i] = regime
     o[L.C_ENERGY + L.Y_FRICTION_WORK - L.Y_FRICTION_WORK] = y[R_FRICTION]
     o[L.C_ENERGY + L.Y_COUPLING_DAMPER_LOSS - L.Y_FRICTION_WORK] = y[R_DAMPER]
     o[L.C_LOCK_LOSS] = fstate[L.F_LOCK_LOSS]

@@ -53,7 +53,7 @@ from brake_sim_ros import __version__
 from brake_sim_ros.errors import BrakeSimError
 from brake_sim_ros.recording import metadata, schemas
 from brake_sim_ros.stream import Topic
-from brake_sim_ros.stream.topics import QosSpec, offered_qos
+from brake_sim_ros.stream.topics import offered_qos
 
 PROFILE = "ros2"
 SCHEMA_ENCODING = "ros2msg"
@@ -270,16 +270,12 @@ class McapRecorder:
             message_encoding=MESSAGE_ENCODING,
             schema_id=schema_id,
             metadata={
-                "offered_qos_profiles": metadata.qos_yaml([self._qos(topic)]),
+                "offered_qos_profiles": metadata.qos_yaml([offered_qos(topic)]),
                 "topic_type_hash": schemas.type_hash(topic.type_name),
             },
         )
         channel = self._channels[topic.name] = _Channel(channel_id, topic)
         return channel
-
-    @staticmethod
-    def _qos(topic: Topic) -> QosSpec:
-        return offered_qos(topic)
 
     def write(self, topic: Topic, msg: Any, time_ns: int) -> None:
         """Add one message at simulated time ``time_ns`` (ns, >= 0) on ``topic``.
@@ -343,7 +339,7 @@ class McapRecorder:
             {
                 "name": c.topic.name,
                 "type": c.topic.type_name,
-                "qos_yaml": metadata.qos_yaml([self._qos(c.topic)]),
+                "qos_yaml": metadata.qos_yaml([offered_qos(c.topic)]),
                 "type_hash": schemas.type_hash(c.topic.type_name),
                 "message_count": c.count,
             }

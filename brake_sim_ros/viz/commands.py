@@ -79,27 +79,6 @@ def finish_simulation_sinks(sinks: list, targets: list[RerunTarget]) -> str:
     )
 
 
-def simulate_to_rerun(
-    scenario: Scenario, targets: list[RerunTarget], *, duration_s: float | None
-) -> str:
-    """Log the node's stream of ``scenario`` (produced offline) to every target.
-
-    Returns:
-        One line saying what was logged where.
-    """
-    from brake_sim_ros.stream.offline import offline_messages
-    from brake_sim_ros.stream.samples import deliver
-
-    sinks = open_simulation_sinks(scenario, targets)
-    try:
-        deliver(offline_messages(scenario, duration_s=duration_s), sinks)
-    except BaseException:
-        for sink in sinks:
-            sink.close()
-        raise
-    return finish_simulation_sinks(sinks, targets)
-
-
 def cmd_view(args: argparse.Namespace) -> int:
     """``brake-sim view FILE.mcap [--save FILE.rrd [--overwrite]]``.
 
