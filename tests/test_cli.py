@@ -306,3 +306,22 @@ def test_scenarios_lists_the_channels_with_units_and_rates():
     assert "bar" in lines["line_pressure"] and "wheel_speed_index" in lines
     r = _cli("scenarios", "--channels", "no_such")
     assert r.returncode != 0 and "unknown scenario" in r.stderr
+
+
+@pytest.mark.parametrize("kind", ["not toml", "fifo", "binary"])
+def test_scenarios_channels_refuses_a_hostile_file_in_one_line(tmp_path, kind):
+    """``scenarios --channels FILE`` reads through the checked reader: one line, exit 2,
+    nothing of the file quoted, a FIFO refused instead of waited on."""
+    path = tmp_path / "x.toml"
+    secret = "SECRET-LINE-CONTENT"
+    if kind == "fifo":
+        os.mkfifo(path)
+    elif kind == "binary":
+        path.write_bytes(b"\xff\xfe" + secret.encode())
+    else:
+        path.write_text(f"{secret} garbage\n")
+    r = _cli("scenarios", "--channels", str(path))
+    assert r.returncode == 2, r.stderr
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("brake-sim: error: "), lines
+    assert secret not in r.stderr and "Traceback" not in r.stderr
