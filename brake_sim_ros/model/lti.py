@@ -20,9 +20,10 @@ sample rate. Treating noise samples as a straight-line input would not: interpol
 smooths white samples and removes a quarter of the noise of a sensor whose bandwidth is
 near the Nyquist frequency.
 
-The recursion (:func:`lti_advance`) is a compiled loop over samples; the state and the
-last input are carried in :class:`LtiState`, so a stream processed in blocks gives the
-same bits as one long block (the same operations in the same order for every sample).
+The recursion (:func:`lti_advance`) is a compiled loop over samples that skips exact
+zeros; the state and the last input are carried in :class:`LtiState`, so a stream
+processed in blocks gives the same bits as one long block (the same operations in the
+same order for every sample).
 """
 
 from __future__ import annotations
@@ -137,16 +138,38 @@ def with_input_noise(system: SampledLti, noise_density_per_sqrt_hz: float) -> Sa
     )
 
 
+def _rows(*matrices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Row pointers and column indices of the entries where any of ``matrices`` (same
+    shape) is non-zero: the terms a row's sum cannot skip."""
+    nonzero = np.zeros(matrices[0].shape, dtype=bool)
+    for m in matrices:
+        nonzero |= m != 0.0
+    counts = nonzero.sum(axis=1)
+    pointers = np.concatenate(([0], np.cumsum(counts))).astype(np.int64)
+    return pointers, np.nonzero(nonzero)[1].astype(np.int64)
+
+
 class LtiState:
     """The state of one sampled system in a stream: ``x`` at the last sample and that
     sample's input. Before the first sample the system rests at the equilibrium of the
-    first input (a brake that starts loaded starts with its structure deflected)."""
+    first input (a brake that starts loaded starts with its structure deflected).
+
+    The recursion skips the terms whose coefficient is exactly zero (a modal structure's
+    ``phi`` is block-diagonal, its outputs read few modes), so its cost follows the
+    system's non-zero entries; the sums keep their order, so the results are those of the
+    full products."""
 
     def __init__(self, system: SampledLti) -> None:
         self.system = system
         self.x = np.zeros(system.a.shape[0])
         self.u_prev = np.zeros(system.n_inputs)
         self.started = False
+        self.pattern = (
+            *_rows(system.phi),
+            *_rows(system.g_prev, system.g_next),
+            *_rows(system.c),
+            *_rows(system.d),
+        )
 
     def advance(self, u: np.ndarray, y: np.ndarray | None = None) -> np.ndarray:
         """Outputs for the input samples ``u`` (shape (k, m)), in place into ``y`` (k, p)
@@ -157,21 +180,28 @@ class LtiState:
             y = np.empty((u.shape[0], s.n_outputs))
         if u.shape[0] == 0:
             return y
+        start = 0
         if not self.started:
             self.x[:] = s.static_state(u[0])
             self.u_prev[:] = u[0]
             self.started = True
             y[0] = s.c @ self.x + s.d @ u[0]
-            lti_advance(s.phi, s.g_prev, s.g_next, s.c, s.d, self.x, self.u_prev, u[1:], y[1:])
-        else:
-            lti_advance(s.phi, s.g_prev, s.g_next, s.c, s.d, self.x, self.u_prev, u, y)
+            start = 1
+        lti_advance(
+            s.phi, s.g_prev, s.g_next, s.c, s.d, *self.pattern, self.x, self.u_prev, u[start:],
+            y[start:],
+        )  # fmt: skip
         return y
 
 
 @njit(cache=True)
-def lti_advance(phi, g_prev, g_next, c, d, x, u_prev, u, y):  # pragma: no cover - compiled
+def lti_advance(  # pragma: no cover - compiled
+    phi, g_prev, g_next, c, d, phi_p, phi_i, g_p, g_i, c_p, c_i, d_p, d_i, x, u_prev, u, y
+):
     """Advance ``x`` over the input rows ``u`` (k, m), writing outputs into ``y`` (k, p);
-    ``x`` and ``u_prev`` are updated in place to the last sample."""
+    ``x`` and ``u_prev`` are updated in place to the last sample. ``*_p``, ``*_i``: row
+    pointers and column indices of the non-zero terms of ``phi``, of ``g_prev`` and
+    ``g_next`` together, of ``c`` and of ``d`` (:func:`_rows`)."""
     n_x = x.shape[0]
     n_u = u.shape[1]
     n_y = c.shape[0]
@@ -179,9 +209,11 @@ def lti_advance(phi, g_prev, g_next, c, d, x, u_prev, u, y):  # pragma: no cover
     for k in range(u.shape[0]):
         for i in range(n_x):
             acc = 0.0
-            for j in range(n_x):
+            for q in range(phi_p[i], phi_p[i + 1]):
+                j = phi_i[q]
                 acc += phi[i, j] * x[j]
-            for j in range(n_u):
+            for q in range(g_p[i], g_p[i + 1]):
+                j = g_i[q]
                 acc += g_prev[i, j] * u_prev[j] + g_next[i, j] * u[k, j]
             x_new[i] = acc
         for i in range(n_x):
@@ -190,8 +222,10 @@ def lti_advance(phi, g_prev, g_next, c, d, x, u_prev, u, y):  # pragma: no cover
             u_prev[j] = u[k, j]
         for i in range(n_y):
             acc = 0.0
-            for j in range(n_x):
+            for q in range(c_p[i], c_p[i + 1]):
+                j = c_i[q]
                 acc += c[i, j] * x[j]
-            for j in range(n_u):
+            for q in range(d_p[i], d_p[i + 1]):
+                j = d_i[q]
                 acc += d[i, j] * u[k, j]
             y[k, i] = acc

@@ -21,6 +21,9 @@ Kinds, and what ``size`` means:
   (0 < size < 1), with the same damping ratio: it moves down into the measured band,
   where the response near it rises by the resonance's quality factor. Accelerometers
   with a mounted resonance only.
+
+This module holds what a fault is; the per-sample loops that apply faults and labels are
+compiled with the signal paths in :mod:`.sensor_paths`.
 """
 
 from __future__ import annotations
@@ -92,86 +95,5 @@ class SensorFault:
         return (time_s >= self.onset_s) & (time_s < self.onset_s + self.duration_s)
 
 
-def labels(faults: tuple[SensorFault, ...], time_s: np.ndarray) -> np.ndarray:
-    """Per-sample fault label: OR of :data:`FAULT_BIT` of every active fault."""
-    out = np.zeros(time_s.shape[0], dtype=LABEL_DTYPE)
-    for fault in faults:
-        out[fault.active(time_s)] |= LABEL_DTYPE(FAULT_BIT[fault.kind])
-    return out
-
-
 def of_kind(faults: tuple[SensorFault, ...], kind: str) -> tuple[SensorFault, ...]:
     return tuple(f for f in faults if f.kind == kind)
-
-
-def gain_factor(faults: tuple[SensorFault, ...], time_s: np.ndarray) -> np.ndarray:
-    """The factor on the true signal: product of ``1 + size`` of active gain errors."""
-    out = np.ones(time_s.shape[0])
-    for f in of_kind(faults, "gain_error"):
-        out[f.active(time_s)] *= 1.0 + f.size
-    return out
-
-
-def bias(faults: tuple[SensorFault, ...], time_s: np.ndarray) -> np.ndarray:
-    """The offset of active bias drifts, ``size (t - onset)``, channel units."""
-    out = np.zeros(time_s.shape[0])
-    for f in of_kind(faults, "bias_drift"):
-        on = f.active(time_s)
-        out[on] += f.size * (time_s[on] - f.onset_s)
-    return out
-
-
-def saturation_limit(faults: tuple[SensorFault, ...], time_s: np.ndarray) -> np.ndarray:
-    """The saturation limit of active saturation faults, channel units (inf where none)."""
-    out = np.full(time_s.shape[0], np.inf)
-    for f in of_kind(faults, "saturation"):
-        on = f.active(time_s)
-        out[on] = np.minimum(out[on], f.size)
-    return out
-
-
-def loose(faults: tuple[SensorFault, ...], time_s: np.ndarray) -> tuple[np.ndarray, float]:
-    """Where a loose mount is active (bool array) and its resonance factor (1.0: none).
-    One loose-mount fault per channel (the loader refuses more)."""
-    found = of_kind(faults, "loose_mount")
-    if not found:
-        return np.zeros(time_s.shape[0], dtype=bool), 1.0
-    return found[0].active(time_s), found[0].size
-
-
-class HoldState:
-    """What :func:`apply_hold` carries between blocks: the last value reported, whether a
-    stuck fault was active at the last sample, and the value it holds."""
-
-    def __init__(self) -> None:
-        self.last_value = 0.0
-        self.was_stuck = False
-        self.held = 0.0
-
-
-def apply_hold(
-    faults: tuple[SensorFault, ...], time_s: np.ndarray, values: np.ndarray, state: HoldState
-) -> np.ndarray:
-    """Stuck and dropout, applied to the reported ``values`` of one block (a copy)."""
-    out = values.copy()
-    if values.shape[0] == 0:
-        return out
-    stuck = np.zeros(time_s.shape[0], dtype=bool)
-    for f in of_kind(faults, "stuck"):
-        stuck |= f.active(time_s)
-    if stuck.any() or state.was_stuck:
-        n = time_s.shape[0]
-        previous = np.concatenate(([state.last_value], values[:-1]))
-        was = np.concatenate(([state.was_stuck], stuck[:-1]))
-        starts = stuck & ~was
-        # the value held by each stuck sample: the value before its run began
-        run_start = np.maximum.accumulate(np.where(starts, np.arange(n), -1))
-        held = np.where(run_start >= 0, previous[np.maximum(run_start, 0)], state.held)
-        out[stuck] = held[stuck]
-        if stuck[-1]:
-            state.held = float(held[-1])
-    state.last_value = float(values[-1])
-    state.was_stuck = bool(stuck[-1])
-    for f in of_kind(faults, "dropout"):
-        out[f.active(time_s)] = np.nan
-    return out

@@ -75,7 +75,6 @@ few hundredths of a bar, its noise clipped at 0 bar.
 from __future__ import annotations
 
 import hashlib
-import itertools
 import math
 from dataclasses import dataclass, field, replace
 
@@ -85,8 +84,16 @@ from scipy import signal
 from brake_sim_ros.errors import ParameterError
 from brake_sim_ros.model import sensor_faults as sf
 from brake_sim_ros.model.layout import SIDES
-from brake_sim_ros.model.lti import LtiState, SampledLti, foh_discretise, with_input_noise
+from brake_sim_ros.model.lti import SampledLti, foh_discretise, with_input_noise
 from brake_sim_ros.model.sensor_faults import SensorFault
+from brake_sim_ros.model.sensor_paths import (
+    PathState,
+    analog_advance,
+    fault_table,
+    no_systems,
+    stack_systems,
+    tone_ring_advance,
+)
 from brake_sim_ros.model.structure import AXES, Structure, StructureParameters
 from brake_sim_ros.model.trajectory import SampleBlock
 
@@ -476,7 +483,8 @@ class SensorFrame:
 
 class AnalogPath:
     """The analog signal path of one channel (module docstring) with its carried state:
-    the dynamics' state, the noise generator, the stuck-value hold."""
+    the dynamics' state, the noise generator, the stuck-value hold. The per-sample work is
+    one compiled call (:func:`.sensor_paths.analog_advance`)."""
 
     def __init__(
         self, channel: SensorChannel, sample_period_s: float, seed: int, decimation: int = 1
@@ -486,63 +494,78 @@ class AnalogPath:
         self.rng = np.random.Generator(np.random.PCG64(channel_seed(seed, channel.name)))
         t = channel.transducer
         self.noise = t.noise_density_per_sqrt_hz
-        self.systems: dict[bool, SampledLti] = {}
-        self.state: LtiState | None = None
-        for loose, factor in (
-            (False, 1.0),
-            *((True, f.size) for f in sf.of_kind(channel.faults, "loose_mount")),
-        ):
+        self.faults = fault_table(channel.faults)
+        systems: list[SampledLti] = []
+        for factor in (1.0, *(f.size for f in sf.of_kind(channel.faults, "loose_mount"))):
             chain = t.continuous(1.0 / (sample_period_s * decimation), factor)
             if chain is not None:
                 system = foh_discretise(*chain, sample_period_s)
                 if self.noise > 0.0:
                     system = with_input_noise(system, self.noise)
-                self.systems[loose] = system
-        if self.systems:
-            self.state = LtiState(self.systems[False])
-            self.n_draws = self.systems[False].a.shape[0]  # one per state and sample
+                systems.append(system)
+        self.systems = systems
+        if systems:
+            self.matrices = stack_systems(systems)
+            n_states = systems[0].a.shape[0]
+            self.state = PathState(n_states, 1)
+            self.n_draws = n_states if self.noise > 0.0 else 0  # one per state and sample
         else:
-            self.n_draws = 1
-        self.hold = sf.HoldState()
+            self.matrices = no_systems()
+            self.state = PathState()
+            self.n_draws = 1 if self.noise > 0.0 else 0
+        self.white_gain = self.noise * math.sqrt(0.5 / sample_period_s)
 
     def advance(self, time_s: np.ndarray, true: np.ndarray) -> np.ndarray:
         """Measured values at the scenario rate for the true values ``true`` (channel unit)
         at ``time_s``."""
-        ch, t = self.channel, self.channel.transducer
-        faults = ch.faults
-        x = true * ch.sensitivity_ratio * sf.gain_factor(faults, time_s)
-        draws = None
-        if self.noise > 0.0:
-            draws = self.rng.standard_normal((time_s.shape[0], self.n_draws))
-        if self.state is not None:
-            x = self._dynamics(time_s, x, draws)
-        elif draws is not None:  # white to the Nyquist frequency: density N
-            x = x + self.noise * math.sqrt(0.5 / self.sample_period_s) * draws[:, 0]
-        x = x + sf.bias(faults, time_s)
-        limit = sf.saturation_limit(faults, time_s)
-        x = np.clip(x, np.maximum(t.range_min, -limit), np.minimum(t.range_max, limit))
-        if t.adc_bits is not None:
-            step = t.adc_step
-            codes = np.clip(np.round((x - t.range_min) / step), 0.0, 2.0**t.adc_bits - 1.0)
-            x = t.range_min + codes * step
-        return sf.apply_hold(faults, time_s, x, self.hold)
+        return self.measure(time_s, true)[0]
 
-    def _dynamics(self, time_s: np.ndarray, x: np.ndarray, draws: np.ndarray | None) -> np.ndarray:
-        assert self.state is not None
-        y = np.empty((x.shape[0], 1))
-        u = x.reshape(-1, 1) if draws is None else np.column_stack([x, draws])
-        if len(self.systems) == 1:
-            self.state.advance(u, y)
-            return y[:, 0]
-        loose, _ = sf.loose(self.channel.faults, time_s)
-        # runs of constant mounting, each with its system; the state carries across
-        cuts = np.flatnonzero(np.diff(loose.astype(np.int8))) + 1
-        bounds = np.concatenate(([0], cuts, [x.shape[0]]))
-        for lo, hi in itertools.pairwise(bounds):
-            if hi > lo:
-                self.state.system = self.systems[bool(loose[lo])]
-                self.state.advance(u[lo:hi], y[lo:hi])
-        return y[:, 0]
+    def measure(self, time_s: np.ndarray, true: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Measured values and per-sample fault labels (``sensor_faults.FAULT_BIT``) for
+        the true values ``true`` (channel unit) at ``time_s``."""
+        ch, t, state = self.channel, self.channel.transducer, self.state
+        k = time_s.shape[0]
+        values = np.empty(k)
+        labels = np.empty(k, dtype=sf.LABEL_DTYPE)
+        if k == 0:
+            return values, labels
+        draws = self.rng.standard_normal((k, self.n_draws))
+        first = self.systems and not state.started
+        if first:  # rest at the equilibrium of the first input, with its mounting
+            gain = np.prod(
+                [
+                    1.0 + f.size
+                    for f in sf.of_kind(ch.faults, "gain_error")
+                    if f.active(time_s[:1])[0]
+                ]
+            )
+            u0 = float(true[0]) * ch.sensitivity_ratio * float(gain)
+            loose = any(f.active(time_s[:1])[0] for f in sf.of_kind(ch.faults, "loose_mount"))
+            system = self.systems[1 if loose else 0]
+            inputs = np.zeros(system.n_inputs)
+            inputs[0] = u0
+            state.x[:] = system.static_state(inputs)
+        state.started = True
+        analog_advance(
+            np.ascontiguousarray(time_s, dtype=np.float64),
+            np.ascontiguousarray(true, dtype=np.float64),
+            float(ch.sensitivity_ratio),
+            *self.faults,
+            *self.matrices,
+            state.x,
+            state.u_prev,
+            bool(first),
+            draws,
+            self.white_gain,
+            float(t.range_min),
+            float(t.range_max),
+            t.adc_step,
+            2.0**t.adc_bits - 1.0 if t.adc_bits is not None else 0.0,
+            state.hold,
+            values,
+            labels,
+        )
+        return values, labels
 
 
 class ToneRing:
@@ -550,42 +573,39 @@ class ToneRing:
 
     def __init__(self, channel: SensorChannel) -> None:
         self.channel = channel
-        self.last: tuple[float, float] | None = None  # (time, tooth phase) of the last sample
-        self.hold = sf.HoldState()
-        self.index_hold = sf.HoldState()
+        self.faults = fault_table(channel.faults)[:3]
+        self.last = np.zeros(3)  # [has one, time s, tooth phase] of the last sample
+        self.pulse_hold = np.zeros(3)
+        self.index_hold = np.zeros(3)
 
     def advance(
         self, time_s: np.ndarray, drum_angle_rad: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Pulse and index values and the rising-edge times, s, of one block."""
-        teeth = self.channel.tone_ring_teeth
-        turns = drum_angle_rad / (2.0 * math.pi)
-        phase = teeth * turns
-        pulse = (phase - np.floor(phase) < 0.5).astype(float)
-        index = (turns - np.floor(turns) < 0.5 / teeth).astype(float)
-        t_all, p_all = time_s, phase
-        if self.last is not None:
-            t_all = np.concatenate(([self.last[0]], time_s))
-            p_all = np.concatenate(([self.last[1]], phase))
-        edges = np.empty(0)
-        if t_all.shape[0] > 1:
-            count = np.floor(p_all)
-            k = np.flatnonzero(count[1:] > count[:-1])  # a tooth's leading edge passed
-            crossing = count[k + 1]  # one edge per sample at most: << 1 tooth per sample
-            frac = (crossing - p_all[k]) / (p_all[k + 1] - p_all[k])
-            edges = t_all[k] + frac * (t_all[k + 1] - t_all[k])
-        if time_s.shape[0]:
-            self.last = (float(time_s[-1]), float(phase[-1]))
-        faults = self.channel.faults
-        pulse = sf.apply_hold(faults, time_s, pulse, self.hold)
-        index = sf.apply_hold(faults, time_s, index, self.index_hold)
-        dropped = np.zeros(time_s.shape[0], dtype=bool)
-        for f in sf.of_kind(faults, "dropout"):
-            dropped |= f.active(time_s)
-        if dropped.any() and edges.shape[0]:  # no edges reported while the sensor is out
-            at = np.searchsorted(time_s, edges)
-            edges = edges[~dropped[np.minimum(at, time_s.shape[0] - 1)]]
+        pulse, index, edges, _ = self.measure(time_s, drum_angle_rad)
         return pulse, index, edges
+
+    def measure(
+        self, time_s: np.ndarray, drum_angle_rad: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Pulse, index, rising-edge times (s) and per-sample fault labels of one block."""
+        k = time_s.shape[0]
+        pulse, index, edges = np.empty(k), np.empty(k), np.empty(k)
+        labels = np.empty(k, dtype=sf.LABEL_DTYPE)
+        n = tone_ring_advance(
+            np.ascontiguousarray(time_s, dtype=np.float64),
+            np.ascontiguousarray(drum_angle_rad, dtype=np.float64),
+            float(self.channel.tone_ring_teeth),
+            *self.faults,
+            self.last,
+            self.pulse_hold,
+            self.index_hold,
+            pulse,
+            index,
+            labels,
+            edges,
+        )
+        return pulse, index, edges[:n].copy(), labels
 
 
 class SensorBank:
@@ -644,16 +664,22 @@ class SensorBank:
             structure, names = np.empty((len(block), 0)), ()
         series: dict[str, ChannelSamples] = {}
         edges: dict[str, np.ndarray] = {}
-        index = block.first_index + np.arange(len(block))
+        first = block.first_index
         for c in self.sensors.channels:
-            keep = index % self.decimation[c.name] == 0
-            label = sf.labels(c.faults, time_s)[keep]
             path = self.paths[c.name]
             if isinstance(path, ToneRing):
-                pulse, idx, edges[c.name] = path.advance(time_s, block["drum_angle_rad"])
-                outputs = (pulse, idx)
+                pulse, idx, edges[c.name], label = path.measure(time_s, block["drum_angle_rad"])
+                outputs: tuple[np.ndarray, ...] = (pulse, idx)
             else:
-                outputs = (path.advance(time_s, self.true_value(c, block, structure)),)
+                values, label = path.measure(time_s, self.true_value(c, block, structure))
+                outputs = (values,)
+            step = self.decimation[c.name]
+            if step == 1:
+                times = time_s
+            else:  # the samples whose running index is a multiple of the decimation
+                keep = slice((-first) % step, None, step)
+                times, label = time_s[keep], label[keep]
+                outputs = tuple(o[keep] for o in outputs)
             for name, values in zip(c.output_names, outputs, strict=True):
-                series[name] = ChannelSamples(name, c.unit, time_s[keep], values[keep], label)
+                series[name] = ChannelSamples(name, c.unit, times, values, label)
         return SensorFrame(series, edges, names, structure)

@@ -1,7 +1,7 @@
 """Benchmark of the ROS node, run as a user would: a node process and a client over DDS.
 
 ``python -m brake_sim_ros.studies.node_bench [--duration S] [--scenario NAME] [--afap-seconds S]
-[--no-measured]``
+[--no-measured] [--sensors-overhead ROUNDS]``
 
 Prints:
     * CPU use of the node process at real-time factor 1, in % of one core, from
@@ -15,6 +15,11 @@ Prints:
     * the highest real-time factor: the ceiling measured as fast as possible, then a
       search down from 80 % of it for the highest factor held within 2 % with deadline
       misses on fewer than 1 % of the chunks, every topic published and subscribed.
+
+With ``--sensors-overhead ROUNDS`` it prints instead what the sensors (``~/measured``) cost
+the node: ROUNDS pairs of real-time runs of ``--duration`` seconds, one node without and
+one with ``publish_measured``, alternated so that drifts of the machine's load fall on
+both, and the extra CPU of the sensors in % of the node's CPU without them.
 
 The client subscribes to every topic with the REP 2003 consumer QoS, so the node does
 all of its publishing work. Both processes share the machine's cores.
@@ -104,6 +109,54 @@ def _sustained(factor: float, check: dict) -> bool:
     return check["rtf"] >= 0.98 * factor and check["deadline_misses"] <= 0.01 * max(
         1, check["chunks"]
     )
+
+
+def _real_time_cpu(duration_s: float, scenario: str, measured: bool) -> dict[str, float]:
+    """One node at real-time factor 1: its counters and CPU over ``duration_s``."""
+    domain = domain_id_for(91)
+    log = Path(tempfile.mkdtemp(prefix="brake_sim_bench_")) / "node.log"
+    node = NodeProcess.start(
+        ["--scenario", scenario, "--duration", "86400", "--ros-args", "-p",
+         f"publish_measured:={'true' if measured else 'false'}"],
+        domain_id=domain,
+        log_path=log,
+    )  # fmt: skip
+    client = SimClient(domain, keep_chunks=False)
+    try:
+        client.wait_for_node(60.0)
+        client.spin_for(WARM_UP_S)
+        window = _Window(client, node.pid)
+        client.spin_for(duration_s)
+        return window.close()
+    finally:
+        client.close()
+        node.stop()
+
+
+def sensors_overhead(duration_s: float, scenario: str, rounds: int) -> str:
+    """The node's extra CPU with ``publish_measured`` on, over alternated runs."""
+    load_before = os.getloadavg()[0]
+    cpu: dict[bool, list[float]] = {False: [], True: []}
+    lines = [
+        f"brake_sim node sensors overhead: scenario '{scenario}', {rounds} rounds of"
+        f" {duration_s:g} s per setting at real-time factor 1, {os.cpu_count()} CPUs, load"
+        f" average {load_before:.2f} before the start"
+    ]
+    for i in range(rounds):
+        for measured in (False, True):
+            r = _real_time_cpu(duration_s, scenario, measured)
+            cpu[measured].append(r["cpu_pct"])
+            lines.append(
+                f"  round {i + 1}, sensors {'on ' if measured else 'off'}: CPU"
+                f" {r['cpu_pct']:.1f} % of one core, real-time factor {r['rtf']:.4f},"
+                f" deadline misses {r['deadline_misses']}, gaps {r['gaps']}"
+            )
+    off, on = statistics.mean(cpu[False]), statistics.mean(cpu[True])
+    lines.append(
+        f"  mean CPU: sensors off {off:.1f} %, on {on:.1f} % of one core; the sensors add"
+        f" {100.0 * (on - off) / off:.1f} % to the node's CPU"
+    )
+    return "\n".join(lines)
 
 
 def run(
@@ -202,7 +255,21 @@ def main(argv: list[str] | None = None) -> int:
         action="store_true",
         help="run the node with publish_measured:=false (no sensors, no ~/measured)",
     )
+    parser.add_argument(
+        "--sensors-overhead",
+        type=int,
+        default=0,
+        metavar="ROUNDS",
+        help="print only the sensors' extra CPU, from ROUNDS alternated pairs of runs",
+    )
     args = parser.parse_args(argv)
+    if not 0 <= args.sensors_overhead <= 100:
+        parser.error(f"--sensors-overhead {args.sensors_overhead}: allowed 1 to 100 rounds")
+    if not 0.0 < args.duration <= 3600.0:
+        parser.error(f"--duration {args.duration:g}: allowed > 0 to 3600 s")
+    if args.sensors_overhead:
+        print(sensors_overhead(args.duration, args.scenario, args.sensors_overhead), flush=True)
+        return 0
     text = run(
         args.duration,
         args.scenario,

@@ -1,0 +1,255 @@
+"""The sensors' per-sample loops, compiled: one call per channel and block.
+
+The rules are those of :mod:`.sensors` (the analog signal path, the tone ring) and
+:mod:`.sensor_faults` (what each fault kind does, its label bit); this module is where
+they are carried out, sample by sample, so that a live node pays one compiled call per
+channel and block instead of dozens of small array operations. Carried state lives in
+small arrays the caller keeps between blocks (:class:`PathState`), so a stream in blocks
+gives the same bits as one block: every sample goes through the same operations in the
+same order whatever the block boundaries.
+
+Faults come as a table (:func:`fault_table`): per fault its kind code (index in
+``sensor_faults.FAULT_KINDS``), onset, end (onset + duration) and size, all in seconds
+of simulated time and the channel's unit. A fault is active at ``t`` when
+``onset <= t < end``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from brake_sim_ros.model import sensor_faults as sf
+from brake_sim_ros.model.lti import SampledLti
+
+KIND_CODE: dict[str, int] = {kind: i for i, kind in enumerate(sf.FAULT_KINDS)}
+BIAS_DRIFT, GAIN_ERROR, DROPOUT, STUCK, SATURATION, LOOSE_MOUNT = (
+    KIND_CODE[k]
+    for k in ("bias_drift", "gain_error", "dropout", "stuck", "saturation", "loose_mount")
+)
+# HOLD carried between blocks: the value reported at the last sample before stuck and
+# dropout were applied, whether a stuck fault was active there (0/1), the value it holds
+LAST_VALUE, WAS_STUCK, HELD = 0, 1, 2
+
+
+def fault_table(
+    faults: tuple[sf.SensorFault, ...],
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``(kind code, onset s, end s, size)`` arrays of ``faults``, in their order."""
+    return (
+        np.array([KIND_CODE[f.kind] for f in faults], dtype=np.int64),
+        np.array([f.onset_s for f in faults], dtype=np.float64),
+        np.array([f.onset_s + f.duration_s for f in faults], dtype=np.float64),
+        np.array([f.size for f in faults], dtype=np.float64),
+    )
+
+
+class PathState:
+    """What one channel carries from block to block: the hold of stuck faults and, for a
+    path with dynamics, the state ``x`` and last input ``u`` of its sampled system."""
+
+    def __init__(self, n_states: int = 0, n_inputs: int = 0) -> None:
+        self.hold = np.zeros(3)
+        self.x = np.zeros(n_states)
+        self.u_prev = np.zeros(n_inputs)
+        self.started = False
+
+
+def stack_systems(systems: list[SampledLti]) -> tuple[np.ndarray, ...]:
+    """``(phi, g_prev, g_next, c, d)`` of same-shaped systems stacked on a first axis (the
+    nominal mounting first, then a loose mount's). ``g_prev`` keeps the signal's column
+    only: a noise draw enters at its own sample (``lti.with_input_noise``), so its
+    ``g_prev`` columns are zero."""
+    return tuple(
+        np.ascontiguousarray(np.stack([m[:, :1] if a == "g_prev" else m for m in mats]))
+        for a, mats in (
+            (a, [getattr(s, a) for s in systems]) for a in ("phi", "g_prev", "g_next", "c", "d")
+        )
+    )
+
+
+def no_systems() -> tuple[np.ndarray, ...]:
+    """The placeholder of :func:`stack_systems` for a path without dynamics."""
+    return tuple(np.zeros((1, 0, 0)) for _ in range(5))
+
+
+@njit(cache=True)
+def _hold(value, stuck, dropped, hold):  # pragma: no cover - compiled
+    """Stuck, then dropout, on one reported value; updates ``hold`` (module HOLD)."""
+    out = value
+    if stuck:
+        if hold[WAS_STUCK] == 0.0:
+            hold[HELD] = hold[LAST_VALUE]  # the value before the run began
+        out = hold[HELD]
+    hold[LAST_VALUE] = value
+    hold[WAS_STUCK] = 1.0 if stuck else 0.0
+    if dropped:
+        out = np.nan
+    return out
+
+
+@njit(cache=True)
+def analog_advance(  # pragma: no cover - compiled
+    time_s,
+    true,
+    sensitivity,
+    f_kind,
+    f_onset,
+    f_end,
+    f_size,
+    phi,
+    g_prev,
+    g_next,
+    c,
+    d,
+    x,
+    u_prev,
+    first,
+    draws,
+    white_gain,
+    range_min,
+    range_max,
+    adc_step,
+    adc_top,
+    hold,
+    values,
+    labels,
+):
+    """One block of an analog channel (``sensors`` module docstring, in that order):
+    ``true`` (k,) in the channel unit at ``time_s`` (k,) -> ``values`` (k,), ``labels``
+    (k,) uint8.
+
+    ``phi ... d`` hold the path's sampled systems (index 1: loose mount), of zero size for
+    a path without dynamics; ``x`` and ``u_prev`` (1,: the last sample's scaled true
+    value) their carried state. On the ``first`` block ``x`` is the caller's equilibrium
+    for sample 0, and sample 0 is output, not advanced to. ``draws`` (k, n): the block's
+    unit normal draws (n = the states of a path with dynamics, 1 without, 0 without
+    noise); ``white_gain`` their scale without dynamics. ``adc_step`` 0: no ADC.
+    ``hold`` is updated in place."""
+    n_x = phi.shape[1]
+    n_draw = draws.shape[1]
+    n_u = 1 + n_draw if n_x > 0 else 1
+    x_new = np.empty(n_x)
+    u = np.empty(n_u)
+    for k in range(time_s.shape[0]):
+        t = time_s[k]
+        gain = 1.0
+        bias = 0.0
+        limit = np.inf
+        loose = 0
+        stuck = False
+        dropped = False
+        label = 0
+        for i in range(f_kind.shape[0]):
+            if not (t >= f_onset[i] and t < f_end[i]):
+                continue
+            kind = f_kind[i]
+            label |= 1 << kind
+            if kind == GAIN_ERROR:
+                gain *= 1.0 + f_size[i]
+            elif kind == BIAS_DRIFT:
+                bias += f_size[i] * (t - f_onset[i])
+            elif kind == SATURATION:
+                limit = min(limit, f_size[i])
+            elif kind == LOOSE_MOUNT:
+                loose = 1
+            elif kind == STUCK:
+                stuck = True
+            elif kind == DROPOUT:
+                dropped = True
+        labels[k] = label
+        v = true[k] * sensitivity * gain
+        if n_x > 0:
+            u[0] = v
+            for j in range(n_draw):
+                u[j + 1] = draws[k, j]
+            s = loose if phi.shape[0] > 1 else 0
+            a, gp, gn = phi[s], g_prev[s], g_next[s]
+            if not (first and k == 0):
+                for i in range(n_x):
+                    acc = 0.0
+                    for j in range(n_x):
+                        acc += a[i, j] * x[j]
+                    acc += gp[i, 0] * u_prev[0] + gn[i, 0] * u[0]
+                    for j in range(1, n_u):
+                        acc += gn[i, j] * u[j]
+                    x_new[i] = acc
+                for i in range(n_x):
+                    x[i] = x_new[i]
+            u_prev[0] = v
+            acc = 0.0
+            for j in range(n_x):
+                acc += c[s, 0, j] * x[j]
+            acc += d[s, 0, 0] * v  # D is zero on the noise inputs (lti.with_input_noise)
+            v = acc
+        elif n_draw > 0:
+            v = v + white_gain * draws[k, 0]
+        v = v + bias
+        lo = max(range_min, -limit)
+        hi = min(range_max, limit)
+        if v < lo:
+            v = lo
+        if v > hi:
+            v = hi
+        if adc_step > 0.0:
+            code = np.rint((v - range_min) / adc_step)
+            if code < 0.0:
+                code = 0.0
+            if code > adc_top:
+                code = adc_top
+            v = range_min + code * adc_step
+        values[k] = _hold(v, stuck, dropped, hold)
+
+
+@njit(cache=True)
+def tone_ring_advance(  # pragma: no cover - compiled
+    time_s,
+    drum_angle_rad,
+    teeth,
+    f_kind,
+    f_onset,
+    f_end,
+    last,
+    pulse_hold,
+    index_hold,
+    pulse,
+    index,
+    labels,
+    edges,
+):
+    """One block of a wheel-speed channel: ``pulse``, ``index`` and ``labels`` (k,) and
+    the rising-edge times into ``edges`` (at most one per sample); returns the number of
+    edges. ``last`` = [has a previous sample (0/1), its time s, its tooth phase], updated.
+    An edge between two samples is dropped when the later sample is in a dropout."""
+    n_edges = 0
+    two_pi = 2.0 * math.pi
+    for k in range(time_s.shape[0]):
+        t = time_s[k]
+        stuck = False
+        dropped = False
+        label = 0
+        for i in range(f_kind.shape[0]):
+            if t >= f_onset[i] and t < f_end[i]:
+                label |= 1 << f_kind[i]
+                if f_kind[i] == STUCK:
+                    stuck = True
+                elif f_kind[i] == DROPOUT:
+                    dropped = True
+        labels[k] = label
+        turns = drum_angle_rad[k] / two_pi
+        phase = teeth * turns
+        p = 1.0 if phase - np.floor(phase) < 0.5 else 0.0
+        q = 1.0 if turns - np.floor(turns) < 0.5 / teeth else 0.0
+        if last[0] != 0.0:
+            t0, p0 = last[1], last[2]
+            crossing = np.floor(phase)
+            if crossing > np.floor(p0) and not dropped:  # a tooth's leading edge passed
+                frac = (crossing - p0) / (phase - p0)
+                edges[n_edges] = t0 + frac * (t - t0)
+                n_edges += 1
+        last[0], last[1], last[2] = 1.0, t, phase
+        pulse[k] = _hold(p, stuck, dropped, pulse_hold)
+        index[k] = _hold(q, stuck, dropped, index_hold)
+    return n_edges
