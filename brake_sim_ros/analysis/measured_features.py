@@ -181,6 +181,7 @@ class CaseSeparation:
         seeds: the noise seeds measured.
         quiet_rms: noise rms per channel before any force, m/s^2.
         sample_period_s: the samples' period, s.
+        duration_s: the symmetric stop's measured duration, s.
         per_seed: each case's features for each seed, in ``seeds`` order.
         comparisons: for each case other than ``base``, each feature's comparison.
     """
@@ -189,6 +190,7 @@ class CaseSeparation:
     seeds: tuple[int, ...]
     quiet_rms: dict[str, float]
     sample_period_s: float
+    duration_s: float
     per_seed: dict[str, list[dict[str, float]]]
     comparisons: dict[str, dict[str, FeatureComparison]]
 
@@ -277,6 +279,7 @@ def measure_cases(
         tuple(seeds),
         quiet,
         period,
+        len(samples[base]) * period,
         per_seed,
         compare_cases(per_seed, base, separation_rules(period)),
     )
