@@ -102,3 +102,38 @@ def test_features_refuse_a_stop_too_short_for_the_window():
         mf.measure_cases(samples, "symmetric", sample_rate_hz=RATE_HZ, seeds=(0, 1))
     with pytest.raises(ValueError, match="two"):
         mf.measure_cases(samples, "symmetric", sample_rate_hz=RATE_HZ, seeds=(0,))
+
+
+def test_validation_section_names_the_separating_features_or_says_none():
+    """The report's section on synthetic figures: a verdict for every case, the separating
+    features named, a case that nothing separates said to be not separated."""
+    from brake_sim_ros.studies.validation import measured_markdown
+
+    def row(first: float, x: float, y: float) -> dict[str, float]:
+        return {mf.FIRST_IMPACT: first, "band rms x": x, "band rms y": y, mf.CLIPPED: 3.0}
+
+    per_seed = {
+        "symmetric": [row(221.0, 50.0, 80.0), row(221.0, 50.01, 80.01)],
+        "case_a": [row(219.0, 50.0, 80.0), row(219.0, 50.01, 80.01)],  # first impact only
+        "case_b": [row(221.0, 51.0, 81.0), row(221.0, 51.01, 81.01)],  # 2 %: below the floor
+    }
+    period = 1.0 / RATE_HZ
+    result = mf.CaseSeparation(
+        "symmetric",
+        (0, 1),
+        {c: 0.03 for c in mf.AXES_CHANNELS},
+        period,
+        0.6,
+        per_seed,
+        mf.compare_cases(per_seed, "symmetric", mf.separation_rules(period)),
+    )
+    contacts = {"left": 221.0, "right": 221.0}
+    fig = {
+        "cases": {"1": {"scenario": "case_a"}, "2": {"scenario": "case_b"}},
+        "measured": {"first_contact_ms": dict.fromkeys(("symmetric", "1", "2"), contacts)},
+    }
+    text = "\n".join(measured_markdown(result, fig))
+    assert "* 1 (case_a): separated by first impact\n" in text
+    assert "* 2 (case_b): **not separated** by any feature" in text
+    assert "1 of 2 cases are separated by at least one feature; not separated: 2 (case_b)." in text
+    assert text.count("| 1 (case_a) |") == len(mf.FEATURES)
