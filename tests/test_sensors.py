@@ -115,6 +115,16 @@ def test_the_default_accelerometers_clip_in_the_first_impacts(stop):
     assert y.max() == transducer.range_max - transducer.adc_step or y.min() == transducer.range_min
 
 
+def test_the_100_g_preset_keeps_the_first_impacts_in_range(stop):
+    """The +-100 g part of the same family reports the same stop unclipped, within its
+    range, with peaks beyond the 50 g part's."""
+    wide = SensorSet(channels=(accelerometer("acc_y", "backing_plate", "y", "adxl1001_class"),))
+    transducer = TRANSDUCER_PRESETS["accelerometer"]["adxl1001_class"]
+    y = SensorBank(wide, FS, seed=0).advance(stop)["acc_y"].values
+    assert transducer.range_min < y.min() and y.max() < transducer.range_max - transducer.adc_step
+    assert np.abs(y).max() > 50.0 * 9.80665
+
+
 def test_one_seed_gives_the_same_bits_two_seeds_independent_noise(stop):
     a = SensorBank(SensorSet(), FS, seed=1).advance(stop)
     b = SensorBank(SensorSet(), FS, seed=1).advance(stop)

@@ -51,6 +51,9 @@ adding or reordering channels does not change another channel's noise.
   anti-alias filter (4th-order Butterworth at 0.45 of the output rate, assumed: what a
   condition-monitoring DAQ does below its Nyquist frequency). Without it the noise of the
   21 kHz resonance folds into the band at 25.6 kHz.
+* accelerometer ``adxl1001_class``: the same family's +-100 g part (ADXL1001 datasheet:
+  30 ug/sqrt(Hz), 11 kHz, 21 kHz resonance), with the same DAQ: for mounts whose impacts
+  exceed 50 g, at 1.2 times the noise.
 * accelerometer ``consumer_imu_class`` (MPU-9250-like): 300 ug/sqrt(Hz), about 1 kHz
   bandwidth, +-16 g with 16 bits (that IMU's widest range and its ADC); no resonance in band.
 * ``pressure_transducer``: 0-250 bar, bandwidth 1 kHz (TESTBED), noise 0.003 bar/sqrt(Hz)
@@ -67,9 +70,9 @@ assumed; the published 1300 N is then 46 bar).
 What they give in the published event (``brake-sim bench sensors``, tests/test_sensors.py):
 a noise floor of about 2.8 mg rms per accelerometer axis; first impacts that exceed the
 +-50 g range at the backing plate (the y axis reaches about 93 g before the sensor), so
-they are reported clipped for a few samples, as a real ADXL1002 there would (widen
-``range_min``/``range_max`` to keep them); below the actuation the line pressure reads a
-few hundredths of a bar, its noise clipped at 0 bar.
+they are reported clipped for a few samples, as a real ADXL1002 there would (the
+``adxl1001_class`` preset keeps them, at 1.2 times the noise); below the actuation the
+line pressure reads a few hundredths of a bar, its noise clipped at 0 bar.
 """
 
 from __future__ import annotations
@@ -249,6 +252,7 @@ IDEAL = Transducer()
 TRANSDUCER_PRESETS: dict[str, dict[str, Transducer]] = {
     "accelerometer": {
         "adxl1002_class": _accel("adxl1002_class", 25.0, 11_000.0, 21_000.0, 50.0, 24, 0.45),
+        "adxl1001_class": _accel("adxl1001_class", 30.0, 11_000.0, 21_000.0, 100.0, 24, 0.45),
         "consumer_imu_class": _accel("consumer_imu_class", 300.0, 1_000.0, None, 16.0, 16, None),
         "ideal": IDEAL,
     },
@@ -631,14 +635,16 @@ class SensorBank:
                 if c.kind == "wheel_speed"
                 else AnalogPath(c, self.sample_period_s, seed)
             )
-
-    @property
-    def output_decimation(self) -> dict[str, int]:
-        """Scenario samples per sample of each output series (a wheel speed's index series
-        is sampled with it): series k of a block is taken at the sample indices that are
-        multiples of this."""
-        return {
-            name: self.decimation[c.name] for c in self.sensors.channels for name in c.output_names
+        # Scenario samples per sample of each output series (a wheel speed's index series
+        # is sampled with it): series k of a block is taken at the sample indices that are
+        # multiples of this.
+        self.output_decimation: dict[str, int] = {
+            name: self.decimation[c.name] for c in sensors.channels for name in c.output_names
+        }
+        self._structure_column = {
+            c.name: self.structure.names.index(f"{c.location}_accel_{c.axis}_m_s2")
+            for c in sensors.channels
+            if c.kind == "accelerometer" and self.structure is not None
         }
 
     def true_value(
@@ -646,9 +652,7 @@ class SensorBank:
     ) -> np.ndarray:
         """What the channel measures, before its signal path, channel unit."""
         if channel.kind == "accelerometer":
-            assert self.structure is not None
-            col = self.structure.names.index(f"{channel.location}_accel_{channel.axis}_m_s2")
-            return structure[:, col]
+            return structure[:, self._structure_column[channel.name]]
         if channel.kind == "load_pin":  # the force on the plate: opposite of the pin's
             return -block[f"{channel.location}_pivot_f{channel.axis}_n"]
         area_m2 = math.pi * channel.piston_diameter_m**2 / 4.0
@@ -656,7 +660,7 @@ class SensorBank:
         return mean_force / area_m2 / PA_PER_BAR
 
     def advance(self, block: SampleBlock) -> SensorFrame:
-        time_s = block.time_s
+        time_s = np.ascontiguousarray(block.time_s)
         if self.structure is not None:
             structure = self.structure.advance(block)
             names = self.structure.names
