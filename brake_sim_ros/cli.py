@@ -8,7 +8,6 @@ from __future__ import annotations
 import argparse
 import contextlib
 import dataclasses
-import json
 import math
 import os
 import sys
@@ -58,7 +57,7 @@ MAX_SIMULATE_DURATION_S = 3600.0
 MAX_HISTORY_BYTES = 2 * 1024**3
 # --out formats: suffix -> what it is
 HISTORY_FORMATS = {
-    ".npz": "numpy; pandas via pd.DataFrame(dict(np.load(f)))",
+    ".npz": "numpy, the Parquet table's columns; pandas via pd.DataFrame(dict(np.load(f)))",
     ".csv": "comma-separated with a header line",
     ".parquet": "Apache Parquet: samples and the scenario's measured sensor channels",
 }
@@ -240,7 +239,7 @@ def _write_history(job: SimulateJob, result: RunResult) -> None:
     }
     with job.atomic("--out") as partial:
         try:
-            if path.suffix == ".parquet":
+            if path.suffix in (".parquet", ".npz"):
                 from brake_sim_ros.datasets import parquet
                 from brake_sim_ros.stream.build import sensor_bank_for
 
@@ -249,10 +248,13 @@ def _write_history(job: SimulateJob, result: RunResult) -> None:
                 table = parquet.history_table(
                     result.samples, sensor_bank_for(scenario), {**meta, "columns": "units in names"}
                 )
-                parquet.write_history(partial, table)
-            elif path.suffix == ".npz":
-                with open(partial, "wb") as f:
-                    np.savez_compressed(f, **columns, metadata=np.array(json.dumps(meta)))
+                if path.suffix == ".parquet":
+                    parquet.write_history(partial, table)
+                else:  # the same columns; the metadata as JSON text
+                    arrays = parquet.history_arrays(table)
+                    meta_json = table.schema.metadata[parquet.METADATA_KEY].decode()
+                    with open(partial, "wb") as f:
+                        np.savez_compressed(f, **arrays, metadata=np.array(meta_json))
             else:
                 names = list(columns)
                 data = np.column_stack([columns[n] for n in names])

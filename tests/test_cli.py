@@ -325,3 +325,49 @@ def test_scenarios_channels_refuses_a_hostile_file_in_one_line(tmp_path, kind):
     lines = r.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("brake-sim: error: "), lines
     assert secret not in r.stderr and "Traceback" not in r.stderr
+
+
+def test_simulate_parquet_and_npz_hold_the_tone_ring_edges_on_their_samples(tmp_path):
+    """``measured:wheel_speed_edge_time [s]``, read back by pyarrow and by numpy: each edge
+    of the run on the row of the first sample at or after it, NaN on every other row, and
+    the same column in the NPZ file as in the Parquet one."""
+    pq = pytest.importorskip("pyarrow.parquet")
+    from brake_sim_ros.stream.build import sensor_bank_for
+
+    name = "measured:wheel_speed_edge_time [s]"
+    out = tmp_path / "run.parquet"
+    r = _cli("simulate", "symmetric", "--duration", "0.3", "--out", str(out), "--quiet")
+    assert r.returncode == 0, r.stderr
+    table = pq.read_table(out)
+    field = table.schema.field(name)
+    assert field.type == "double"
+    assert field.metadata[b"unit"] == b"s" and field.metadata[b"tone_ring_teeth"] == b"48"
+    column = table[name].to_numpy()
+    assert table[name].null_count == 0
+    scenario = load_scenario("symmetric")
+    run = run_scenario(scenario, duration_s=0.3)
+    edges = sensor_bank_for(scenario).advance(run.samples).edges_s["wheel_speed"]
+    rows = np.flatnonzero(~np.isnan(column))
+    assert edges.size > 50 and rows.size == edges.size
+    assert column[rows].tobytes() == edges.tobytes()
+    t = table["time_s"].to_numpy()
+    assert np.all((t[rows - 1] < column[rows]) & (column[rows] <= t[rows]))
+    npz = tmp_path / "run.npz"
+    r = _cli("simulate", "symmetric", "--duration", "0.3", "--out", str(npz), "--quiet")
+    assert r.returncode == 0, r.stderr
+    data = np.load(npz)
+    assert data[name].tobytes() == column.tobytes()
+    for measured in ("measured:wheel_speed [1]", "measured:backing_plate_accel_y [m/s^2]"):
+        assert data[measured].tobytes() == table[measured].to_numpy().tobytes()
+    assert data["fault:line_pressure"].dtype == np.uint8
+
+
+def test_two_edges_in_one_sample_interval_are_refused():
+    from brake_sim_ros.datasets.parquet import edges_on_rows
+
+    t = np.arange(5) * 0.1
+    np.testing.assert_array_equal(
+        edges_on_rows(t, np.array([0.05, 0.3])), [np.nan, 0.05, np.nan, 0.3, np.nan]
+    )
+    with pytest.raises(ValueError, match="more than one edge"):
+        edges_on_rows(t, np.array([0.21, 0.29]))

@@ -350,3 +350,39 @@ def test_measured_channels_are_plotted_with_their_sensor_faults(tmp_path: Path):
     assert "sensor line_pressure: fault dropout" in events
     assert "sensor line_pressure: fault none" in events
     assert not any("slow_x: fault" in e for e in events)
+
+
+def test_wheel_speed_from_edges_is_what_an_abs_controller_computes(tmp_path: Path):
+    """measured/wheel_speed_from_edges: one value per tone-ring edge after the first, at
+    the edge's time, (2 pi / teeth) / (interval to the previous edge) rad/s, the previous
+    edge carried across chunks; it follows the drum speed of the run."""
+    from brake_sim_ros.viz.measured import edge_speed_path
+
+    scenario = load_scenario("symmetric")
+    path = tmp_path / "edges.rrd"
+    rec = rr.RecordingStream("brake_sim_test")
+    rec.save(path)
+    sink = RerunSink(rec, params=scenario.setup.params)
+    chunks = []
+    measured = StreamSettings(publish_measured=True)
+    for topic, msg, ns in offline_messages(scenario, duration_s=0.4, settings=measured):
+        sink.write(topic, msg, ns)
+        if topic is stream.MEASURED:
+            chunks.append(msg)
+    sink.close()
+    verify(path)
+    c = read(path)
+    edges = conversion.measured_edges(chunks)["wheel_speed"]
+    teeth = chunks[0].tone_ring_teeth[0]
+    entity = edge_speed_path("wheel_speed")
+    assert entity == f"{E.MEASURED}/wheel_speed_from_edges"
+    assert edges.size > 100 and sum(len(m.edge_times_s) > 0 for m in chunks) > 30
+    times = c.times(entity)
+    np.testing.assert_array_equal(times, np.round(edges[1:] * 1e9).astype(np.int64))
+    values = c.values(entity)
+    expected = (2 * np.pi / teeth) / np.diff(edges)
+    np.testing.assert_array_equal(np.sort(values), np.sort(expected))
+    run = run_scenario(scenario, duration_s=0.4)
+    middle = 0.5 * (edges[1:] + edges[:-1])
+    true = np.interp(middle, run.samples.time_s, run.samples["drum_speed_rad_s"])
+    assert np.max(np.abs(expected / true - 1)) < 0.02

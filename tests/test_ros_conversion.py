@@ -6,6 +6,7 @@ where they are not installed.
 
 from __future__ import annotations
 
+import itertools
 import math
 import uuid
 
@@ -323,3 +324,54 @@ def test_measured_stream_same_seed_same_bits_other_seed_other_noise():
     assert a["backing_plate_accel_x"].tobytes() != other["backing_plate_accel_x"].tobytes()
     assert a["wheel_speed"].tobytes() == other["wheel_speed"].tobytes()  # no noise there
     assert _measured(scenario, publish_measured=False) == {}
+
+
+def _measured_chunks(scenario, duration_s: float, **settings) -> list:
+    from brake_sim_ros.stream.offline import StreamSettings
+
+    settings = {"publish_measured": True, **settings}
+    messages = offline_messages(
+        scenario, duration_s=duration_s, settings=StreamSettings(**settings)
+    )
+    return [msg for topic, msg, _ns in messages if topic is stream.MEASURED]
+
+
+def test_every_tone_ring_edge_is_in_exactly_one_chunk_at_its_drum_angle():
+    """The chunks' edges, joined, are the edges of the run fed to the sensors as one block,
+    bit for bit, whatever the chunking; each chunk holds those in (previous chunk's last
+    sample, its last sample]; and the drum angle at consecutive edges (interpolated in the
+    run's samples) is one tooth pitch, 2 pi / teeth, apart."""
+    from brake_sim_ros.stream.build import sensor_bank_for
+    from brake_sim_ros.stream.run import run_scenario
+
+    scenario = load_scenario("symmetric")
+    duration_s = 0.5
+    run = run_scenario(scenario, duration_s=duration_s)
+    whole = sensor_bank_for(scenario).advance(run.samples).edges_s
+    (teeth,) = [c.tone_ring_teeth for c in scenario.sensors.channels if c.kind == "wheel_speed"]
+    for chunk_rate_hz in (100.0, 37.0):  # 256 samples a chunk; 692
+        chunks = _measured_chunks(scenario, duration_s, chunk_rate_hz=chunk_rate_hz)
+        assert [list(m.edge_channel_names) for m in chunks[:1]] == [["wheel_speed"]]
+        assert all(list(m.tone_ring_teeth) == [teeth] for m in chunks)
+        joined = conversion.measured_edges(chunks)
+        assert joined.keys() == whole.keys() == {"wheel_speed"}
+        assert joined["wheel_speed"].tobytes() == whole["wheel_speed"].tobytes()
+        period = 1 / scenario.sample_rate_hz
+        for prev, msg in itertools.pairwise(chunks):
+            edges = np.asarray(msg.edge_times_s)
+            lo = (prev.first_sample_index + prev.sample_count - 1) * period
+            hi = (msg.first_sample_index + msg.sample_count - 1) * period
+            assert np.all((edges > lo) & (edges <= hi)), msg.first_sample_index
+    edges = whole["wheel_speed"]
+    assert edges.size > 200 and np.all(np.diff(edges) > 0)
+    angle = np.interp(edges, run.samples.time_s, run.samples["drum_angle_rad"])
+    pitch = 2 * np.pi / teeth
+    np.testing.assert_allclose(np.diff(angle), pitch, rtol=1e-9)
+    np.testing.assert_allclose(angle / pitch, np.round(angle / pitch), rtol=0, atol=1e-9)
+
+
+def test_measured_edges_refuses_counts_that_do_not_add_up():
+    (msg,) = _measured_chunks(load_scenario("symmetric"), 0.01)
+    msg.edge_counts = [len(msg.edge_times_s) + 1]
+    with pytest.raises(ValueError, match="edge counts say"):
+        conversion.measured_edges([msg])

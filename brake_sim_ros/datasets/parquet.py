@@ -11,7 +11,15 @@ One row per sample of the scenario's rate. Columns, units in the names:
   the sensor; null on rows a slower channel does not sample) and ``fault:<name>``
   (uint8, OR of ``sensor_faults.FAULT_BIT``; 0 = no sensor fault; null likewise).
 
-Each measured column's field metadata gives ``unit``, ``rate_hz`` and ``decimation``.
+* per wheel-speed channel (a tone ring), ``measured:<name>_edge_time [s]`` (float64): the
+  simulated time of the tone ring's rising edge that occurred in (previous sample's time,
+  this sample's time], NaN on rows without one (:func:`edge_time_column`). The model
+  reports at most one edge per sample interval (it assumes much less than a tooth pitch
+  per sample: 48 teeth at 25.6 kHz allow up to 3350 rad/s); two on one row are refused.
+  Speed from consecutive edges: ``(2 pi / teeth) / diff(edge times)`` rad/s.
+
+Each measured column's field metadata gives ``unit``, ``rate_hz`` and ``decimation``; an
+edge-time column's gives ``unit`` and ``tone_ring_teeth``.
 The file's key-value metadata ``brake_sim`` holds JSON: the run parameters the caller
 gives (scenario, method, seed, rates, ...) and ``fault_bits``.
 """
@@ -40,6 +48,33 @@ def measured_column(name: str, unit: str) -> str:
 
 def fault_column(name: str) -> str:
     return f"fault:{name}"
+
+
+def edge_time_column(name: str) -> str:
+    """The column of a wheel-speed channel's edge times (``name``: the channel's)."""
+    return measured_column(f"{name}_edge_time", "s")
+
+
+def edges_on_rows(time_s: np.ndarray, edges_s: np.ndarray) -> np.ndarray:
+    """Sample-aligned edge times: row k holds the edge in (time_s[k-1], time_s[k]], NaN
+    where there is none (row 0: an edge at time_s[0]).
+
+    Args:
+        time_s: sample times, s, ascending, shape (n,).
+        edges_s: edge times, s, ascending, within [time_s[0], time_s[-1]].
+
+    Raises:
+        ValueError: two edges fall on one row (more than one tooth per sample).
+    """
+    out = np.full(time_s.shape[0], np.nan)
+    rows = np.searchsorted(time_s, edges_s, side="left")
+    if rows.size and (np.any(np.diff(rows) == 0) or rows[-1] >= time_s.shape[0]):
+        raise ValueError(
+            "tone-ring edges: more than one edge in a sample interval, or one after the last"
+            " sample; a sample-aligned column holds one per sample"
+        )
+    out[rows] = edges_s
+    return out
 
 
 def history_table(
@@ -79,9 +114,29 @@ def history_table(
             fields.append(pa.field(value_name, pa.float64(), metadata=info))
             columns[fault_column(name)] = pa.array(labels, mask=~sampled)
             fields.append(pa.field(fault_column(name), pa.uint8(), metadata=info))
+        teeth = {c.name: c.tone_ring_teeth for c in sensors.sensors.channels}
+        for name, edges in frame.edges_s.items():
+            edge_name = edge_time_column(name)
+            columns[edge_name] = pa.array(edges_on_rows(np.asarray(samples.time_s), edges))
+            info = {b"unit": b"s", b"tone_ring_teeth": str(teeth[name]).encode()}
+            fields.append(pa.field(edge_name, pa.float64(), metadata=info))
     meta = {**metadata, "fault_bits": FAULT_BIT}
     schema = pa.schema(fields, metadata={METADATA_KEY: json.dumps(meta).encode()})
     return pa.Table.from_arrays([columns[f.name] for f in fields], schema=schema)
+
+
+def history_arrays(table: pa.Table) -> dict[str, np.ndarray]:
+    """The columns of a :func:`history_table` as numpy arrays, for an NPZ file: the same
+    names; a null (a row a slower channel does not sample) becomes NaN in a measured column
+    and 0 in a fault column (a dropout, also NaN, carries its fault bit)."""
+    out = {}
+    for name in table.column_names:
+        column = table[name]
+        if pa.types.is_floating(column.type):
+            out[name] = column.to_numpy(zero_copy_only=False)  # null -> NaN
+        else:
+            out[name] = column.fill_null(0).to_numpy()
+    return out
 
 
 def write_history(path: str | os.PathLike[str], table: pa.Table) -> None:

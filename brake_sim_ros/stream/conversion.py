@@ -13,7 +13,7 @@ import array
 import dataclasses
 import math
 import uuid
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from fractions import Fraction
 
 import numpy as np
@@ -33,7 +33,7 @@ from brake_sim_ros.analysis import contact_events
 from brake_sim_ros.analysis.onsets import in_contact
 from brake_sim_ros.model.defects import Defects
 from brake_sim_ros.model.parameters import BrakeParameters
-from brake_sim_ros.model.sensors import SensorFrame
+from brake_sim_ros.model.sensors import SensorBank, SensorFrame
 from brake_sim_ros.model.trajectory import SampleBlock
 
 FRAME_ID = "brake_backing_plate"
@@ -114,18 +114,26 @@ def pivot_force_chunk(block: SampleBlock) -> PivotForceChunk:
     )
 
 
-def measured_chunk(
-    block: SampleBlock, frame: SensorFrame, decimation: dict[str, int]
-) -> MeasuredChunk:
-    """What the sensors measured over ``block`` (``frame``: the bank's output for it;
-    ``decimation``: the bank's ``output_decimation``), channel-major; stamp = time of
-    the block's first sample."""
+def measured_chunk(block: SampleBlock, frame: SensorFrame, sensors: SensorBank) -> MeasuredChunk:
+    """What the sensors measured over ``block`` (``frame``: the bank ``sensors``'s output for
+    it), channel-major; stamp = time of the block's first sample.
+
+    The tone-ring edges are the frame's (``SensorFrame.edges_s``, simulated time in s): the
+    bank carries each ring's last sample from block to block, so a chunk holds the edges in
+    (previous block's last sample, this block's last sample] and every edge of a run is in
+    exactly one chunk."""
+    decimation = sensors.output_decimation
+    teeth = {c.name: c.tone_ring_teeth for c in sensors.sensors.channels}
     series = list(frame.series.values())
     values = array.array("d")
     labels = array.array("B")
     for s in series:
         values.frombytes(np.ascontiguousarray(s.values, dtype=np.float64).tobytes())
         labels.frombytes(np.ascontiguousarray(s.fault_label, dtype=np.uint8).tobytes())
+    edge_names = list(frame.edges_s)
+    edge_times = array.array("d")
+    for name in edge_names:
+        edge_times.frombytes(np.ascontiguousarray(frame.edges_s[name], dtype=np.float64).tobytes())
     return MeasuredChunk(
         header=header(stamp_ns(block.first_index, block.sample_period_s)),
         first_sample_index=int(block.first_index),
@@ -137,7 +145,33 @@ def measured_chunk(
         channel_sample_counts=array.array("I", [len(s.values) for s in series]),
         values=values,
         fault_labels=labels,
+        edge_channel_names=edge_names,
+        tone_ring_teeth=array.array("I", [teeth[n] for n in edge_names]),
+        edge_counts=array.array("I", [len(frame.edges_s[n]) for n in edge_names]),
+        edge_times_s=edge_times,
     )
+
+
+def measured_edges(msgs: Iterable[MeasuredChunk]) -> dict[str, np.ndarray]:
+    """The tone-ring edge times, s, of each wheel-speed channel over ``msgs`` (consecutive
+    chunks of one run, in order), joined: the inverse of :func:`measured_chunk` for edges.
+
+    Raises:
+        ValueError: a chunk whose ``edge_counts`` do not add up to its ``edge_times_s``.
+    """
+    parts: dict[str, list[np.ndarray]] = {}
+    for msg in msgs:
+        times = np.asarray(msg.edge_times_s, dtype=np.float64)
+        counts = [int(c) for c in msg.edge_counts]
+        if sum(counts) != times.size or len(counts) != len(msg.edge_channel_names):
+            raise ValueError(
+                f"measured chunk at sample {msg.first_sample_index}: {times.size} edge times,"
+                f" its edge counts say {sum(counts)}"
+            )
+        bounds = np.cumsum([0, *counts])
+        for k, name in enumerate(msg.edge_channel_names):
+            parts.setdefault(name, []).append(times[bounds[k] : bounds[k + 1]])
+    return {name: np.concatenate(p) for name, p in parts.items()}
 
 
 def state_rows(block: SampleBlock, stride: int) -> list[int]:

@@ -91,7 +91,7 @@ def block_messages(
         frame = sensors.advance(block)
         yield (
             MEASURED,
-            conversion.measured_chunk(block, frame, sensors.output_decimation),
+            conversion.measured_chunk(block, frame, sensors),
             conversion.stamp_ns(block.first_index, dt),
         )
     for event in contact_events.feed(block):

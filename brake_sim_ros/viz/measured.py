@@ -2,6 +2,11 @@
 ``measured/<channel>`` (its unit in the series name), and an event whenever a channel's
 sensor-fault label changes (ground truth: a sensor fault, not a brake defect).
 
+From each wheel-speed channel's tone-ring edges, ``measured/<channel>_from_edges``: the
+speed an ABS controller computes, ``(2 pi / teeth) / (t[k] - t[k-1])`` rad/s, logged at
+each edge time ``t[k]`` (the previous edge carried from chunk to chunk; an interval that
+spans a dropout, with its edges missing, reads low, as it would in the controller).
+
 Every sample is sent to files; with ``envelope_hz`` (live viewers) only the smallest and
 largest value of each ``1 / envelope_hz`` bucket, at their own times, as for the pivot
 forces. Values are sent as columns, one ``send_columns`` per channel and chunk.
@@ -25,6 +30,11 @@ def fault_names(label: int) -> str:
     return ", ".join(k for k, bit in FAULT_BIT.items() if label & bit) or "none"
 
 
+def edge_speed_path(channel: str) -> str:
+    """Entity of the speed from a wheel-speed channel's edges, rad/s."""
+    return f"{E.MEASURED}/{channel}_from_edges"
+
+
 class MeasuredSeries:
     """Logs MeasuredChunks; remembers each channel's last fault label and styles sent."""
 
@@ -34,10 +44,12 @@ class MeasuredSeries:
         self._styled: set[str] = set()
         self._labels: dict[str, int] = {}
         self.samples_logged = 0  # values received, every channel
+        self._last_edge_s: dict[str, float] = {}
 
     def restart(self) -> None:
-        """A reset: fault labels start again from healthy."""
+        """A reset: fault labels start again from healthy; edge intervals start afresh."""
         self._labels.clear()
+        self._last_edge_s.clear()
 
     def on_chunk(self, msg: Any) -> None:
         rate = float(msg.sample_rate_hz)
@@ -68,6 +80,7 @@ class MeasuredSeries:
             send_scalar_columns(self.rec, path, ns[keep], chunk_values[keep])
             self.samples_logged += count
             self._fault_events(name, chunk_labels, ns)
+        self._edge_speeds(msg)
         if start != values.size or start != labels.size:
             log_event(
                 self.rec,
@@ -76,6 +89,41 @@ class MeasuredSeries:
                 f" labels, its channel counts say {start}",
                 "WARN",
             )
+
+    def _edge_speeds(self, msg: Any) -> None:
+        """``measured/<channel>_from_edges``: rad/s from consecutive tone-ring edges."""
+        times = np.asarray(msg.edge_times_s, dtype=np.float64)
+        counts = [int(c) for c in msg.edge_counts]
+        if sum(counts) != times.size:
+            log_event(
+                self.rec,
+                stamp_ns(msg),
+                f"measured chunk at sample {int(msg.first_sample_index)}: {times.size} edge"
+                f" times, its edge counts say {sum(counts)}",
+                "WARN",
+            )
+            return
+        start = 0
+        for name, teeth, count in zip(
+            msg.edge_channel_names, msg.tone_ring_teeth, counts, strict=True
+        ):
+            edges = times[start : start + count]
+            start += count
+            if count == 0:
+                continue
+            path = edge_speed_path(name)
+            if path not in self._styled:
+                self._styled.add(path)
+                label = f"{name.replace('_', ' ')} from edges (rad/s)"
+                self.rec.log(path, rr.SeriesLines(names=[label]), static=True)
+            last = self._last_edge_s.get(name)
+            joined = edges if last is None else np.concatenate(([last], edges))
+            self._last_edge_s[name] = float(edges[-1])
+            if joined.size < 2:
+                continue
+            speed = (2.0 * np.pi / int(teeth)) / np.diff(joined)
+            ns = np.round(joined[1:] * NS_PER_S).astype(np.int64)
+            send_scalar_columns(self.rec, path, ns, speed)
 
     def _fault_events(self, name: str, labels: np.ndarray, ns: np.ndarray) -> None:
         last = self._labels.get(name, 0)

@@ -123,6 +123,10 @@ EXPECTED_FIELDS = {
         "channel_sample_counts": "sequence<uint32>",
         "values": "sequence<double>",
         "fault_labels": "sequence<uint8>",
+        "edge_channel_names": "sequence<string>",
+        "tone_ring_teeth": "sequence<uint32>",
+        "edge_counts": "sequence<uint32>",
+        "edge_times_s": "sequence<double>",
     },
     StepSimulation.Request: {"steps": "uint64", "duration_s": "double"},
     StepSimulation.Response: {
