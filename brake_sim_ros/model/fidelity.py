@@ -327,7 +327,7 @@ def plan(needs: Needs | None, *, model_shoes: tuple[str, ...] = SIDES) -> Plan:
         )
     sensors = "measured_signals" in asked
     if not sensors:
-            reason += "; no sensors ([needs] do not ask measured_signals): no structure"
+        reason += "; no sensors ([needs] do not ask measured_signals): no structure"
     return Plan(
         level,
         shoes,
