@@ -174,3 +174,18 @@ def test_run_scenario_keeps_what_the_sensors_read():
     assert bank is not None
     frame = bank.advance(run.samples)
     assert "backing_plate_accel_x" in frame.series
+
+
+def test_bench_sensors_says_which_plan_it_measured(tmp_path, capsys):
+    from brake_sim_ros.studies.sensors_bench import cost
+
+    lean = tmp_path / "lean.toml"
+    lean.write_text(_scenario_text(["pivot_forces"]))
+    cost(str(lean), 0.02, 256, 1)
+    out = capsys.readouterr().out
+    assert "fidelity plan: level full, sensors off" in out and "no structure" in out
+    asked = tmp_path / "asked.toml"
+    asked.write_text(_scenario_text(["pivot_forces", "measured_signals"]))
+    cost(str(asked), 0.02, 256, 1)
+    out = capsys.readouterr().out
+    assert "sensors on" in out and "physics with the sensors streamed" in out
