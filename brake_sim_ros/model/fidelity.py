@@ -73,8 +73,8 @@ OUTPUTS: dict[str, str] = {
     "shoe_motion": "shoe angle and speed histories, rad, rad/s",
     "energy_balance": "every energy term of the balance (closes to rounding), J",
     "measured_signals": (
-        "the scenario's sensor channels: accelerometers on the structure, m/s^2, load pins,"
-        " N, line pressure, bar, wheel speed pulses and index"
+        "the scenario's sensor channels ([[sensors]]): accelerometers on the structure"
+        " (m/s^2), load pins (N), line pressure (bar), wheel speed (pulse and index, 1)"
     ),
 }
 # outputs that belong to one shoe and do not depend on the other shoe (see module doc)
