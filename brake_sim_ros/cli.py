@@ -245,6 +245,8 @@ def _write_history(job: SimulateJob, result: RunResult) -> None:
 
                 meta["seed"] = scenario.seed
                 meta["duration_s"] = job.duration_s
+                meta["fidelity_level"] = result.plan.level.name
+                meta["sensors"] = result.plan.sensors  # no measured columns without them
                 table = parquet.history_table(
                     result.samples, sensor_bank_for(scenario), {**meta, "columns": "units in names"}
                 )
@@ -434,7 +436,16 @@ def cmd_scenarios(args: argparse.Namespace) -> int:
 
 def channels_text(scenario: Scenario) -> str:
     """The measured series of ``scenario``'s sensors: name, unit, rate, what and where,
-    the transducer class and any sensor faults, a line each."""
+    the transducer class and any sensor faults, a line each; one line saying why there
+    are none when its fidelity plan builds no sensors."""
+    from brake_sim_ros.stream.build import measures
+
+    if not measures(scenario):
+        return (
+            f"scenario {scenario.name}: no measured channels: its [needs] do not ask"
+            " 'measured_signals', so its fidelity plan builds no sensors (no structure);"
+            " add it to [needs] outputs to measure"
+        )
     rate = scenario.sample_rate_hz
     lines = [f"scenario {scenario.name}: sensors at {rate:g} Hz samples (unit, rate, kind)"]
     for c in scenario.sensors.channels:

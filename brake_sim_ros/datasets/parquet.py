@@ -9,7 +9,9 @@ One row per sample of the scenario's rate. Columns, units in the names:
   :func:`~brake_sim_ros.stream.build.sensor_bank_for` as the node's ``~/measured`` does,
   the same bits): ``measured:<name> [<unit>]`` (float64; NaN where a dropout silenced
   the sensor; null on rows a slower channel does not sample) and ``fault:<name>``
-  (uint8, OR of ``sensor_faults.FAULT_BIT``; 0 = no sensor fault; null likewise).
+  (uint8, OR of ``sensor_faults.FAULT_BIT``; 0 = no sensor fault; null likewise). None
+  when the scenario's fidelity plan builds no sensors (``[needs]`` without
+  ``measured_signals``; ``simulate`` then records ``"sensors": false`` in the metadata).
 
 * per wheel-speed channel (a tone ring), ``measured:<name>_edge_time [s]`` (float64): the
   simulated time of the tone ring's rising edge that occurred in (previous sample's time,

@@ -29,6 +29,16 @@ Why each level serves what it serves (the physics behind the capability table):
   where it is saturated; so a shoe's impacts and contact-regime forces are the same with
   the other shoe removed, and a scenario that asks only these, for one shoe, gets a
   one-shoe model.
+* ``measured_signals`` (the scenario's sensor channels) only from ``full``. The sensors read
+  the pivot-force history with its impacts (accelerometers through the backing-plate
+  structure, load pins), the actuation forces (line pressure) and the drum angle (the
+  wheel-speed tone ring). The contact-regime levels have no impacts: their pivot forces
+  are the steady ones, which leave the structure's modes unexcited and the accelerations
+  near zero, so what they would measure is not what a vehicle's sensors see. The rigid
+  levels have impacts but no drum-side signal: the tone ring would read the flywheel, and
+  miss the coupling's twist and the lock at standstill. The structure sums both pivot
+  forces, so measured signals never come from a one-shoe model. A plan without this
+  output builds no sensor bank: no structure, no measured channels (the cost is saved).
 
 Pure logic: no numerics, no files.
 """
@@ -62,6 +72,10 @@ OUTPUTS: dict[str, str] = {
     "contact_forces": "indentation, normal and friction force, contact point histories",
     "shoe_motion": "shoe angle and speed histories, rad, rad/s",
     "energy_balance": "every energy term of the balance (closes to rounding), J",
+    "measured_signals": (
+        "the scenario's sensor channels ([[sensors]]): accelerometers on the structure"
+        " (m/s^2), load pins (N), line pressure (bar), wheel speed (pulse and index, 1)"
+    ),
 }
 # outputs that belong to one shoe and do not depend on the other shoe (see module doc)
 SHOE_LOCAL_OUTPUTS = frozenset({"impacts", "contact_regime_forces"})
@@ -170,6 +184,8 @@ class Plan:
             :data:`DERIVED_COLUMNS`), ``time_s`` first; without needs, ``layout.COLUMNS``.
         accuracy: the accuracy preset passed through, or None.
         reason: one sentence saying why this level was chosen.
+        sensors: the scenario's sensor bank is built (and with it the structure, when the
+            set has an accelerometer): without needs, or when they ask ``measured_signals``.
     """
 
     level: Level
@@ -177,6 +193,7 @@ class Plan:
     columns: tuple[str, ...]
     accuracy: str | None
     reason: str
+    sensors: bool = True
 
 
 # columns computed from the recorded ones, appended after layout.COLUMNS
@@ -224,6 +241,12 @@ _EVENT_COLUMNS: dict[str, tuple[str, ...]] = {
         "drum_speed_rad_s",
     ),
     "impacts": ("regime",),
+    # what the sensor bank reads (model/sensors.py): both pivot forces (the structure sums
+    # them; load pins), both actuation forces (line pressure), the drum angle (tone ring)
+    "measured_signals": (
+        "drum_angle_rad",
+        *(f"{s}_{c}" for s in SIDES for c in ("pivot_fx_n", "pivot_fy_n", "actuation_force_n")),
+    ),
     "energy_balance": (
         "flywheel_angle_rad",
         "drum_angle_rad",
@@ -268,6 +291,7 @@ def plan(needs: Needs | None, *, model_shoes: tuple[str, ...] = SIDES) -> Plan:
             L.COLUMNS,
             None,
             "the scenario states no [needs]: the full model, every signal",
+            sensors=True,
         )
     missing = [s for s in needs.shoes if s not in model_shoes]
     if missing:
@@ -301,4 +325,14 @@ def plan(needs: Needs | None, *, model_shoes: tuple[str, ...] = SIDES) -> Plan:
             f"; only the {'/'.join(shoes)} shoe is modelled: {sorted(asked)} of one shoe do not"
             " depend on the other"
         )
-    return Plan(level, shoes, columns_for(needs.outputs, needs.shoes), needs.accuracy, reason)
+    sensors = "measured_signals" in asked
+    if not sensors:
+        reason += "; no sensors ([needs] do not ask measured_signals): no structure"
+    return Plan(
+        level,
+        shoes,
+        columns_for(needs.outputs, needs.shoes),
+        needs.accuracy,
+        reason,
+        sensors=sensors,
+    )

@@ -19,7 +19,7 @@ from brake_sim_ros.recording.writer import McapRecorder, RecordingOptions
 from brake_sim_ros.scenarios import Scenario
 from brake_sim_ros.stream import MessageSink, conversion
 from brake_sim_ros.stream import parameters as ros_params
-from brake_sim_ros.stream.build import stepper_for
+from brake_sim_ros.stream.build import require_measured, stepper_for
 from brake_sim_ros.stream.offline import StreamSettings, offline_messages
 
 
@@ -95,8 +95,12 @@ def record_offline(
     Raises:
         RecordingError: the file cannot be written (nothing else is left half done: the
             partial file holds every chunk written before the failure).
+        FidelityError: ``settings.publish_measured`` on a scenario whose fidelity plan has
+            no sensors (refused before the file is opened).
     """
     settings = settings or StreamSettings()
+    if settings.publish_measured:  # before the file is opened
+        require_measured(scenario, "publish_measured")
     run_id = conversion.new_run_id() if run_id is None else run_id
     duration = scenario.duration_s if duration_s is None else duration_s
     stepper = stepper_for(scenario)

@@ -79,7 +79,7 @@ from brake_sim_ros.solvers.realtime import (
 )
 from brake_sim_ros.stream import MessageSink, Topic, conversion
 from brake_sim_ros.stream import parameters as ros_params
-from brake_sim_ros.stream.build import sensor_bank_for, stepper_for
+from brake_sim_ros.stream.build import require_measured, sensor_bank_for, stepper_for
 
 NODE_NAME = "brake_sim"
 MAX_LAG_S = 0.5  # wall seconds of backlog that are caught up (see pacing)
@@ -156,6 +156,8 @@ class BrakeSimNode(Node):
         setup = dataclasses.replace(self.scenario.setup, params=params, defects=defects)
         self._stepper = self._make_stepper(setup, self.scenario, self._param("chunk_rate_hz"))
         self._publish_measured = bool(self._param("publish_measured"))
+        if self._publish_measured:  # asked for what the scenario's plan does not build
+            require_measured(self.scenario, "publish_measured true refused")
         self._sensors = self._new_sensor_bank()  # carried between blocks, new at each reset
         self._run_initial_angles = self._initial_angles(setup)
         self._double_names = {
@@ -423,7 +425,8 @@ class BrakeSimNode(Node):
 
     def _new_sensor_bank(self) -> SensorBank | None:
         """The scenario's sensors from sample 0, seeded with the run's seed (None when
-        publish_measured is off), as the offline stream builds them."""
+        publish_measured is off; it is refused on a scenario whose plan has no sensors),
+        as the offline stream builds them."""
         if not self._publish_measured:
             return None
         return sensor_bank_for(self.scenario, seed=self._seed)
@@ -883,8 +886,11 @@ class BrakeSimNode(Node):
 
         The new scenario's stepping is calibrated (some ms) and checked against the work
         bounds and, in real time, against the budget (the publishing costs measured at
-        start); a scenario the node cannot hold is refused.
+        start); a scenario the node cannot hold is refused, and so is one whose fidelity
+        plan has no sensors while publish_measured is on (its ~/measured would go silent).
         """
+        if self._publish_measured:
+            require_measured(scenario, "publish_measured is on")
         chunk_rate = self._param("chunk_rate_hz")
         stepper = self._make_stepper(scenario.setup, scenario, chunk_rate)
         dt = stepper.sample_period_s

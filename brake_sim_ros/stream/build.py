@@ -7,6 +7,8 @@ sample rate with the same substeps, and give the same numbers for the same scena
 
 from __future__ import annotations
 
+from brake_sim_ros.errors import FidelityError
+from brake_sim_ros.model.fidelity import levels_serving, plan
 from brake_sim_ros.model.sensors import SensorBank
 from brake_sim_ros.model.trajectory import BrakeSetup
 from brake_sim_ros.scenarios.loader import Scenario
@@ -36,10 +38,43 @@ def stepper_for(scenario: Scenario, *, setup: BrakeSetup | None = None) -> Fixed
     )
 
 
-def sensor_bank_for(scenario: Scenario, *, seed: int | None = None) -> SensorBank:
+def measures(scenario: Scenario) -> bool:
+    """Whether ``scenario``'s fidelity plan builds its sensors (:attr:`Plan.sensors
+    <brake_sim_ros.model.fidelity.Plan>`): without ``[needs]``, or when they ask
+    ``measured_signals``."""
+    return plan(scenario.needs, model_shoes=scenario.setup.options.shoes).sensors
+
+
+def measured_refusal(scenario: Scenario) -> str | None:
+    """Why ``scenario`` cannot measure (one line), or None when its plan builds sensors.
+
+    For callers that were asked for measured signals explicitly (the node's and the
+    offline stream's ``publish_measured``): they refuse rather than publish nothing."""
+    if measures(scenario):
+        return None
+    return (
+        f"scenario '{scenario.name}' states [needs] without 'measured_signals', so its plan"
+        " builds no sensors (no structure, no measured channels): add 'measured_signals' to"
+        f" [needs] outputs (levels that deliver it: {levels_serving('measured_signals')})"
+        " or leave publish_measured off"
+    )
+
+
+def require_measured(scenario: Scenario, what: str) -> None:
+    """Raise FidelityError ``"<what>: <reason>"`` unless ``scenario``'s plan has sensors."""
+    reason = measured_refusal(scenario)
+    if reason is not None:
+        raise FidelityError(f"{what}: {reason}")
+
+
+def sensor_bank_for(scenario: Scenario, *, seed: int | None = None) -> SensorBank | None:
     """The scenario's sensors (``scenario.sensors``) at its sample rate, their noise seeded
-    from ``seed`` (default: the scenario's). The node and the offline stream build their
-    bank here, at start and at each reset, so they measure the same bits."""
+    from ``seed`` (default: the scenario's); None when its fidelity plan has no sensors
+    (``[needs]`` without ``measured_signals``: no structure, no channels, no cost). The
+    node, the offline stream and the Parquet writer build their bank here, at start and at
+    each reset, so they measure the same bits."""
+    if not measures(scenario):
+        return None
     return SensorBank(
         scenario.sensors, scenario.sample_rate_hz, scenario.seed if seed is None else seed
     )

@@ -20,7 +20,7 @@ from brake_sim_ros.scenarios import Scenario
 from brake_sim_ros.solvers.fixed_step import FixedStepStepper
 from brake_sim_ros.stream import Topic, conversion
 from brake_sim_ros.stream import parameters as ros_params
-from brake_sim_ros.stream.build import sensor_bank_for, stepper_for
+from brake_sim_ros.stream.build import require_measured, sensor_bank_for, stepper_for
 
 
 def _default(name: str):
@@ -57,9 +57,15 @@ def offline_messages(
         run_id: the run id of the ground-truth messages (DefectState, ContactEvent);
             default a fresh one (:func:`~brake_sim_ros.stream.conversion.new_run_id`).
             Give the node's to reproduce its stream byte for byte.
+
+    Raises:
+        FidelityError: ``publish_measured`` on a scenario whose fidelity plan has no
+            sensors (``[needs]`` without ``measured_signals``), at the first message.
     """
-    run_id = conversion.new_run_id() if run_id is None else run_id
     settings = settings or StreamSettings()
+    if settings.publish_measured:
+        require_measured(scenario, "publish_measured")
+    run_id = conversion.new_run_id() if run_id is None else run_id
     stepper = stepper or stepper_for(scenario)
     stepper.reset()
     period = stepper.sample_period_s

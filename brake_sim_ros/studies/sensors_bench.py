@@ -1,10 +1,13 @@
 """``brake-sim bench sensors``: cost of the structure and the sensors, and what the measured
 acceleration tells of each built-in case.
 
-Part 1, cost: the scenario is run once; then the structure alone and the scenario's sensor
-set (structure included) process its samples, in one block and in streaming chunks of
-``--chunk`` samples, best of ``--repeats``; printed as CPU seconds per simulated second and
-as a multiple of real time, beside the physics' own cost.
+Part 1, cost: the scenario is run once at the level its fidelity plan chooses (printed);
+then the structure alone and the scenario's sensor set (structure included) process its
+samples, in one block and in streaming chunks of ``--chunk`` samples, best of
+``--repeats``; printed as CPU seconds per simulated second and as a multiple of real time,
+beside the physics' own cost, with the total with and without the sensors. A scenario
+whose plan has no sensors (``[needs]`` without ``measured_signals``) reports its physics
+only: it builds no structure and no sensors.
 
 Part 2, cases: every built-in case is run for ``--case-duration`` seconds and measured by
 the default sensor set with ``--seeds`` noise seeds. Features of the backing-plate
@@ -47,6 +50,18 @@ def cost(scenario_name: str, duration_s: float | None, chunk: int, repeats: int)
     samples = run.samples
     simulated = len(samples) * samples.sample_period_s
     rate = scenario.sample_rate_hz
+    print(
+        f"fidelity plan: level {run.plan.level.name}, sensors"
+        f" {'on' if run.plan.sensors else 'off'} ({run.plan.reason})"
+    )
+    if not run.plan.sensors:  # the plan builds no sensor bank: nothing more to pay for
+        per = run.cpu_s / simulated
+        print(
+            f"scenario {scenario.name}: {simulated:g} s simulated, physics"
+            f" {per:.5f} CPU s / sim s; no structure, no sensors (add 'measured_signals' to"
+            " [needs] outputs to measure their cost)"
+        )
+        return
     parts = _chunks(samples, chunk)
     # compile and warm up outside the timed region
     SensorBank(scenario.sensors, rate, scenario.seed).advance(parts[0])
@@ -83,6 +98,12 @@ def cost(scenario_name: str, duration_s: float | None, chunk: int, repeats: int)
     for what, cpu in rows:
         per = cpu / simulated
         print(f"{what:<38}{per:>15.5f}{1.0 / per if per > 0 else float('inf'):>14.0f}")
+    physics, streamed = rows[0][1] / simulated, rows[-1][1] / simulated
+    print(
+        f"physics with the sensors streamed {physics + streamed:.5f} CPU s / sim s, without"
+        f" {physics:.5f} (a [needs] without 'measured_signals' saves {streamed:.5f},"
+        f" {100 * streamed / physics:.0f} % of the physics)"
+    )
 
 
 def cases(duration_s: float, seeds: int) -> None:
