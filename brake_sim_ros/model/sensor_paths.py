@@ -166,15 +166,14 @@ def analog_advance(  # pragma: no cover - compiled
             for j in range(n_draw):
                 u[j + 1] = draws[k, j]
             s = loose if phi.shape[0] > 1 else 0
-            a, gp, gn = phi[s], g_prev[s], g_next[s]
             if not (first and k == 0):
                 for i in range(n_x):
                     acc = 0.0
                     for j in range(n_x):
-                        acc += a[i, j] * x[j]
-                    acc += gp[i, 0] * u_prev[0] + gn[i, 0] * u[0]
+                        acc += phi[s, i, j] * x[j]
+                    acc += g_prev[s, i, 0] * u_prev[0] + g_next[s, i, 0] * u[0]
                     for j in range(1, n_u):
-                        acc += gn[i, j] * u[j]
+                        acc += g_next[s, i, j] * u[j]
                     x_new[i] = acc
                 for i in range(n_x):
                     x[i] = x_new[i]
