@@ -248,7 +248,10 @@ def _write_history(job: SimulateJob, result: RunResult) -> None:
                 meta["fidelity_level"] = result.plan.level.name
                 meta["sensors"] = result.plan.sensors  # no measured columns without them
                 table = parquet.history_table(
-                    result.samples, sensor_bank_for(scenario), {**meta, "columns": "units in names"}
+                    result.samples,
+                    sensor_bank_for(scenario),
+                    scenario.setup.defects,
+                    {**meta, "columns": "units in names"},
                 )
                 if path.suffix == ".parquet":
                     parquet.write_history(partial, table)

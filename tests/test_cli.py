@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 from brake_sim_ros.cli import simulate_summary
+from brake_sim_ros.model import catalogue
 from brake_sim_ros.scenarios import load_scenario
 from brake_sim_ros.scenarios.loader import parse_scenario
 from brake_sim_ros.stream.run import run_scenario
@@ -282,6 +283,36 @@ def test_simulate_parquet_holds_samples_and_the_measured_channels(tmp_path):
         assert table[name].to_numpy().tobytes() == np.asarray(values).tobytes(), name
 
 
+def test_simulate_parquet_labels_every_sample_with_the_defects_ground_truth(tmp_path):
+    """Per catalogue kind and location a severity column, the scenario's defect on every
+    row and 0 for the healthy others; the metadata lists the defects as DefectState does."""
+    pq = pytest.importorskip("pyarrow.parquet")
+    out = tmp_path / "case7.parquet"
+    r = _cli("simulate", "case7_left_actuation", "--duration", "0.05", "--out", str(out))
+    assert r.returncode == 0, r.stderr
+    table = pq.read_table(out)
+    scenario = load_scenario("case7_left_actuation")
+    share = scenario.setup.defects.left.actuation_share - 0.5
+    right = scenario.setup.defects.right.actuation_share - 0.5
+    assert share > 0.0 > right
+    columns = [c for c in table.column_names if c.startswith("defect:")]
+    assert len(columns) == sum(len(k.locations) for k in catalogue.KINDS)
+    for name in columns:
+        values = table[name].to_numpy()
+        expected = {
+            "defect:left_actuation_share_change [1]": share,
+            "defect:right_actuation_share_change [1]": right,
+        }.get(name, 0.0)
+        assert values.shape == (table.num_rows,) and np.all(values == expected), name
+    meta = json.loads(table.schema.metadata[b"brake_sim"])
+    assert [(d["kind"], d["location"]) for d in meta["defects"]] == [
+        ("actuation_share_change", "left"),
+        ("actuation_share_change", "right"),
+    ]
+    assert meta["defects"][0]["severity"] == share and meta["defects"][0]["growth"] == "step"
+    assert meta["unit_id"] == ""
+
+
 def test_a_slower_channel_is_null_between_its_samples():
     pytest.importorskip("pyarrow")
     from brake_sim_ros.datasets.parquet import history_table
@@ -291,7 +322,7 @@ def test_a_slower_channel_is_null_between_its_samples():
     run = run_scenario(scenario, duration_s=0.05)
     slow = accelerometer("slow_x", "backing_plate", "x", rate_hz=6400.0)
     bank = SensorBank(SensorSet(channels=(slow,)), scenario.sample_rate_hz, seed=3)
-    table = history_table(run.samples, bank, {"seed": 3})
+    table = history_table(run.samples, bank, scenario.setup.defects, {"seed": 3})
     values = table["measured:slow_x [m/s^2]"]
     assert values.null_count == len(run.samples) - len(run.samples) // 4
     assert values.to_pylist()[0] is not None and values.to_pylist()[1] is None

@@ -279,9 +279,10 @@ def test_view_mcap_save_rrd(tmp_path: Path, capsys):
     check_run(rrd, n_samples=N_SAMPLES, n_states=100)
     c = read(rrd)
     truth = c.texts[f"{E.DEFECTS}/ground_truth"][0]
-    assert "case5_left_tilted" in truth and "-2.000" in truth
+    assert "case5_left_tilted" in truth and "| initial_angle | left | -2 | deg |" in truth
     assert not any("built-in brake geometry" in t for t in c.texts[E.EVENTS])
-    assert c.values(f"{E.DEFECTS}/left/initial_angle_deg")[0] == pytest.approx(-2.0)
+    assert c.values(f"{E.DEFECTS}/left/initial_angle")[0] == pytest.approx(-2.0)
+    assert c.values(f"{E.DEFECTS}/right/initial_angle")[0] == 0.0
 
 
 def test_view_without_model_metadata_says_so(tmp_path: Path):

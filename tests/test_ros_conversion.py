@@ -18,7 +18,6 @@ pytest.importorskip("brake_sim_msgs", reason="brake_sim_msgs not built (run scri
 from brake_sim_ros import stream
 from brake_sim_ros.model.defects import Defects, ShoeDefect
 from brake_sim_ros.model.layout import COL, N_COLUMNS
-from brake_sim_ros.model.parameters import BrakeParameters
 from brake_sim_ros.model.trajectory import SampleBlock
 from brake_sim_ros.ros.diagnostics import (
     RunStats,
@@ -30,6 +29,7 @@ from brake_sim_ros.scenarios import load_scenario
 from brake_sim_ros.solvers.fixed_step import FixedStepStepper
 from brake_sim_ros.stream import conversion
 from brake_sim_ros.stream.offline import offline_messages
+from brake_sim_ros.viz.annotations import shoe_defects
 
 DT = 4e-5
 
@@ -149,31 +149,39 @@ def test_defect_state_is_the_ground_truth_in_force():
     )
     msg = conversion.defect_state(
         scenario="mine",
-        params=BrakeParameters(),
         defects=defects,
         initial_angles_deg=(-2.0, 0.0),
         ns=1_500_000_000,
         run_id="abc",
+        seed=7,
     )
     assert msg.scenario == "mine" and not msg.healthy and msg.run_id == "abc"
-    nominal = BrakeParameters().shoe.pivot_radius_m
-    assert msg.left_pivot_radius_m == pytest.approx(nominal * 1.03)
-    assert msg.right_pivot_radius_m == nominal
-    assert msg.left_initial_angle_rad == math.radians(-2.0)
-    assert (msg.left_actuation_share, msg.right_actuation_share) == (0.55, 0.45)
-    assert list(msg.active_defects) == defects.labels()
+    assert (msg.seed, msg.unit_id) == (7, "")
+    entries = {(d.location, d.kind): (d.severity, d.unit, d.onset_s, d.growth) for d in msg.defects}
+    assert entries == {
+        ("left", "pivot_radius_change"): (3.0, "%", 0.0, "step"),
+        ("left", "initial_angle"): (-2.0, "deg", 0.0, "step"),
+        ("left", "actuation_share_change"): (pytest.approx(0.05), "1", 0.0, "step"),
+        ("right", "actuation_share_change"): (pytest.approx(-0.05), "1", 0.0, "step"),
+    }
+    assert list(msg.labels) == defects.labels() and len(msg.labels) == len(msg.defects)
     assert (msg.header.stamp.sec, msg.header.stamp.nanosec) == (1, 500_000_000)
+    # the list read back gives the shoes' defects (the Rerun sink draws the shoes from it)
+    shoes = shoe_defects(msg)
+    assert shoes["left"].pivot_radius_change_pct == 3.0
+    assert shoes["left"].actuation_share == pytest.approx(0.55)
+    assert shoes["right"].actuation_share == pytest.approx(0.45)
+    assert shoes["right"].pivot_radius_change_pct == 0.0 == shoes["right"].initial_angle_deg
     # a changed initial angle applies at the next reset: the run's own start is reported
     pending = conversion.defect_state(
         scenario="s",
-        params=BrakeParameters(),
         defects=Defects(left=ShoeDefect(initial_angle_deg=-1.0)),
         initial_angles_deg=(0.0, 0.0),
         ns=0,
         run_id="abc",
+        seed=0,
     )
-    assert pending.healthy and pending.left_initial_angle_rad == 0.0
-    assert list(pending.active_defects) == []
+    assert pending.healthy and list(pending.defects) == [] and list(pending.labels) == []
 
 
 def test_every_offline_run_has_its_own_run_id_in_all_its_ground_truth():

@@ -20,10 +20,17 @@ One row per sample of the scenario's rate. Columns, units in the names:
   per sample: 48 teeth at 25.6 kHz allow up to 3350 rad/s); two on one row are refused.
   Speed from consecutive edges: ``(2 pi / teeth) / diff(edge times)`` rad/s.
 
+* per kind of the defect catalogue (``model/catalogue.py``, ``brake-sim defects``) and
+  location, ``defect:<location>_<kind> [<unit>]`` (float64): the defect's severity at that
+  sample, 0 where it is absent (today's defects are steps at the start of the run, so the
+  column is constant).
+
 Each measured column's field metadata gives ``unit``, ``rate_hz`` and ``decimation``; an
 edge-time column's gives ``unit`` and ``tone_ring_teeth``.
 The file's key-value metadata ``brake_sim`` holds JSON: the run parameters the caller
-gives (scenario, method, seed, rates, ...) and ``fault_bits``.
+gives (scenario, method, seed, rates, ...), ``fault_bits``, ``defects`` (the ground truth:
+one object per defect in force with kind, location, severity, unit, onset_s, growth and
+growth_rate, as the DefectState message) and ``unit_id`` (empty for a single brake).
 """
 
 from __future__ import annotations
@@ -37,6 +44,7 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 
+from brake_sim_ros.model.defects import Defects
 from brake_sim_ros.model.sensor_faults import FAULT_BIT
 from brake_sim_ros.model.sensors import SensorBank
 from brake_sim_ros.model.trajectory import SampleBlock
@@ -80,10 +88,14 @@ def edges_on_rows(time_s: np.ndarray, edges_s: np.ndarray) -> np.ndarray:
 
 
 def history_table(
-    samples: SampleBlock, sensors: SensorBank | None, metadata: Mapping[str, Any]
+    samples: SampleBlock,
+    sensors: SensorBank | None,
+    defects: Defects,
+    metadata: Mapping[str, Any],
 ) -> pa.Table:
-    """The table of ``samples`` and, with ``sensors`` (a fresh bank, fed the whole run
-    here), what they measured; ``metadata`` goes into the ``brake_sim`` key as JSON."""
+    """The table of ``samples``, with ``sensors`` (a fresh bank, fed the whole run here)
+    what they measured, and the ground truth of ``defects`` (the brake's defects in force
+    over the run); ``metadata`` goes into the ``brake_sim`` key as JSON."""
     n = len(samples)
     index = samples.first_index + np.arange(n, dtype=np.int64)
     history = samples.as_dict()
@@ -122,7 +134,15 @@ def history_table(
             columns[edge_name] = pa.array(edges_on_rows(np.asarray(samples.time_s), edges))
             info = {b"unit": b"s", b"tone_ring_teeth": str(teeth[name]).encode()}
             fields.append(pa.field(edge_name, pa.float64(), metadata=info))
-    meta = {**metadata, "fault_bits": FAULT_BIT}
+    for name, severity in defects.severities().items():
+        columns[name] = pa.array(np.full(n, severity))
+        fields.append(pa.field(name, pa.float64()))
+    meta = {
+        **metadata,
+        "fault_bits": FAULT_BIT,
+        "defects": [d.as_dict() for d in defects.active()],
+        "unit_id": "",
+    }
     schema = pa.schema(fields, metadata={METADATA_KEY: json.dumps(meta).encode()})
     return pa.Table.from_arrays([columns[f.name] for f in fields], schema=schema)
 

@@ -6,6 +6,7 @@ import math
 from dataclasses import dataclass, field
 
 from brake_sim_ros.errors import ParameterError
+from brake_sim_ros.model.catalogue import KIND_BY_NAME, KINDS, ActiveDefect, label_column
 
 
 @dataclass(frozen=True)
@@ -34,20 +35,27 @@ class ShoeDefect:
             value = getattr(self, name)
             if not isinstance(value, int | float) or not math.isfinite(value):
                 raise ParameterError(f"defect {name}={value!r} is invalid: allowed a finite number")
-        if not -20.0 <= self.pivot_radius_change_pct <= 20.0:
-            raise ParameterError(
-                f"defect pivot_radius_change_pct={self.pivot_radius_change_pct} is invalid:"
-                " allowed -20 to +20 %"
-            )
-        if not -10.0 <= self.initial_angle_deg <= 10.0:
-            raise ParameterError(
-                f"defect initial_angle_deg={self.initial_angle_deg} is invalid: allowed -10 to"
-                " +10 deg"
-            )
-        if not 0.0 <= self.actuation_share <= 1.0:
-            raise ParameterError(
-                f"defect actuation_share={self.actuation_share} is invalid: allowed 0 to 1"
-            )
+        for kind, severity in self.severities().items():
+            KIND_BY_NAME[kind].check(severity)
+
+    def severities(self) -> dict[str, float]:
+        """The severity of each catalogue kind a shoe can carry (0: absent), in the kind's
+        unit (:mod:`.catalogue`)."""
+        return {
+            "pivot_radius_change": float(self.pivot_radius_change_pct),
+            "initial_angle": float(self.initial_angle_deg),
+            "actuation_share_change": float(self.actuation_share) - 0.5,
+        }
+
+    @classmethod
+    def from_severities(cls, severities: dict[str, float]) -> ShoeDefect:
+        """The shoe carrying these catalogue severities (absent kinds healthy): the
+        inverse of :meth:`severities`."""
+        return cls(
+            pivot_radius_change_pct=severities.get("pivot_radius_change", 0.0),
+            initial_angle_deg=severities.get("initial_angle", 0.0),
+            actuation_share=0.5 + severities.get("actuation_share_change", 0.0),
+        )
 
     @property
     def is_healthy(self) -> bool:
@@ -61,16 +69,6 @@ class ShoeDefect:
     def actuation_gain(self) -> float:
         """Multiplier on this shoe's actuation force, ``2 * actuation_share``."""
         return 2.0 * self.actuation_share
-
-    def labels(self, side: str) -> list[str]:
-        out = []
-        if self.pivot_radius_change_pct:
-            out.append(f"{side} pivot radius {self.pivot_radius_change_pct:+.1f} %")
-        if self.initial_angle_deg:
-            out.append(f"{side} initial angle {self.initial_angle_deg:+.2f} deg")
-        if self.actuation_share != 0.5:
-            out.append(f"{side} actuation share {self.actuation_share:.3f}")
-        return out
 
 
 @dataclass(frozen=True)
@@ -93,5 +91,27 @@ class Defects:
     def is_healthy(self) -> bool:
         return self.left.is_healthy and self.right.is_healthy
 
+    def active(self) -> tuple[ActiveDefect, ...]:
+        """The ground truth: every defect in force, in catalogue order (kind, then
+        location); each a step at the start of the run."""
+        shoes = {"left": self.left.severities(), "right": self.right.severities()}
+        return tuple(
+            ActiveDefect(kind.name, loc, shoes[loc][kind.name], kind.unit)
+            for kind in KINDS
+            for loc in kind.locations
+            if shoes[loc][kind.name] != 0.0
+        )
+
+    def severities(self) -> dict[str, float]:
+        """The per-sample label columns (:func:`.catalogue.label_columns`) and their value:
+        each kind's severity at each location, 0 where absent."""
+        shoes = {"left": self.left.severities(), "right": self.right.severities()}
+        return {
+            label_column(kind, loc): shoes[loc][kind.name]
+            for kind in KINDS
+            for loc in kind.locations
+        }
+
     def labels(self) -> list[str]:
-        return self.left.labels("left") + self.right.labels("right")
+        """One readable line per defect in force (:attr:`.catalogue.ActiveDefect.label`)."""
+        return [d.label for d in self.active()]

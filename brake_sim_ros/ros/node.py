@@ -933,11 +933,11 @@ class BrakeSimNode(Node):
         ns = conversion.stamp_ns(self._stepper.sample_index, self._stepper.sample_period_s)
         msg = conversion.defect_state(
             scenario=self.scenario.name,
-            params=setup.params,
             defects=setup.defects,
             initial_angles_deg=self._run_initial_angles,
             ns=ns,
             run_id=self.run_id,
+            seed=self._seed,
         )
         self._emit(stream.DEFECTS, msg, ns)
 

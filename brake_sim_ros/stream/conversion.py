@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import array
 import dataclasses
-import math
 import uuid
 from collections.abc import Callable, Iterable
 from fractions import Fraction
@@ -20,6 +19,7 @@ import numpy as np
 from brake_sim_msgs.msg import (
     BrakeState,
     ContactEvent,
+    Defect,
     DefectState,
     MeasuredChunk,
     PivotForceChunk,
@@ -32,7 +32,6 @@ from std_msgs.msg import Header
 from brake_sim_ros.analysis import contact_events
 from brake_sim_ros.analysis.onsets import in_contact
 from brake_sim_ros.model.defects import Defects
-from brake_sim_ros.model.parameters import BrakeParameters
 from brake_sim_ros.model.sensors import SensorBank, SensorFrame
 from brake_sim_ros.model.trajectory import SampleBlock
 
@@ -265,40 +264,48 @@ def clock(ns: int) -> Clock:
 def defect_state(
     *,
     scenario: str,
-    params: BrakeParameters,
     defects: Defects,
     initial_angles_deg: tuple[float, float],
     ns: int,
     run_id: str,
+    seed: int,
+    unit_id: str = "",
 ) -> DefectState:
-    """Ground truth of the defects in force from simulated time ``ns`` on.
+    """Ground truth of the defects in force from simulated time ``ns`` on: the
+    catalogue's list (:meth:`Defects.active`).
 
     Args:
         scenario: name of the active scenario.
-        params: parameters in force (the pivot radius is reported from them).
         defects: defects in force.
         initial_angles_deg: (left, right) starting angles of the run in progress, deg.
             They differ from ``defects`` after a run-time change of
             ``initial_angle_deg``, which applies at the next reset.
         ns: simulated time from which it applies, ns.
         run_id: the run's id (:func:`new_run_id`, or the node's ``run_id`` parameter).
+        seed: the run's seed.
+        unit_id: the brake unit's id (empty for a single brake).
     """
     left = dataclasses.replace(defects.left, initial_angle_deg=initial_angles_deg[0])
     right = dataclasses.replace(defects.right, initial_angle_deg=initial_angles_deg[1])
-    in_force = Defects(left=left, right=right)
-    nominal = params.shoe.pivot_radius_m
+    active = dataclasses.replace(defects, left=left, right=right).active()
     return DefectState(
         header=header(ns),
         run_id=run_id,
         scenario=scenario,
-        healthy=in_force.is_healthy,
-        left_pivot_radius_m=nominal * (1.0 + left.pivot_radius_change_pct / 100.0),
-        right_pivot_radius_m=nominal * (1.0 + right.pivot_radius_change_pct / 100.0),
-        left_pivot_radius_change_pct=float(left.pivot_radius_change_pct),
-        right_pivot_radius_change_pct=float(right.pivot_radius_change_pct),
-        left_initial_angle_rad=math.radians(left.initial_angle_deg),
-        right_initial_angle_rad=math.radians(right.initial_angle_deg),
-        left_actuation_share=float(left.actuation_share),
-        right_actuation_share=float(right.actuation_share),
-        active_defects=in_force.labels(),
+        unit_id=unit_id,
+        seed=int(seed),
+        healthy=not active,
+        defects=[
+            Defect(
+                kind=d.kind,
+                location=d.location,
+                severity=float(d.severity),
+                unit=d.unit,
+                onset_s=float(d.onset_s),
+                growth=d.growth,
+                growth_rate=float(d.growth_rate),
+            )
+            for d in active
+        ],
+        labels=[d.label for d in active],
     )

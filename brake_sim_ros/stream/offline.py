@@ -79,11 +79,11 @@ def offline_messages(
         stream.DEFECTS,
         conversion.defect_state(
             scenario=scenario.name,
-            params=setup.params,
             defects=setup.defects,
             initial_angles_deg=initial_angles,
             ns=0,
             run_id=run_id,
+            seed=scenario.seed,
         ),
         0,
     )

@@ -5,11 +5,11 @@ commands (``actuation/command/<side>``, N) and the diagnostics (``events/diagnos
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 import rerun as rr
 
+from brake_sim_ros.model import catalogue
 from brake_sim_ros.model.defects import ShoeDefect
 from brake_sim_ros.viz import entities as E
 from brake_sim_ros.viz.timeline import NS_PER_S, log_event, set_sim_time
@@ -18,35 +18,32 @@ _DIAG_LEVELS = {0: "INFO", 1: "WARN", 2: "ERROR", 3: "WARN"}  # DiagnosticStatus
 
 
 def shoe_defects(msg: Any) -> dict[str, ShoeDefect]:
-    """The defects of a DefectState per side (angles in the message in rad, here deg)."""
+    """The shoes' defects of a DefectState (its catalogue list, per side)."""
     return {
-        side: ShoeDefect(
-            pivot_radius_change_pct=float(getattr(msg, f"{side}_pivot_radius_change_pct")),
-            initial_angle_deg=math.degrees(float(getattr(msg, f"{side}_initial_angle_rad"))),
-            actuation_share=float(getattr(msg, f"{side}_actuation_share")),
+        side: ShoeDefect.from_severities(
+            {d.kind: float(d.severity) for d in msg.defects if d.location == side}
         )
         for side in E.SIDES
     }
 
 
 def log_defects(rec: rr.RecordingStream, msg: Any, ns: int, shoes: dict[str, ShoeDefect]) -> None:
-    """A DefectState stamped ``ns`` with its defects ``shoes``: the ground-truth table,
-    the defect scalars and an event."""
-    labels = list(msg.active_defects)
+    """A DefectState stamped ``ns`` with its shoes' defects ``shoes``: the ground-truth
+    table (one row per defect in force), a scalar per catalogue kind and location
+    (``defects/<location>/<kind>``, in its unit, 0 when absent) and an event."""
+    labels = list(msg.labels)
     lines = [
-        f"### Defect ground truth — scenario `{msg.scenario}`",
+        f"### Defect ground truth — scenario `{msg.scenario}`, seed {msg.seed}",
         "",
         "**healthy**" if msg.healthy else "**active:** " + "; ".join(labels),
         "",
-        "| | left | right |",
-        "|---|---|---|",
-        f"| pivot radius (mm) | {1e3 * msg.left_pivot_radius_m:.2f}"
-        f" | {1e3 * msg.right_pivot_radius_m:.2f} |",
-        f"| pivot radius change (%) | {msg.left_pivot_radius_change_pct:+.2f}"
-        f" | {msg.right_pivot_radius_change_pct:+.2f} |",
-        f"| initial angle (deg) | {math.degrees(msg.left_initial_angle_rad):+.3f}"
-        f" | {math.degrees(msg.right_initial_angle_rad):+.3f} |",
-        f"| actuation share | {msg.left_actuation_share:.3f} | {msg.right_actuation_share:.3f} |",
+        "| kind | location | severity | unit | onset (s) | growth |",
+        "|---|---|---|---|---|---|",
+        *(
+            f"| {d.kind} | {d.location} | {d.severity:+g} | {d.unit} | {d.onset_s:g}"
+            f" | {d.growth} |"
+            for d in msg.defects
+        ),
         "",
         f"applies from t = {ns / NS_PER_S:.6f} s",
     ]
@@ -55,14 +52,11 @@ def log_defects(rec: rr.RecordingStream, msg: Any, ns: int, shoes: dict[str, Sho
         f"{E.DEFECTS}/ground_truth",
         rr.TextDocument("\n".join(lines), media_type=rr.MediaType.MARKDOWN),
     )
-    for side in E.SIDES:
-        d = shoes[side]
-        for name, value in (
-            ("pivot_radius_change_pct", d.pivot_radius_change_pct),
-            ("initial_angle_deg", d.initial_angle_deg),
-            ("actuation_share", d.actuation_share),
-        ):
-            rec.log(f"{E.DEFECTS}/{side}/{name}", rr.Scalars(value))
+    now = {(d.location, d.kind): float(d.severity) for d in msg.defects}
+    for kind in catalogue.KINDS:
+        for location in kind.locations:
+            value = now.get((location, kind.name), 0.0)
+            rec.log(f"{E.DEFECTS}/{location}/{kind.name}", rr.Scalars(value))
     text = "healthy" if msg.healthy else ", ".join(labels)
     log_event(rec, ns, f"defect ground truth ({msg.scenario}): {text}")
 

@@ -42,7 +42,7 @@ MEASURED = "measured"
 
 # events, ground truth, drawing
 EVENTS = "events"  # TextLog: impacts, regime changes, resets, lost samples, diagnostics
-DEFECTS = "defects"  # defects/ground_truth (markdown), defects/<side>/<field> scalars
+DEFECTS = "defects"  # defects/ground_truth (markdown), defects/<location>/<kind> scalars
 RUN = "run"  # run/scenario (markdown): what was simulated
 DRAWING = "drawing"  # 2-D, metres in brake_backing_plate
 

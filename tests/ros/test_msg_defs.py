@@ -31,6 +31,7 @@ from brake_sim_msgs.msg import (  # noqa: E402
     ActuationCommand,
     BrakeState,
     ContactEvent,
+    Defect,
     DefectState,
     MeasuredChunk,
     PivotForceChunk,
@@ -91,16 +92,20 @@ EXPECTED_FIELDS = {
         "header": "std_msgs/Header",
         "run_id": "string",
         "scenario": "string",
+        "unit_id": "string",
+        "seed": "uint64",
         "healthy": "boolean",
-        "left_pivot_radius_m": "double",
-        "right_pivot_radius_m": "double",
-        "left_pivot_radius_change_pct": "double",
-        "right_pivot_radius_change_pct": "double",
-        "left_initial_angle_rad": "double",
-        "right_initial_angle_rad": "double",
-        "left_actuation_share": "double",
-        "right_actuation_share": "double",
-        "active_defects": "sequence<string>",
+        "defects": "sequence<brake_sim_msgs/Defect>",
+        "labels": "sequence<string>",
+    },
+    Defect: {
+        "kind": "string",
+        "location": "string",
+        "severity": "double",
+        "unit": "string",
+        "onset_s": "double",
+        "growth": "string",
+        "growth_rate": "double",
     },
     ContactEvent: {
         "header": "std_msgs/Header",
@@ -171,8 +176,9 @@ def test_defaults_and_type_checks():
     assert list(msg.left_fx_n) == [1.0, -2.5]
     req = ResetSimulation.Request()
     assert req.scenario == "" and req.seed == 0
-    state = DefectState(active_defects=["left pivot radius +3.0 %"])
-    assert state.active_defects == ["left pivot radius +3.0 %"]
+    entry = Defect(kind="pivot_radius_change", location="left", severity=3.0, unit="%")
+    state = DefectState(defects=[entry], labels=[entry.kind])
+    assert state.defects[0].severity == 3.0 and state.labels == ["pivot_radius_change"]
 
 
 def _expected_chunk(first: int) -> dict[str, list[float]]:

@@ -32,6 +32,7 @@ from brake_sim_ros.ros.harness import NodeProcess, SimClient, domain_id_for  # n
 from brake_sim_ros.scenarios import load_scenario  # noqa: E402
 from brake_sim_ros.stream import conversion  # noqa: E402
 from brake_sim_ros.stream.build import stepper_for  # noqa: E402
+from brake_sim_ros.viz.annotations import shoe_defects  # noqa: E402
 
 DOMAIN = domain_id_for(2)
 DT = 1 / 25_600  # the sample period
@@ -291,10 +292,11 @@ def test_defect_change_at_run_time_changes_the_shoe_and_the_ground_truth(sim):
         assert result.successful, result.reason
         sim.wait_for(lambda: len(sim.rx.defects) > n_truth, 5.0, "republished ground truth")
         truth = sim.rx.defects[-1]
-        assert truth.left_pivot_radius_change_pct == 3.0 and not truth.healthy
-        nominal = load_scenario("symmetric").setup.params.shoe.pivot_radius_m
-        assert truth.left_pivot_radius_m == pytest.approx(nominal * 1.03)
-        assert list(truth.active_defects) == ["left pivot radius +3.0 %"]
+        assert shoe_defects(truth)["left"].pivot_radius_change_pct == 3.0 and not truth.healthy
+        assert [(d.kind, d.location, d.severity, d.unit) for d in truth.defects] == [
+            ("pivot_radius_change", "left", 3.0, "%")
+        ]
+        assert list(truth.labels) == ["left pivot_radius_change +3 %"]
         assert truth.header.stamp.sec == 1 and truth.header.stamp.nanosec == 0
         step(sim, steps=5000)
         scenario = load_scenario("symmetric")
@@ -324,20 +326,20 @@ def test_initial_angle_and_a_lone_actuation_share_change(sim):
         assert result.successful, result.reason
         sim.wait_for(lambda: sim.rx.defects, 5.0, "ground truth")
         # an initial condition: the run in progress keeps its start, the next reset uses it
-        assert sim.rx.defects[-1].left_initial_angle_rad == 0.0
+        assert shoe_defects(sim.rx.defects[-1])["left"].initial_angle_deg == 0.0
         result = sim.set_parameter("defects.left.actuation_share", 0.55)
         assert result.successful, result.reason
         values = sim.get_parameters(["defects.right.actuation_share"])
         assert values["defects.right.actuation_share"] == pytest.approx(0.45)
         assert sim.reset().success
         sim.wait_for(
-            lambda: sim.rx.defects[-1].left_initial_angle_rad != 0.0,
+            lambda: shoe_defects(sim.rx.defects[-1])["left"].initial_angle_deg != 0.0,
             5.0,
             "ground truth after the reset",
         )
         truth = sim.rx.defects[-1]
-        assert truth.left_initial_angle_rad == pytest.approx(math.radians(-1.0))
-        assert truth.left_actuation_share == 0.55
+        assert shoe_defects(truth)["left"].initial_angle_deg == pytest.approx(-1.0)
+        assert shoe_defects(truth)["left"].actuation_share == pytest.approx(0.55)
         sim.forget()
         step(sim, steps=100)
         assert sim.rx.states[0].left_shoe_angle_rad == pytest.approx(math.radians(-1.0))

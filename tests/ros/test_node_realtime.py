@@ -242,7 +242,7 @@ def test_ground_truth_is_latched_for_late_subscribers(run):
     )
     client.wait_for(lambda: bool(late), 10.0, "latched DefectState")
     assert late[-1].scenario == "symmetric" and late[-1].healthy
-    assert late[-1].left_actuation_share == 0.5 and list(late[-1].active_defects) == []
+    assert list(late[-1].defects) == [] and list(late[-1].labels) == []
 
 
 def test_exit_at_end_prints_a_summary_and_exits_0(tmp_path):

@@ -59,6 +59,6 @@ def test_node_rerun_save(tmp_path):
     assert c.times(f"{E.SPEED}/drum").size == 50
     # the ground truth and drawing follow the model in force, --ros-args override included
     truth = c.texts[f"{E.DEFECTS}/ground_truth"][0]
-    assert "+3.00" in truth
-    assert c.values(f"{E.DEFECTS}/left/pivot_radius_change_pct")[0] == pytest.approx(3.0)
+    assert "| pivot_radius_change | left | +3 | % |" in truth
+    assert c.values(f"{E.DEFECTS}/left/pivot_radius_change")[0] == pytest.approx(3.0)
     assert c.times(f"{E.DRAWING}/linings").size == 25

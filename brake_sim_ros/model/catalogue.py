@@ -1,0 +1,158 @@
+"""The defect catalogue: every kind of brake defect the model knows, as data, and the
+ground truth of a brake's condition as a list of active defects.
+
+Each kind has a name, the locations it can sit at, a severity in a physical unit (0 for a
+healthy brake, so a label column reads 0 where the defect is absent), the range the model
+accepts and a line on what it changes. The ground truth of a brake (:func:`active`) is a
+list of :class:`ActiveDefect`, one per kind and location in force, so a consumer (the
+``DefectState`` message, Parquet label columns, file metadata, a scorer) needs no change
+when a kind is added here.
+
+Time: every defect in force today is a step at the start of the run (onset 0 s, growth
+``step``): a run keeps its defects until a reset. The onset and growth fields are part of
+the description so that defects that grow during a run carry them without a new format.
+
+Pure data and logic: no numerics, no files.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from brake_sim_ros.errors import ParameterError
+from brake_sim_ros.model.layout import SIDES
+
+GROWTH_LAWS: tuple[str, ...] = ("step",)  # how a severity evolves after its onset
+
+
+@dataclass(frozen=True)
+class DefectKind:
+    """One kind of defect.
+
+    Attributes:
+        name: the kind's name in ground truth, label columns and the CLI.
+        locations: where it can sit (a shoe: ``left``/``right``; ``drum``).
+        unit: the severity's unit.
+        minimum, maximum: the severities the model accepts, in ``unit`` (the limit's
+            reason is in ``limit``).
+        limit: why the range stops there.
+        description: what it changes in the brake, and the sign convention.
+        scenario_key: the key that sets it in a scenario's ``[defects.<location>]`` and
+            the node parameter ``<location>_<key>``.
+        healthy_value: what that key reads on a healthy brake (the value set is
+            ``healthy_value + severity``).
+    """
+
+    name: str
+    locations: tuple[str, ...]
+    unit: str
+    minimum: float
+    maximum: float
+    limit: str
+    description: str
+    scenario_key: str
+    healthy_value: float = 0.0
+
+    def check(self, severity: float, where: str = "") -> None:
+        """Refuse a severity outside the range, in one line naming the limit."""
+        if not self.minimum <= severity <= self.maximum:
+            h = self.healthy_value
+            raise ParameterError(
+                f"defect {where}{self.scenario_key}={h + severity:g} is invalid: allowed"
+                f" {h + self.minimum:g} to {h + self.maximum:g} ({self.limit})"
+            )
+
+
+KINDS: tuple[DefectKind, ...] = (
+    DefectKind(
+        name="pivot_radius_change",
+        locations=SIDES,
+        unit="%",
+        minimum=-20.0,
+        maximum=20.0,
+        limit="the range the shoe's assembly on its abutments is built and tested for",
+        description=(
+            "the anchor pin's distance from the drum centre, in % of the nominal radius;"
+            " positive moves the pin outward, toward the drum"
+        ),
+        scenario_key="pivot_radius_change_pct",
+    ),
+    DefectKind(
+        name="initial_angle",
+        locations=SIDES,
+        unit="deg",
+        minimum=-10.0,
+        maximum=10.0,
+        limit="the range the shoe's assembly on its abutments is built and tested for",
+        description=(
+            "the shoe's assembled angle about its pivot; negative tilts it toward the"
+            " drum centre, away from the drum"
+        ),
+        scenario_key="initial_angle_deg",
+    ),
+    DefectKind(
+        name="actuation_share_change",
+        locations=SIDES,
+        unit="1",
+        minimum=-0.5,
+        maximum=0.5,
+        limit="a shoe's share of the total force lies between 0 and 1",
+        description=(
+            "the shoe's share of the total actuation force minus the healthy 0.5 (a"
+            " scenario sets the share itself: 0.55 is +0.05); the shares sum to 1"
+        ),
+        scenario_key="actuation_share",
+        healthy_value=0.5,
+    ),
+)
+KIND_BY_NAME: dict[str, DefectKind] = {k.name: k for k in KINDS}
+
+
+@dataclass(frozen=True)
+class ActiveDefect:
+    """One defect in force.
+
+    Attributes:
+        kind: a name from :data:`KINDS`.
+        location: where it sits (one of the kind's locations).
+        severity: its size now, in the kind's unit (non-zero).
+        unit: the kind's unit.
+        onset_s: simulated time it started, s.
+        growth: how it evolves after the onset (:data:`GROWTH_LAWS`).
+        growth_rate: the law's rate, unit/s (0 for a step).
+    """
+
+    kind: str
+    location: str
+    severity: float
+    unit: str
+    onset_s: float = 0.0
+    growth: str = "step"
+    growth_rate: float = 0.0
+
+    @property
+    def label(self) -> str:
+        """One readable line, e.g. ``left pivot_radius_change +3 %``."""
+        unit = "" if self.unit == "1" else f" {self.unit}"
+        return f"{self.location} {self.kind} {self.severity:+g}{unit}"
+
+    def as_dict(self) -> dict[str, object]:
+        return {
+            "kind": self.kind,
+            "location": self.location,
+            "severity": self.severity,
+            "unit": self.unit,
+            "onset_s": self.onset_s,
+            "growth": self.growth,
+            "growth_rate": self.growth_rate,
+        }
+
+
+def label_column(kind: DefectKind, location: str) -> str:
+    """The per-sample label column of a kind at a location: its severity, 0 if absent."""
+    return f"defect:{location}_{kind.name} [{kind.unit}]"
+
+
+def label_columns() -> tuple[str, ...]:
+    """Every label column, in catalogue order."""
+    return tuple(label_column(k, loc) for k in KINDS for loc in k.locations)
