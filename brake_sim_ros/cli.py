@@ -462,6 +462,33 @@ def channels_text(scenario: Scenario) -> str:
     return "\n".join(lines)
 
 
+def cmd_defects(args: argparse.Namespace) -> int:
+    print(catalogue_text())
+    return 0
+
+
+def catalogue_text() -> str:
+    """The defect catalogue: per kind its locations, unit, valid range and why, the
+    scenario key that sets it, and what it changes; a block each."""
+    from brake_sim_ros.model.catalogue import GROWTH_LAWS, KINDS, label_column
+
+    lines = [
+        "defect catalogue (ground truth: DefectState.defects; Parquet/NPZ label columns"
+        " defect:<location>_<kind> [<unit>], 0 where absent)"
+    ]
+    for k in KINDS:
+        h = k.healthy_value
+        lines += [
+            f"  {k.name} [{k.unit}] at {', '.join(k.locations)}: {k.description}",
+            f"    range {k.minimum:g} to {k.maximum:g} {k.unit} ({k.limit});"
+            f" set by {k.scenario_key} = {h:g} + severity in a scenario's"
+            f" [defects.<location>] or the node's parameter defects.<location>.{k.scenario_key};"
+            f" column {label_column(k, k.locations[0])}",
+        ]
+    lines.append(f"growth laws: {', '.join(GROWTH_LAWS)} (every defect is in force from t = 0)")
+    return "\n".join(lines)
+
+
 # --- bench ---------------------------------------------------------------------------
 def cmd_bench(args: argparse.Namespace) -> int:
     return int(BENCHMARKS[args.what].run(args.rest) or 0)
@@ -628,6 +655,11 @@ def build_parser() -> argparse.ArgumentParser:
         " units and rates",
     )
     p.set_defaults(func=cmd_scenarios)
+
+    p = sub.add_parser(
+        "defects", help="list the defect catalogue: kinds, locations, units, valid ranges"
+    )
+    p.set_defaults(func=cmd_defects)
 
     p = sub.add_parser(
         "bench",

@@ -33,6 +33,7 @@ from rosbags.rosbag2.storage_mcap import McapReader  # noqa: E402
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore  # noqa: E402
 
 from brake_sim_ros import stream  # noqa: E402
+from brake_sim_ros.model import catalogue  # noqa: E402
 from brake_sim_ros.recording import metadata  # noqa: E402
 from brake_sim_ros.recording.reader import RecordingReadError  # noqa: E402
 from brake_sim_ros.recording.record import record_offline  # noqa: E402
@@ -475,3 +476,23 @@ def test_tone_ring_edges_are_recovered_from_a_recording_by_rosbags(tmp_path: Pat
     middle = 0.5 * (edges["wheel_speed"][1:] + edges["wheel_speed"][:-1])
     true = np.interp(middle, run.samples.time_s, run.samples["drum_speed_rad_s"])
     assert np.max(np.abs(speed / true - 1)) < 0.02
+
+
+def test_the_defect_ground_truth_round_trips_through_an_independent_reader(recording, scenario):
+    """rosbags alone decodes the DefectState list (a nested message sequence) of the
+    recording: the scenario's defects, catalogue kinds and units, run id and seed; every
+    sample of the run lies after it, so each is labelled with it."""
+    _, decoded = _rosbags_messages(recording)
+    truths = [(ns, m) for topic, _, ns, m in decoded if topic == stream.DEFECTS.name]
+    assert len(truths) == 1
+    ns, truth = truths[0]
+    assert ns == 0 and truth.run_id == RUN_ID and truth.seed == scenario.seed
+    assert truth.scenario == SCENARIO and not truth.healthy and truth.unit_id == ""
+    expected = scenario.setup.defects.active()
+    assert [
+        (d.kind, d.location, d.severity, d.unit, d.onset_s, d.growth) for d in truth.defects
+    ] == [(d.kind, d.location, d.severity, d.unit, d.onset_s, d.growth) for d in expected]
+    assert {d.kind for d in truth.defects} <= set(catalogue.KIND_BY_NAME)
+    assert list(truth.labels) == [d.label for d in expected]
+    first_sample = min(ns for topic, _, ns, _ in decoded if topic == stream.PIVOT_FORCES.name)
+    assert ns <= first_sample

@@ -33,6 +33,7 @@ from typing import Any
 
 from brake_sim_ros.errors import ParameterError
 from brake_sim_ros.model.actuation import MAX_ACTUATION_FORCE_N, NOMINAL_PEAK_ACTUATION_N
+from brake_sim_ros.model.catalogue import KINDS
 from brake_sim_ros.model.defects import Defects, ShoeDefect
 from brake_sim_ros.model.layout import SIDES
 from brake_sim_ros.model.parameters import PARAMETER_GROUPS, BrakeParameters
@@ -76,9 +77,11 @@ _RANGES: dict[str, tuple[float, float]] = {
     "contact.damping_n_s_per_m": (0.0, 1e6),
     "friction.coefficient": (0.0, 1.0),  # [core]
     "friction.smoothing_speed_m_s": (1e-5, 1.0),  # [core]
-    "defects.pivot_radius_change_pct": (-20.0, 20.0),  # [core]
-    "defects.initial_angle_deg": (-10.0, 10.0),  # [core]
-    "defects.actuation_share": (0.0, 1.0),  # [core]
+    # the defects' ranges are the catalogue's (model/catalogue.py), in scenario terms
+    **{
+        f"defects.{k.scenario_key}": (k.healthy_value + k.minimum, k.healthy_value + k.maximum)
+        for k in KINDS
+    },
 }
 
 # Unit suffixes of the core's field names, longest first.

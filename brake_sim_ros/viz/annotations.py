@@ -40,8 +40,7 @@ def log_defects(rec: rr.RecordingStream, msg: Any, ns: int, shoes: dict[str, Sho
         "| kind | location | severity | unit | onset (s) | growth |",
         "|---|---|---|---|---|---|",
         *(
-            f"| {d.kind} | {d.location} | {d.severity:+g} | {d.unit} | {d.onset_s:g}"
-            f" | {d.growth} |"
+            f"| {d.kind} | {d.location} | {d.severity:+g} | {d.unit} | {d.onset_s:g} | {d.growth} |"
             for d in msg.defects
         ),
         "",

@@ -1,0 +1,85 @@
+"""The defect catalogue: one table of kinds that the defects, the node's parameters, the
+ground truth and the CLI all read."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from brake_sim_ros.cli import catalogue_text, main
+from brake_sim_ros.errors import ParameterError
+from brake_sim_ros.model import catalogue
+from brake_sim_ros.model.defects import Defects, ShoeDefect
+from brake_sim_ros.stream.parameters import _RANGES as RANGES
+
+
+def test_every_kind_is_set_by_a_defect_field_and_a_node_parameter_with_its_range():
+    fields = {f.name for f in dataclasses.fields(ShoeDefect)}
+    for kind in catalogue.KINDS:
+        assert kind.scenario_key in fields
+        lo, hi = RANGES[f"defects.{kind.scenario_key}"]
+        assert (lo, hi) == (kind.healthy_value + kind.minimum, kind.healthy_value + kind.maximum)
+        assert getattr(ShoeDefect(), kind.scenario_key) == kind.healthy_value
+    assert set(ShoeDefect().severities()) == set(catalogue.KIND_BY_NAME)
+    columns = catalogue.label_columns()
+    assert len(set(columns)) == len(columns) == sum(len(k.locations) for k in catalogue.KINDS)
+
+
+shoes = st.builds(
+    ShoeDefect,
+    pivot_radius_change_pct=st.floats(-20.0, 20.0),
+    initial_angle_deg=st.floats(-10.0, 10.0),
+    actuation_share=st.floats(0.0, 1.0),
+)
+
+
+@given(shoes)
+def test_severities_and_back_give_the_same_shoe(shoe):
+    back = ShoeDefect.from_severities(shoe.severities())
+    assert back.pivot_radius_change_pct == shoe.pivot_radius_change_pct
+    assert back.initial_angle_deg == shoe.initial_angle_deg
+    assert back.actuation_share == pytest.approx(shoe.actuation_share, abs=1e-15)
+
+
+@given(shoes)
+def test_the_ground_truth_lists_exactly_the_non_zero_severities(shoe):
+    other = ShoeDefect(actuation_share=1.0 - shoe.actuation_share)
+    defects = Defects(left=shoe, right=other)
+    active = defects.active()
+    columns = defects.severities()
+    assert {catalogue.label_column(catalogue.KIND_BY_NAME[d.kind], d.location) for d in active} == {
+        name for name, value in columns.items() if value != 0.0
+    }
+    assert all(d.severity != 0.0 and d.onset_s == 0.0 and d.growth == "step" for d in active)
+    assert (len(active) == 0) == defects.is_healthy
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        (
+            {"pivot_radius_change_pct": 20.5},
+            "pivot_radius_change_pct=20.5 is invalid: allowed -20 to 20",
+        ),
+        ({"initial_angle_deg": -10.5}, "initial_angle_deg=-10.5 is invalid: allowed -10 to 10"),
+        (
+            {"actuation_share": 1.5},
+            "actuation_share=1.5 is invalid: allowed 0 to 1 (a shoe's share",
+        ),
+    ],
+)
+def test_a_severity_beyond_its_range_is_refused_naming_the_limit(change, message):
+    with pytest.raises(ParameterError, match=message.replace("(", r"\(")):
+        ShoeDefect(**change)
+
+
+def test_the_cli_lists_every_kind_with_unit_locations_and_range(capsys):
+    assert main(["defects"]) == 0
+    out = capsys.readouterr().out
+    assert out.strip() == catalogue_text()
+    for kind in catalogue.KINDS:
+        assert f"{kind.name} [{kind.unit}] at {', '.join(kind.locations)}" in out
+        assert f"range {kind.minimum:g} to {kind.maximum:g} {kind.unit}" in out
