@@ -462,6 +462,13 @@ def channels_text(scenario: Scenario) -> str:
     return "\n".join(lines)
 
 
+def run_severity(argv: list[str]) -> int:
+    """``brake-sim severity ...``: the study parses its own options."""
+    from brake_sim_ros.studies import severity
+
+    return severity.main(argv)
+
+
 def cmd_defects(args: argparse.Namespace) -> int:
     print(catalogue_text())
     return 0
@@ -661,6 +668,12 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.set_defaults(func=cmd_defects)
 
+    sub.add_parser(  # parsed by the study (main() hands it the arguments)
+        "severity",
+        help="sweep each defect from healthy to its service limit and report how signal"
+        " features move: brake-sim severity [--out DIR] [--duration S]",
+    )
+
     p = sub.add_parser(
         "bench",
         help="benchmarks that print figures: "
@@ -690,7 +703,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 # commands that run the physics kernels (compiled on first use)
-PHYSICS_COMMANDS = ("node", "live", "simulate", "validate", "bench")
+PHYSICS_COMMANDS = ("node", "live", "simulate", "validate", "bench", "severity")
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -705,6 +718,8 @@ def main(argv: list[str] | None = None) -> int:
         return run_replay(argv[1:])
     if argv[:1] == ["live"]:
         return run_live(argv[1:])
+    if argv[:1] == ["severity"]:
+        return run_severity(argv[1:])
     parser = build_parser()
     args = parser.parse_args(argv)
     try:

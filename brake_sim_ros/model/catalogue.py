@@ -41,6 +41,8 @@ class DefectKind:
             the node parameter ``<location>_<key>``.
         healthy_value: what that key reads on a healthy brake (the value set is
             ``healthy_value + severity``).
+        service_limit: a size seen in service (shared figures: the study's cases), in
+            ``unit``, signed: where a severity sweep ends.
     """
 
     name: str
@@ -51,6 +53,7 @@ class DefectKind:
     limit: str
     description: str
     scenario_key: str
+    service_limit: float
     healthy_value: float = 0.0
 
     def check(self, severity: float, where: str = "") -> None:
@@ -76,6 +79,7 @@ KINDS: tuple[DefectKind, ...] = (
             " positive moves the pin outward, toward the drum"
         ),
         scenario_key="pivot_radius_change_pct",
+        service_limit=3.0,  # the study's cases: +-3 %
     ),
     DefectKind(
         name="initial_angle",
@@ -89,6 +93,7 @@ KINDS: tuple[DefectKind, ...] = (
             " drum centre, away from the drum"
         ),
         scenario_key="initial_angle_deg",
+        service_limit=-2.0,  # the study's cases: -2 deg
     ),
     DefectKind(
         name="actuation_share_change",
@@ -102,6 +107,7 @@ KINDS: tuple[DefectKind, ...] = (
             " scenario sets the share itself: 0.55 is +0.05); the shares sum to 1"
         ),
         scenario_key="actuation_share",
+        service_limit=0.05,  # the study's cases: +-10 % of the share (0.55)
         healthy_value=0.5,
     ),
 )

@@ -112,6 +112,22 @@ class Defects:
             for loc in kind.locations
         }
 
+    @classmethod
+    def single(cls, kind: str, location: str, severity: float) -> Defects:
+        """A brake with one catalogue defect of ``severity`` at ``location`` (the other
+        shoe's actuation share follows a share change: the shares sum to 1)."""
+        if location not in ("left", "right") or location not in KIND_BY_NAME[kind].locations:
+            raise ParameterError(
+                f"defect {kind} at {location!r} is invalid: allowed at"
+                f" {list(KIND_BY_NAME[kind].locations)}"
+            )
+        shoes = {side: ShoeDefect() for side in ("left", "right")}
+        shoes[location] = ShoeDefect.from_severities({kind: severity})
+        if kind == "actuation_share_change":
+            other = "right" if location == "left" else "left"
+            shoes[other] = ShoeDefect(actuation_share=1.0 - shoes[location].actuation_share)
+        return cls(**shoes)
+
     def labels(self) -> list[str]:
         """One readable line per defect in force (:attr:`.catalogue.ActiveDefect.label`)."""
         return [d.label for d in self.active()]

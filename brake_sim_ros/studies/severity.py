@@ -1,0 +1,227 @@
+"""``brake-sim severity``: each defect of the catalogue swept from healthy to a size seen
+in service, and how a few signal features move, so a user sees what is detectable and
+from what size.
+
+For every kind (:data:`~brake_sim_ros.model.catalogue.KINDS`) and location, the symmetric
+scenario is run with that one defect at :data:`STEPS` fractions of the kind's service limit
+(0, 20, ..., 100 %; ``Defects.single``), for ``--duration`` simulated seconds. Features:
+
+* at the defective shoe, from the pivot force (the model's own signal): the first-impact
+  peak ``|F_pivot|`` (N), the first-to-second impact period (ms), the number of impacts,
+  the actuation force at the first impact (N), and the contact-regime mean ``|F_pivot|``
+  (N; the run must reach 1 s past the impacts, so from ``--duration`` 6.6 s only);
+* what a sensor gives (the default set, one noise seed, :mod:`..analysis.measured_features`):
+  the rms of the backing-plate acceleration x and y in the drum-brake noise band over the
+  impacts (m/s^2), and the first-impact time seen by the accelerometers (ms).
+
+The report (``report.md``, one figure per kind, ``severity.json``) gives each feature's
+value and its change against the healthy brake. One deterministic brake: a change is what
+the signal carries, not a detection rate.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from collections.abc import Callable
+from pathlib import Path
+
+from brake_sim_ros.analysis import measured_features as mf
+from brake_sim_ros.model import catalogue
+from brake_sim_ros.model.catalogue import DefectKind
+from brake_sim_ros.model.defects import Defects
+from brake_sim_ros.model.sensors import SensorBank, SensorSet
+from brake_sim_ros.scenarios import load_scenario
+from brake_sim_ros.stream.run import run_scenario
+
+STEPS = (0.0, 0.2, 0.4, 0.6, 0.8, 1.0)  # fractions of the service limit
+BASE_SCENARIO = "symmetric"
+DEFAULT_DURATION_S = 0.6
+SEED = 0
+FEATURES: dict[str, str] = {  # key: label (unit)
+    "first_impact_peak_n": "first-impact peak of the pivot force magnitude (N)",
+    "period_ms": "impact period (ms)",
+    "impacts": "impacts",
+    "first_impact_actuation_n": "actuation at first impact (N)",
+    "contact_regime_force_n": "contact-regime mean pivot force magnitude (N)",
+    "band_rms_x": "band rms accel x (m/s^2)",
+    "band_rms_y": "band rms accel y (m/s^2)",
+    "first_impact_ms": "first impact, accelerometers (ms)",
+}
+
+
+def features(defects: Defects, location: str, duration_s: float) -> dict[str, float]:
+    """The :data:`FEATURES` of the base scenario with ``defects``, at shoe ``location``."""
+    scenario = load_scenario(BASE_SCENARIO).with_defects(defects)
+    run = run_scenario(scenario, duration_s=duration_s)
+    shoe = run.metrics.shoe(location)
+    sensors = SensorSet()
+    frame = SensorBank(sensors, scenario.sample_rate_hz, SEED).advance(run.samples)
+    measured = mf.features(frame, mf.noise_rms(frame), sensors)
+    return {
+        "first_impact_peak_n": shoe.first_impact_peak_n,
+        "period_ms": 1e3 * shoe.period_s,
+        "impacts": float(shoe.n_impacts),
+        "first_impact_actuation_n": shoe.first_impact_actuation_n,
+        "contact_regime_force_n": shoe.contact_regime_force_n,
+        "band_rms_x": measured[mf.BAND_RMS[0]],
+        "band_rms_y": measured[mf.BAND_RMS[1]],
+        "first_impact_ms": measured[mf.FIRST_IMPACT],
+    }
+
+
+def sweep(
+    kind: DefectKind,
+    location: str,
+    duration_s: float,
+    healthy: dict[str, float],
+    progress: Callable[[str], None] | None = None,
+    steps: tuple[float, ...] = STEPS,
+) -> dict[str, object]:
+    """One kind at one location at ``steps`` (fractions of its service limit, 0 first):
+    severities and each feature's values (the first is ``healthy``)."""
+    severities = [f * kind.service_limit + 0.0 for f in steps]
+    rows = [healthy]
+    for severity in severities[1:]:
+        if progress:
+            progress(f"{location} {kind.name} {severity:+g} {kind.unit}")
+        rows.append(features(Defects.single(kind.name, location, severity), location, duration_s))
+    return {
+        "kind": kind.name,
+        "location": location,
+        "unit": kind.unit,
+        "severities": severities,
+        "values": {k: [r[k] for r in rows] for k in FEATURES},
+    }
+
+
+def sweeps(
+    duration_s: float,
+    progress: Callable[[str], None] | None = None,
+    kinds: tuple[DefectKind, ...] = catalogue.KINDS,
+    steps: tuple[float, ...] = STEPS,
+) -> list[dict[str, object]]:
+    """``kinds`` at every location, healthy runs shared per location."""
+    locations = sorted({loc for k in kinds for loc in k.locations})
+    healthy = {loc: features(Defects(), loc, duration_s) for loc in locations}
+    return [
+        sweep(kind, loc, duration_s, healthy[loc], progress, steps)
+        for kind in kinds
+        for loc in kind.locations
+    ]
+
+
+def change_pct(value: float, base: float) -> float:
+    """Change of ``value`` against ``base``, % (nan where either is missing or base 0)."""
+    if not (math.isfinite(value) and math.isfinite(base)) or base == 0.0:
+        return math.nan
+    return 100.0 * (value - base) / abs(base)
+
+
+def report_markdown(results: list[dict[str, object]], duration_s: float) -> str:
+    lines = [
+        "# Defect severity sweeps",
+        "",
+        f"Scenario `{BASE_SCENARIO}` with one defect, {duration_s:g} s simulated, default"
+        f" sensors (seed {SEED}). Severity from healthy to the kind's service limit"
+        " (`brake-sim defects`); each cell: value (change against healthy).",
+        "",
+    ]
+    for r in results:
+        sev = r["severities"]
+        values = r["values"]
+        assert isinstance(sev, list) and isinstance(values, dict)
+        lines += [
+            f"## {r['location']} {r['kind']} [{r['unit']}]",
+            "",
+            f"![{r['location']} {r['kind']}]({r['location']}_{r['kind']}.png)",
+            "",
+            "| feature | " + " | ".join(f"{s:+g}" for s in sev) + " |",
+            "|---|" + "---|" * len(sev),
+        ]
+        for key, label in FEATURES.items():
+            row = values[key]
+            cells = [
+                f"{v:.4g} ({change_pct(v, row[0]):+.1f} %)" if i else f"{v:.4g}"
+                for i, v in enumerate(row)
+            ]
+            lines.append(f"| {label} | " + " | ".join(cells) + " |")
+        lines.append("")
+    return "\n".join(lines)
+
+
+def plot(result: dict[str, object], out_dir: Path) -> Path:
+    """One figure per kind and location: each feature's change (%) against severity."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    sev = result["severities"]
+    values = result["values"]
+    assert isinstance(sev, list) and isinstance(values, dict)
+    fig, axes = plt.subplots(2, 4, figsize=(15, 6), sharex=True)
+    for ax, (key, label) in zip(axes.flat, FEATURES.items(), strict=True):
+        base = values[key][0]
+        ax.plot(sev, [change_pct(v, base) for v in values[key]], "o-")
+        ax.axhline(0.0, color="0.6", lw=0.6)
+        ax.set_title(label, fontsize=9)
+        ax.grid(alpha=0.3)
+    for ax in axes[1]:
+        ax.set_xlabel(f"severity ({result['unit']})")
+    for ax in axes[:, 0]:
+        ax.set_ylabel("change against healthy (%)")
+    fig.suptitle(f"{result['location']} {result['kind']}: features against severity")
+    fig.tight_layout()
+    path = out_dir / f"{result['location']}_{result['kind']}.png"
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+    return path
+
+
+def write_report(
+    out_dir: Path,
+    duration_s: float,
+    progress: Callable[[str], None] | None = None,
+    kinds: tuple[DefectKind, ...] = catalogue.KINDS,
+    steps: tuple[float, ...] = STEPS,
+) -> Path:
+    """Run the sweeps; write ``report.md``, a figure per kind and location and
+    ``severity.json``."""
+    out_dir.mkdir(parents=True, exist_ok=True)
+    results = sweeps(duration_s, progress, kinds, steps)
+    for r in results:
+        plot(r, out_dir)
+    (out_dir / "severity.json").write_text(json.dumps(results, indent=1, allow_nan=True))
+    path = out_dir / "report.md"
+    path.write_text(report_markdown(results, duration_s))
+    return path
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(
+        prog="brake-sim severity", description=__doc__.split("\n\n")[0]
+    )
+    parser.add_argument("--out", default="out/severity", help="report directory")
+    parser.add_argument(
+        "--duration",
+        type=float,
+        default=DEFAULT_DURATION_S,
+        metavar="S",
+        help=f"simulated seconds per run (default {DEFAULT_DURATION_S:g}; 6.6 for the"
+        " contact-regime force)",
+    )
+    args = parser.parse_args(argv)
+    if not mf.IMPACT_WINDOW_S[1] <= args.duration <= 60.0:
+        parser.error(f"--duration {args.duration:g}: allowed {mf.IMPACT_WINDOW_S[1]:g} to 60 s")
+    path = write_report(
+        Path(args.out), args.duration, lambda what: print(f"running {what}", file=sys.stderr)
+    )
+    print(f"report: {path}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,57 @@
+"""The severity sweep: one defect from healthy toward its service limit, features that
+move with it, and the report a user reads."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from brake_sim_ros.cli import main
+from brake_sim_ros.model.catalogue import KIND_BY_NAME
+from brake_sim_ros.model.defects import Defects
+from brake_sim_ros.studies import severity
+
+DURATION_S = 0.45  # the first impacts of the published event
+
+
+def test_a_share_change_keeps_the_total_and_a_bad_location_is_refused():
+    d = Defects.single("actuation_share_change", "right", -0.05)
+    assert d.right.actuation_share == pytest.approx(0.45)
+    assert d.left.actuation_share == pytest.approx(0.55)
+    assert Defects.single("pivot_radius_change", "left", 3.0).right.is_healthy
+    with pytest.raises(Exception, match="allowed at"):
+        Defects.single("pivot_radius_change", "drum", 1.0)
+
+
+def test_a_pin_moved_out_lowers_its_shoes_first_impact_peak_and_period_monotonically():
+    """The published pivot sweep's direction, at three severities of the catalogue's
+    service limit: larger moves, larger drops (can fail on a sign or an order)."""
+    kind = KIND_BY_NAME["pivot_radius_change"]
+    healthy = severity.features(Defects(), "left", DURATION_S)
+    result = severity.sweep(kind, "left", DURATION_S, healthy, steps=(0.0, 0.5, 1.0))
+    assert result["severities"] == [0.0, 1.5, 3.0]
+    peak = result["values"]["first_impact_peak_n"]
+    period = result["values"]["period_ms"]
+    assert peak[0] > peak[1] > peak[2] and period[0] > period[1] > period[2]
+
+
+def test_the_report_has_a_table_and_a_figure_per_kind_and_location(tmp_path):
+    out = tmp_path / "sev"
+    kind = KIND_BY_NAME["actuation_share_change"]
+    path = severity.write_report(out, DURATION_S, kinds=(kind,), steps=(0.0, 1.0))
+    text = path.read_text()
+    for loc in kind.locations:
+        assert f"## {loc} actuation_share_change [1]" in text
+        assert (out / f"{loc}_actuation_share_change.png").stat().st_size > 10_000
+    data = json.loads((out / "severity.json").read_text())
+    assert [r["location"] for r in data] == list(kind.locations)
+    assert data[0]["severities"] == [0.0, 0.05]
+    assert set(data[0]["values"]) == set(severity.FEATURES)
+
+
+def test_the_cli_refuses_a_duration_too_short_for_the_features(capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(["severity", "--duration", "0.1"])
+    assert exc.value.code == 2
+    assert "--duration 0.1: allowed 0.4 to 60 s" in capsys.readouterr().err
