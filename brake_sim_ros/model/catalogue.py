@@ -126,6 +126,8 @@ class ActiveDefect:
         onset_s: simulated time it started, s.
         growth: how it evolves after the onset (:data:`GROWTH_LAWS`).
         growth_rate: the law's rate, unit/s (0 for a step).
+        attributes: what else describes it, by name (each name ends in its unit), e.g.
+            the amplitude and phase of each harmonic of a drum out of round.
     """
 
     kind: str
@@ -135,6 +137,7 @@ class ActiveDefect:
     onset_s: float = 0.0
     growth: str = "step"
     growth_rate: float = 0.0
+    attributes: tuple[tuple[str, float], ...] = ()
 
     @property
     def label(self) -> str:
@@ -151,6 +154,7 @@ class ActiveDefect:
             "onset_s": self.onset_s,
             "growth": self.growth,
             "growth_rate": self.growth_rate,
+            "attributes": dict(self.attributes),
         }
 
 

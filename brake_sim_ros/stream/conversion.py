@@ -304,6 +304,8 @@ def defect_state(
                 onset_s=float(d.onset_s),
                 growth=d.growth,
                 growth_rate=float(d.growth_rate),
+                attribute_names=[name for name, _ in d.attributes],
+                attribute_values=_doubles(np.array([v for _, v in d.attributes], dtype=float)),
             )
             for d in active
         ],

@@ -106,6 +106,8 @@ EXPECTED_FIELDS = {
         "onset_s": "double",
         "growth": "string",
         "growth_rate": "double",
+        "attribute_names": "sequence<string>",
+        "attribute_values": "sequence<double>",
     },
     ContactEvent: {
         "header": "std_msgs/Header",
