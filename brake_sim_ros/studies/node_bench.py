@@ -28,12 +28,14 @@ all of its publishing work. Both processes share the machine's cores.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
 import os
 import statistics
 import sys
 import tempfile
 import time
+from collections.abc import Iterator
 from pathlib import Path
 
 from brake_sim_ros.ros.harness import NodeProcess, SimClient, domain_id_for
@@ -111,9 +113,14 @@ def _sustained(factor: float, check: dict) -> bool:
     )
 
 
-def _real_time_cpu(duration_s: float, scenario: str, measured: bool) -> dict[str, float]:
-    """One node at real-time factor 1: its counters and CPU over ``duration_s``."""
-    domain = domain_id_for(91)
+@contextlib.contextmanager
+def _node_and_client(
+    scenario: str, measured: bool, domain_offset: int, exit_codes: list[int] | None = None
+) -> Iterator[tuple[NodeProcess, SimClient]]:
+    """A node running ``scenario`` at real-time factor 1 and a client subscribed to every
+    topic, on a private domain; both warmed up. Yields them; stops both on exit and
+    appends the node's exit code to ``exit_codes``."""
+    domain = domain_id_for(domain_offset)
     log = Path(tempfile.mkdtemp(prefix="brake_sim_bench_")) / "node.log"
     node = NodeProcess.start(
         ["--scenario", scenario, "--duration", "86400", "--ros-args", "-p",
@@ -125,12 +132,20 @@ def _real_time_cpu(duration_s: float, scenario: str, measured: bool) -> dict[str
     try:
         client.wait_for_node(60.0)
         client.spin_for(WARM_UP_S)
+        yield node, client
+    finally:
+        client.close()
+        code = node.stop()
+        if exit_codes is not None:
+            exit_codes.append(code)
+
+
+def _real_time_cpu(duration_s: float, scenario: str, measured: bool) -> dict[str, float]:
+    """One node at real-time factor 1: its counters and CPU over ``duration_s``."""
+    with _node_and_client(scenario, measured, 91) as (node, client):
         window = _Window(client, node.pid)
         client.spin_for(duration_s)
         return window.close()
-    finally:
-        client.close()
-        node.stop()
 
 
 def sensors_overhead(duration_s: float, scenario: str, rounds: int) -> str:
@@ -163,18 +178,8 @@ def run(
     duration_s: float, scenario: str, afap_s: float, latency_count: int, measured: bool = True
 ) -> str:
     load_before = os.getloadavg()[0]  # other work on the machine skews every figure
-    domain = domain_id_for(90)
-    log = Path(tempfile.mkdtemp(prefix="brake_sim_bench_")) / "node.log"
-    node = NodeProcess.start(
-        ["--scenario", scenario, "--duration", "86400", "--ros-args", "-p",
-         f"publish_measured:={'true' if measured else 'false'}"],
-        domain_id=domain,
-        log_path=log,
-    )  # fmt: skip
-    client = SimClient(domain, keep_chunks=False)
-    try:
-        client.wait_for_node(60.0)
-        client.spin_for(WARM_UP_S)
+    exit_codes: list[int] = []
+    with _node_and_client(scenario, measured, 90, exit_codes) as (node, client):
         window = _Window(client, node.pid)
         client.spin_for(duration_s)
         rt = window.close()
@@ -195,9 +200,7 @@ def run(
             checks.append((factor, check))
             if _sustained(factor, check) or factor == 1.0:
                 break
-    finally:
-        client.close()
-        code = node.stop()
+    code = exit_codes[0]
     lat_ms = sorted(1e3 * x for x in lat)
     p95 = lat_ms[min(len(lat_ms) - 1, math.ceil(0.95 * len(lat_ms)) - 1)]
     lines = [
