@@ -211,3 +211,12 @@ def test_scenario_tables_read_both_ways():
     assert inline.setup.defects == tables.setup.defects
     assert inline.setup.defects.drum.harmonics == (DrumHarmonic(2, 50.0, 30.0),)
     assert inline.setup.defects.labels() == ["drum order 2 50 um at 30 deg"]
+
+
+def test_the_severity_sweep_prints_a_line_per_severity(capsys):
+    from brake_sim_ros.studies import BENCHMARKS
+
+    assert BENCHMARKS["drum"].run(["--severities", "0", "50"]) == 0
+    rows = capsys.readouterr().out.splitlines()[2:]
+    assert [float(r.split()[0]) for r in rows] == [0.0, 50.0]
+    assert float(rows[0].split()[2]) == 0.0 and float(rows[1].split()[2]) > 1.0
