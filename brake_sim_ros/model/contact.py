@@ -21,7 +21,8 @@ capacity ``mu Fn``.
 
 Frames and signs: the backing-plate frame (x right, y up, z out of the wheel); forces in N
 on the shoe; the friction force acts along the drum's counter-clockwise tangent
-``(-ny, nx)`` and its torque on the drum is ``-Ff * dist``.
+``(-ny, nx)`` and its torque on the drum is ``-Ff * dist`` (on an out-of-round drum
+``-Ff`` times the tangent's arm, plus the normal force's ``-Fn dr/dpsi``).
 """
 
 from __future__ import annotations
