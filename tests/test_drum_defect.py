@@ -220,3 +220,27 @@ def test_the_severity_sweep_prints_a_line_per_severity(capsys):
     rows = capsys.readouterr().out.splitlines()[2:]
     assert [float(r.split()[0]) for r in rows] == [0.0, 50.0]
     assert float(rows[0].split()[2]) == 0.0 and float(rows[1].split()[2]) > 1.0
+
+
+def test_a_scenario_with_a_drum_defect_runs_at_an_impact_level_with_both_shoes():
+    """Asking contact-regime forces of one shoe gets the rigid impact level (not the
+    contact-regime one) with both shoes (not a one-shoe model: the wave reaches a shoe at
+    the drum speed, which the other shoe's braking sets; alone, the line differs by 6 %).
+    Its order-2 line is the full model's."""
+    from brake_sim_ros.stream.run import run_scenario
+
+    scenario = parse_scenario(
+        SCENARIO
+        + "harmonics = [{order = 2, amplitude_um = 50}]\n"
+        + '[needs]\noutputs = ["contact_regime_forces"]\nshoes = ["left"]\n'
+    )
+    result = run_scenario(scenario, duration_s=RUN_S)
+    assert result.plan.level.name == "rigid" and result.plan.shoes == ("left", "right")
+    assert "both shoes are modelled" in result.plan.reason
+    block = result.samples
+    full = _run(_drum((2, 50.0, 0.0)))
+    # the plan keeps no drum angle: take the full model's (the rigid rotor turns as the
+    # flywheel; the coupling's twist is a slow offset, which leaves the line's size)
+    angle = np.interp(block.time_s, full.time_s, full["drum_angle_rad"])
+    rigid = order_amplitude(block.time_s, angle, block["left_pivot_fy_n"], 2, WINDOW_S)
+    assert rigid == pytest.approx(_line(full, full["left_pivot_fy_n"], 2), rel=0.01)
