@@ -481,7 +481,7 @@ def catalogue_text() -> str:
 
     lines = [
         "defect catalogue (ground truth: DefectState.defects; Parquet/NPZ label columns"
-        " defect:<location>_<kind> [<unit>], 0 where absent)"
+        " defect:<kind>:<location> [<unit>], 0 where absent)"
     ]
     for k in KINDS:
         h = k.healthy_value

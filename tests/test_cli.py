@@ -300,8 +300,8 @@ def test_simulate_parquet_labels_every_sample_with_the_defects_ground_truth(tmp_
     for name in columns:
         values = table[name].to_numpy()
         expected = {
-            "defect:left_actuation_share_change [1]": share,
-            "defect:right_actuation_share_change [1]": right,
+            "defect:actuation_share_change:left [1]": share,
+            "defect:actuation_share_change:right [1]": right,
         }.get(name, 0.0)
         assert values.shape == (table.num_rows,) and np.all(values == expected), name
     meta = json.loads(table.schema.metadata[b"brake_sim"])

@@ -4,6 +4,7 @@ move with it, and the report a user reads."""
 from __future__ import annotations
 
 import json
+import math
 
 import pytest
 
@@ -48,6 +49,7 @@ def test_the_report_has_a_table_and_a_figure_per_kind_and_location(tmp_path):
     assert [r["location"] for r in data] == list(kind.locations)
     assert data[0]["severities"] == [0.0, 0.05]
     assert set(data[0]["values"]) == set(severity.FEATURES)
+    assert math.isnan(data[0]["values"]["order_2_line_n"][0])  # too short for the window
 
 
 def test_the_cli_refuses_a_duration_too_short_for_the_features(capsys):
@@ -55,3 +57,17 @@ def test_the_cli_refuses_a_duration_too_short_for_the_features(capsys):
         main(["severity", "--duration", "0.1"])
     assert exc.value.code == 2
     assert "--duration 0.1: allowed 0.4 to 60 s" in capsys.readouterr().err
+
+
+def test_an_oval_drum_shows_in_the_order_2_line_in_proportion_to_its_runout():
+    """The drum kind swept like the others: its line at twice the rotation frequency is
+    numerically zero on a round drum and doubles with the runout."""
+    kind = KIND_BY_NAME["drum_out_of_round"]
+    healthy = severity.features(Defects(), "drum", severity.ORDER_WINDOW_S[1])
+    result = severity.sweep(
+        kind, "drum", severity.ORDER_WINDOW_S[1], healthy, steps=(0.0, 0.5, 1.0)
+    )
+    line = result["values"]["order_2_line_n"]
+    assert result["severities"] == [0.0, 75.0, 150.0]
+    assert line[0] < 1e-6 < line[1]
+    assert line[2] / line[1] == pytest.approx(2.0, rel=0.02)

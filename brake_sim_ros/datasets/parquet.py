@@ -21,7 +21,7 @@ One row per sample of the scenario's rate. Columns, units in the names:
   Speed from consecutive edges: ``(2 pi / teeth) / diff(edge times)`` rad/s.
 
 * per kind of the defect catalogue (``model/catalogue.py``, ``brake-sim defects``) and
-  location, ``defect:<location>_<kind> [<unit>]`` (float64): the defect's severity at that
+  location, ``defect:<kind>:<location> [<unit>]`` (float64): the defect's severity at that
   sample, 0 where it is absent (today's defects are steps at the start of the run, so the
   column is constant).
 

@@ -11,7 +11,13 @@ from scipy.optimize import brentq
 from brake_sim_ros.errors import ParameterError
 from brake_sim_ros.model import kernel
 from brake_sim_ros.model import layout as L
-from brake_sim_ros.model.defects import Defects, ShoeDefect
+from brake_sim_ros.model.defects import (
+    MAX_DRUM_SLOPE,
+    SERVICE_RUNOUT_UM,
+    Defects,
+    DrumDefect,
+    ShoeDefect,
+)
 from brake_sim_ros.model.parameters import BrakeParameters
 
 SIDES = L.SIDES
@@ -183,7 +189,53 @@ def pack(
         p[b + L.S_ACTUATION_GAIN] = defect.actuation_gain
         p[b + L.S_ENABLED] = 1.0 if side in options.shoes else 0.0
         _check_shoe(params, side, defect, s, p, b)
+    _pack_drum(params, defects, p)
     return p
+
+
+def _pack_drum(params: BrakeParameters, defects: Defects, p: np.ndarray) -> None:
+    """Pack the drum's radius harmonics (layout.P_DRUM_WAVE_*) after checking the limits
+    that need the assembled brake: the slope, and the peak runout against the rest gap.
+
+    A round drum (no harmonic of non-zero amplitude) packs no harmonic at all, so the
+    kernels take exactly the round drum's arithmetic.
+    """
+    drum: DrumDefect = defects.drum
+    waves = [h for h in drum.harmonics if h.amplitude_um > 0.0]
+    if not waves:
+        return
+    radius = params.shoe.drum_radius_m
+    slope = drum.slope(radius)
+    if slope > MAX_DRUM_SLOPE:
+        raise ParameterError(
+            f"drum harmonics slope sum_k k a_k / R0 = {slope:.4f}: allowed at most"
+            f" {MAX_DRUM_SLOPE} (the contact geometry tilts the normal by a small slope)"
+        )
+    # the gap between each resting shoe and the round drum (the running clearance for a
+    # healthy shoe; the shoe defects change it)
+    gaps = [
+        -indentation_at(
+            p,
+            L.P_SHOE_BASE + i * L.SHOE_STRIDE,
+            math.radians(getattr(defects, side).initial_angle_deg),
+        )
+        for i, side in enumerate(SIDES)
+    ]
+    runout_m = drum.peak_runout_um * 1e-6
+    gap = min(gaps)
+    if runout_m >= gap:
+        raise ParameterError(
+            f"drum peak runout sum_k a_k = {drum.peak_runout_um:g} um: allowed below the"
+            f" gap between the resting shoes and the drum, {gap * 1e6:.0f} um (the running"
+            " clearance), or the drum touches the retracted shoes every revolution"
+            f" (permanent contact); service drums run out by up to {SERVICE_RUNOUT_UM:g} um"
+        )
+    p[L.P_DRUM_WAVE_COUNT] = float(len(waves))
+    for j, h in enumerate(waves):
+        b = L.P_DRUM_WAVE_BASE + j * L.DRUM_WAVE_STRIDE
+        p[b + L.W_ORDER] = float(h.order)
+        p[b + L.W_AMPLITUDE] = h.amplitude_um * 1e-6
+        p[b + L.W_PHASE] = math.radians(h.phase_deg)
 
 
 def _check_shoe(
@@ -287,9 +339,14 @@ def contact_arms(p: np.ndarray, base: int, start_angle_rad: float) -> ContactArm
     )
 
 
-def indentation_at(p: np.ndarray, base: int, theta_rad: float) -> float:
-    """Indentation (m, positive = penetration) of a shoe held at ``theta_rad``."""
-    out = kernel.shoe_eval(p, base, theta_rad, 0.0, 0.0, 0.0, L.CONTACT_AUTO)
+def indentation_at(
+    p: np.ndarray, base: int, theta_rad: float, drum_angle_rad: float = 0.0
+) -> float:
+    """Indentation (m, positive = penetration) of a shoe held at ``theta_rad`` against the
+    drum at ``drum_angle_rad`` (which matters only for an out-of-round drum)."""
+    out = kernel.shoe_eval(
+        p, base, theta_rad, 0.0, 0.0, 0.0, L.CONTACT_AUTO, 0, 0.0, drum_angle_rad
+    )
     return float(out[2])
 
 

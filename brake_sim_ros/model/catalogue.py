@@ -23,6 +23,7 @@ from brake_sim_ros.errors import ParameterError
 from brake_sim_ros.model.layout import SIDES
 
 GROWTH_LAWS: tuple[str, ...] = ("step",)  # how a severity evolves after its onset
+DRUM_KIND = "drum_out_of_round"
 
 
 @dataclass(frozen=True)
@@ -110,6 +111,26 @@ KINDS: tuple[DefectKind, ...] = (
         service_limit=0.05,  # the study's cases: +-10 % of the share (0.55)
         healthy_value=0.5,
     ),
+    DefectKind(
+        name=DRUM_KIND,
+        locations=("drum",),
+        unit="um",
+        minimum=0.0,
+        maximum=3500.0,
+        limit=(
+            "the peak runout stays below the gap between the resting shoes and the drum"
+            " (the running clearance, 3.5 mm nominal, checked at assembly) and the surface"
+            " slope sum k a_k / R0 at most 0.05"
+        ),
+        description=(
+            "drum radius harmonics r(psi) = R0 + sum a_k cos(k psi + phi_k), psi in the"
+            " drum's frame; the severity is the peak runout sum a_k, each harmonic's"
+            " amplitude and phase are attributes (order_<k>_amplitude_um,"
+            " order_<k>_phase_deg)"
+        ),
+        scenario_key="harmonics",
+        service_limit=150.0,  # service runouts 50-150 um (about 50 um a common limit)
+    ),
 )
 KIND_BY_NAME: dict[str, DefectKind] = {k.name: k for k in KINDS}
 
@@ -160,7 +181,7 @@ class ActiveDefect:
 
 def label_column(kind: DefectKind, location: str) -> str:
     """The per-sample label column of a kind at a location: its severity, 0 if absent."""
-    return f"defect:{location}_{kind.name} [{kind.unit}]"
+    return f"defect:{kind.name}:{location} [{kind.unit}]"
 
 
 def label_columns() -> tuple[str, ...]:

@@ -9,7 +9,9 @@ Contact geometry. A shoe is rigid and turns by ``phi = sign * theta`` about its 
 brake). The lining point farthest from the drum centre is on the ray from the origin
 through ``C`` when that ray crosses the arc, otherwise at the arc end angularly nearest to
 it; its distance from the centre minus ``R_d`` is the indentation ``eps`` (m, positive =
-penetration). The normal is the drum's outward normal there.
+penetration). The normal is the drum's outward normal there. An out-of-round drum
+(:func:`drum_radius`) puts its local radius in place of ``R_d`` and tilts the normal by its
+slope (:func:`kinematics`).
 
 Contact law. Kelvin-Voigt, ``Fn = k_c eps + c_c eps_dot`` while in contact, never
 negative (a contact never pulls). Friction: Coulomb, smoothed ``Ff = mu Fn tanh(v / v_s)``
@@ -19,7 +21,8 @@ capacity ``mu Fn``.
 
 Frames and signs: the backing-plate frame (x right, y up, z out of the wheel); forces in N
 on the shoe; the friction force acts along the drum's counter-clockwise tangent
-``(-ny, nx)`` and its torque on the drum is ``-Ff * dist``.
+``(-ny, nx)`` and its torque on the drum is ``-Ff * dist`` (on an out-of-round drum
+``-Ff`` times the tangent's arm, plus the normal force's ``-Fn dr/dpsi``).
 """
 
 from __future__ import annotations
@@ -52,7 +55,11 @@ N_EVAL = 14
 def contact_point(p, base, c, sn):
     """Lining point farthest from the drum centre for a shoe turned by phi (cos c, sin sn).
 
-    Returns (x, y, distance from the drum centre, unit normal x, unit normal y), m.
+    Returns (x, y, distance from the drum centre, unit normal x, unit normal y, turn rate):
+    m, m, m, 1, 1, and ``d(alpha)/d(phi)`` (1), the rate at which the point's polar angle
+    ``alpha`` turns with the shoe (on the ray through the arc centre ``C`` the point slides
+    along the lining: ``C.(C - P) / |C|^2``; at an arc end it is a material point:
+    ``X.(X - P) / |X|^2``).
     """
     px = p[base + L.S_PIVOT_X]
     py = p[base + L.S_PIVOT_Y]
@@ -74,7 +81,8 @@ def contact_point(p, base, c, sn):
         uy = my
     if ux * mx + uy * my >= p[base + L.S_LINING_HALF_COS]:
         # the ray from the drum centre through the arc centre crosses the lining
-        return cx + r * ux, cy + r * uy, ce + r, ux, uy
+        turn = (cx * (cx - px) + cy * (cy - py)) / (ce * ce) if ce > 1e-150 else 0.0
+        return cx + r * ux, cy + r * uy, ce + r, ux, uy, turn
     hc = p[base + L.S_LINING_HALF_COS]
     hs = p[base + L.S_LINING_HALF_SIN]
     if mx * uy - my * ux < 0.0:
@@ -84,16 +92,53 @@ def contact_point(p, base, c, sn):
     xx = cx + r * ex
     xy = cy + r * ey
     dist = math.sqrt(xx * xx + xy * xy)
-    return xx, xy, dist, xx / dist, xy / dist
+    return xx, xy, dist, xx / dist, xy / dist, (xx * (xx - px) + xy * (xy - py)) / (dist * dist)
 
 
 @njit(cache=True, inline="always")
-def kinematics(p, base, theta, omega):
-    """Contact kinematics of a shoe at angle ``theta`` (rad) turning at ``omega`` (rad/s).
+def drum_radius(p, psi):
+    """Radius of the drum at the angle ``psi`` of its own frame (rad) and its slope.
+
+    ``r(psi) = R0 + sum_k a_k cos(k psi + phi_k)`` over the packed harmonics
+    (layout.P_DRUM_WAVE_*; :class:`brake_sim_ros.model.defects.DrumDefect`). Returns
+    (r m, dr/dpsi m/rad).
+    """
+    r = p[L.P_DRUM_RADIUS]
+    slope = 0.0
+    for j in range(int(p[L.P_DRUM_WAVE_COUNT])):
+        b = L.P_DRUM_WAVE_BASE + j * L.DRUM_WAVE_STRIDE
+        k = p[b + L.W_ORDER]
+        a = p[b + L.W_AMPLITUDE]
+        arg = k * psi + p[b + L.W_PHASE]
+        r += a * math.cos(arg)
+        slope -= k * a * math.sin(arg)
+    return r, slope
+
+
+@njit(cache=True, inline="always")
+def kinematics(p, base, theta, omega, drum_angle, drum_speed):
+    """Contact kinematics of a shoe at angle ``theta`` (rad) turning at ``omega`` (rad/s)
+    against a drum at ``drum_angle`` (rad) turning at ``drum_speed`` (rad/s, about +z).
 
     Returns (eps m, eps_dot m/s, tangential speed of the shoe's material point at the
-    contact along (-ny, nx) m/s, contact x m, contact y m, distance from the drum centre m,
-    normal x, normal y, cos phi, sin phi).
+    contact along the drum's tangent (-ny, nx) m/s, contact x m, contact y m, friction arm
+    m, normal x, normal y, cos phi, sin phi, contact-force direction x, y, wave arm m):
+
+    * round drum (no harmonics packed): ``eps = |X| - R0`` at the lining point ``X``
+      farthest from the centre, the normal and the contact-force direction are the radial
+      unit vector, the friction arm is ``|X|`` and the wave arm 0.
+    * out-of-round drum: ``eps = g = |X| - r(psi)``, the radial penetration of ``X`` into
+      the drum's local radius (``psi = alpha - drum_angle``, ``alpha`` the polar angle of
+      ``X``). The normal is the drum surface's, tilted by its slope:
+      ``grad g = e_r - (r'/|X|) e_t`` normalised; friction acts along its tangent, whose
+      arm about the drum centre is ``|X| / |grad g|``. The contact force on the shoe is
+      ``-f q`` for the Kelvin-Voigt force ``f``, with ``q`` chosen so that the moments it
+      applies are exactly the gradients of the contact's elastic energy ``k g^2 / 2``:
+      on the drum ``-f r'`` (the wave arm ``r'``: a non-round drum turning under a
+      pressed shoe works against the normal force), on the shoe ``-f dg/dphi``. ``q`` is
+      ``grad g`` plus a radial term of order ``r'/|P|`` from the contact point sliding
+      along the lining as the shoe turns (:func:`contact_point`); the energy books
+      (analysis/energy.py) then close exactly as for the round drum.
     """
     s = p[base + L.S_SIGN]
     px = p[base + L.S_PIVOT_X]
@@ -101,15 +146,37 @@ def kinematics(p, base, theta, omega):
     phi = s * theta
     c = math.cos(phi)
     sn = math.sin(phi)
-    xx, xy, dist, nx, ny = contact_point(p, base, c, sn)
-    eps = dist - p[L.P_DRUM_RADIUS]
+    xx, xy, dist, nx, ny, turn = contact_point(p, base, c, sn)
     w = s * omega
     # velocity of the shoe's material point at the contact
     vx = -w * (xy - py)
     vy = w * (xx - px)
-    eps_dot = nx * vx + ny * vy
-    vt = -ny * vx + nx * vy
-    return eps, eps_dot, vt, xx, xy, dist, nx, ny, c, sn
+    if p[L.P_DRUM_WAVE_COUNT] <= 0.0:
+        eps = dist - p[L.P_DRUM_RADIUS]
+        eps_dot = nx * vx + ny * vy
+        vt = -ny * vx + nx * vy
+        return eps, eps_dot, vt, xx, xy, dist, nx, ny, c, sn, nx, ny, 0.0
+    radius, r_slope = drum_radius(p, math.atan2(xy, xx) - drum_angle)
+    eps = dist - radius
+    tilt = r_slope / dist
+    norm = math.sqrt(1.0 + tilt * tilt)
+    # grad g = e_r - tilt e_t, e_t = (-ny, nx)
+    gx = nx + tilt * ny
+    gy = ny - tilt * nx
+    # moment arms about the pivot of the radial and tangential directions at X
+    arm_r = (xx - px) * ny - (xy - py) * nx
+    arm_t = (xx - px) * nx + (xy - py) * ny
+    # dg/dphi = arm_r - r' turn; dg/d(drum angle) = r'
+    eps_dot = w * (arm_r - r_slope * turn) + r_slope * drum_speed
+    # q = q_r e_r - tilt e_t: tangential part fixed by the drum's moment (X x q = -r'),
+    # radial part by the shoe's ((X - P) x q = dg/dphi)
+    q_r = 1.0 - r_slope * (turn - arm_t / dist) / arm_r
+    qx = q_r * nx + tilt * ny
+    qy = q_r * ny - tilt * nx
+    tx = -gy / norm
+    ty = gx / norm
+    vt = tx * vx + ty * vy
+    return eps, eps_dot, vt, xx, xy, dist / norm, gx / norm, gy / norm, c, sn, qx, qy, r_slope
 
 
 @njit(cache=True, inline="always")
@@ -124,8 +191,9 @@ def normal_force(p, base, eps, eps_dot, mode):
 
 
 @njit(cache=True, inline="always")
-def switching_function(p, base, theta, omega):
-    """Indentation ``eps`` and switching function ``h`` of one shoe, both in m.
+def switching_function(p, base, theta, omega, drum_angle, drum_speed):
+    """Indentation ``eps`` and switching function ``h`` of one shoe, both in m (shoe and
+    drum angles and speeds as for :func:`kinematics`).
 
     ``h = min(eps, eps + (c_c / k_c) eps_dot)``: the Kelvin-Voigt force of
     :func:`normal_force` is on exactly when ``h > 0`` (the lining penetrates and the force
@@ -136,7 +204,7 @@ def switching_function(p, base, theta, omega):
     """
     if p[base + L.S_ENABLED] <= 0.0:
         return -1.0, -1.0
-    k = kinematics(p, base, theta, omega)
+    k = kinematics(p, base, theta, omega, drum_angle, drum_speed)
     eps = k[0]
     g = eps + p[L.P_CONTACT_DAMPING] / p[L.P_CONTACT_STIFFNESS] * k[1]
     return eps, min(eps, g)
@@ -154,18 +222,20 @@ def sliding_friction(p, fn, v_slide):
 def shoe_forces(p, base, omega, actuation, kin, fn, ff, v_slide):
     """Moment balance of one shoe given its contact kinematics ``kin`` (from
     :func:`kinematics`), normal force ``fn`` and friction force ``ff`` (N), and the
-    sliding speed ``v_slide`` (m/s) against which friction works.
+    sliding speed ``v_slide`` (m/s) against which friction works. The drum torque is the
+    friction's (``-ff`` times its arm) plus, on an out-of-round drum, the normal force's
+    (``-fn`` times the wave arm ``dr/dpsi``).
 
     Returns the :data:`N_EVAL` slots of :func:`shoe_eval`.
     """
-    eps, eps_dot, _vt, xx, xy, dist, nx, ny, c, sn = kin
+    eps, eps_dot, _vt, xx, xy, arm, nx, ny, c, sn, qx, qy, wave_arm = kin
     s = p[base + L.S_SIGN]
     px = p[base + L.S_PIVOT_X]
     py = p[base + L.S_PIVOT_Y]
     enabled = p[base + L.S_ENABLED] > 0.0
     w = s * omega
-    fcx = -fn * nx - ff * ny
-    fcy = -fn * ny + ff * nx
+    fcx = -fn * qx - ff * ny
+    fcy = -fn * qy + ff * nx
     # actuation on the tip, fixed world direction
     tdx = p[base + L.S_TIP_X] - px
     tdy = p[base + L.S_TIP_Y] - py
@@ -185,7 +255,7 @@ def shoe_forces(p, base, omega, actuation, kin, fn, ff, v_slide):
     p_act = fex * (-w * ty) + fey * (w * tx)
     return (
         theta_ddot,
-        -ff * dist,
+        -ff * arm - fn * wave_arm,
         eps,
         eps_dot,
         fn,
@@ -208,7 +278,9 @@ def sliding_speed(kin, drum_speed):
 
 
 @njit(cache=True, inline="always")
-def shoe_eval(p, base, theta, omega, drum_speed, actuation, mode, stuck=0, share=0.0):
+def shoe_eval(
+    p, base, theta, omega, drum_speed, actuation, mode, stuck=0, share=0.0, drum_angle=0.0
+):
     """Forces on one shoe and what they do.
 
     Args:
@@ -227,7 +299,7 @@ def shoe_eval(p, base, theta, omega, drum_speed, actuation, mode, stuck=0, share
         force x N, net applied force y N, friction power W, contact loss power W,
         actuation power W). The net applied force is contact + friction + actuation.
     """
-    kin = kinematics(p, base, theta, omega)
+    kin = kinematics(p, base, theta, omega, drum_angle, drum_speed)
     fn = normal_force(p, base, kin[0], kin[1], mode)
     v_slide = sliding_speed(kin, drum_speed)
     ff = share * p[L.P_FRICTION_COEFFICIENT] * fn if stuck else sliding_friction(p, fn, v_slide)

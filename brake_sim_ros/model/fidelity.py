@@ -39,6 +39,18 @@ Why each level serves what it serves (the physics behind the capability table):
   miss the coupling's twist and the lock at standstill. The structure sums both pivot
   forces, so measured signals never come from a one-shoe model. A plan without this
   output builds no sensor bank: no structure, no measured channels (the cost is saved).
+* Defects: every level represents the shoe defects (pivot location, initial angle,
+  actuation share: the geometry and the gains). An out-of-round drum (``drum_out_of_round``)
+  needs the drum angle in the contact and the shoes' dynamics: its wave moves the shoe at
+  ``k`` times the rotation frequency, it drives the contact damper and the drum works
+  against the normal force. The contact-regime levels balance massless shoes without the
+  drum angle and reuse a balance while the actuation holds, so they cannot represent it;
+  the impact levels (``rigid``, ``full``) can (the rigid coupling changes the order-2 line
+  of the leading shoe's pivot force by 3e-7 of it). A scenario with a drum defect gets the
+  cheapest impact level that serves it; a forced contact-regime level is refused, naming
+  the defect and the levels that represent it. Never a one-shoe model: the wave passes the
+  shoe at ``k`` times the drum speed, which the other shoe's braking sets (one shoe alone
+  stops the drum more slowly: the line of 50 um of ovality differs by 6 %).
 
 Pure logic: no numerics, no files.
 """
@@ -49,6 +61,7 @@ from dataclasses import dataclass
 
 from brake_sim_ros.errors import FidelityError
 from brake_sim_ros.model import layout as L
+from brake_sim_ros.model.catalogue import DRUM_KIND, KIND_BY_NAME
 
 SIDES = L.SIDES
 # the solver presets by name (their schemes and steps: solvers/presets.py)
@@ -77,8 +90,18 @@ OUTPUTS: dict[str, str] = {
         " (m/s^2), load pins (N), line pressure (bar), wheel speed (pulse and index, 1)"
     ),
 }
+# defect kind (model/catalogue.py) -> levels that represent it (see module doc)
+_ALL_LEVELS = frozenset({"contact_regime_rigid", "contact_regime", "rigid", "full"})
+DEFECT_LEVELS: dict[str, frozenset[str]] = {
+    "pivot_radius_change": _ALL_LEVELS,
+    "initial_angle": _ALL_LEVELS,
+    "actuation_share_change": _ALL_LEVELS,
+    DRUM_KIND: frozenset({"rigid", "full"}),
+}
 # outputs that belong to one shoe and do not depend on the other shoe (see module doc)
 SHOE_LOCAL_OUTPUTS = frozenset({"impacts", "contact_regime_forces"})
+# defects whose effect on a shoe follows the drum speed: no one-shoe model (see module doc)
+SPEED_DEPENDENT_DEFECTS = frozenset({DRUM_KIND})
 
 
 @dataclass(frozen=True)
@@ -142,12 +165,15 @@ class Needs:
         shoes: shoes whose signals are wanted (a subset of ``("left", "right")``).
         accuracy: solver accuracy preset name (passed through to the solver), or None.
         level: a forced level name, or None to let the planner choose.
+        defects: kinds of the scenario's defects (:data:`DEFECT_LEVELS` keys): the level
+            must represent them (the scenario loader fills them in from ``[defects]``).
     """
 
     outputs: tuple[str, ...]
     shoes: tuple[str, ...] = SIDES
     accuracy: str | None = None
     level: str | None = None
+    defects: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         unknown = [o for o in self.outputs if o not in OUTPUTS]
@@ -171,6 +197,12 @@ class Needs:
             )
         if self.level is not None and self.level not in LEVEL_BY_NAME:
             raise FidelityError(f"needs level {self.level!r}: allowed one of {list(LEVEL_BY_NAME)}")
+        unknown = [d for d in self.defects if d not in DEFECT_LEVELS]
+        if unknown:
+            raise FidelityError(
+                f"needs defects {list(self.defects)!r}: allowed names from"
+                f" {list(DEFECT_LEVELS)} (unknown: {unknown})"
+            )
 
 
 @dataclass(frozen=True)
@@ -276,6 +308,15 @@ def levels_serving(output: str) -> list[str]:
     return [lv.name for lv in LEVELS if output in lv.outputs]
 
 
+def levels_representing(defect: str) -> list[str]:
+    """Names of the levels that represent the defect kind ``defect``, cheapest first."""
+    return [lv.name for lv in LEVELS if lv.name in DEFECT_LEVELS[defect]]
+
+
+def _represents(level: Level, defects: tuple[str, ...]) -> bool:
+    return all(level.name in DEFECT_LEVELS[d] for d in defects)
+
+
 def plan(needs: Needs | None, *, model_shoes: tuple[str, ...] = SIDES) -> Plan:
     """Choose the cheapest level serving ``needs`` (None: the full model, every signal).
 
@@ -309,17 +350,37 @@ def plan(needs: Needs | None, *, model_shoes: tuple[str, ...] = SIDES) -> Plan:
                 f"needs level {level.name!r} cannot deliver the output {out!r} ({OUTPUTS[out]}):"
                 f" allowed levels for it: {levels_serving(out)}"
             )
+        for defect in needs.defects:
+            if level.name not in DEFECT_LEVELS[defect]:
+                raise FidelityError(
+                    f"needs level {level.name!r} cannot represent the defect {defect!r}"
+                    f" ({KIND_BY_NAME[defect].description}): allowed levels for it:"
+                    f" {levels_representing(defect)}"
+                )
         reason = f"level {level.name!r} forced by the scenario's [needs]"
     else:
-        level = next(lv for lv in LEVELS if asked <= lv.outputs)
+        level = next(lv for lv in LEVELS if asked <= lv.outputs and _represents(lv, needs.defects))
         cheaper = [lv for lv in LEVELS if lv.dof < level.dof]
         if cheaper:
-            lacks = ", ".join(f"{lv.name} lacks {sorted(asked - lv.outputs)[0]}" for lv in cheaper)
+
+            def lack(lv: Level) -> str:
+                if not asked <= lv.outputs:
+                    return f"{lv.name} lacks {sorted(asked - lv.outputs)[0]}"
+                defect = next(d for d in needs.defects if lv.name not in DEFECT_LEVELS[d])
+                return f"{lv.name} cannot represent {defect}"
+
+            lacks = ", ".join(lack(lv) for lv in cheaper)
             reason = f"the cheapest level delivering {sorted(asked)} ({lacks})"
         else:
             reason = f"the cheapest level; it delivers {sorted(asked)}"
     shoes = model_shoes
-    if len(needs.shoes) < len(model_shoes) and asked <= SHOE_LOCAL_OUTPUTS:
+    speed_bound = sorted(SPEED_DEPENDENT_DEFECTS.intersection(needs.defects))
+    if len(needs.shoes) < len(model_shoes) and asked <= SHOE_LOCAL_OUTPUTS and speed_bound:
+        reason += (
+            f"; both shoes are modelled: the {speed_bound[0]} defect reaches a shoe at the"
+            " drum speed, which the other shoe's braking sets"
+        )
+    elif len(needs.shoes) < len(model_shoes) and asked <= SHOE_LOCAL_OUTPUTS:
         shoes = needs.shoes
         reason += (
             f"; only the {'/'.join(shoes)} shoe is modelled: {sorted(asked)} of one shoe do not"

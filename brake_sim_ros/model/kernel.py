@@ -51,8 +51,9 @@ def evaluate(y, p, fe_left, fe_right, stuck, mode_left, mode_right, dydt, out, r
     wd = 0.0 if stuck else y[L.Y_DRUM_SPEED]
     bl = L.P_SHOE_BASE
     br = L.P_SHOE_BASE + L.SHOE_STRIDE
-    kl = contact.kinematics(p, bl, y[L.Y_LEFT_ANGLE], y[L.Y_LEFT_SPEED])
-    kr = contact.kinematics(p, br, y[L.Y_RIGHT_ANGLE], y[L.Y_RIGHT_SPEED])
+    wa = y[L.Y_DRUM_ANGLE]
+    kl = contact.kinematics(p, bl, y[L.Y_LEFT_ANGLE], y[L.Y_LEFT_SPEED], wa, wd)
+    kr = contact.kinematics(p, br, y[L.Y_RIGHT_ANGLE], y[L.Y_RIGHT_SPEED], wa, wd)
     fnl = contact.normal_force(p, bl, kl[0], kl[1], mode_left)
     fnr = contact.normal_force(p, br, kr[0], kr[1], mode_right)
     vl = contact.sliding_speed(kl, wd)
@@ -62,7 +63,8 @@ def evaluate(y, p, fe_left, fe_right, stuck, mode_left, mode_right, dydt, out, r
     )
     if stuck:
         share = standstill.stuck_share(
-            coupling, standstill.static_capacity(p, fnl, kl[5], fnr, kr[5])
+            standstill.held_torque(coupling, fnl, kl, fnr, kr),
+            standstill.static_capacity(p, fnl, kl[5], fnr, kr[5]),
         )
         mu = p[L.P_FRICTION_COEFFICIENT]
         ffl = share * mu * fnl
@@ -212,7 +214,12 @@ def _update_regime(kstate, k_regime, k_flag, k_change, touching, step, settle_st
 def _shoe_switch(p, shoe, y):
     """:func:`contact.switching_function` of shoe 0 (left) or 1 (right) for the state ``y``."""
     return contact.switching_function(
-        p, L.P_SHOE_BASE + shoe * L.SHOE_STRIDE, y[L.Y_LEFT_ANGLE + shoe], y[L.Y_LEFT_SPEED + shoe]
+        p,
+        L.P_SHOE_BASE + shoe * L.SHOE_STRIDE,
+        y[L.Y_LEFT_ANGLE + shoe],
+        y[L.Y_LEFT_SPEED + shoe],
+        y[L.Y_DRUM_ANGLE],
+        y[L.Y_DRUM_SPEED],
     )
 
 

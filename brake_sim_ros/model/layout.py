@@ -45,7 +45,18 @@ S_LINING_HALF_SIN = 19
 S_LINING_MID_COS = 20  # unit vector toward the arc's middle at rest
 S_LINING_MID_SIN = 21
 
-N_PARAMS = P_SHOE_BASE + 2 * SHOE_STRIDE
+# drum out-of-roundness (model/defects.py DrumDefect), after the shoes: the number of
+# harmonics, then (order k, amplitude m, phase rad) per harmonic; r(psi) = R0 +
+# sum a cos(k psi + phase), psi the angle in the drum's frame (model/contact.py drum_radius)
+P_DRUM_WAVE_COUNT = P_SHOE_BASE + 2 * SHOE_STRIDE
+P_DRUM_WAVE_BASE = P_DRUM_WAVE_COUNT + 1
+DRUM_WAVE_STRIDE = 3
+W_ORDER = 0
+W_AMPLITUDE = 1
+W_PHASE = 2
+MAX_DRUM_HARMONICS = 24  # most harmonics one drum carries (model/defects.py DrumDefect)
+
+N_PARAMS = P_DRUM_WAVE_BASE + MAX_DRUM_HARMONICS * DRUM_WAVE_STRIDE
 
 # --- state vector ---------------------------------------------------------------------
 Y_FLYWHEEL_ANGLE = 0

@@ -61,7 +61,8 @@ def coupling_torque(p, flywheel_angle, drum_angle, flywheel_speed, drum_speed):
 
 @njit(cache=True, inline="always")
 def static_capacity(p, fn_left, dist_left, fn_right, dist_right):
-    """Largest torque the pressed shoes hold on the drum, N m: ``mu (Fn_l r_l + Fn_r r_r)``."""
+    """Largest torque the pressed shoes hold on the drum, N m: ``mu (Fn_l r_l + Fn_r r_r)``
+    (``r``: the friction arms about the drum centre, m)."""
     return p[L.P_FRICTION_COEFFICIENT] * (fn_left * dist_left + fn_right * dist_right)
 
 
@@ -80,19 +81,30 @@ def stuck_share(coupling, capacity):
 
 
 @njit(cache=True, inline="always")
+def held_torque(coupling, fn_left, kin_left, fn_right, kin_right):
+    """Torque static friction must hold on the drum, N m: the coupling's plus, on an
+    out-of-round drum, the normal forces' (``-Fn dr/dpsi`` each, the wave arm of
+    :func:`brake_sim_ros.model.contact.kinematics`; 0 on a round drum)."""
+    return coupling - (fn_left * kin_left[12] + fn_right * kin_right[12])
+
+
+@njit(cache=True, inline="always")
 def hold_torques(p, y):
-    """(coupling torque N m, static capacity N m) of the state ``y`` with the drum held."""
+    """(torque to hold N m, static capacity N m) of the state ``y`` with the drum held:
+    the coupling's torque on the drum (plus the normal forces' on an out-of-round drum,
+    :func:`held_torque`) and what the pressed shoes can hold."""
     bl = L.P_SHOE_BASE
     br = L.P_SHOE_BASE + L.SHOE_STRIDE
-    kl = contact.kinematics(p, bl, y[L.Y_LEFT_ANGLE], y[L.Y_LEFT_SPEED])
-    kr = contact.kinematics(p, br, y[L.Y_RIGHT_ANGLE], y[L.Y_RIGHT_SPEED])
+    wa = y[L.Y_DRUM_ANGLE]
+    kl = contact.kinematics(p, bl, y[L.Y_LEFT_ANGLE], y[L.Y_LEFT_SPEED], wa, 0.0)
+    kr = contact.kinematics(p, br, y[L.Y_RIGHT_ANGLE], y[L.Y_RIGHT_SPEED], wa, 0.0)
     fnl = contact.normal_force(p, bl, kl[0], kl[1], L.CONTACT_AUTO)
     fnr = contact.normal_force(p, br, kr[0], kr[1], L.CONTACT_AUTO)
     capacity = static_capacity(p, fnl, kl[5], fnr, kr[5])
     coupling = coupling_torque(
         p, y[L.Y_FLYWHEEL_ANGLE], y[L.Y_DRUM_ANGLE], y[L.Y_FLYWHEEL_SPEED], 0.0
     )
-    return coupling, capacity
+    return held_torque(coupling, fnl, kl, fnr, kr), capacity
 
 
 @njit(cache=True, inline="always")

@@ -152,7 +152,9 @@ class BrakeSimNode(Node):
             for k, v in ros_params.complete_actuation_share(overridden).items()
             if k not in overridden
         }
-        params, defects = ros_params.build_model({**values, **implied})
+        params, defects = ros_params.build_model(
+            {**values, **implied}, drum=self.scenario.setup.defects.drum
+        )
         setup = dataclasses.replace(self.scenario.setup, params=params, defects=defects)
         self._stepper = self._make_stepper(setup, self.scenario, self._param("chunk_rate_hz"))
         self._publish_measured = bool(self._param("publish_measured"))
@@ -552,7 +554,9 @@ class BrakeSimNode(Node):
         if model_changes:
             old_setup = self._stepper.setup
             try:
-                params, defects = ros_params.build_model(self._model_values(model_changes))
+                params, defects = ros_params.build_model(
+                    self._model_values(model_changes), drum=old_setup.defects.drum
+                )
                 setup = dataclasses.replace(old_setup, params=params, defects=defects)
                 self._stepper.replace_setup(setup)  # validates, or changes nothing
             except BrakeSimError as exc:

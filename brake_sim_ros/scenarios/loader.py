@@ -34,7 +34,14 @@ from brake_sim_ros.model.actuation import (
     ForceProfile,
 )
 from brake_sim_ros.model.assembly import SIDES, ModelOptions, pack
-from brake_sim_ros.model.defects import Defects, ShoeDefect
+from brake_sim_ros.model.defects import (
+    MAX_DRUM_HARMONICS,
+    MAX_DRUM_ORDER,
+    Defects,
+    DrumDefect,
+    DrumHarmonic,
+    ShoeDefect,
+)
 from brake_sim_ros.model.fidelity import ACCURACY_PRESETS, LEVEL_BY_NAME, OUTPUTS, Needs, plan
 from brake_sim_ros.model.parameters import PARAMETER_GROUPS, BrakeParameters
 from brake_sim_ros.model.sensors import SensorSet, default_sensor_set
@@ -179,7 +186,11 @@ class Scenario:
     def with_defects(self, defects: Defects) -> Scenario:
         setup = dataclasses.replace(self.setup, defects=defects)
         pack(setup.params, setup.defects, setup.options)  # validity check
-        return dataclasses.replace(self, setup=setup)
+        needs = self.needs
+        if needs is not None:  # the level must represent the new defects
+            needs = dataclasses.replace(needs, defects=defects.kinds)
+            plan(needs, model_shoes=setup.options.shoes)
+        return dataclasses.replace(self, setup=setup, needs=needs)
 
 
 # --- strict value checks --------------------------------------------------------------------
@@ -335,8 +346,41 @@ def _actuation(ctx: _Ctx, data: Any) -> Actuation:
     )
 
 
+def _drum(ctx: _Ctx, data: Any) -> DrumDefect:
+    """``[defects.drum]``: ``harmonics``, an array of tables ``{order, amplitude_um,
+    phase_deg}`` (phase optional, 0 deg)."""
+    data = ctx.table(data, "defects.drum", {"harmonics"})
+    rows = data.get("harmonics", [])
+    if not isinstance(rows, list):
+        raise ctx.fail(
+            "defects.drum.harmonics", rows, "an array of tables {order, amplitude_um, phase_deg}"
+        )
+    if len(rows) > MAX_DRUM_HARMONICS:
+        raise ctx.fail("defects.drum.harmonics", rows, f"at most {MAX_DRUM_HARMONICS} harmonics")
+    harmonics = []
+    for i, row in enumerate(rows):
+        key = f"defects.drum.harmonics[{i}]"
+        row = ctx.table(row, key, {"order", "amplitude_um", "phase_deg"})
+        for name in ("order", "amplitude_um"):
+            if name not in row:
+                raise ctx.fail(f"{key}.{name}", _MISSING, "a number (order: an integer)")
+        order = row["order"]
+        if isinstance(order, bool) or not isinstance(order, int):
+            raise ctx.fail(f"{key}.order", order, f"an integer 1 to {MAX_DRUM_ORDER}")
+        amplitude = ctx.number(row["amplitude_um"], f"{key}.amplitude_um")
+        phase = ctx.number(row.get("phase_deg", 0.0), f"{key}.phase_deg")
+        try:
+            harmonics.append(DrumHarmonic(order, amplitude, phase))
+        except BrakeSimError as exc:
+            raise ScenarioError(f"{ctx.source}: [{key}]: {exc}") from exc
+    try:
+        return DrumDefect(tuple(harmonics))
+    except BrakeSimError as exc:
+        raise ScenarioError(f"{ctx.source}: [defects.drum]: {exc}") from exc
+
+
 def _defects(ctx: _Ctx, data: Any) -> Defects:
-    data = ctx.table(data, "defects", set(SIDES))
+    data = ctx.table(data, "defects", {*SIDES, "drum"})
     shoes = {}
     names = {f.name for f in dataclasses.fields(ShoeDefect)}
     for side in SIDES:
@@ -353,8 +397,9 @@ def _defects(ctx: _Ctx, data: Any) -> Defects:
             built[side] = ShoeDefect(**shoes[side])
         except BrakeSimError as exc:
             raise ScenarioError(f"{ctx.source}: [defects.{side}]: {exc}") from exc
+    drum = _drum(ctx, data.get("drum", {}))
     try:
-        return Defects(**built)
+        return Defects(**built, drum=drum)
     except BrakeSimError as exc:
         raise ScenarioError(f"{ctx.source}: [defects]: {exc}") from exc
 
@@ -593,6 +638,8 @@ def _parse(data: dict[str, Any], text: str, source: str) -> Scenario:
         options=_options(ctx, top.get("model", {})),
     )
     needs = _needs(ctx, top["needs"], setup.options.shoes) if "needs" in top else None
+    if needs is not None:  # the level must represent the scenario's defects
+        needs = dataclasses.replace(needs, defects=defects.kinds)
     try:
         pack(setup.params, setup.defects, setup.options)
         plan(needs, model_shoes=setup.options.shoes)  # refuse needs no level can serve

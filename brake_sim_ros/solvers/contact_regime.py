@@ -8,10 +8,12 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import brentq
 
-from brake_sim_ros.errors import SimulationError
+from brake_sim_ros.errors import FidelityError, SimulationError
 from brake_sim_ros.model import layout as L
 from brake_sim_ros.model import quasi_static as Q
 from brake_sim_ros.model.assembly import indentation_at, pack
+from brake_sim_ros.model.catalogue import KIND_BY_NAME
+from brake_sim_ros.model.fidelity import DEFECT_LEVELS, levels_representing
 from brake_sim_ros.model.trajectory import BrakeSetup, SampleBlock
 
 SAMPLE_COLUMNS: tuple[str, ...] = (*L.COLUMNS, "braking_torque_n_m")
@@ -73,7 +75,19 @@ def touch_angle(p: np.ndarray, base: int, start_rad: float) -> float:
 def run_contact_regime(
     setup: BrakeSetup, duration_s: float, *, accuracy: str | None = None
 ) -> ContactRegimeResult:
-    """Integrate the contact-regime model of ``setup`` over ``[0, duration_s)``."""
+    """Integrate the contact-regime model of ``setup`` over ``[0, duration_s)``.
+
+    Raises:
+        FidelityError: ``setup`` has a defect the contact-regime levels cannot represent
+            (an out-of-round drum: :data:`brake_sim_ros.model.fidelity.DEFECT_LEVELS`).
+    """
+    for defect in setup.defects.kinds:
+        if "contact_regime" not in DEFECT_LEVELS[defect]:
+            raise FidelityError(
+                f"the contact-regime model cannot represent the defect {defect!r}"
+                f" ({KIND_BY_NAME[defect].description}): allowed levels for it:"
+                f" {levels_representing(defect)}"
+            )
     p = pack(setup.params, setup.defects, setup.options)
     h = macro_step(setup, accuracy)
     n = max(1, round(duration_s / h))

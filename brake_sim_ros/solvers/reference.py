@@ -102,7 +102,9 @@ def run_reference(
     modes = [L.CONTACT_OFF, L.CONTACT_OFF]
     for i, base in enumerate(SHOE_BASES):
         modes[i] = (
-            L.CONTACT_ON if indentation_at(p, base, y[L.Y_LEFT_ANGLE + i]) > 0 else L.CONTACT_OFF
+            L.CONTACT_ON
+            if indentation_at(p, base, y[L.Y_LEFT_ANGLE + i], y[L.Y_DRUM_ANGLE]) > 0
+            else L.CONTACT_OFF
         )
     stuck = 0
     lock_loss = 0.0
@@ -225,7 +227,7 @@ def run_reference(
             # Simultaneous events (a symmetric brake's shoes touch at the same instant) may
             # be reported one at a time; re-sync every shoe with the geometry.
             for i, base in enumerate(SHOE_BASES):
-                eps = indentation_at(p, base, y[L.Y_LEFT_ANGLE + i])
+                eps = indentation_at(p, base, y[L.Y_LEFT_ANGLE + i], y[L.Y_DRUM_ANGLE])
                 if (modes[i] == L.CONTACT_OFF and eps > 0.0) or (
                     modes[i] == L.CONTACT_ON and eps < -SEPARATION_HYSTERESIS_M
                 ):
@@ -249,7 +251,7 @@ def _flip(modes: list[int], shoe: int, t: float, result: ReferenceResult) -> Non
 
 def _shoe_event(p: np.ndarray, base: int, index: int, offset_m: float):
     def shoe_contact_event(_t: float, yy: np.ndarray) -> float:
-        return indentation_at(p, base, yy[L.Y_LEFT_ANGLE + index]) + offset_m
+        return indentation_at(p, base, yy[L.Y_LEFT_ANGLE + index], yy[L.Y_DRUM_ANGLE]) + offset_m
 
     shoe_contact_event.shoe_index = index
     return shoe_contact_event

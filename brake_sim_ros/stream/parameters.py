@@ -34,7 +34,7 @@ from typing import Any
 from brake_sim_ros.errors import ParameterError
 from brake_sim_ros.model.actuation import MAX_ACTUATION_FORCE_N, NOMINAL_PEAK_ACTUATION_N
 from brake_sim_ros.model.catalogue import KINDS
-from brake_sim_ros.model.defects import Defects, ShoeDefect
+from brake_sim_ros.model.defects import Defects, DrumDefect, ShoeDefect
 from brake_sim_ros.model.layout import SIDES
 from brake_sim_ros.model.parameters import PARAMETER_GROUPS, BrakeParameters
 from brake_sim_ros.model.trajectory import BrakeSetup
@@ -81,6 +81,7 @@ _RANGES: dict[str, tuple[float, float]] = {
     **{
         f"defects.{k.scenario_key}": (k.healthy_value + k.minimum, k.healthy_value + k.maximum)
         for k in KINDS
+        if set(k.locations) <= set(SIDES)  # the shoes' (the drum has no node parameter)
     },
 }
 
@@ -334,8 +335,11 @@ def _ros_value(value: Any) -> float | int | bool | str:
     return float(value)
 
 
-def build_model(values: dict[str, Any]) -> tuple[BrakeParameters, Defects]:
-    """Core objects from flat ROS values (every model field present).
+def build_model(
+    values: dict[str, Any], drum: DrumDefect | None = None
+) -> tuple[BrakeParameters, Defects]:
+    """Core objects from flat ROS values (every model field present), with ``drum`` (the
+    scenario's drum: it has no flat values; default round).
 
     Raises:
         ParameterError: from the core, with its message, when a value or combination is
@@ -345,7 +349,7 @@ def build_model(values: dict[str, Any]) -> tuple[BrakeParameters, Defects]:
     for side in SIDES:
         kwargs = {f.name: values[f"defects.{side}.{f.name}"] for f in fields(ShoeDefect)}
         shoes[side] = ShoeDefect(**kwargs)
-    defects = Defects(left=shoes["left"], right=shoes["right"])
+    defects = Defects(left=shoes["left"], right=shoes["right"], drum=drum or DrumDefect())
     groups = {}
     for group, cls in PARAMETER_GROUPS.items():
         groups[group] = cls(**{f.name: values[f"{group}.{f.name}"] for f in fields(cls)})

@@ -76,6 +76,12 @@ def _fidelity(argv: list[str]) -> int:
     return fidelity.main(argv)
 
 
+def _drum(argv: list[str]) -> int:
+    from brake_sim_ros.studies import drum_defect
+
+    return drum_defect.main(argv)
+
+
 BENCHMARKS: dict[str, Study] = {
     s.name: s
     for s in (
@@ -106,6 +112,11 @@ BENCHMARKS: dict[str, Study] = {
             "sensors",
             "cost of the structure and sensors; which cases the measured acceleration separates",
             _sensors,
+        ),
+        Study(
+            "drum",
+            "severity sweep of drum ovality: the pivot-force line at 2 f_rot per amplitude",
+            _drum,
         ),
     )
 }

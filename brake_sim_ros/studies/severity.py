@@ -10,6 +10,10 @@ scenario is run with that one defect at :data:`STEPS` fractions of the kind's se
   peak ``|F_pivot|`` (N), the first-to-second impact period (ms), the number of impacts,
   the actuation force at the first impact (N), and the contact-regime mean ``|F_pivot|``
   (N; the run must reach 1 s past the impacts, so from ``--duration`` 6.6 s only);
+* the order-2 line (twice the drum's rotation frequency, by order analysis on the drum
+  angle, :mod:`..analysis.orders`) of that shoe's ``|F_pivot|`` over 0.8-1.9 s, the
+  contact regime with the actuation held (N; from ``--duration`` 1.9 s); for the drum the
+  leading (left) shoe's;
 * what a sensor gives (the default set, one noise seed, :mod:`..analysis.measured_features`):
   the rms of the backing-plate acceleration x and y in the drum-brake noise band over the
   impacts (m/s^2), and the first-impact time seen by the accelerometers (ms).
@@ -28,17 +32,22 @@ import sys
 from collections.abc import Callable
 from pathlib import Path
 
+import numpy as np
+
 from brake_sim_ros.analysis import measured_features as mf
+from brake_sim_ros.analysis.orders import order_amplitude
 from brake_sim_ros.model import catalogue
 from brake_sim_ros.model.catalogue import DefectKind
 from brake_sim_ros.model.defects import Defects
+from brake_sim_ros.model.layout import SIDES
 from brake_sim_ros.model.sensors import SensorBank, SensorSet
 from brake_sim_ros.scenarios import load_scenario
 from brake_sim_ros.stream.run import run_scenario
 
 STEPS = (0.0, 0.2, 0.4, 0.6, 0.8, 1.0)  # fractions of the service limit
 BASE_SCENARIO = "symmetric"
-DEFAULT_DURATION_S = 0.6
+DEFAULT_DURATION_S = 2.0
+ORDER_WINDOW_S = (0.8, 1.9)  # contact regime with the actuation held (published event)
 SEED = 0
 FEATURES: dict[str, str] = {  # key: label (unit)
     "first_impact_peak_n": "first-impact peak of the pivot force magnitude (N)",
@@ -49,14 +58,24 @@ FEATURES: dict[str, str] = {  # key: label (unit)
     "band_rms_x": "band rms accel x (m/s^2)",
     "band_rms_y": "band rms accel y (m/s^2)",
     "first_impact_ms": "first impact, accelerometers (ms)",
+    "order_2_line_n": "order-2 line of the pivot force magnitude (N)",
 }
+# features whose healthy value is zero (up to rounding): reported as values, not changes
+ABSOLUTE = frozenset({"order_2_line_n"})
 
 
 def features(defects: Defects, location: str, duration_s: float) -> dict[str, float]:
-    """The :data:`FEATURES` of the base scenario with ``defects``, at shoe ``location``."""
+    """The :data:`FEATURES` of the base scenario with ``defects``, at shoe ``location``
+    (the leading, left, shoe for the drum)."""
     scenario = load_scenario(BASE_SCENARIO).with_defects(defects)
     run = run_scenario(scenario, duration_s=duration_s)
-    shoe = run.metrics.shoe(location)
+    side = location if location in SIDES else SIDES[0]
+    shoe = run.metrics.shoe(side)
+    b = run.samples
+    order_line = math.nan
+    if duration_s >= ORDER_WINDOW_S[1]:  # twice the drum's rotation, by order analysis
+        magnitude = np.hypot(b[f"{side}_pivot_fx_n"], b[f"{side}_pivot_fy_n"])
+        order_line = order_amplitude(b.time_s, b["drum_angle_rad"], magnitude, 2.0, ORDER_WINDOW_S)
     sensors = SensorSet()
     frame = SensorBank(sensors, scenario.sample_rate_hz, SEED).advance(run.samples)
     measured = mf.features(frame, mf.noise_rms(frame), sensors)
@@ -69,6 +88,7 @@ def features(defects: Defects, location: str, duration_s: float) -> dict[str, fl
         "band_rms_x": measured[mf.BAND_RMS[0]],
         "band_rms_y": measured[mf.BAND_RMS[1]],
         "first_impact_ms": measured[mf.FIRST_IMPACT],
+        "order_2_line_n": order_line,
     }
 
 
@@ -104,7 +124,7 @@ def sweeps(
     steps: tuple[float, ...] = STEPS,
 ) -> list[dict[str, object]]:
     """``kinds`` at every location, healthy runs shared per location."""
-    locations = sorted({loc for k in kinds for loc in k.locations})
+    locations = list(dict.fromkeys(loc for k in kinds for loc in k.locations))
     healthy = {loc: features(Defects(), loc, duration_s) for loc in locations}
     return [
         sweep(kind, loc, duration_s, healthy[loc], progress, steps)
@@ -144,7 +164,9 @@ def report_markdown(results: list[dict[str, object]], duration_s: float) -> str:
         for key, label in FEATURES.items():
             row = values[key]
             cells = [
-                f"{v:.4g} ({change_pct(v, row[0]):+.1f} %)" if i else f"{v:.4g}"
+                f"{v:.4g} ({change_pct(v, row[0]):+.1f} %)"
+                if i and key not in ABSOLUTE
+                else f"{v:.4g}"
                 for i, v in enumerate(row)
             ]
             lines.append(f"| {label} | " + " | ".join(cells) + " |")
@@ -162,17 +184,20 @@ def plot(result: dict[str, object], out_dir: Path) -> Path:
     sev = result["severities"]
     values = result["values"]
     assert isinstance(sev, list) and isinstance(values, dict)
-    fig, axes = plt.subplots(2, 4, figsize=(15, 6), sharex=True)
+    fig, axes = plt.subplots(3, 3, figsize=(14, 9), sharex=True)
     for ax, (key, label) in zip(axes.flat, FEATURES.items(), strict=True):
         base = values[key][0]
-        ax.plot(sev, [change_pct(v, base) for v in values[key]], "o-")
+        if key not in ABSOLUTE and math.isfinite(base) and base != 0.0:
+            ax.plot(sev, [change_pct(v, base) for v in values[key]], "o-")
+            ax.set_ylabel("change against healthy (%)", fontsize=8)
+        else:  # nothing to compare with on a healthy brake: the values themselves
+            ax.plot(sev, values[key], "o-", color="C1")
+            ax.set_ylabel("value", fontsize=8)
         ax.axhline(0.0, color="0.6", lw=0.6)
         ax.set_title(label, fontsize=9)
         ax.grid(alpha=0.3)
-    for ax in axes[1]:
+    for ax in axes[-1]:
         ax.set_xlabel(f"severity ({result['unit']})")
-    for ax in axes[:, 0]:
-        ax.set_ylabel("change against healthy (%)")
     fig.suptitle(f"{result['location']} {result['kind']}: features against severity")
     fig.tight_layout()
     path = out_dir / f"{result['location']}_{result['kind']}.png"
