@@ -1,0 +1,59 @@
+"""A real node on a scenario with an out-of-round drum: the drum has no node parameter,
+and the node still runs it and says so in its ground truth, at start, after a parameter
+change of a shoe defect and after a ~/reset to it."""
+
+from __future__ import annotations
+
+import pytest
+
+pytestmark = [
+    pytest.mark.ros,
+    pytest.mark.filterwarnings("ignore:module 'sre_(parse|constants)' is deprecated"),
+]
+
+rclpy = pytest.importorskip("rclpy", reason="rclpy not installed (run scripts/setup.sh)")
+
+from brake_sim_ros.ros.harness import NodeProcess, SimClient, domain_id_for  # noqa: E402
+
+OVAL = (
+    'name = "oval"\nduration_s = 2.0\n[defects.drum]\n'
+    "harmonics = [{order = 2, amplitude_um = 50, phase_deg = 30}]\n"
+)
+
+
+def _drum(truth) -> list[tuple]:
+    return [
+        (d.severity, d.unit, list(d.attribute_names), list(d.attribute_values))
+        for d in truth.defects
+        if d.kind == "drum_out_of_round" and d.location == "drum"
+    ]
+
+
+def test_the_node_keeps_the_scenarios_drum_through_parameter_changes_and_resets(tmp_path):
+    (tmp_path / "oval.toml").write_text(OVAL)
+    domain = domain_id_for(73)
+    node = NodeProcess.start(
+        ["--duration", "3600", "--ros-args", "-p", f"scenario_dirs:={tmp_path}"],
+        domain_id=domain,
+        log_path=tmp_path / "node.log",
+    )
+    sim = SimClient(domain)
+    expected = [(50.0, "um", ["order_2_amplitude_um", "order_2_phase_deg"], [50.0, 30.0])]
+    try:
+        sim.wait_for_node(30.0)
+        assert _drum(sim.rx.defects[-1]) == []  # the built-in symmetric brake: round
+        assert sim.reset(scenario="oval.toml", timeout_s=10.0).success
+        sim.wait_for(lambda: _drum(sim.rx.defects[-1]) == expected, 5.0, "the oval drum")
+        assert not sim.rx.defects[-1].healthy
+        n = len(sim.rx.defects)
+        result = sim.set_parameter("defects.left.pivot_radius_change_pct", 1.0)
+        assert result.successful, result.reason
+        sim.wait_for(lambda: len(sim.rx.defects) > n, 5.0, "ground truth after the change")
+        truth = sim.rx.defects[-1]
+        assert _drum(truth) == expected  # not dropped by the rebuild from parameters
+        assert ("pivot_radius_change", "left", 1.0) in [
+            (d.kind, d.location, d.severity) for d in truth.defects
+        ]
+    finally:
+        sim.close()
+        assert node.stop() == 0, node.output()
