@@ -3,10 +3,10 @@ ground truth of a brake's condition as a list of active defects.
 
 Each kind has a name, the locations it can sit at, a severity in a physical unit (0 for a
 healthy brake, so a label column reads 0 where the defect is absent), the range the model
-accepts and a line on what it changes. The ground truth of a brake (:func:`active`) is a
-list of :class:`ActiveDefect`, one per kind and location in force, so a consumer (the
-``DefectState`` message, Parquet label columns, file metadata, a scorer) needs no change
-when a kind is added here.
+accepts and a line on what it changes. The ground truth of a brake (``Defects.active``,
+:mod:`.defects`) is a list of :class:`ActiveDefect`, one per kind and location in force,
+so a consumer (the ``DefectState`` message, Parquet label columns, file metadata, a
+scorer) needs no change when a kind is added here.
 
 Time: every defect in force today is a step at the start of the run (onset 0 s, growth
 ``step``): a run keeps its defects until a reset. The onset and growth fields are part of
