@@ -466,7 +466,11 @@ def run_severity(argv: list[str]) -> int:
     """``brake-sim severity ...``: the study parses its own options."""
     from brake_sim_ros.studies import severity
 
-    return severity.main(argv)
+    try:
+        return severity.main(argv)
+    except BrakeSimError as exc:
+        print(f"brake-sim: error: {exc}", file=sys.stderr)
+        return EXIT_ERROR
 
 
 def cmd_defects(args: argparse.Namespace) -> int:

@@ -71,3 +71,17 @@ def test_an_oval_drum_shows_in_the_order_2_line_in_proportion_to_its_runout():
     assert result["severities"] == [0.0, 75.0, 150.0]
     assert line[0] < 1e-6 < line[1]
     assert line[2] / line[1] == pytest.approx(2.0, rel=0.02)
+
+
+def test_the_report_is_never_written_through_a_link(tmp_path, capsys):
+    """A report.md that is a symbolic link is refused before any run, in one line, and the
+    file it points to is untouched."""
+    out = tmp_path / "sev"
+    out.mkdir()
+    victim = tmp_path / "precious.txt"
+    victim.write_text("keep me")
+    (out / "report.md").symlink_to(victim)
+    assert main(["severity", "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and "is a symbolic link" in err
+    assert victim.read_text() == "keep me" and not list(out.glob("*.png"))

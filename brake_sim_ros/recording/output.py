@@ -29,7 +29,7 @@ import itertools
 import os
 import secrets
 import stat
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from pathlib import Path
 
 from brake_sim_ros.errors import BrakeSimError
@@ -191,6 +191,21 @@ def atomic_output(
             with contextlib.suppress(OSError):
                 directory.rmdir()  # only if still empty
         raise
+
+
+def replace_output(
+    path: str | os.PathLike[str], write: Callable[[Path], None], *, option: str = "--out"
+) -> Path:
+    """A file that a rerun replaces (a report, a figure): ``write`` fills a temporary file
+    beside ``path`` (:func:`atomic_output`), which is then renamed over ``path``; never
+    written through a link nor over anything but a regular file, never left half written.
+
+    Raises:
+        OutputError: a rule refuses ``path``, or it cannot be written.
+    """
+    with atomic_output(path, overwrite=True, option=option) as tmp:
+        write(tmp)
+    return Path(path)
 
 
 def probe_output(

@@ -41,6 +41,7 @@ from brake_sim_ros.model.catalogue import DefectKind
 from brake_sim_ros.model.defects import Defects
 from brake_sim_ros.model.layout import SIDES
 from brake_sim_ros.model.sensors import SensorBank, SensorSet
+from brake_sim_ros.recording.output import check_output, replace_output
 from brake_sim_ros.scenarios import load_scenario
 from brake_sim_ros.stream.run import run_scenario
 
@@ -201,7 +202,7 @@ def plot(result: dict[str, object], out_dir: Path) -> Path:
     fig.suptitle(f"{result['location']} {result['kind']}: features against severity")
     fig.tight_layout()
     path = out_dir / f"{result['location']}_{result['kind']}.png"
-    fig.savefig(path, dpi=100)
+    replace_output(path, lambda tmp: fig.savefig(tmp, format="png", dpi=100))
     plt.close(fig)
     return path
 
@@ -215,14 +216,15 @@ def write_report(
 ) -> Path:
     """Run the sweeps; write ``report.md``, a figure per kind and location and
     ``severity.json``."""
+    check_output(out_dir / "report.md", overwrite=True, option="--out")  # before the work
     out_dir.mkdir(parents=True, exist_ok=True)
     results = sweeps(duration_s, progress, kinds, steps)
     for r in results:
         plot(r, out_dir)
-    (out_dir / "severity.json").write_text(json.dumps(results, indent=1, allow_nan=True))
-    path = out_dir / "report.md"
-    path.write_text(report_markdown(results, duration_s))
-    return path
+    text = json.dumps(results, indent=1, allow_nan=True)
+    replace_output(out_dir / "severity.json", lambda tmp: tmp.write_text(text, encoding="utf-8"))
+    report = report_markdown(results, duration_s)
+    return replace_output(out_dir / "report.md", lambda tmp: tmp.write_text(report, "utf-8"))
 
 
 def main(argv: list[str] | None = None) -> int:

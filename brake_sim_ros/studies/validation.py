@@ -33,6 +33,7 @@ from brake_sim_ros.model.assembly import contact_arms, pack, place_shoe
 from brake_sim_ros.model.defects import Defects, ShoeDefect
 from brake_sim_ros.model.layout import SIDES
 from brake_sim_ros.model.parameters import BrakeParameters
+from brake_sim_ros.recording.output import check_output, replace_output
 from brake_sim_ros.scenarios import load_scenario
 from brake_sim_ros.stream.run import RunResult, run_scenario
 
@@ -754,7 +755,11 @@ def _reflow(text: str, width: int = 92) -> str:
 def write_report(
     out_dir: Path, json_path: Path | None = None, progress: Callable[[str], None] | None = None
 ) -> tuple[dict, list[Check]]:
-    """Run everything and write report.md, figures.json and the plots into ``out_dir``."""
+    """Run everything and write report.md, figures.json and the plots into ``out_dir``
+    (each replaced whole, never through a link: ``recording.output.replace_output``)."""
+    check_output(out_dir / "report.md", overwrite=True, option="--out")  # before the work
+    if json_path is not None:
+        check_output(json_path, overwrite=True, option="--json")
     out_dir.mkdir(parents=True, exist_ok=True)
     base, runs = run_all(progress)
     sweep = pivot_sweep(base, progress)
@@ -765,11 +770,11 @@ def write_report(
     check_list = checks(fig)
     params = load_scenario(SYMMETRIC).setup.params
     report = markdown(fig, check_list, base.metrics, params, measured)
-    (out_dir / "report.md").write_text(report, encoding="utf-8")
-    (out_dir / "figures.json").write_text(json.dumps(fig, indent=2), encoding="utf-8")
+    text = json.dumps(fig, indent=2)
+    replace_output(out_dir / "report.md", lambda tmp: tmp.write_text(report, encoding="utf-8"))
+    replace_output(out_dir / "figures.json", lambda tmp: tmp.write_text(text, encoding="utf-8"))
     if json_path is not None:
-        json_path.parent.mkdir(parents=True, exist_ok=True)
-        json_path.write_text(json.dumps(fig, indent=2), encoding="utf-8")
+        replace_output(json_path, lambda tmp: tmp.write_text(text, "utf-8"), option="--json")
     from brake_sim_ros.studies.validation_plots import plot_pivot_sweep, plot_validation
 
     plot_validation(base, runs, out_dir)

@@ -10,6 +10,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 
+from brake_sim_ros.recording.output import replace_output
+
 MAX_POINTS = 20_000
 
 
@@ -128,6 +130,6 @@ def plot_pivot_sweep(sweep: dict, out_dir: Path) -> Path:
 
 def _save(fig, path: Path) -> Path:
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    replace_output(path, lambda tmp: fig.savefig(tmp, format="png", dpi=110))
     plt.close(fig)
     return path
