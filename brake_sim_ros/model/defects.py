@@ -68,11 +68,7 @@ class ShoeDefect:
 
     @property
     def is_healthy(self) -> bool:
-        return (
-            self.pivot_radius_change_pct == 0.0
-            and self.initial_angle_deg == 0.0
-            and self.actuation_share == 0.5
-        )
+        return not any(self.severities().values())
 
     @property
     def actuation_gain(self) -> float:

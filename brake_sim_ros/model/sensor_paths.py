@@ -70,9 +70,21 @@ def stack_systems(systems: list[SampledLti]) -> tuple[np.ndarray, ...]:
     )
 
 
+def unit_equilibria(systems: list[SampledLti]) -> np.ndarray:
+    """Each system's equilibrium state under a unit signal input (noise inputs at 0),
+    stacked like :func:`stack_systems`: a path starts at rest, ``x = u x_unit``."""
+    out = []
+    for system in systems:
+        unit = np.zeros(system.n_inputs)
+        unit[0] = 1.0
+        out.append(system.static_state(unit))
+    return np.ascontiguousarray(np.stack(out))
+
+
 def no_systems() -> tuple[np.ndarray, ...]:
-    """The placeholder of :func:`stack_systems` for a path without dynamics."""
-    return tuple(np.zeros((1, 0, 0)) for _ in range(5))
+    """The placeholder of :func:`stack_systems` and :func:`unit_equilibria` for a path
+    without dynamics."""
+    return (*(np.zeros((1, 0, 0)) for _ in range(5)), np.zeros((1, 0)))
 
 
 @njit(cache=True)
@@ -90,6 +102,37 @@ def _hold(value, stuck, dropped, hold):  # pragma: no cover - compiled
     return out
 
 
+@njit(cache=True, inline="always")
+def _faults_at(t, f_kind, f_onset, f_end, f_size):  # pragma: no cover - compiled
+    """What the active faults do at time ``t``: (label bits, gain factor, bias, saturation
+    limit, loose mount 0/1, stuck, dropped) (``sensor_faults`` module docstring)."""
+    gain = 1.0
+    bias = 0.0
+    limit = np.inf
+    loose = 0
+    stuck = False
+    dropped = False
+    label = 0
+    for i in range(f_kind.shape[0]):
+        if not (t >= f_onset[i] and t < f_end[i]):
+            continue
+        kind = f_kind[i]
+        label |= 1 << kind
+        if kind == GAIN_ERROR:
+            gain *= 1.0 + f_size[i]
+        elif kind == BIAS_DRIFT:
+            bias += f_size[i] * (t - f_onset[i])
+        elif kind == SATURATION:
+            limit = min(limit, f_size[i])
+        elif kind == LOOSE_MOUNT:
+            loose = 1
+        elif kind == STUCK:
+            stuck = True
+        elif kind == DROPOUT:
+            dropped = True
+    return label, gain, bias, limit, loose, stuck, dropped
+
+
 @njit(cache=True)
 def analog_advance(  # pragma: no cover - compiled
     time_s,
@@ -104,6 +147,7 @@ def analog_advance(  # pragma: no cover - compiled
     g_next,
     c,
     d,
+    x_unit,
     x,
     u_prev,
     first,
@@ -122,9 +166,10 @@ def analog_advance(  # pragma: no cover - compiled
     (k,) uint8.
 
     ``phi ... d`` hold the path's sampled systems (index 1: loose mount), of zero size for
-    a path without dynamics; ``x`` and ``u_prev`` (1,: the last sample's scaled true
-    value) their carried state. On the ``first`` block ``x`` is the caller's equilibrium
-    for sample 0, and sample 0 is output, not advanced to. ``draws`` (k, n): the block's
+    a path without dynamics; ``x_unit`` their equilibrium states under a unit input;
+    ``x`` and ``u_prev`` (1,: the last sample's scaled true value) their carried state. On
+    the ``first`` block sample 0 starts at rest under its input (``x = v x_unit``), output,
+    not advanced to. ``draws`` (k, n): the block's
     unit normal draws (n = the states of a path with dynamics, 1 without, 0 without
     noise); ``white_gain`` their scale without dynamics. ``adc_step`` 0: no ADC.
     ``hold`` is updated in place."""
@@ -134,31 +179,9 @@ def analog_advance(  # pragma: no cover - compiled
     x_new = np.empty(n_x)
     u = np.empty(n_u)
     for k in range(time_s.shape[0]):
-        t = time_s[k]
-        gain = 1.0
-        bias = 0.0
-        limit = np.inf
-        loose = 0
-        stuck = False
-        dropped = False
-        label = 0
-        for i in range(f_kind.shape[0]):
-            if not (t >= f_onset[i] and t < f_end[i]):
-                continue
-            kind = f_kind[i]
-            label |= 1 << kind
-            if kind == GAIN_ERROR:
-                gain *= 1.0 + f_size[i]
-            elif kind == BIAS_DRIFT:
-                bias += f_size[i] * (t - f_onset[i])
-            elif kind == SATURATION:
-                limit = min(limit, f_size[i])
-            elif kind == LOOSE_MOUNT:
-                loose = 1
-            elif kind == STUCK:
-                stuck = True
-            elif kind == DROPOUT:
-                dropped = True
+        label, gain, bias, limit, loose, stuck, dropped = _faults_at(
+            time_s[k], f_kind, f_onset, f_end, f_size
+        )
         labels[k] = label
         v = true[k] * sensitivity * gain
         if n_x > 0:
@@ -166,7 +189,10 @@ def analog_advance(  # pragma: no cover - compiled
             for j in range(n_draw):
                 u[j + 1] = draws[k, j]
             s = loose if phi.shape[0] > 1 else 0
-            if not (first and k == 0):
+            if first and k == 0:  # at rest under the first input: x = v x_unit
+                for i in range(n_x):
+                    x[i] = v * x_unit[s, i]
+            else:
                 for i in range(n_x):
                     acc = 0.0
                     for j in range(n_x):
@@ -210,6 +236,7 @@ def tone_ring_advance(  # pragma: no cover - compiled
     f_kind,
     f_onset,
     f_end,
+    f_size,
     last,
     pulse_hold,
     index_hold,
@@ -226,16 +253,7 @@ def tone_ring_advance(  # pragma: no cover - compiled
     two_pi = 2.0 * math.pi
     for k in range(time_s.shape[0]):
         t = time_s[k]
-        stuck = False
-        dropped = False
-        label = 0
-        for i in range(f_kind.shape[0]):
-            if t >= f_onset[i] and t < f_end[i]:
-                label |= 1 << f_kind[i]
-                if f_kind[i] == STUCK:
-                    stuck = True
-                elif f_kind[i] == DROPOUT:
-                    dropped = True
+        label, _, _, _, _, stuck, dropped = _faults_at(t, f_kind, f_onset, f_end, f_size)
         labels[k] = label
         turns = drum_angle_rad[k] / two_pi
         phase = teeth * turns

@@ -96,6 +96,7 @@ from brake_sim_ros.model.sensor_paths import (
     no_systems,
     stack_systems,
     tone_ring_advance,
+    unit_equilibria,
 )
 from brake_sim_ros.model.structure import AXES, Structure, StructureParameters
 from brake_sim_ros.model.trajectory import SampleBlock
@@ -509,7 +510,7 @@ class AnalogPath:
                 systems.append(system)
         self.systems = systems
         if systems:
-            self.matrices = stack_systems(systems)
+            self.matrices = (*stack_systems(systems), unit_equilibria(systems))
             n_states = systems[0].a.shape[0]
             self.state = PathState(n_states, 1)
             self.n_draws = n_states if self.noise > 0.0 else 0  # one per state and sample
@@ -534,21 +535,7 @@ class AnalogPath:
         if k == 0:
             return values, labels
         draws = self.rng.standard_normal((k, self.n_draws))
-        first = self.systems and not state.started
-        if first:  # rest at the equilibrium of the first input, with its mounting
-            gain = np.prod(
-                [
-                    1.0 + f.size
-                    for f in sf.of_kind(ch.faults, "gain_error")
-                    if f.active(time_s[:1])[0]
-                ]
-            )
-            u0 = float(true[0]) * ch.sensitivity_ratio * float(gain)
-            loose = any(f.active(time_s[:1])[0] for f in sf.of_kind(ch.faults, "loose_mount"))
-            system = self.systems[1 if loose else 0]
-            inputs = np.zeros(system.n_inputs)
-            inputs[0] = u0
-            state.x[:] = system.static_state(inputs)
+        first = not state.started
         state.started = True
         analog_advance(
             np.ascontiguousarray(time_s, dtype=np.float64),
@@ -558,7 +545,7 @@ class AnalogPath:
             *self.matrices,
             state.x,
             state.u_prev,
-            bool(first),
+            first,
             draws,
             self.white_gain,
             float(t.range_min),
@@ -577,7 +564,7 @@ class ToneRing:
 
     def __init__(self, channel: SensorChannel) -> None:
         self.channel = channel
-        self.faults = fault_table(channel.faults)[:3]
+        self.faults = fault_table(channel.faults)
         self.last = np.zeros(3)  # [has one, time s, tooth phase] of the last sample
         self.pulse_hold = np.zeros(3)
         self.index_hold = np.zeros(3)

@@ -124,15 +124,7 @@ def measured_chunk(block: SampleBlock, frame: SensorFrame, sensors: SensorBank) 
     decimation = sensors.output_decimation
     teeth = {c.name: c.tone_ring_teeth for c in sensors.sensors.channels}
     series = list(frame.series.values())
-    values = array.array("d")
-    labels = array.array("B")
-    for s in series:
-        values.frombytes(np.ascontiguousarray(s.values, dtype=np.float64).tobytes())
-        labels.frombytes(np.ascontiguousarray(s.fault_label, dtype=np.uint8).tobytes())
     edge_names = list(frame.edges_s)
-    edge_times = array.array("d")
-    for name in edge_names:
-        edge_times.frombytes(np.ascontiguousarray(frame.edges_s[name], dtype=np.float64).tobytes())
     return MeasuredChunk(
         header=header(stamp_ns(block.first_index, block.sample_period_s)),
         first_sample_index=int(block.first_index),
@@ -142,12 +134,19 @@ def measured_chunk(block: SampleBlock, frame: SensorFrame, sensors: SensorBank) 
         units=[s.unit for s in series],
         decimation=array.array("I", [decimation[s.name] for s in series]),
         channel_sample_counts=array.array("I", [len(s.values) for s in series]),
-        values=values,
-        fault_labels=labels,
+        values=_doubles(np.concatenate([s.values for s in series] or [np.empty(0)])),
+        fault_labels=array.array(  # bytes: copied whole (frombytes), not per element
+            "B",
+            np.concatenate([s.fault_label for s in series] or [np.empty(0)])
+            .astype(np.uint8)
+            .tobytes(),
+        ),
         edge_channel_names=edge_names,
         tone_ring_teeth=array.array("I", [teeth[n] for n in edge_names]),
         edge_counts=array.array("I", [len(frame.edges_s[n]) for n in edge_names]),
-        edge_times_s=edge_times,
+        edge_times_s=_doubles(
+            np.concatenate([frame.edges_s[n] for n in edge_names] or [np.empty(0)])
+        ),
     )
 
 
