@@ -65,6 +65,8 @@ MAX_STEP_RANGE_S = (MIN_PHYSICS_STEP_S, 1e-2)
 MAX_SCENARIO_BYTES = 1024 * 1024
 MAX_NESTING = 32  # tables and arrays inside one another
 MAX_NAME_CHARS = 255  # a file name's limit on common file systems
+NOMINAL_UNIT = "nominal"  # the unit with the drawing's nominal parameters, no scatter
+_UNIT_ID = re.compile(r"[A-Za-z0-9_-][A-Za-z0-9_.-]{0,63}")
 # a value or key is quoted in an error message only up to this many characters (its repr);
 # a longer one is described ("a string of 300 characters"): messages never echo the file
 SHOWN_CHARS = 24
@@ -145,6 +147,7 @@ class Scenario:
     setup: BrakeSetup = field(default_factory=BrakeSetup)
     duration_s: float = 7.5
     seed: int = 0
+    unit_id: str = NOMINAL_UNIT  # which brake of a fleet; "nominal": the drawing's brake
     solver: SolverSettings = field(default_factory=SolverSettings)
     sample_rate_hz: float = DEFAULT_SAMPLE_RATE_HZ
     source: str = "<built-in>"
@@ -602,6 +605,15 @@ def _name(ctx: _Ctx, value: Any) -> str:
     return value
 
 
+def _unit_id(ctx: _Ctx, value: Any) -> str:
+    """A brake unit's id: 1 to 64 of ``A-Z a-z 0-9 _ . -``, not starting with '.'."""
+    if not isinstance(value, str) or not _UNIT_ID.fullmatch(value):
+        raise ctx.fail(
+            "unit_id", value, "1 to 64 characters of A-Z a-z 0-9 _ . -, not starting with '.'"
+        )
+    return value
+
+
 def _parse(data: dict[str, Any], text: str, source: str) -> Scenario:
     ctx = _Ctx(source)
     top = ctx.table(
@@ -613,6 +625,7 @@ def _parse(data: dict[str, Any], text: str, source: str) -> Scenario:
             "duration_s",
             "sample_rate_hz",
             "seed",
+            "unit_id",
             "solver",
             "actuation",
             "defects",
@@ -653,6 +666,7 @@ def _parse(data: dict[str, Any], text: str, source: str) -> Scenario:
             top.get("duration_s", 7.5), "duration_s", 0.0, 86_400.0, lo_open=True
         ),
         seed=seed,
+        unit_id=_unit_id(ctx, top.get("unit_id", NOMINAL_UNIT)),
         solver=_solver(ctx, top.get("solver", {})),
         sample_rate_hz=ctx.number(
             top.get("sample_rate_hz", DEFAULT_SAMPLE_RATE_HZ),
