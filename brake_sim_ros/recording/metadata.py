@@ -18,7 +18,8 @@ Metadata records (MCAP ``Metadata``; every value a string):
     ``physics_step_s``, ``substeps_per_sample``, ``step_limit_s``; a live run may re-pick
     the substeps later, which its /diagnostics and log say), ``mode`` (``live`` or
     ``offline``), ``duration_s``, the stream settings (``chunk_rate_hz``,
-    ``state_rate_hz``, ``publish_clock``, ``publish_measured``), ``time_base`` and
+    ``state_rate_hz``, ``publish_clock``, ``publish_measured``, ``measured_rate_hz``),
+    ``time_base`` and
     ``model_note``; a live run adds its node name and ``real_time_factor``; values are
     ``repr()`` of the Python value except strings, which are given as they are.
 ``brake_sim_ros_parameters`` (live runs)
@@ -116,6 +117,7 @@ def run_record(
     state_rate_hz: float,
     publish_clock: bool,
     publish_measured: bool,
+    measured_rate_hz: float,
     extra: Mapping[str, Any] | None = None,
 ) -> dict[str, str]:
     """The ``brake_sim_run`` record (see the module doc); ``stepper`` as it is now."""
@@ -138,6 +140,7 @@ def run_record(
         "state_rate_hz": state_rate_hz,
         "publish_clock": publish_clock,
         "publish_measured": publish_measured,
+        "measured_rate_hz": measured_rate_hz,
         "time_base": TIME_BASE,
         "model_note": (
             "brake_sim_model holds the model at the start of the recording; changes made"

@@ -120,6 +120,7 @@ def record_offline(
             state_rate_hz=settings.state_rate_hz,
             publish_clock=settings.publish_clock,
             publish_measured=settings.publish_measured,
+            measured_rate_hz=settings.measured_rate_hz,
         ),
     }
     live_only = (stream.DIAGNOSTICS, stream.ACTUATION)
@@ -192,6 +193,7 @@ def node_recorder(
             state_rate_hz=values["state_rate_hz"],
             publish_clock=values["publish_clock"],
             publish_measured=values["publish_measured"],
+            measured_rate_hz=values["measured_rate_hz"],
             extra={
                 "node": node.get_fully_qualified_name(),
                 "real_time_factor": values["real_time_factor"],
