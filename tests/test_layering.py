@@ -36,9 +36,10 @@ ALLOWED: dict[str, set[str]] = {
     "recording": _STREAM,
     "viz": _STREAM | {"recording"},  # the viewer reads MCAP recordings
     "datasets": _STREAM,  # tables of runs (Parquet)
+    "monitoring": _STREAM | {"datasets"},  # detectors and their scoring, on datasets
     "studies": _STREAM | _ADAPTERS,
     "app": _STREAM | _ADAPTERS,
-    "cli": _STREAM | _ADAPTERS | {"app", "studies", "datasets"},
+    "cli": _STREAM | _ADAPTERS | {"app", "studies", "datasets", "monitoring"},
 }
 
 
