@@ -46,6 +46,13 @@ from brake_sim_ros.model.fidelity import ACCURACY_PRESETS, LEVEL_BY_NAME, OUTPUT
 from brake_sim_ros.model.parameters import PARAMETER_GROUPS, BrakeParameters
 from brake_sim_ros.model.sensors import SensorSet, default_sensor_set
 from brake_sim_ros.model.trajectory import BrakeSetup
+from brake_sim_ros.model.units import (
+    NOMINAL_UNIT,
+    UnitValue,
+    unit_parameters,
+    unit_sensors,
+    unit_values,
+)
 from brake_sim_ros.scenarios.sensors import parse_sensors
 from brake_sim_ros.solvers.fixed_step import MIN_PHYSICS_STEP_S
 from brake_sim_ros.solvers.methods import FIXED_STEP_METHODS, SOLVER_METHODS
@@ -65,7 +72,6 @@ MAX_STEP_RANGE_S = (MIN_PHYSICS_STEP_S, 1e-2)
 MAX_SCENARIO_BYTES = 1024 * 1024
 MAX_NESTING = 32  # tables and arrays inside one another
 MAX_NAME_CHARS = 255  # a file name's limit on common file systems
-NOMINAL_UNIT = "nominal"  # the unit with the drawing's nominal parameters, no scatter
 _UNIT_ID = re.compile(r"[A-Za-z0-9_-][A-Za-z0-9_.-]{0,63}")
 # a value or key is quoted in an error message only up to this many characters (its repr);
 # a longer one is described ("a string of 300 characters"): messages never echo the file
@@ -147,13 +153,68 @@ class Scenario:
     setup: BrakeSetup = field(default_factory=BrakeSetup)
     duration_s: float = 7.5
     seed: int = 0
-    unit_id: str = NOMINAL_UNIT  # which brake of a fleet; "nominal": the drawing's brake
+    # which brake of a fleet; "nominal": the drawing's brake. ``setup.params`` and
+    # ``sensors`` are that unit's (model/units.py), drawn from the scenario's values (kept
+    # in ``nominal_params`` / ``nominal_sensors``) with ``unit_id`` and ``seed``
+    unit_id: str = NOMINAL_UNIT
     solver: SolverSettings = field(default_factory=SolverSettings)
     sample_rate_hz: float = DEFAULT_SAMPLE_RATE_HZ
     source: str = "<built-in>"
     text: str = ""
     needs: Needs | None = None  # None: the full model, every signal
     sensors: SensorSet = field(default_factory=default_sensor_set)  # [structure], [[sensors]]
+    nominal_params: BrakeParameters | None = None  # the scenario's own; None: setup.params
+    nominal_sensors: SensorSet | None = None  # the scenario's own; None: sensors
+
+    @property
+    def drawing_params(self) -> BrakeParameters:
+        """The scenario's parameters before the unit's scatter (its file's values)."""
+        return self.setup.params if self.nominal_params is None else self.nominal_params
+
+    @property
+    def drawing_sensors(self) -> SensorSet:
+        """The scenario's sensors before the unit's scatter."""
+        return self.sensors if self.nominal_sensors is None else self.nominal_sensors
+
+    def unit_values(self) -> list[UnitValue]:
+        """Every scattered value of this scenario's unit against the scenario's own (the
+        unit's ground truth; all unchanged for unit "nominal")."""
+        return unit_values(
+            self.drawing_params, self.setup.params, self.drawing_sensors, self.sensors
+        )
+
+    def with_unit(self, unit_id: str | None = None, *, seed: int | None = None) -> Scenario:
+        """This scenario as brake unit ``unit_id`` drawn with ``seed`` (None keeps each):
+        the scenario's own parameters and sensors with the unit's manufacturing scatter
+        (:mod:`brake_sim_ros.model.units`); unit "nominal" is the scenario's brake itself.
+        The seed also seeds the sensor noise, as it always has.
+
+        Raises:
+            ScenarioError: a malformed unit id or seed, or a unit whose drawn brake leaves
+                the model's validity (one line naming the scenario and the unit).
+        """
+        unit_id = self.unit_id if unit_id is None else unit_id
+        seed = self.seed if seed is None else seed
+        ctx = _Ctx(self.source)
+        _unit_id(ctx, unit_id)
+        if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed < 2**63:
+            raise ctx.fail("seed", seed, "an integer from 0 to 2^63 - 1")
+        params, sensors = self.drawing_params, self.drawing_sensors
+        try:
+            setup = dataclasses.replace(self.setup, params=unit_parameters(params, unit_id, seed))
+            drawn_sensors = unit_sensors(sensors, unit_id, seed)
+            pack(setup.params, setup.defects, setup.options)
+        except BrakeSimError as exc:
+            raise ScenarioError(f"{self.source}: {exc}") from None
+        return dataclasses.replace(
+            self,
+            setup=setup,
+            sensors=drawn_sensors,
+            unit_id=unit_id,
+            seed=seed,
+            nominal_params=params,
+            nominal_sensors=sensors,
+        )
 
     @property
     def digest(self) -> str:
@@ -658,7 +719,7 @@ def _parse(data: dict[str, Any], text: str, source: str) -> Scenario:
         plan(needs, model_shoes=setup.options.shoes)  # refuse needs no level can serve
     except BrakeSimError as exc:
         raise ScenarioError(f"{source}: {exc}") from exc
-    return Scenario(
+    scenario = Scenario(
         name=name,
         description=ctx.string(top.get("description", ""), "description"),
         setup=setup,
@@ -678,6 +739,7 @@ def _parse(data: dict[str, Any], text: str, source: str) -> Scenario:
         needs=needs,
         sensors=parse_sensors(ctx, top.get("structure"), top.get("sensors")),
     )
+    return scenario.with_unit()  # the file's values are the drawing; the unit scatters them
 
 
 def builtin_names() -> list[str]:
