@@ -252,6 +252,8 @@ def _write_history(job: SimulateJob, result: RunResult) -> None:
                     sensor_bank_for(scenario),
                     scenario.setup.defects,
                     {**meta, "columns": "units in names"},
+                    unit_id=scenario.unit_id,
+                    unit_values=scenario.unit_values(),
                 )
                 if path.suffix == ".parquet":
                     parquet.write_history(partial, table)

@@ -190,3 +190,65 @@ def test_the_unit_command_prints_the_unit_against_nominal():
         capture_output=True, text=True, cwd=ROOT, timeout=600,
     )  # fmt: skip
     assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "unit_id" in bad.stderr
+
+
+def test_ground_truth_and_recording_carry_the_unit(tmp_path):
+    """The unit's id and parameters reach DefectState, the MCAP metadata (read back by the
+    mcap reader, the DefectState by rosbags alone) and the Parquet file's metadata."""
+    pytest.importorskip("rclpy")
+    from mcap.reader import make_reader
+    from rosbags.rosbag2.storage_mcap import McapReader
+    from rosbags.typesys import Stores, get_types_from_msg, get_typestore
+
+    from brake_sim_ros import stream
+    from brake_sim_ros.recording import metadata
+    from brake_sim_ros.recording.record import record_offline
+
+    scenario = load_scenario("symmetric").with_unit("VIN-0042", seed=11)
+    path = tmp_path / "unit.mcap"
+    record_offline(scenario, path, duration_s=0.05)
+    with open(path, "rb") as f:
+        records = {m.name: m.metadata for m in make_reader(f).iter_metadata()}
+    unit = records[metadata.UNIT]
+    assert unit["unit_id"] == "VIN-0042" and unit["seed"] == "11"
+    values = json.loads(unit["unit_parameters"])
+    assert values == [v.as_dict() for v in scenario.unit_values()]
+    friction = next(v for v in values if v["key"] == "friction.coefficient")
+    assert friction["nominal"] == 0.285 != friction["value"]
+    assert friction["value"] == scenario.setup.params.friction.coefficient
+    params, _ = metadata.model_from_record(records[metadata.MODEL])
+    assert params == scenario.setup.params  # the model record is the unit's brake
+    assert records[metadata.ROSBAG2]["serialized_metadata"].count("VIN-0042") == 1
+
+    reader = McapReader(path)
+    reader.open()
+    try:
+        store = get_typestore(Stores.EMPTY)
+        for conn in reader.connections:
+            store.register(get_types_from_msg(conn.msgdef.data, conn.msgtype))
+        truths = [
+            store.deserialize_cdr(data, conn.msgtype)
+            for conn, _, data in reader.messages(reader.connections)
+            if conn.topic == stream.DEFECTS.name
+        ]
+    finally:
+        reader.close()
+    assert [(t.unit_id, t.seed) for t in truths] == [("VIN-0042", 11)]
+
+
+def test_simulate_writes_the_unit_into_the_parquet_metadata(tmp_path):
+    pq = pytest.importorskip("pyarrow.parquet")
+    source = tmp_path / "unit.toml"
+    source.write_text('name = "fleet"\nunit_id = "VIN-0042"\nseed = 11\n')
+    out = tmp_path / "run.parquet"
+    r = subprocess.run(
+        [sys.executable, "-m", "brake_sim_ros.cli", "simulate", str(source), "--duration",
+         "0.05", "--out", str(out), "--quiet"],
+        capture_output=True, text=True, cwd=ROOT, timeout=600,
+    )  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    meta = json.loads(pq.read_schema(out).metadata[b"brake_sim"])
+    expected = load_scenario(source).unit_values()
+    assert meta["unit_id"] == "VIN-0042" and meta["seed"] == 11
+    assert meta["unit_parameters"] == [v.as_dict() for v in expected]
+    assert any(v["value"] != v["nominal"] for v in meta["unit_parameters"])

@@ -137,6 +137,16 @@ def run_parameter_specs() -> list[ParamSpec]:
             constraints="empty, or 1 to 64 characters of A-Z a-z 0-9 . _ -",
         ),
         ParamSpec(
+            "unit_id",
+            "",
+            "Brake unit to simulate (its manufacturing scatter, drawn with the run's seed "
+            "from the scenario's values): empty = the scenario's unit_id; 'nominal' = the "
+            "scenario's brake itself; otherwise 1 to 64 of A-Z a-z 0-9 _ . - (not starting "
+            "with '.'). Applies to every scenario ~/reset loads; a ~/reset with a new seed "
+            "draws the unit again (the model parameters then read the new unit's values). " + fixed,
+            constraints="empty, 'nominal', or 1 to 64 characters of A-Z a-z 0-9 _ . -",
+        ),
+        ParamSpec(
             "duration_s",
             0.0,
             "Simulated time after which the free run ends (s); 0 at start-up = the "
@@ -221,6 +231,7 @@ FIXED_AT_START = frozenset(
         "exit_at_end",
         "max_actuation_force_n",
         "run_id",
+        "unit_id",
         "publish_measured",
     }
 )
