@@ -21,6 +21,7 @@ from brake_sim_ros.model.assembly import pack
 from brake_sim_ros.model.parameters import BrakeParameters
 from brake_sim_ros.model.sensors import default_sensor_set
 from brake_sim_ros.scenarios import builtin_names, load_scenario, parse_scenario
+from brake_sim_ros.studies import units as fleet_study
 
 ROOT = Path(__file__).resolve().parents[1]
 SENSORS = default_sensor_set()
@@ -252,3 +253,42 @@ def test_simulate_writes_the_unit_into_the_parquet_metadata(tmp_path):
     assert meta["unit_id"] == "VIN-0042" and meta["seed"] == 11
     assert meta["unit_parameters"] == [v.as_dict() for v in expected]
     assert any(v["value"] != v["nominal"] for v in meta["unit_parameters"])
+
+
+# --- the spread of a fleet ----------------------------------------------------------------
+# A short stop (from 40 rad/s, about 2.6 s) at the fast preset: a unit costs about 0.1 s.
+SHORT_STOP = """
+name = "short_stop"
+duration_s = 4.0
+[parameters.driveline]
+initial_speed_rad_s = 40.0
+[solver]
+preset = "fast"
+"""
+
+
+def test_fifty_units_spread_stop_time_and_first_impact_as_the_scatter_predicts():
+    """The spread across 50 units against a linear model of the scatter, derived before
+    the fleet is run: each parameter moved one sigma alone gives its effect on a figure,
+    the predicted standard deviation is the root sum of squares of the effects times each
+    truncated distribution's std/sigma (``studies/units.linear_spread``).
+
+    Bounds: the sample standard deviation of 50 draws has a relative standard error of
+    about 1/sqrt(2 x 49) = 10 %, so 0.6-1.4 of the prediction is four standard errors;
+    0.2 more above allows for what the linear model leaves out (a peak force and a stop
+    time are smooth but not linear over +-3 sigma). Spread must be nonzero, and the stop
+    time must fall with the friction coefficient (the braking torque rises with it).
+    """
+    scenario = parse_scenario(SHORT_STOP).with_unit(units.NOMINAL_UNIT, seed=2)
+    predicted, parts = fleet_study.linear_spread(scenario, duration_s=4.0)
+    ids = fleet_study.fleet_unit_ids(50)
+    rows = fleet_study.fleet(scenario, ids, duration_s=4.0)
+    stop = np.array([r.stop_time_s for r in rows])
+    peak = np.array([r.first_impact_n for r in rows])
+    assert np.all(np.isfinite(stop)) and np.all(np.isfinite(peak))
+    assert np.std(stop) > 0 and np.std(peak) > 0
+    assert 0.6 <= np.std(stop, ddof=1) / predicted.stop_time_s <= 1.6
+    assert 0.6 <= np.std(peak, ddof=1) / predicted.first_impact_n <= 1.6
+    mu = np.array([units.deviations(u, 2)["friction.coefficient"] for u in ids])
+    assert parts["friction.coefficient"].stop_time_s < 0
+    assert np.corrcoef(mu, stop)[0, 1] < -0.5
