@@ -523,13 +523,15 @@ def unit_text(scenario: Scenario, *, sources: bool = False) -> str:
     """A scenario's brake unit against the scenario's own values: per scattered parameter
     its nominal value, the unit's, the change and the tolerance, with units; with
     ``sources``, where each distribution comes from."""
+    from brake_sim_ros.model.units import NOMINAL_UNIT
+
     values = scenario.unit_values()
     lines = [
         f"unit {scenario.unit_id} (seed {scenario.seed}) of scenario {scenario.name}:"
         " manufacturing scatter, each a normal truncated at its tolerance"
         + (
             " (the nominal unit: the scenario's brake itself)"
-            if scenario.unit_id == "nominal"
+            if scenario.unit_id == NOMINAL_UNIT
             else ""
         ),
         f"  {'parameter':46s} {'nominal':>12s} {'this unit':>12s} {'change':>10s}"

@@ -198,12 +198,11 @@ def test_ground_truth_and_recording_carry_the_unit(tmp_path):
     mcap reader, the DefectState by rosbags alone) and the Parquet file's metadata."""
     pytest.importorskip("rclpy")
     from mcap.reader import make_reader
-    from rosbags.rosbag2.storage_mcap import McapReader
-    from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
     from brake_sim_ros import stream
     from brake_sim_ros.recording import metadata
     from brake_sim_ros.recording.record import record_offline
+    from tests.bag_helpers import rosbags_decoded
 
     scenario = load_scenario("symmetric").with_unit("VIN-0042", seed=11)
     path = tmp_path / "unit.mcap"
@@ -221,19 +220,7 @@ def test_ground_truth_and_recording_carry_the_unit(tmp_path):
     assert params == scenario.setup.params  # the model record is the unit's brake
     assert records[metadata.ROSBAG2]["serialized_metadata"].count("VIN-0042") == 1
 
-    reader = McapReader(path)
-    reader.open()
-    try:
-        store = get_typestore(Stores.EMPTY)
-        for conn in reader.connections:
-            store.register(get_types_from_msg(conn.msgdef.data, conn.msgtype))
-        truths = [
-            store.deserialize_cdr(data, conn.msgtype)
-            for conn, _, data in reader.messages(reader.connections)
-            if conn.topic == stream.DEFECTS.name
-        ]
-    finally:
-        reader.close()
+    truths = rosbags_decoded(path)[stream.DEFECTS.name]
     assert [(t.unit_id, t.seed) for t in truths] == [("VIN-0042", 11)]
 
 
