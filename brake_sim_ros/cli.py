@@ -254,6 +254,7 @@ def _write_history(job: SimulateJob, result: RunResult) -> None:
                     {**meta, "columns": "units in names"},
                     unit_id=scenario.unit_id,
                     unit_values=scenario.unit_values(),
+                    conditions=scenario.conditions_record(),
                 )
                 if path.suffix == ".parquet":
                     parquet.write_history(partial, table)

@@ -331,6 +331,7 @@ def test_a_slower_channel_is_null_between_its_samples():
         {"seed": 3},
         unit_id=scenario.unit_id,
         unit_values=scenario.unit_values(),
+        conditions=scenario.conditions_record(),
     )
     values = table["measured:slow_x [m/s^2]"]
     assert values.null_count == len(run.samples) - len(run.samples) // 4

@@ -33,7 +33,9 @@ one object per defect in force with kind, location, severity, unit, onset_s, gro
 growth_rate, as the DefectState message), ``unit_id`` (the scenario's brake unit,
 "nominal" for the drawing's brake) and ``unit_parameters`` (the unit's ground truth: a
 list of ``{key, unit, nominal, value}``, every scattered parameter as the scenario gives it
-and as the unit has it, :mod:`brake_sim_ros.model.units`).
+and as the unit has it, :mod:`brake_sim_ros.model.units`) and ``conditions`` (the run's
+operating conditions drawn from the scenario's ranges: per name ``{value, unit, range}``,
+:mod:`brake_sim_ros.model.conditions`; ``{}`` without them).
 """
 
 from __future__ import annotations
@@ -99,11 +101,14 @@ def history_table(
     *,
     unit_id: str,
     unit_values: Sequence[UnitValue],
+    conditions: Mapping[str, Any],
 ) -> pa.Table:
     """The table of ``samples``, with ``sensors`` (a fresh bank, fed the whole run here)
     what they measured, and the ground truth of ``defects`` (the brake's defects in force
-    over the run) and of the unit (``unit_id``, ``unit_values``: its scattered parameters,
-    ``Scenario.unit_values()``); ``metadata`` goes into the ``brake_sim`` key as JSON."""
+    over the run), of the unit (``unit_id``, ``unit_values``: its scattered parameters,
+    ``Scenario.unit_values()``) and of the run's ``conditions``
+    (``Scenario.conditions_record()``); ``metadata`` goes into the ``brake_sim`` key as
+    JSON."""
     n = len(samples)
     index = samples.first_index + np.arange(n, dtype=np.int64)
     history = samples.as_dict()
@@ -151,6 +156,7 @@ def history_table(
         "defects": [d.as_dict() for d in defects.active()],
         "unit_id": unit_id,
         "unit_parameters": [v.as_dict() for v in unit_values],
+        "conditions": dict(conditions),
     }
     schema = pa.schema(fields, metadata={METADATA_KEY: json.dumps(meta).encode()})
     return pa.Table.from_arrays([columns[f.name] for f in fields], schema=schema)

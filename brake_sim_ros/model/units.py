@@ -63,7 +63,16 @@ def _key64(text: str) -> int:
     return int.from_bytes(hashlib.sha256(text.encode()).digest()[:8], "big")
 
 
-_DOMAIN = _key64("brake_sim_ros unit scatter")
+def keyed_uniform(seed: int, *names: str) -> float:
+    """One uniform draw in [0, 1) of its own generator,
+    ``Generator(PCG64(SeedSequence([seed, *keys])))``, each key the first 8 bytes
+    (big-endian) of SHA-256 of a name: the same seed and names give the same bits in any
+    process; other names, an independent stream."""
+    sequence = np.random.SeedSequence([int(seed), *(_key64(n) for n in names)])
+    return float(np.random.Generator(np.random.PCG64(sequence)).random())
+
+
+DOMAIN = "brake_sim_ros unit scatter"
 
 
 @dataclass(frozen=True)
@@ -251,14 +260,8 @@ SENSOR_UNITS = {"sensitivity_ratio": "1", "resonance_hz": "Hz"}
 SCATTER_BY_KEY: dict[str, Scatter] = {s.key: s for s in SCATTER}
 
 
-def unit_key(unit_id: str) -> int:
-    """The unit id's 64-bit key: the first 8 bytes of its SHA-256, big-endian."""
-    return _key64(unit_id)
-
-
 def _uniform(unit_id: str, seed: int, key: str) -> float:
-    sequence = np.random.SeedSequence([int(seed), _DOMAIN, unit_key(unit_id), _key64(key)])
-    return float(np.random.Generator(np.random.PCG64(sequence)).random())
+    return keyed_uniform(seed, DOMAIN, unit_id, key)
 
 
 def _check(unit_id: str, seed: int) -> None:

@@ -26,7 +26,10 @@ Metadata records (MCAP ``Metadata``; every value a string):
     (the draw's, the run's seed at the start of the recording) and ``unit_parameters``,
     JSON: a list of ``{key, unit, nominal, value}``, every scattered parameter of the brake
     and its sensors as the scenario gives it (``nominal``) and as the unit has it
-    (``value``); all equal for unit ``nominal``. ``brake_sim_model`` holds the drawn
+    (``value``); all equal for unit ``nominal``; and ``conditions``, JSON: the run's
+    operating conditions drawn from the scenario's ``[conditions]`` ranges
+    (:mod:`brake_sim_ros.model.conditions`), per name ``{value, unit, range}`` (``{}``
+    without them). ``brake_sim_model`` holds the drawn
     values too (with any ROS parameter overrides of a live run on top). The unit at the
     start of the recording: a live ~/reset with a new seed draws the unit again, and its
     DefectState then carries the unit id and the new seed that determine it.
@@ -120,6 +123,7 @@ def unit_record(scenario: Scenario) -> dict[str, str]:
         "unit_id": scenario.unit_id,
         "seed": repr(scenario.seed),
         "unit_parameters": json.dumps([v.as_dict() for v in scenario.unit_values()]),
+        "conditions": json.dumps(scenario.conditions_record()),
     }
 
 

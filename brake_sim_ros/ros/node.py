@@ -56,7 +56,6 @@ from brake_sim_ros.analysis.contact_events import ContactEventDetector
 from brake_sim_ros.errors import BrakeSimError, ParameterError, ScenarioError
 from brake_sim_ros.model.sensors import SensorBank
 from brake_sim_ros.model.trajectory import BrakeSetup, SampleBlock
-from brake_sim_ros.model.units import NOMINAL_UNIT
 from brake_sim_ros.ros import qos
 from brake_sim_ros.ros.budget import measure_publishing, measure_stepping
 from brake_sim_ros.ros.commands import (
@@ -854,8 +853,8 @@ class BrakeSimNode(Node):
                 scenario = load_requested_scenario(request.scenario, self._scenario_dirs)
                 scenario = self._as_unit(scenario, seed=seed if seed >= 0 else None)
                 self._switch_scenario(scenario, request.scenario)
-            elif seed >= 0 and seed != self.scenario.seed and self._scattered():
-                # a unit is drawn with the seed: a new seed is another brake of the fleet
+            elif seed >= 0 and seed != self.scenario.seed and self.scenario.drawn:
+                # the seed draws the unit and the conditions: a new seed, another run
                 scenario = self.scenario.with_unit(seed=seed)
                 self._switch_scenario(scenario, self._param("scenario"))
             else:
@@ -898,10 +897,6 @@ class BrakeSimNode(Node):
         if not self._unit_id and seed is None:
             return scenario
         return scenario.with_unit(self._unit_id or None, seed=seed)
-
-    def _scattered(self) -> bool:
-        """Whether the current brake is a drawn unit (not the scenario's own brake)."""
-        return self.scenario.unit_id != NOMINAL_UNIT
 
     def _switch_scenario(self, scenario: Scenario, name_or_path: str) -> None:
         """Replace scenario, stepper and timing; on error nothing changes.

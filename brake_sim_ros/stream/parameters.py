@@ -143,7 +143,8 @@ def run_parameter_specs() -> list[ParamSpec]:
             "from the scenario's values): empty = the scenario's unit_id; 'nominal' = the "
             "scenario's brake itself; otherwise 1 to 64 of A-Z a-z 0-9 _ . - (not starting "
             "with '.'). Applies to every scenario ~/reset loads; a ~/reset with a new seed "
-            "draws the unit again (the model parameters then read the new unit's values). " + fixed,
+            "draws the unit (and a scenario's [conditions]) again: the model parameters "
+            "then read the new draw's values. " + fixed,
             constraints="empty, 'nominal', or 1 to 64 characters of A-Z a-z 0-9 _ . -",
         ),
         ParamSpec(
