@@ -553,6 +553,12 @@ def unit_text(scenario: Scenario, *, sources: bool = False) -> str:
             lines.append(f"      {v.scatter.source}")
     if not sources:
         lines.append("  (where each distribution comes from: --sources)")
+    for name, truth in scenario.conditions_record().items():
+        low, high = truth["range"]
+        lines.append(
+            f"  condition {name} = {truth['value']:.6g} {truth['unit']} (drawn from"
+            f" [{low:g}, {high:g}] with seed {scenario.seed})"
+        )
     return "\n".join(lines)
 
 

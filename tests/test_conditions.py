@@ -152,3 +152,12 @@ def test_the_drawn_conditions_are_ground_truth(tmp_path):
     )
     meta = json.loads(table.schema.metadata[b"brake_sim"])
     assert meta["conditions"] == truth
+
+
+def test_the_unit_command_shows_the_drawn_conditions(tmp_path):
+    from brake_sim_ros.cli import unit_text
+
+    text = unit_text(_scenario(5))
+    drawn = dict(_scenario(5).conditions)
+    line = next(x for x in text.splitlines() if "condition load_factor" in x)
+    assert f"{drawn['load_factor']:.6g} 1 (drawn from [1, 1.4] with seed 5)" in line
