@@ -487,7 +487,7 @@ def test_the_defect_ground_truth_round_trips_through_an_independent_reader(recor
     assert len(truths) == 1
     ns, truth = truths[0]
     assert ns == 0 and truth.run_id == RUN_ID and truth.seed == scenario.seed
-    assert truth.scenario == SCENARIO and not truth.healthy and truth.unit_id == ""
+    assert truth.scenario == SCENARIO and not truth.healthy and truth.unit_id == "nominal"
     expected = scenario.setup.defects.active()
     assert [
         (d.kind, d.location, d.severity, d.unit, d.onset_s, d.growth) for d in truth.defects

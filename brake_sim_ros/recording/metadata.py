@@ -22,6 +22,18 @@ Metadata records (MCAP ``Metadata``; every value a string):
     ``time_base`` and
     ``model_note``; a live run adds its node name and ``real_time_factor``; values are
     ``repr()`` of the Python value except strings, which are given as they are.
+``brake_sim_unit``
+    which brake unit was run (:mod:`brake_sim_ros.model.units`): ``unit_id``, ``seed``
+    (the draw's, the run's seed at the start of the recording) and ``unit_parameters``,
+    JSON: a list of ``{key, unit, nominal, value}``, every scattered parameter of the brake
+    and its sensors as the scenario gives it (``nominal``) and as the unit has it
+    (``value``); all equal for unit ``nominal``; and ``conditions``, JSON: the run's
+    operating conditions drawn from the scenario's ``[conditions]`` ranges
+    (:mod:`brake_sim_ros.model.conditions`), per name ``{value, unit, range}`` (``{}``
+    without them). ``brake_sim_model`` holds the drawn
+    values too (with any ROS parameter overrides of a live run on top). The unit at the
+    start of the recording: a live ~/reset with a new seed draws the unit again, and its
+    DefectState then carries the unit id and the new seed that determine it.
 ``brake_sim_ros_parameters`` (live runs)
     every ROS parameter of the node at the start of the recording, ``repr()`` of its value.
 ``rosbag2`` (written when the file is closed)
@@ -55,6 +67,7 @@ from brake_sim_ros.stream.topics import QosSpec
 MODEL = "brake_sim_model"
 SCENARIO = "brake_sim_scenario"
 RUN = "brake_sim_run"
+UNIT = "brake_sim_unit"
 ROS_PARAMETERS = "brake_sim_ros_parameters"
 ROSBAG2 = "rosbag2"
 ROS_DISTRO = "jazzy"
@@ -102,6 +115,16 @@ def scenario_record(scenario: Scenario) -> dict[str, str]:
         "toml": scenario.text,
         "sha256": scenario.digest,
         "description": scenario.description,
+    }
+
+
+def unit_record(scenario: Scenario) -> dict[str, str]:
+    """The ``brake_sim_unit`` record of ``scenario``'s unit."""
+    return {
+        "unit_id": scenario.unit_id,
+        "seed": repr(scenario.seed),
+        "unit_parameters": json.dumps([v.as_dict() for v in scenario.unit_values()]),
+        "conditions": json.dumps(scenario.conditions_record()),
     }
 
 

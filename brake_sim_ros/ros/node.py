@@ -132,7 +132,8 @@ class BrakeSimNode(Node):
         except ScenarioError as exc:
             raise ParameterError(str(exc)) from None
         # the operator's choice (command line or parameter): any file, not a request
-        self.scenario: Scenario = load_scenario(self._param("scenario"))
+        self._unit_id = self._param("unit_id")  # "" = each scenario's own
+        self.scenario: Scenario = self._as_unit(load_scenario(self._param("scenario")))
         self._seed = self.scenario.seed
         # the run id of the ground truth: the parameter's, or a fresh one per run (reset)
         self._run_id_fixed = ros_params.check_run_id(self._param("run_id"))
@@ -879,7 +880,12 @@ class BrakeSimNode(Node):
                 raise BrakeSimError(f"seed={seed}: allowed -1 (keep) or a seed >= 0")
             if request.scenario:
                 scenario = load_requested_scenario(request.scenario, self._scenario_dirs)
+                scenario = self._as_unit(scenario, seed=seed if seed >= 0 else None)
                 self._switch_scenario(scenario, request.scenario)
+            elif seed >= 0 and seed != self.scenario.seed and self.scenario.drawn:
+                # the seed draws the unit and the conditions: a new seed, another run
+                scenario = self.scenario.with_unit(seed=seed)
+                self._switch_scenario(scenario, self._param("scenario"))
             else:
                 self._stepper.reset()
                 self._log_step_change("reset")
@@ -914,6 +920,13 @@ class BrakeSimNode(Node):
             f" run id {self.run_id}"
         )
         return response
+
+    def _as_unit(self, scenario: Scenario, *, seed: int | None = None) -> Scenario:
+        """``scenario`` as the node's ``unit_id`` parameter's unit (empty: its own), drawn
+        with ``seed`` (None: the scenario's)."""
+        if not self._unit_id and seed is None:
+            return scenario
+        return scenario.with_unit(self._unit_id or None, seed=seed)
 
     def _switch_scenario(self, scenario: Scenario, name_or_path: str) -> None:
         """Replace scenario, stepper and timing; on error nothing changes.
@@ -972,6 +985,7 @@ class BrakeSimNode(Node):
             ns=ns,
             run_id=self.run_id,
             seed=self._seed,
+            unit_id=self.scenario.unit_id,
         )
         self._emit(stream.DEFECTS, msg, ns)
 

@@ -85,6 +85,7 @@ def offline_messages(
             ns=0,
             run_id=run_id,
             seed=scenario.seed,
+            unit_id=scenario.unit_id,
         ),
         0,
     )

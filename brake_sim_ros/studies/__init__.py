@@ -82,6 +82,12 @@ def _drum(argv: list[str]) -> int:
     return drum_defect.main(argv)
 
 
+def _units(argv: list[str]) -> int:
+    from brake_sim_ros.studies import units
+
+    return units.main(argv)
+
+
 BENCHMARKS: dict[str, Study] = {
     s.name: s
     for s in (
@@ -117,6 +123,11 @@ BENCHMARKS: dict[str, Study] = {
             "drum",
             "severity sweep of drum ovality: the pivot-force line at 2 f_rot per amplitude",
             _drum,
+        ),
+        Study(
+            "units",
+            "spread of stop time and first-impact force across a fleet of units",
+            _units,
         ),
     )
 }
