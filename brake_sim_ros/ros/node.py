@@ -22,6 +22,8 @@ Topics (node name ``brake_sim``; ``~`` = ``/brake_sim``; QoS in :mod:`.qos`):
 Services:
     ~/step   brake_sim_msgs/StepSimulation   advance N samples or a duration while paused
     ~/reset  brake_sim_msgs/ResetSimulation  back to t = 0, optionally a new scenario/seed
+                                             (a new seed draws a scattered unit and a
+                                             scenario's [conditions] again)
 
 The sample rate is the scenario's. The stepper takes whole physics substeps per sample,
 re-picked from the step limit at every model change and for any accepted actuation force

@@ -3,7 +3,10 @@
 A scenario names any parameter override, the defects, the actuation, the duration, the
 output sample rate, the solver (a preset, or a method and a largest physics step), and
 optionally what it needs (``[needs]``: outputs, shoes, accuracy,
-forced level; see :mod:`brake_sim_ros.model.fidelity`). Loading is strict: an unknown key,
+forced level; see :mod:`brake_sim_ros.model.fidelity`), which brake unit it is (``unit_id``:
+the manufacturing scatter drawn with the seed around the file's values, see
+:mod:`brake_sim_ros.model.units`) and ranges of operating conditions drawn per run
+(``[conditions]``, :mod:`brake_sim_ros.model.conditions`). Loading is strict: an unknown key,
 a wrong type, or a non-finite or out-of-range value is an error that names the file, the
 key, the value and what is allowed. See ``builtin/symmetric.toml`` for a commented example.
 
