@@ -507,9 +507,12 @@ def catalogue_text() -> str:
 def cmd_unit(args: argparse.Namespace) -> int:
     from brake_sim_ros.scenarios import load_scenario
 
-    if args.seed is not None and not 0 <= args.seed < 2**63:
-        raise BrakeSimError(f"--seed {args.seed}: allowed an integer from 0 to 2^63 - 1")
-    scenario = load_scenario(args.scenario).with_unit(args.unit_id, seed=args.seed)
+    for flag, value in (("--seed", args.seed), ("--fleet-seed", args.fleet_seed)):
+        if value is not None and not 0 <= value < 2**63:
+            raise BrakeSimError(f"{flag} {value}: allowed an integer from 0 to 2^63 - 1")
+    scenario = load_scenario(args.scenario).with_unit(
+        args.unit_id, seed=args.seed, fleet_seed=args.fleet_seed
+    )
     print(unit_text(scenario, sources=args.sources))
     return 0
 
@@ -528,7 +531,7 @@ def unit_text(scenario: Scenario, *, sources: bool = False) -> str:
 
     values = scenario.unit_values()
     lines = [
-        f"unit {scenario.unit_id} (seed {scenario.seed}) of scenario {scenario.name}:"
+        f"unit {scenario.unit_id} (fleet seed {scenario.fleet_seed}) of scenario {scenario.name}:"
         " manufacturing scatter, each a normal truncated at its tolerance"
         + (
             " (the nominal unit: the scenario's brake itself)"
@@ -739,10 +742,18 @@ def build_parser() -> argparse.ArgumentParser:
         help="a brake unit's manufacturing scatter: its parameters against the scenario's",
         description="Print brake unit UNIT_ID's parameters against the scenario's own"
         " (nominal) values, with units and each distribution's tolerance. A unit is drawn"
-        " from its id and the seed; 'nominal' is the scenario's brake itself.",
+        " from its id and the fleet seed (the same brake in every run); 'nominal' is the"
+        " scenario's brake itself. The run's seed draws the scenario's [conditions].",
     )
     p.add_argument("unit_id", help="the unit's id: 1 to 64 of A-Z a-z 0-9 _ . -, or nominal")
-    p.add_argument("--seed", type=int, help="the draw's seed (default: the scenario's)")
+    p.add_argument(
+        "--fleet-seed",
+        type=int,
+        help="the fleet's seed, which draws units (default: the scenario's)",
+    )
+    p.add_argument(
+        "--seed", type=int, help="the run's seed: its [conditions] (default: the scenario's)"
+    )
     p.add_argument(
         "--scenario", default="symmetric", help="built-in name or .toml path (default symmetric)"
     )

@@ -48,7 +48,7 @@ def test_same_unit_and_seed_give_identical_bits_in_another_process():
     assert json.loads(out.stdout) == here
 
 
-def test_the_seed_and_the_unit_id_each_change_the_draw():
+def test_the_fleet_seed_and_the_unit_id_each_change_the_draw():
     base = units.deviations("VIN-0042", 7)
     assert units.deviations("VIN-0042", 8) != base
     assert units.deviations("VIN-0043", 7) != base
@@ -137,7 +137,10 @@ def test_the_corners_of_the_tolerance_box_are_valid_brakes():
 
 
 def test_scatter_applies_around_the_scenarios_own_values():
-    text = 'name = "mine"\nunit_id = "VIN-9"\nseed = 4\n[parameters.friction]\ncoefficient = 0.40\n'
+    text = (
+        'name = "mine"\nunit_id = "VIN-9"\nfleet_seed = 4\n[parameters.friction]\n'
+        "coefficient = 0.40\n"
+    )
     scenario = parse_scenario(text)
     d = units.deviations("VIN-9", 4)["friction.coefficient"]
     assert scenario.drawing_params.friction.coefficient == 0.40
@@ -145,9 +148,12 @@ def test_scatter_applies_around_the_scenarios_own_values():
     back = scenario.with_unit(units.NOMINAL_UNIT)
     assert back.setup.params == scenario.drawing_params and back.sensors == SENSORS
     # the same unit from the default file: the same deviation
-    plain = parse_scenario('name = "mine"\nunit_id = "VIN-9"\nseed = 4\n')
+    plain = parse_scenario('name = "mine"\nunit_id = "VIN-9"\nfleet_seed = 4\n')
     assert plain.setup.params.friction.coefficient == 0.285 * (1.0 + d)
-    assert plain.with_unit(seed=5).setup.params != plain.setup.params
+    assert plain.with_unit(fleet_seed=5).setup.params != plain.setup.params
+    # the run's seed is its noise: the same unit is the same brake in every run
+    again = plain.with_unit(seed=5)
+    assert again.setup.params == plain.setup.params and again.sensors == plain.sensors
 
 
 def test_a_unit_beyond_the_models_limits_is_refused_in_one_line():
@@ -177,11 +183,11 @@ def test_a_bad_unit_id_is_refused_in_one_line(unit_id):
 
 def test_the_unit_command_prints_the_unit_against_nominal():
     r = subprocess.run(
-        [sys.executable, "-m", "brake_sim_ros.cli", "unit", "VIN-0042", "--seed", "11"],
+        [sys.executable, "-m", "brake_sim_ros.cli", "unit", "VIN-0042", "--fleet-seed", "11"],
         capture_output=True, text=True, cwd=ROOT, timeout=600,
     )  # fmt: skip
     assert r.returncode == 0, r.stderr
-    scenario = load_scenario("symmetric").with_unit("VIN-0042", seed=11)
+    scenario = load_scenario("symmetric").with_unit("VIN-0042", fleet_seed=11)
     mu = scenario.setup.params.friction.coefficient
     line = next(x for x in r.stdout.splitlines() if "friction.coefficient" in x)
     assert f"{mu:.6g}" in line and f"{100 * (mu / 0.285 - 1):+.3f} %" in line
@@ -204,13 +210,13 @@ def test_ground_truth_and_recording_carry_the_unit(tmp_path):
     from brake_sim_ros.recording.record import record_offline
     from tests.bag_helpers import rosbags_decoded
 
-    scenario = load_scenario("symmetric").with_unit("VIN-0042", seed=11)
+    scenario = load_scenario("symmetric").with_unit("VIN-0042", seed=11, fleet_seed=3)
     path = tmp_path / "unit.mcap"
     record_offline(scenario, path, duration_s=0.05)
     with open(path, "rb") as f:
         records = {m.name: m.metadata for m in make_reader(f).iter_metadata()}
     unit = records[metadata.UNIT]
-    assert unit["unit_id"] == "VIN-0042" and unit["seed"] == "11"
+    assert (unit["unit_id"], unit["seed"], unit["fleet_seed"]) == ("VIN-0042", "11", "3")
     values = json.loads(unit["unit_parameters"])
     assert values == [v.as_dict() for v in scenario.unit_values()]
     friction = next(v for v in values if v["key"] == "friction.coefficient")
@@ -227,7 +233,7 @@ def test_ground_truth_and_recording_carry_the_unit(tmp_path):
 def test_simulate_writes_the_unit_into_the_parquet_metadata(tmp_path):
     pq = pytest.importorskip("pyarrow.parquet")
     source = tmp_path / "unit.toml"
-    source.write_text('name = "fleet"\nunit_id = "VIN-0042"\nseed = 11\n')
+    source.write_text('name = "fleet"\nunit_id = "VIN-0042"\nseed = 11\nfleet_seed = 3\n')
     out = tmp_path / "run.parquet"
     r = subprocess.run(
         [sys.executable, "-m", "brake_sim_ros.cli", "simulate", str(source), "--duration",
@@ -266,7 +272,7 @@ def test_fifty_units_spread_stop_time_and_first_impact_as_the_scatter_predicts()
     time are smooth but not linear over +-3 sigma). Spread must be nonzero, and the stop
     time must fall with the friction coefficient (the braking torque rises with it).
     """
-    scenario = parse_scenario(SHORT_STOP).with_unit(units.NOMINAL_UNIT, seed=2)
+    scenario = parse_scenario(SHORT_STOP).with_unit(units.NOMINAL_UNIT, fleet_seed=2)
     predicted, parts = fleet_study.linear_spread(scenario, duration_s=4.0)
     ids = fleet_study.fleet_unit_ids(50)
     rows = fleet_study.fleet(scenario, ids, duration_s=4.0)

@@ -32,7 +32,9 @@ a left/right difference is what the defects describe.
 first 8 bytes (big-endian) of SHA-256 of the unit id and of the parameter's key (for a
 sensor ``sensor.<channel>.<field>``), ``DOMAIN`` the same of ``brake_sim_ros unit
 scatter``: never Python's ``hash()``, so a unit id and seed give the same bits in any
-process. One uniform draw per deviation, mapped through the truncated normal's inverse
+process. The seed here is the fleet's (a scenario's ``fleet_seed``), not the run's: a unit
+is the same brake in every run, whatever noise and conditions the run's seed draws.
+One uniform draw per deviation, mapped through the truncated normal's inverse
 distribution function, so adding, removing or reordering parameters of the table changes
 no other parameter's deviation, and a unit's sensor channel keeps its deviation when other
 channels are added. The four-word entropy never equals the sensor noise's two-word

@@ -23,17 +23,19 @@ Metadata records (MCAP ``Metadata``; every value a string):
     ``model_note``; a live run adds its node name and ``real_time_factor``; values are
     ``repr()`` of the Python value except strings, which are given as they are.
 ``brake_sim_unit``
-    which brake unit was run (:mod:`brake_sim_ros.model.units`): ``unit_id``, ``seed``
-    (the draw's, the run's seed at the start of the recording) and ``unit_parameters``,
+    which brake unit was run (:mod:`brake_sim_ros.model.units`): ``unit_id`` and
+    ``fleet_seed`` (what draws the unit's scatter: the same brake in every run), ``seed``
+    (the run's at the start of the recording: its noise and conditions) and
+    ``unit_parameters``,
     JSON: a list of ``{key, unit, nominal, value}``, every scattered parameter of the brake
     and its sensors as the scenario gives it (``nominal``) and as the unit has it
     (``value``); all equal for unit ``nominal``; and ``conditions``, JSON: the run's
     operating conditions drawn from the scenario's ``[conditions]`` ranges
     (:mod:`brake_sim_ros.model.conditions`), per name ``{value, unit, range}`` (``{}``
     without them). ``brake_sim_model`` holds the drawn
-    values too (with any ROS parameter overrides of a live run on top). The unit at the
-    start of the recording: a live ~/reset with a new seed draws the unit again, and its
-    DefectState then carries the unit id and the new seed that determine it.
+    values too (with any ROS parameter overrides of a live run on top). The conditions at
+    the start of the recording: a live ~/reset with a new seed draws them again, and its
+    DefectState then carries the new seed.
 ``brake_sim_ros_parameters`` (live runs)
     every ROS parameter of the node at the start of the recording, ``repr()`` of its value.
 ``rosbag2`` (written when the file is closed)
@@ -123,6 +125,7 @@ def unit_record(scenario: Scenario) -> dict[str, str]:
     return {
         "unit_id": scenario.unit_id,
         "seed": repr(scenario.seed),
+        "fleet_seed": repr(scenario.fleet_seed),
         "unit_parameters": json.dumps([v.as_dict() for v in scenario.unit_values()]),
         "conditions": json.dumps(scenario.conditions_record()),
     }

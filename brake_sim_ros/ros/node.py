@@ -22,8 +22,9 @@ Topics (node name ``brake_sim``; ``~`` = ``/brake_sim``; QoS in :mod:`.qos`):
 Services:
     ~/step   brake_sim_msgs/StepSimulation   advance N samples or a duration while paused
     ~/reset  brake_sim_msgs/ResetSimulation  back to t = 0, optionally a new scenario/seed
-                                             (a new seed draws a scattered unit and a
-                                             scenario's [conditions] again)
+                                             (a new seed draws new noise and a
+                                             scenario's [conditions] again; the unit
+                                             stays the same brake)
 
 The sample rate is the scenario's. The stepper takes whole physics substeps per sample,
 re-picked from the step limit at every model change and for any accepted actuation force
@@ -885,7 +886,7 @@ class BrakeSimNode(Node):
                 scenario = self._as_unit(scenario, seed=seed if seed >= 0 else None)
                 self._switch_scenario(scenario, request.scenario)
             elif seed >= 0 and seed != self.scenario.seed and self.scenario.drawn:
-                # the seed draws the unit and the conditions: a new seed, another run
+                # the seed draws the operating conditions: a new seed, another setup
                 scenario = self.scenario.with_unit(seed=seed)
                 self._switch_scenario(scenario, self._param("scenario"))
             else:

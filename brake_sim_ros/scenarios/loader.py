@@ -4,7 +4,7 @@ A scenario names any parameter override, the defects, the actuation, the duratio
 output sample rate, the solver (a preset, or a method and a largest physics step), and
 optionally what it needs (``[needs]``: outputs, shoes, accuracy,
 forced level; see :mod:`brake_sim_ros.model.fidelity`), which brake unit it is (``unit_id``:
-the manufacturing scatter drawn with the seed around the file's values, see
+the manufacturing scatter drawn with ``fleet_seed`` around the file's values, see
 :mod:`brake_sim_ros.model.units`) and ranges of operating conditions drawn per run
 (``[conditions]``, :mod:`brake_sim_ros.model.conditions`). Loading is strict: an unknown key,
 a wrong type, or a non-finite or out-of-range value is an error that names the file, the
@@ -156,11 +156,13 @@ class Scenario:
     description: str = ""
     setup: BrakeSetup = field(default_factory=BrakeSetup)
     duration_s: float = 7.5
-    seed: int = 0
+    seed: int = 0  # the run's: its sensor noise and its drawn [conditions]
     # which brake of a fleet; "nominal": the drawing's brake. ``setup.params`` and
     # ``sensors`` are that unit's (model/units.py), drawn from the scenario's values (kept
-    # in ``nominal_params`` / ``nominal_sensors``) with ``unit_id`` and ``seed``
+    # in ``nominal_params`` / ``nominal_sensors``) with ``unit_id`` and ``fleet_seed``: a
+    # unit is the same brake in every run, whatever the run's seed
     unit_id: str = NOMINAL_UNIT
+    fleet_seed: int = 0
     solver: SolverSettings = field(default_factory=SolverSettings)
     sample_rate_hz: float = DEFAULT_SAMPLE_RATE_HZ
     source: str = "<built-in>"
@@ -177,9 +179,10 @@ class Scenario:
 
     @property
     def drawn(self) -> bool:
-        """Whether the seed draws this scenario's brake or conditions (a unit other than
-        "nominal", or ``[conditions]`` ranges): another seed is then another run."""
-        return self.unit_id != NOMINAL_UNIT or bool(self.condition_ranges)
+        """Whether the run's seed draws this scenario's operating conditions (it has
+        ``[conditions]`` ranges): another seed is then another setup, not only other
+        noise."""
+        return bool(self.condition_ranges)
 
     @property
     def drawing_params(self) -> BrakeParameters:
@@ -211,14 +214,21 @@ class Scenario:
             self.drawing_params, self.setup.params, self.drawing_sensors, self.sensors
         )
 
-    def with_unit(self, unit_id: str | None = None, *, seed: int | None = None) -> Scenario:
-        """This scenario as brake unit ``unit_id`` drawn with ``seed`` (None keeps each):
-        the scenario's own parameters and sensors with the unit's manufacturing scatter
-        (:mod:`brake_sim_ros.model.units`); unit "nominal" is the scenario's brake itself.
-        The seed also draws the run's operating conditions from the scenario's
-        ``[conditions]`` ranges (:mod:`brake_sim_ros.model.conditions`), applied to the
-        scenario's own values before the unit's scatter, and seeds the sensor noise, as
-        it always has. Defects and model options are kept as they are.
+    def with_unit(
+        self,
+        unit_id: str | None = None,
+        *,
+        seed: int | None = None,
+        fleet_seed: int | None = None,
+    ) -> Scenario:
+        """This scenario as brake unit ``unit_id`` of the fleet ``fleet_seed``, run with
+        ``seed`` (None keeps each): the scenario's own parameters and sensors with the
+        unit's manufacturing scatter (:mod:`brake_sim_ros.model.units`, drawn from the unit
+        id and the fleet seed: the same brake in every run); unit "nominal" is the
+        scenario's brake itself. The run's seed draws its operating conditions from the
+        scenario's ``[conditions]`` ranges (:mod:`brake_sim_ros.model.conditions`),
+        applied to the scenario's own values before the unit's scatter, and seeds the
+        sensor noise. Defects and model options are kept as they are.
 
         Raises:
             ScenarioError: a malformed unit id or seed, or a unit whose drawn brake leaves
@@ -226,10 +236,12 @@ class Scenario:
         """
         unit_id = self.unit_id if unit_id is None else unit_id
         seed = self.seed if seed is None else seed
+        fleet_seed = self.fleet_seed if fleet_seed is None else fleet_seed
         ctx = _Ctx(self.source)
         _unit_id(ctx, unit_id)
-        if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed < 2**63:
-            raise ctx.fail("seed", seed, "an integer from 0 to 2^63 - 1")
+        for key, value in (("seed", seed), ("fleet_seed", fleet_seed)):
+            if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value < 2**63:
+                raise ctx.fail(key, value, "an integer from 0 to 2^63 - 1")
         params, sensors = self.drawing_params, self.drawing_sensors
         actuation = (
             self.setup.actuation if self.nominal_actuation is None else self.nominal_actuation
@@ -240,8 +252,10 @@ class Scenario:
             setup = operating.apply(
                 dataclasses.replace(self.setup, params=params, actuation=actuation), drawn
             )
-            setup = dataclasses.replace(setup, params=unit_parameters(setup.params, unit_id, seed))
-            drawn_sensors = unit_sensors(sensors, unit_id, seed)
+            setup = dataclasses.replace(
+                setup, params=unit_parameters(setup.params, unit_id, fleet_seed)
+            )
+            drawn_sensors = unit_sensors(sensors, unit_id, fleet_seed)
             pack(setup.params, setup.defects, setup.options)
         except BrakeSimError as exc:
             raise ScenarioError(f"{self.source}: {exc}") from None
@@ -251,6 +265,7 @@ class Scenario:
             sensors=drawn_sensors,
             unit_id=unit_id,
             seed=seed,
+            fleet_seed=fleet_seed,
             nominal_params=params,
             nominal_sensors=sensors,
             nominal_actuation=actuation,
@@ -747,6 +762,7 @@ def _parse(data: dict[str, Any], text: str, source: str) -> Scenario:
             "sample_rate_hz",
             "seed",
             "unit_id",
+            "fleet_seed",
             "solver",
             "actuation",
             "defects",
@@ -761,9 +777,10 @@ def _parse(data: dict[str, Any], text: str, source: str) -> Scenario:
     if "name" not in top:
         raise ctx.fail("name", _MISSING, "a scenario name (string); it is required")
     name = _name(ctx, top["name"])
-    seed = top.get("seed", 0)
-    if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed < 2**63:
-        raise ctx.fail("seed", seed, "an integer from 0 to 2^63 - 1")
+    seed, fleet_seed = top.get("seed", 0), top.get("fleet_seed", 0)
+    for key, value in (("seed", seed), ("fleet_seed", fleet_seed)):
+        if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value < 2**63:
+            raise ctx.fail(key, value, "an integer from 0 to 2^63 - 1")
     params = _parameters(ctx, top.get("parameters", {}))
     defects = _defects(ctx, top.get("defects", {}))
     setup = BrakeSetup(
@@ -789,6 +806,7 @@ def _parse(data: dict[str, Any], text: str, source: str) -> Scenario:
         ),
         seed=seed,
         unit_id=_unit_id(ctx, top.get("unit_id", NOMINAL_UNIT)),
+        fleet_seed=fleet_seed,
         solver=_solver(ctx, top.get("solver", {})),
         sample_rate_hz=ctx.number(
             top.get("sample_rate_hz", DEFAULT_SAMPLE_RATE_HZ),

@@ -139,12 +139,12 @@ def run_parameter_specs() -> list[ParamSpec]:
         ParamSpec(
             "unit_id",
             "",
-            "Brake unit to simulate (its manufacturing scatter, drawn with the run's seed "
-            "from the scenario's values): empty = the scenario's unit_id; 'nominal' = the "
-            "scenario's brake itself; otherwise 1 to 64 of A-Z a-z 0-9 _ . - (not starting "
-            "with '.'). Applies to every scenario ~/reset loads; a ~/reset with a new seed "
-            "draws the unit (and a scenario's [conditions]) again: the model parameters "
-            "then read the new draw's values. " + fixed,
+            "Brake unit to simulate (its manufacturing scatter, drawn with the scenario's "
+            "fleet_seed from the scenario's values): empty = the scenario's unit_id; "
+            "'nominal' = the scenario's brake itself; otherwise 1 to 64 of A-Z a-z 0-9 _ . - "
+            "(not starting with '.'). Applies to every scenario ~/reset loads; the unit is "
+            "the same brake whatever the run's seed (a new seed draws new sensor noise and a "
+            "scenario's [conditions] again). " + fixed,
             constraints="empty, 'nominal', or 1 to 64 characters of A-Z a-z 0-9 _ . -",
         ),
         ParamSpec(

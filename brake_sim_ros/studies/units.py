@@ -57,7 +57,7 @@ def figures(scenario: Scenario, duration_s: float = DURATION_S) -> UnitFigures:
 def fleet(
     scenario: Scenario, unit_ids: Sequence[str], duration_s: float = DURATION_S
 ) -> list[UnitFigures]:
-    """:func:`figures` of each unit of ``scenario`` (drawn with the scenario's seed)."""
+    """:func:`figures` of each unit of ``scenario`` (drawn with the scenario's fleet seed)."""
     return [figures(scenario.with_unit(u), duration_s) for u in unit_ids]
 
 
@@ -102,7 +102,7 @@ def main(argv: list[str] | None = None) -> int:
     if not 2 <= args.units <= 100_000:
         parser.error(f"--units {args.units}: allowed 2 to 100000")
     scenario = load_scenario(args.scenario).with_solver(preset=args.preset)
-    scenario = scenario.with_unit(NOMINAL_UNIT, seed=args.seed)
+    scenario = scenario.with_unit(NOMINAL_UNIT, fleet_seed=args.seed)
     start = time.perf_counter()
     rows = fleet(scenario, fleet_unit_ids(args.units))
     wall = time.perf_counter() - start

@@ -1,0 +1,241 @@
+"""A detector over a dataset (``brake-sim sweep``): fitted on one split, run and scored on
+another, offline, through the same streaming contract as live.
+
+Each run's measured channels are fed in chunks (``chunk_s``, default 0.1 s: what the
+node's ``~/measured`` delivers); the truth at each assessment is the run's label columns
+(``defect:<kind>:<location> [<unit>]``) at the assessment's sample. A run is defective
+from the first sample at which any label is non-zero (its onset) to its end.
+
+The score (:func:`score`, written as JSON by ``brake-sim score``; :data:`SCHEMA_VERSION`):
+
+``detector``, ``split``, ``hold_s``, ``runs``, ``windows``
+``detection``: ``defective_runs``, ``detected``, ``missed``, ``delays_s`` (one per
+    detected run, from its onset to the first held alarm), ``median_delay_s``
+``false_alarms``: ``count`` and ``healthy_hours`` over the healthy samples of every run,
+    ``per_hour``
+``health_index``: ``auroc``, ``auprc`` over all windows (defective at the window's last
+    sample = positive); null where undefined
+``isolation``: ``classes`` and ``matrix`` (rows true, columns diagnosed; ``none``: no
+    diagnosis) over the windows of defective runs after onset, when the detector diagnoses;
+    null otherwise
+``severity``: ``rmse`` of the diagnosed severity against the true one, when given
+``per_run``: one object per run: ``run_id``, ``unit_id``, ``defects`` (kind:location
+    labels active at the end), ``onset_s``, ``delay_s``, ``false_alarms``
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterator
+from dataclasses import dataclass
+
+import numpy as np
+import pyarrow.parquet as pq
+
+from brake_sim_ros.datasets.reader import SweepDataset
+from brake_sim_ros.datasets.sweep import SAMPLES_DIR
+from brake_sim_ros.monitoring import metrics
+from brake_sim_ros.monitoring.detector import Assessment, Detector, SampleChunk, TrainingWindow
+
+SCHEMA_VERSION = 1
+MEASURED_PREFIX = "measured:"
+LABEL_PREFIX = "defect:"
+
+
+@dataclass(frozen=True)
+class RunSamples:
+    """One run's measured channels (by channel name) and its truth."""
+
+    run_id: str
+    unit_id: str
+    sample_rate_hz: float
+    time_s: np.ndarray
+    channels: dict[str, np.ndarray]
+    label_names: tuple[str, ...]  # "kind:location"
+    labels: np.ndarray  # (n, len(label_names)) severities, 0 where absent
+
+    def active(self, row: int) -> tuple[tuple[str, str], ...]:
+        """``(kind, location)`` of the defects active at sample ``row``."""
+        return tuple(
+            tuple(name.split(":", 1))  # type: ignore[misc]
+            for name, v in zip(self.label_names, self.labels[row], strict=True)
+            if v != 0.0
+        )
+
+    @property
+    def onset_index(self) -> int | None:
+        rows = np.flatnonzero(np.any(self.labels != 0.0, axis=1))
+        return int(rows[0]) if rows.size else None
+
+
+def _channel_name(column: str) -> str:
+    """``measured:<name> [<unit>]`` -> ``<name>``."""
+    return column[len(MEASURED_PREFIX) :].rsplit(" [", 1)[0]
+
+
+def _label_name(column: str) -> str:
+    """``defect:<kind>:<location> [<unit>]`` -> ``<kind>:<location>``."""
+    return column[len(LABEL_PREFIX) :].rsplit(" [", 1)[0]
+
+
+def read_run(dataset: SweepDataset, run_id: str) -> RunSamples:
+    table = pq.read_table(dataset.root / SAMPLES_DIR / f"run={run_id}")
+    names = table.column_names
+    time_s = table["time_s"].to_numpy()
+    if time_s.size < 2:
+        raise ValueError(f"run {run_id}: {time_s.size} samples; a detector needs 2 or more")
+    channels = {
+        _channel_name(c): table[c].to_numpy(zero_copy_only=False).astype(np.float64)
+        for c in names
+        if c.startswith(MEASURED_PREFIX) and not c.endswith("_edge_time [s]")
+    }
+    label_cols = [c for c in names if c.startswith(LABEL_PREFIX)]
+    labels = (
+        np.column_stack([table[c].to_numpy() for c in label_cols])
+        if label_cols
+        else np.zeros((time_s.size, 0))
+    )
+    unit = dataset.manifest.filter(dataset.manifest["run_id"].to_numpy() == run_id)
+    return RunSamples(
+        run_id=run_id,
+        unit_id=str(unit["unit_id"][0]) if unit.num_rows else "",
+        sample_rate_hz=1.0 / float(time_s[1] - time_s[0]),
+        time_s=time_s,
+        channels=channels,
+        label_names=tuple(_label_name(c) for c in label_cols),
+        labels=labels,
+    )
+
+
+def chunks(run: RunSamples, chunk_s: float) -> Iterator[SampleChunk]:
+    """The run's measured channels as consecutive chunks of about ``chunk_s``."""
+    n = max(1, round(chunk_s * run.sample_rate_hz))
+    for start in range(0, run.time_s.size, n):
+        yield SampleChunk(
+            start,
+            run.sample_rate_hz,
+            {name: values[start : start + n] for name, values in run.channels.items()},
+        )
+
+
+def fit(detector: Detector, dataset: SweepDataset, split: str = "train") -> int:
+    """Fit ``detector`` on the windows of ``split`` (its window length); the number of
+    windows it saw."""
+    windows: list[TrainingWindow] = []
+    for run_id in dataset.runs(split):
+        run = read_run(dataset, run_id)
+        n = detector.window_samples(run.sample_rate_hz)
+        for start in range(0, run.time_s.size - n + 1, n):
+            windows.append(
+                TrainingWindow(
+                    {c: v[start : start + n] for c, v in run.channels.items()},
+                    run.sample_rate_hz,
+                    run.active(start + n - 1),
+                )
+            )
+    detector.fit(windows)
+    return len(windows)
+
+
+def assess_run(detector: Detector, run: RunSamples, chunk_s: float) -> list[Assessment]:
+    detector.reset()
+    return [a for c in chunks(run, chunk_s) for a in detector.feed(c)]
+
+
+def score(
+    detector: Detector,
+    dataset: SweepDataset,
+    split: str = "test",
+    *,
+    hold_s: float = 0.2,
+    chunk_s: float = 0.1,
+) -> dict:
+    """Run ``detector`` (fitted) over ``split`` and score it (module docstring)."""
+    per_run, delays, missed = [], [], 0
+    fa_count, fa_hours = 0, 0.0
+    truth, index, true_class, diagnosed, sev_est, sev_true = [], [], [], [], [], []
+    for run_id in dataset.runs(split):
+        run = read_run(dataset, run_id)
+        found = assess_run(detector, run, chunk_s)
+        rows = np.array([a.sample_index for a in found], dtype=np.int64)
+        times = run.time_s[rows] if rows.size else np.zeros(0)
+        alarm = np.array([a.alarm for a in found], dtype=bool)
+        defective = np.any(run.labels[rows] != 0.0, axis=1) if rows.size else np.zeros(0, bool)
+        truth.extend(defective.tolist())
+        index.extend(a.health_index for a in found)
+        onset = run.onset_index
+        onset_s = None if onset is None else float(run.time_s[onset])
+        delay = None
+        if rows.size:
+            count, hours = metrics.false_alarms_per_hour(alarm, times, ~defective, hold_s)
+            fa_count, fa_hours = fa_count + count, fa_hours + hours
+        else:
+            count = 0
+        if onset_s is not None:
+            delay = metrics.detection_delay(alarm, times, onset_s, hold_s) if rows.size else None
+            if delay is None:
+                missed += 1
+            else:
+                delays.append(delay)
+            for a, row, bad in zip(found, rows, defective, strict=True):
+                if not bad:
+                    continue
+                active = run.active(int(row))
+                true_class.append(":".join(active[0]))
+                d = a.diagnosis
+                diagnosed.append("none" if d is None else f"{d.kind}:{d.location}")
+                if d is not None and math.isfinite(d.severity):
+                    k = run.label_names.index(f"{d.kind}:{d.location}") if (
+                        f"{d.kind}:{d.location}" in run.label_names
+                    ) else None
+                    if k is not None:
+                        sev_est.append(d.severity)
+                        sev_true.append(float(run.labels[row, k]))
+        per_run.append(
+            {
+                "run_id": run.run_id,
+                "unit_id": run.unit_id,
+                "defects": [":".join(x) for x in run.active(run.time_s.size - 1)],
+                "onset_s": onset_s,
+                "delay_s": delay,
+                "false_alarms": count,
+            }
+        )
+    y = np.array(truth, dtype=bool)
+    h = np.array(index, dtype=np.float64)
+    classes = sorted(set(true_class) | set(diagnosed))
+    diagnoses = any(d != "none" for d in diagnosed)
+    return {
+        "schema_version": SCHEMA_VERSION,
+        "detector": detector.name,
+        "split": split,
+        "hold_s": hold_s,
+        "runs": len(per_run),
+        "windows": int(y.size),
+        "detection": {
+            "defective_runs": len(delays) + missed,
+            "detected": len(delays),
+            "missed": missed,
+            "delays_s": delays,
+            "median_delay_s": float(np.median(delays)) if delays else None,
+        },
+        "false_alarms": {
+            "count": fa_count,
+            "healthy_hours": fa_hours,
+            "per_hour": fa_count / fa_hours if fa_hours > 0 else None,
+        },
+        "health_index": {
+            "auroc": metrics.auroc(y, h) if y.size else None,
+            "auprc": metrics.auprc(y, h) if y.size else None,
+        },
+        "isolation": (
+            {
+                "classes": classes,
+                "matrix": metrics.confusion(true_class, diagnosed, classes).tolist(),
+            }
+            if diagnoses
+            else None
+        ),
+        "severity": {"rmse": metrics.rmse(sev_est, sev_true)} if sev_est else None,
+        "per_run": per_run,
+    }
