@@ -75,7 +75,9 @@ class Outcome:
         run_id: the run.
         status: ``"ok"`` or ``"failed"``.
         error: one line when failed, else "".
-        cost_cpu_s: CPU time of the worker thread for the run (simulate, measure, write), s.
+        cost_cpu_s: CPU time of the worker process during the run (simulate, measure,
+            write; pyarrow's threads included), s. A Dask worker running several tasks
+            at once in threads counts theirs too: give it one thread per process.
         file: the run's file relative to the output directory ("" when failed).
         sha256: the file's SHA-256 ("" when failed).
         rows: samples written.
@@ -129,6 +131,9 @@ def limit_threads() -> None:
 def _init_worker() -> None:
     """A pool worker: one thread, the kernels loaded from numba's cache once, here."""
     limit_threads()
+    import pyarrow
+
+    pyarrow.set_cpu_count(1)  # Parquet encoding and compression in this thread's stead
     from brake_sim_ros.solvers.warmup import ensure_compiled
 
     ensure_compiled(say=lambda _line: None)
@@ -153,7 +158,7 @@ def run_task(spec: RunSpec, out_dir: str) -> Outcome:
     from brake_sim_ros.scenarios.loader import parse_scenario
     from brake_sim_ros.stream.run import run_scenario
 
-    start = time.thread_time()
+    start = time.process_time()
     relative = run_file(spec.run_id)
     try:
         scenario = parse_scenario(spec.scenario_text, spec.run_id)
@@ -174,7 +179,7 @@ def run_task(spec: RunSpec, out_dir: str) -> Outcome:
         with atomic_output(path, overwrite=True, option=spec.run_id) as partial:
             pq.write_table(table, partial, compression="zstd")
             digest = sha256_file(partial)
-        cost = time.thread_time() - start
+        cost = time.process_time() - start
         return Outcome(spec.run_id, "ok", "", cost, relative, digest, table.num_rows, _rss_mb())
     except Exception as exc:  # recorded for this run; the sweep goes on
         error = (
@@ -182,7 +187,7 @@ def run_task(spec: RunSpec, out_dir: str) -> Outcome:
             if isinstance(exc, BrakeSimError)
             else (f"{type(exc).__name__}: {_one_line(exc)}")
         )
-        return Outcome(spec.run_id, "failed", error, time.thread_time() - start)
+        return Outcome(spec.run_id, "failed", error, time.process_time() - start)
 
 
 def _rss_mb() -> float:
