@@ -308,3 +308,62 @@ def test_dataset_info_summarises_and_finds_leakage_and_damage(tmp_path, capsys, 
     assert code == 2 and "damaged" in err and err.count("\n") == 1
     code, err = _main(capsys, "dataset", "info", str(tmp_path / "nowhere"))
     assert code == 2 and err.count("\n") == 1
+
+
+def _children(pid: int) -> list[int]:
+    out = []
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit():
+            try:
+                fields = (entry / "stat").read_text().rsplit(")", 1)[1].split()
+            except OSError:
+                continue
+            if int(fields[1]) == pid:
+                out.append(int(entry.name))
+    return out
+
+
+def test_a_worker_killed_midway_is_one_line_and_the_sweep_resumes(
+    tmp_path, reference, campaign_file
+):
+    out = tmp_path / "worker-killed"
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    process = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "brake_sim_ros.cli",
+            "sweep",
+            str(campaign_file),
+            "--out",
+            str(out),
+            "--workers",
+            "1",
+            "--quiet",
+        ],
+        env=env,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,
+    )
+    try:
+        deadline = time.monotonic() + 120
+        while not (out / DONE_DIR).is_dir() or not any((out / DONE_DIR).glob("*.json")):
+            assert process.poll() is None and time.monotonic() < deadline
+            time.sleep(0.005)
+        commands = {p: Path(f"/proc/{p}/cmdline").read_bytes() for p in _children(process.pid)}
+        workers = [p for p, c in commands.items() if b"spawn_main" in c and b"resource" not in c]
+        assert len(workers) == 1
+        os.kill(workers[0], signal.SIGKILL)  # the pool's worker, as an out-of-memory kill would
+        _, err = process.communicate(timeout=60)
+    finally:
+        if process.poll() is None:
+            os.killpg(process.pid, signal.SIGKILL)
+            process.wait()
+    assert process.returncode == 2
+    assert err.count("\n") == 1 and "worker process died" in err and "Traceback" not in err
+    assert not (out / MANIFEST_NAME).exists()
+    result = _cli("sweep", str(campaign_file), "--out", str(out), "--workers", "2", "--quiet")
+    assert result.returncode == 0, result.stderr
+    _same_dataset(reference, out)

@@ -50,6 +50,7 @@ from brake_sim_ros.scenarios.loader import (
     BUILTIN_PACKAGE,
     MAX_SCENARIO_BYTES,
     _Ctx,
+    _is_path,
     builtin_names,
     parse_scenario,
     parse_toml,
@@ -199,12 +200,7 @@ def load_campaign(name_or_path: str | os.PathLike[str]) -> Campaign:
         CampaignError: one line naming the file and the key.
     """
     text_path = os.fspath(name_or_path)
-    is_path = (
-        not isinstance(name_or_path, str)
-        or text_path.endswith(".toml")
-        or "/" in text_path
-        or os.path.lexists(text_path)
-    )
+    is_path = _is_path(name_or_path)
     try:
         if is_path:
             text = read_scenario_text(name_or_path)

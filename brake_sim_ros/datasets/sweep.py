@@ -230,9 +230,12 @@ def prepare_output(out: Path, lock_text: str) -> None:
     lock = out / LOCK_NAME
     entries = sorted(os.listdir(out))
     if LOCK_NAME in entries:
-        for part in (lock, out / SAMPLES_DIR, out / DONE_DIR):
-            if part.is_symlink():
-                raise SweepError(f"--out {name}: {part.name} is a symbolic link: refused")
+        for part in (lock, out / SAMPLES_DIR, out / DONE_DIR, *(out / SAMPLES_DIR).glob("*")):
+            if part.is_symlink():  # a file written into it would land elsewhere
+                raise SweepError(
+                    f"--out {name}: {describe_path(part.relative_to(out))} is a symbolic link:"
+                    " outputs are never written through a link"
+                )
         if not lock.is_file() or lock.stat().st_size > 64 * 1024**2:
             raise SweepError(f"--out {name}: {LOCK_NAME} is not a campaign lock file")
         if lock.read_bytes() != lock_text.encode():
@@ -321,16 +324,28 @@ def _executor(
     or on the Dask cluster at ``scheduler``."""
     if scheduler is None:
         context = multiprocessing.get_context("spawn")  # no state copied from this process
-        with concurrent.futures.ProcessPoolExecutor(
+        pool = concurrent.futures.ProcessPoolExecutor(
             max_workers=workers, mp_context=context, initializer=_init_worker
-        ) as pool:
+        )
 
-            def run_local(specs: list[RunSpec], out_dir: str) -> Iterator[Outcome]:
-                futures = [pool.submit(run_task, s, out_dir) for s in specs]
+        def run_local(specs: list[RunSpec], out_dir: str) -> Iterator[Outcome]:
+            futures = [pool.submit(run_task, s, out_dir) for s in specs]
+            try:
                 for future in concurrent.futures.as_completed(futures):
                     yield future.result()
+            except concurrent.futures.process.BrokenProcessPool:
+                unfinished = sum(not f.done() or f.exception() is not None for f in futures)
+                raise SweepError(
+                    f"a worker process died (killed, or out of memory?) with {unfinished} runs"
+                    " unfinished: the finished ones are kept; run the command again to resume"
+                ) from None
 
+        try:
             yield run_local
+        except BaseException:  # Ctrl-C or a refusal: queued runs are dropped, not waited for
+            pool.shutdown(wait=False, cancel_futures=True)
+            raise
+        pool.shutdown(wait=True)
         return
     try:
         from distributed import Client, as_completed
@@ -409,7 +424,7 @@ def sweep(
     table = manifest_table(runs, outcomes)
     with atomic_output(out / MANIFEST_NAME, overwrite=True, option="--out") as partial:
         pq.write_table(table, partial, compression="zstd")
-    cpu = sum(o.cost_cpu_s for s, o in outcomes.items() if s in {t.run_id for t in todo})
+    cpu = sum(outcomes[s.run_id].cost_cpu_s for s in todo)
     simulated = sum(s.duration_s for s in todo if outcomes[s.run_id].status == "ok")
     summary = SweepSummary(
         runs=len(runs),
