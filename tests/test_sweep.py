@@ -352,8 +352,14 @@ def test_a_worker_killed_midway_is_one_line_and_the_sweep_resumes(
         while not (out / DONE_DIR).is_dir() or not any((out / DONE_DIR).glob("*.json")):
             assert process.poll() is None and time.monotonic() < deadline
             time.sleep(0.005)
-        commands = {p: Path(f"/proc/{p}/cmdline").read_bytes() for p in _children(process.pid)}
-        workers = [p for p, c in commands.items() if b"spawn_main" in c and b"resource" not in c]
+        # the pool's workers are forked by its fork server, a child of the sweep
+        server = [
+            p
+            for p in _children(process.pid)
+            if b"forkserver" in Path(f"/proc/{p}/cmdline").read_bytes()
+        ]
+        assert len(server) == 1
+        workers = _children(server[0])
         assert len(workers) == 1
         os.kill(workers[0], signal.SIGKILL)  # the pool's worker, as an out-of-memory kill would
         _, err = process.communicate(timeout=60)

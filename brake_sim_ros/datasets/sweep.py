@@ -20,9 +20,12 @@ removed when the sweep resumes. The same campaign gives the same bytes in every 
 the cost column of the manifest (CPU seconds, a measurement).
 
 Runs are independent tasks: a local pool of worker processes
-(:class:`concurrent.futures.ProcessPoolExecutor`, one numba thread each) or the workers of
-an existing Dask cluster (``--scheduler``), which must share ``DIR``'s file system. A run
-that fails is recorded with its error and the others go on.
+(:class:`concurrent.futures.ProcessPoolExecutor`, one numerics thread each, forked from a
+server that loaded the kernels once: :mod:`.warm_worker`) or the workers of an existing
+Dask cluster (``--scheduler``; start them with one thread each and ``OMP_NUM_THREADS=1``
+``NUMBA_NUM_THREADS=1``), which must share ``DIR``'s file system. A run that fails is
+recorded with its error and the others go on; a worker process that dies ends the sweep
+(finished runs kept, the rerun resumes).
 """
 
 from __future__ import annotations
@@ -129,7 +132,8 @@ def limit_threads() -> None:
 
 
 def _init_worker() -> None:
-    """A pool worker: one thread, the kernels loaded from numba's cache once, here."""
+    """A pool worker: one thread (the fork server set it), the kernels loaded (by the fork
+    server; else from numba's cache here, once)."""
     limit_threads()
     import pyarrow
 
@@ -323,7 +327,10 @@ def _executor(
     """A function mapping run specs to outcomes as they finish: on a local process pool
     or on the Dask cluster at ``scheduler``."""
     if scheduler is None:
-        context = multiprocessing.get_context("spawn")  # no state copied from this process
+        # workers fork from a server that imported and warmed the run path once
+        # (warm_worker), none of this process's state copied
+        context = multiprocessing.get_context("forkserver")
+        context.set_forkserver_preload(["brake_sim_ros.datasets.warm_worker"])
         pool = concurrent.futures.ProcessPoolExecutor(
             max_workers=workers, mp_context=context, initializer=_init_worker
         )
