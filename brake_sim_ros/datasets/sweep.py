@@ -143,6 +143,25 @@ def _init_worker() -> None:
     ensure_compiled(say=lambda _line: None)
 
 
+def pool_context() -> multiprocessing.context.BaseContext:
+    """The local pool's process context: workers fork from one server process that
+    imported and warmed the run path once (:mod:`.warm_worker`); none of this process's
+    state is copied. The server starts on first use and serves every later pool of this
+    process (:func:`start_pool_server` starts it ahead)."""
+    context = multiprocessing.get_context("forkserver")
+    context.set_forkserver_preload(["brake_sim_ros.datasets.warm_worker"])
+    return context
+
+
+def start_pool_server() -> None:
+    """Start the pool's fork server now (it imports and warms the run path), e.g. to keep
+    its start out of a measurement."""
+    from multiprocessing import forkserver
+
+    pool_context()
+    forkserver.ensure_running()
+
+
 def run_file(run_id: str) -> str:
     """A run's file, relative to the output directory."""
     return f"{SAMPLES_DIR}/run={run_id}/{PART_NAME}"
@@ -327,10 +346,7 @@ def _executor(
     """A function mapping run specs to outcomes as they finish: on a local process pool
     or on the Dask cluster at ``scheduler``."""
     if scheduler is None:
-        # workers fork from a server that imported and warmed the run path once
-        # (warm_worker), none of this process's state copied
-        context = multiprocessing.get_context("forkserver")
-        context.set_forkserver_preload(["brake_sim_ros.datasets.warm_worker"])
+        context = pool_context()
         pool = concurrent.futures.ProcessPoolExecutor(
             max_workers=workers, mp_context=context, initializer=_init_worker
         )
