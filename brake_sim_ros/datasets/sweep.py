@@ -156,10 +156,9 @@ def pool_context() -> multiprocessing.context.BaseContext:
 def start_pool_server() -> None:
     """Start the pool's fork server now (it imports and warms the run path), e.g. to keep
     its start out of a measurement."""
-    from multiprocessing import forkserver
-
-    pool_context()
-    forkserver.ensure_running()
+    # a first fork waits for the server's imports and warm-up (ensure_running does not)
+    with concurrent.futures.ProcessPoolExecutor(1, mp_context=pool_context()) as pool:
+        pool.submit(int).result()
 
 
 def run_file(run_id: str) -> str:
