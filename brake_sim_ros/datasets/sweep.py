@@ -45,6 +45,7 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from brake_sim_ros.datasets.threads import limit_threads
 from brake_sim_ros.errors import BrakeSimError
 from brake_sim_ros.recording.output import OutputError, atomic_output
 from brake_sim_ros.recording.records import describe_path
@@ -62,8 +63,6 @@ MANIFEST_COLUMNS = ("run_id", "unit_id", "seed", "split")
 STATUS_COLUMNS = ("status", "error", "cost_cpu_s", "file", "sha256", "rows")
 # the temporary names of recording.output.atomic_output: removed when a sweep resumes
 _PARTIAL = re.compile(r"\..+\.[0-9a-f]{8}\.partial(\.[a-z]+)?")
-# threads each worker's numerics may use: one per process, the pool gives the parallelism
-_THREAD_LIMITS = ("NUMBA_NUM_THREADS", "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
 
 
 class SweepError(BrakeSimError, ValueError):
@@ -123,12 +122,6 @@ def sha256_file(path: Path) -> str:
         for block in iter(lambda: f.read(1 << 20), b""):
             digest.update(block)
     return digest.hexdigest()
-
-
-def limit_threads() -> None:
-    """One numerics thread per worker (set before numba is imported in a fresh process)."""
-    for name in _THREAD_LIMITS:
-        os.environ[name] = "1"
 
 
 def _init_worker() -> None:

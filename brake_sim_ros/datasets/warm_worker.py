@@ -8,10 +8,9 @@ the kernels themselves.
 
 from __future__ import annotations
 
-import os
+from brake_sim_ros.datasets.threads import limit_threads
 
-for _name in ("NUMBA_NUM_THREADS", "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ[_name] = "1"  # before numba, numpy's BLAS or pyarrow start their threads
+limit_threads()  # before numba, numpy's BLAS or pyarrow start their threads
 
 import pyarrow  # noqa: E402
 

@@ -26,10 +26,10 @@ from brake_sim_ros.datasets.sweep import (
     DONE_DIR,
     MANIFEST_NAME,
     SweepSummary,
-    limit_threads,
     start_pool_server,
     sweep,
 )
+from brake_sim_ros.datasets.threads import limit_threads
 
 
 def _files(root: Path) -> dict[str, bytes]:
