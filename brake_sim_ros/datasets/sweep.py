@@ -409,31 +409,31 @@ def sweep(
         SweepError, OutputError: ``out`` refused (before any run), or a file not written.
     """
     runs = campaign.runs()
-    prepare_output(out, campaign.lock_text(runs))
-    start = time.perf_counter()
-    outcomes: dict[str, Outcome] = {}
-    for spec in runs:
-        done = finished(out, spec.run_id)
-        if done is not None:
-            outcomes[spec.run_id] = done
-    resumed = len(outcomes)
-    todo = [s for s in runs if s.run_id not in outcomes]
     n_workers = workers or os.cpu_count() or 1
-    failed = 0
-    bar = _progress(len(runs), resumed, quiet)
-    try:
-        if todo:
-            with _executor(min(n_workers, len(todo)), scheduler) as execute:
-                for outcome in execute(todo, str(out.resolve())):
-                    outcomes[outcome.run_id] = outcome
-                    if outcome.status == "ok":
-                        _record(out, outcome)
-                    else:
-                        failed += 1
-                    bar.set_postfix(failed=failed, refresh=False)
-                    bar.update(1)
-    finally:
-        bar.close()
+    # a scheduler that cannot be reached is refused before DIR is made or written
+    with _executor(n_workers, scheduler) as execute:  # the pool forks as runs need workers
+        prepare_output(out, campaign.lock_text(runs))
+        start = time.perf_counter()
+        outcomes: dict[str, Outcome] = {}
+        for spec in runs:
+            done = finished(out, spec.run_id)
+            if done is not None:
+                outcomes[spec.run_id] = done
+        resumed = len(outcomes)
+        todo = [s for s in runs if s.run_id not in outcomes]
+        failed = 0
+        bar = _progress(len(runs), resumed, quiet)
+        try:
+            for outcome in execute(todo, str(out.resolve())) if todo else ():
+                outcomes[outcome.run_id] = outcome
+                if outcome.status == "ok":
+                    _record(out, outcome)
+                else:
+                    failed += 1
+                bar.set_postfix(failed=failed, refresh=False)
+                bar.update(1)
+        finally:
+            bar.close()
     import pyarrow.parquet as pq
 
     table = manifest_table(runs, outcomes)
