@@ -167,6 +167,12 @@ def test_windows_carry_their_labels(reference):
     )
 
 
+def _records(out: Path) -> list[Path]:
+    """The runs a sweep has recorded as done (not a record's temporary file: .<name>...)."""
+    folder = out / DONE_DIR
+    return [p for p in folder.glob("run-*.json")] if folder.is_dir() else []
+
+
 def _sweep_until_a_run_is_done(campaign_file: Path, out: Path) -> subprocess.Popen[str]:
     """``brake-sim sweep`` on one worker in its own session, returned once its first run
     is recorded (and before its last: the caller checks)."""
@@ -180,7 +186,7 @@ def _sweep_until_a_run_is_done(campaign_file: Path, out: Path) -> subprocess.Pop
         start_new_session=True,
     )  # fmt: skip
     deadline = time.monotonic() + 120
-    while not (out / DONE_DIR).is_dir() or not any((out / DONE_DIR).glob("*.json")):
+    while not _records(out):
         if process.poll() is not None or time.monotonic() > deadline:
             os.killpg(process.pid, signal.SIGKILL)
             raise AssertionError("the sweep ended, or ran 2 min, before a run was recorded")
@@ -193,7 +199,7 @@ def test_a_sweep_killed_midway_resumes_to_the_same_bytes(tmp_path, reference, ca
     process = _sweep_until_a_run_is_done(campaign_file, out)
     os.killpg(process.pid, signal.SIGKILL)
     process.communicate(timeout=30)
-    done = len(list((out / DONE_DIR).glob("*.json")))
+    done = len(_records(out))
     assert not (out / MANIFEST_NAME).exists() and 1 <= done < 30  # killed midway
     result = _cli("sweep", str(campaign_file), "--out", str(out), "--workers", "2", "--quiet")
     assert result.returncode == 0, result.stderr
