@@ -512,6 +512,65 @@ def cmd_dataset(args: argparse.Namespace) -> int:
     return 0
 
 
+# --- unit ----------------------------------------------------------------------------
+def cmd_unit(args: argparse.Namespace) -> int:
+    from brake_sim_ros.scenarios import load_scenario
+
+    if args.seed is not None and not 0 <= args.seed < 2**63:
+        raise BrakeSimError(f"--seed {args.seed}: allowed an integer from 0 to 2^63 - 1")
+    scenario = load_scenario(args.scenario).with_unit(args.unit_id, seed=args.seed)
+    print(unit_text(scenario, sources=args.sources))
+    return 0
+
+
+def _shown(value: float, unit: str) -> tuple[float, str]:
+    """A value in the unit a table shows it in (m as mm, Pa as GPa)."""
+    scale = {"m": (1e3, "mm"), "Pa": (1e-9, "GPa")}.get(unit)
+    return (value * scale[0], scale[1]) if scale else (value, unit)
+
+
+def unit_text(scenario: Scenario, *, sources: bool = False) -> str:
+    """A scenario's brake unit against the scenario's own values: per scattered parameter
+    its nominal value, the unit's, the change and the tolerance, with units; with
+    ``sources``, where each distribution comes from."""
+    from brake_sim_ros.model.units import NOMINAL_UNIT
+
+    values = scenario.unit_values()
+    lines = [
+        f"unit {scenario.unit_id} (seed {scenario.seed}) of scenario {scenario.name}:"
+        " manufacturing scatter, each a normal truncated at its tolerance"
+        + (
+            " (the nominal unit: the scenario's brake itself)"
+            if scenario.unit_id == NOMINAL_UNIT
+            else ""
+        ),
+        f"  {'parameter':46s} {'nominal':>12s} {'this unit':>12s} {'change':>10s}"
+        f"  {'in':9s}  tolerance",
+    ]
+    for v in values:
+        nominal, shown = _shown(v.nominal, v.unit)
+        value, _ = _shown(v.value, v.unit)
+        if v.scatter.mode == "relative":
+            change = f"{100 * (v.value / v.nominal - 1):+.3f} %" if v.nominal else "-"
+        else:
+            change = f"{value - nominal:+.4g}"
+        lines.append(
+            f"  {v.key:46s} {nominal:12.6g} {value:12.6g} {change:>10s}  {shown:9s}"
+            f"  {v.scatter.describe(v.unit)}"
+        )
+        if sources:
+            lines.append(f"      {v.scatter.source}")
+    if not sources:
+        lines.append("  (where each distribution comes from: --sources)")
+    for name, truth in scenario.conditions_record().items():
+        low, high = truth["range"]
+        lines.append(
+            f"  condition {name} = {truth['value']:.6g} {truth['unit']} (drawn from"
+            f" [{low:g}, {high:g}] with seed {scenario.seed})"
+        )
+    return "\n".join(lines)
+
+
 # --- bench ---------------------------------------------------------------------------
 def cmd_bench(args: argparse.Namespace) -> int:
     return int(BENCHMARKS[args.what].run(args.rest) or 0)
@@ -683,6 +742,21 @@ def build_parser() -> argparse.ArgumentParser:
         "defects", help="list the defect catalogue: kinds, locations, units, valid ranges"
     )
     p.set_defaults(func=cmd_defects)
+
+    p = sub.add_parser(
+        "unit",
+        help="a brake unit's manufacturing scatter: its parameters against the scenario's",
+        description="Print brake unit UNIT_ID's parameters against the scenario's own"
+        " (nominal) values, with units and each distribution's tolerance. A unit is drawn"
+        " from its id and the seed; 'nominal' is the scenario's brake itself.",
+    )
+    p.add_argument("unit_id", help="the unit's id: 1 to 64 of A-Z a-z 0-9 _ . -, or nominal")
+    p.add_argument("--seed", type=int, help="the draw's seed (default: the scenario's)")
+    p.add_argument(
+        "--scenario", default="symmetric", help="built-in name or .toml path (default symmetric)"
+    )
+    p.add_argument("--sources", action="store_true", help="say where each distribution comes from")
+    p.set_defaults(func=cmd_unit)
 
     sub.add_parser(  # parsed by the study (main() hands it the arguments)
         "severity",

@@ -310,7 +310,9 @@ def test_simulate_parquet_labels_every_sample_with_the_defects_ground_truth(tmp_
         ("actuation_share_change", "right"),
     ]
     assert meta["defects"][0]["severity"] == share and meta["defects"][0]["growth"] == "step"
-    assert meta["unit_id"] == ""
+    assert meta["unit_id"] == "nominal" and all(
+        v["value"] == v["nominal"] for v in meta["unit_parameters"]
+    )
 
 
 def test_a_slower_channel_is_null_between_its_samples():
@@ -322,7 +324,15 @@ def test_a_slower_channel_is_null_between_its_samples():
     run = run_scenario(scenario, duration_s=0.05)
     slow = accelerometer("slow_x", "backing_plate", "x", rate_hz=6400.0)
     bank = SensorBank(SensorSet(channels=(slow,)), scenario.sample_rate_hz, seed=3)
-    table = history_table(run.samples, bank, scenario.setup.defects, {"seed": 3})
+    table = history_table(
+        run.samples,
+        bank,
+        scenario.setup.defects,
+        {"seed": 3},
+        unit_id=scenario.unit_id,
+        unit_values=scenario.unit_values(),
+        conditions=scenario.conditions_record(),
+    )
     values = table["measured:slow_x [m/s^2]"]
     assert values.null_count == len(run.samples) - len(run.samples) // 4
     assert values.to_pylist()[0] is not None and values.to_pylist()[1] is None

@@ -440,7 +440,7 @@ def test_measured_channels_are_recorded_and_read_back_checked(tmp_path: Path):
     recording = open_recording(path)
     decode = cdr.decoder(stream.MEASURED.type_name)
     got = [decode(m.data) for m in recording.messages(topics=[stream.MEASURED.name])]
-    assert len(got) == len(sent) == 20
+    assert len(got) == len(sent) == 2  # a chunk per 100 ms (measured_rate_hz)
     for a, b in zip(got, sent, strict=True):
         assert list(a.channel_names) == list(b.channel_names)
         assert list(a.units) == list(b.units)
@@ -464,7 +464,7 @@ def test_tone_ring_edges_are_recovered_from_a_recording_by_rosbags(tmp_path: Pat
     record_offline(scenario, path, duration_s=0.4, settings=settings, run_id=RUN_ID)
     _connections, decoded = _rosbags_messages(path)
     chunks = [m for topic, _type, _ns, m in decoded if topic == stream.MEASURED.name]
-    assert len(chunks) == 40
+    assert len(chunks) == 4  # a chunk per 100 ms (measured_rate_hz)
     edges = conversion.measured_edges(chunks)
     run = run_scenario(scenario, duration_s=0.4)
     expected = sensor_bank_for(scenario).advance(run.samples).edges_s
@@ -487,7 +487,7 @@ def test_the_defect_ground_truth_round_trips_through_an_independent_reader(recor
     assert len(truths) == 1
     ns, truth = truths[0]
     assert ns == 0 and truth.run_id == RUN_ID and truth.seed == scenario.seed
-    assert truth.scenario == SCENARIO and not truth.healthy and truth.unit_id == ""
+    assert truth.scenario == SCENARIO and not truth.healthy and truth.unit_id == "nominal"
     expected = scenario.setup.defects.active()
     assert [
         (d.kind, d.location, d.severity, d.unit, d.onset_s, d.growth) for d in truth.defects

@@ -365,7 +365,8 @@ def test_wheel_speed_from_edges_is_what_an_abs_controller_computes(tmp_path: Pat
     rec.save(path)
     sink = RerunSink(rec, params=scenario.setup.params)
     chunks = []
-    measured = StreamSettings(publish_measured=True)
+    # a measured chunk per 10 ms, so that the edges are carried across many chunks
+    measured = StreamSettings(publish_measured=True, measured_rate_hz=100.0)
     for topic, msg, ns in offline_messages(scenario, duration_s=0.4, settings=measured):
         sink.write(topic, msg, ns)
         if topic is stream.MEASURED:

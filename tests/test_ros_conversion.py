@@ -154,9 +154,10 @@ def test_defect_state_is_the_ground_truth_in_force():
         ns=1_500_000_000,
         run_id="abc",
         seed=7,
+        unit_id="VIN-0042",
     )
     assert msg.scenario == "mine" and not msg.healthy and msg.run_id == "abc"
-    assert (msg.seed, msg.unit_id) == (7, "")
+    assert (msg.seed, msg.unit_id) == (7, "VIN-0042")
     entries = {(d.location, d.kind): (d.severity, d.unit, d.onset_s, d.growth) for d in msg.defects}
     assert entries == {
         ("left", "pivot_radius_change"): (3.0, "%", 0.0, "step"),
@@ -180,6 +181,7 @@ def test_defect_state_is_the_ground_truth_in_force():
         ns=0,
         run_id="abc",
         seed=0,
+        unit_id="nominal",
     )
     assert pending.healthy and list(pending.defects) == [] and list(pending.labels) == []
 

@@ -175,6 +175,38 @@ def test_a_stream_in_blocks_equals_one_block_bit_for_bit(stop, sensors):
     assert np.array_equal(whole.structure, streamed.structure)
 
 
+def test_measured_stream_publishes_due_chunks_and_the_rest_at_flush(stop):
+    """The stream holds blocks until a chunk is due, then one MeasuredChunk carries every
+    pending sample; a flush publishes the rest; joined, they are one block's bits."""
+    from brake_sim_ros import stream
+
+    measured = stream.MeasuredStream(SensorBank(SensorSet(), FS, seed=3), chunk_samples=2560)
+    chunks, start = [], 0
+    for size in (256, 256, 1000, 1100, 256, 77, 3000, 40):  # 5985 samples
+        part = SampleBlock(
+            stop.data[start : start + size], start, stop.sample_period_s, stop.columns
+        )
+        chunks.extend(msg for _topic, msg, _ns in measured.feed(part))
+        start += size
+    assert [m.sample_count for m in chunks] == [2612, 3333]  # due at >= 2560 pending
+    assert measured.pending_samples == 40
+    rest = [msg for _topic, msg, _ns in measured.flush()]
+    assert [m.sample_count for m in rest] == [40] and measured.pending_samples == 0
+    assert list(measured.flush()) == []
+    chunks += rest
+    assert [m.first_sample_index for m in chunks] == [0, 2612, 5945]
+    whole = SensorBank(SensorSet(), FS, seed=3).advance(
+        SampleBlock(stop.data[:start], 0, stop.sample_period_s, stop.columns)
+    )
+    for name in chunks[0].channel_names:  # values are channel-major in each chunk
+        parts = []
+        for m in chunks:
+            k = list(m.channel_names).index(name)
+            bounds = np.cumsum([0, *m.channel_sample_counts])
+            parts.append(np.asarray(m.values)[bounds[k] : bounds[k + 1]])
+        assert np.array_equal(np.concatenate(parts), whole[name].values, equal_nan=True), name
+
+
 def test_decimated_channel_keeps_every_nth_sample_and_refuses_other_rates(stop):
     frame = SensorBank(_faulted_set(), FS, seed=0).advance(stop)
     imu = frame["imu_y"]

@@ -30,14 +30,19 @@ edge-time column's gives ``unit`` and ``tone_ring_teeth``.
 The file's key-value metadata ``brake_sim`` holds JSON: the run parameters the caller
 gives (scenario, method, seed, rates, ...), ``fault_bits``, ``defects`` (the ground truth:
 one object per defect in force with kind, location, severity, unit, onset_s, growth and
-growth_rate, as the DefectState message) and ``unit_id`` (empty for a single brake).
+growth_rate, as the DefectState message), ``unit_id`` (the scenario's brake unit,
+"nominal" for the drawing's brake) and ``unit_parameters`` (the unit's ground truth: a
+list of ``{key, unit, nominal, value}``, every scattered parameter as the scenario gives it
+and as the unit has it, :mod:`brake_sim_ros.model.units`) and ``conditions`` (the run's
+operating conditions drawn from the scenario's ranges: per name ``{value, unit, range}``,
+:mod:`brake_sim_ros.model.conditions`; ``{}`` without them).
 """
 
 from __future__ import annotations
 
 import json
 import os
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -48,6 +53,7 @@ from brake_sim_ros.model.defects import Defects
 from brake_sim_ros.model.sensor_faults import FAULT_BIT
 from brake_sim_ros.model.sensors import SensorBank
 from brake_sim_ros.model.trajectory import SampleBlock
+from brake_sim_ros.model.units import UnitValue
 
 if TYPE_CHECKING:
     from brake_sim_ros.scenarios.loader import Scenario
@@ -96,10 +102,17 @@ def history_table(
     sensors: SensorBank | None,
     defects: Defects,
     metadata: Mapping[str, Any],
+    *,
+    unit_id: str,
+    unit_values: Sequence[UnitValue],
+    conditions: Mapping[str, Any],
 ) -> pa.Table:
     """The table of ``samples``, with ``sensors`` (a fresh bank, fed the whole run here)
     what they measured, and the ground truth of ``defects`` (the brake's defects in force
-    over the run); ``metadata`` goes into the ``brake_sim`` key as JSON."""
+    over the run), of the unit (``unit_id``, ``unit_values``: its scattered parameters,
+    ``Scenario.unit_values()``) and of the run's ``conditions``
+    (``Scenario.conditions_record()``); ``metadata`` goes into the ``brake_sim`` key as
+    JSON."""
     n = len(samples)
     index = samples.first_index + np.arange(n, dtype=np.int64)
     history = samples.as_dict()
@@ -145,7 +158,9 @@ def history_table(
         **metadata,
         "fault_bits": FAULT_BIT,
         "defects": [d.as_dict() for d in defects.active()],
-        "unit_id": metadata.get("unit_id", ""),
+        "unit_id": unit_id,
+        "unit_parameters": [v.as_dict() for v in unit_values],
+        "conditions": dict(conditions),
     }
     schema = pa.schema(fields, metadata={METADATA_KEY: json.dumps(meta).encode()})
     return pa.Table.from_arrays([columns[f.name] for f in fields], schema=schema)
@@ -158,9 +173,9 @@ def run_table(
     extra: Mapping[str, Any] | None = None,
 ) -> pa.Table:
     """The table of a finished run of ``scenario`` (``simulate --out``, each run of a
-    sweep): :func:`history_table` with the scenario's sensors and defects, and the run's
-    parameters and the full scenario text (``scenario_toml``) in the metadata, plus
-    ``extra`` (a sweep's run id, unit and split)."""
+    sweep): :func:`history_table` with the scenario's sensors, defects, unit and drawn
+    conditions, and the run's parameters and the full scenario text (``scenario_toml``)
+    in the metadata, plus ``extra`` (a sweep's run id and split)."""
     from brake_sim_ros import __version__
     from brake_sim_ros.stream.build import sensor_bank_for
 
@@ -182,7 +197,15 @@ def run_table(
         **(extra or {}),
         "columns": "units in names",
     }
-    return history_table(result.samples, sensor_bank_for(scenario), scenario.setup.defects, meta)
+    return history_table(
+        result.samples,
+        sensor_bank_for(scenario),
+        scenario.setup.defects,
+        meta,
+        unit_id=scenario.unit_id,
+        unit_values=scenario.unit_values(),
+        conditions=scenario.conditions_record(),
+    )
 
 
 def history_arrays(table: pa.Table) -> dict[str, np.ndarray]:

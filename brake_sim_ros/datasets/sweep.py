@@ -178,7 +178,7 @@ def run_task(spec: RunSpec, out_dir: str) -> Outcome:
     try:
         scenario = parse_scenario(spec.scenario_text, spec.run_id)
         result = run_scenario(scenario)
-        extra = {"run_id": spec.run_id, "unit_id": spec.unit_id, "split": spec.split}
+        extra = {"run_id": spec.run_id, "split": spec.split}  # the unit: the scenario's
         table = run_table(scenario, result, scenario.duration_s, extra)
         if spec.keep:
             missing = [c for c in spec.keep if c not in table.column_names]

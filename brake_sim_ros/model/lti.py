@@ -14,11 +14,12 @@ its low-frequency tail right.
 
 White noise entering at the input (a sensor's input-referred noise) is discretised exactly
 too (:func:`with_input_noise`): its effect over one sample is a Gaussian state increment
-whose covariance comes from one more matrix exponential (Van Loan's method), so the sampled
-output has the variance of the continuous system's, whatever its bandwidth against the
-sample rate. Treating noise samples as a straight-line input would not: interpolation
-smooths white samples and removes a quarter of the noise of a sensor whose bandwidth is
-near the Nyquist frequency.
+whose covariance comes from one more matrix exponential (Van Loan's method), realised in
+innovations form with one draw per sample, so the sampled output has the continuous
+system's noise spectrum and variance, whatever its bandwidth against the sample rate.
+Treating noise samples as a straight-line input would not: interpolation smooths white
+samples and removes a quarter of the noise of a sensor whose bandwidth is near the
+Nyquist frequency.
 
 The recursion (:func:`lti_advance`) is a compiled loop over samples that skips exact
 zeros; the state and the last input are carried in :class:`LtiState`, so a stream
@@ -28,6 +29,7 @@ same order for every sample).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -102,17 +104,41 @@ def foh_discretise(
     )
 
 
+# The innovations gain is the fixed point of the Riccati recursion below; its poles are the
+# path's own (the slowest a lightly damped resonance decaying ~20 % per sample), so it
+# converges in tens of iterations: this many means something is wrong with the system.
+_RICCATI_MAX_ITERATIONS = 10_000
+
+
 def with_input_noise(system: SampledLti, noise_density_per_sqrt_hz: float) -> SampledLti:
-    """``system`` with white noise of one-sided density ``N`` added to its (single) input,
-    as extra inputs: unit normal draws ``z[k]`` (one per state) enter as
-    ``x[k] += L z[k]``, ``L L^T = Q_d``, the exact covariance of the state increment over
-    one sample, ``Q_d = int_0^T e^(A s) B q B^T e^(A^T s) ds`` with intensity
-    ``q = N^2 / 2`` (two-sided). The continuous system's ``B`` and ``D`` gain zero columns
-    (the equilibrium and the feedthrough ignore the noise: ``D`` must be 0 for white
-    noise to have a finite variance)."""
-    a, b, t = system.a, system.b, system.sample_period_s
-    if b.shape[1] != 1 or np.any(system.d != 0.0):
-        raise ValueError("input noise needs a single-input system without feedthrough")
+    """``system`` (single input, single output) with white noise of one-sided density
+    ``N`` added to its input, realised with one unit normal draw per sample.
+
+    Exact discretisation first: over one sample the noise adds to the state a Gaussian
+    increment of covariance ``Q_d = int_0^T e^(A s) B q B^T e^(A^T s) ds``, intensity
+    ``q = N^2 / 2`` (two-sided), from one matrix exponential (Van Loan). Drawing that
+    increment takes one draw per state. The output's noise is a stationary process whose
+    second-order statistics are fixed by ``(Phi, Q_d, C)``; its innovations form
+    ``x[k+1] = Phi x[k] + K e[k]``, ``y[k] = C x[k] + e[k]`` (``e`` white, variance
+    ``R_e``) has exactly the same autocovariance at every lag with a single draw
+    ``e[k] = sqrt(R_e) z[k]``: ``K`` and ``R_e`` come from the steady state of the
+    Kalman predictor's Riccati recursion ``P <- Phi P Phi^T + Q_d - Phi P C^T (C P
+    C^T)^-1 C P Phi^T``, ``R_e = C P C^T``, ``K = Phi P C^T / R_e``. The output carries
+    the continuous sensor's noise (its spectrum, its variance) at an eighth of the draws
+    for an 8-state path; only the state's noise, which nothing reads, is not the same.
+
+    The noise is one extra input column ``z``: in ``G_prev`` (``K sqrt(R_e)``: the draw
+    of sample ``k`` moves the state at ``k + 1``) and in ``D`` (``sqrt(R_e)``: it is in
+    the output at once); ``B`` gains a zero column (the equilibrium ignores the noise).
+    ``D`` must be 0 on the signal for white noise to have a finite variance.
+
+    Raises:
+        ValueError: several inputs or outputs, a feedthrough, or a recursion that does
+            not settle.
+    """
+    a, b, c, t = system.a, system.b, system.c, system.sample_period_s
+    if b.shape[1] != 1 or c.shape[0] != 1 or np.any(system.d != 0.0):
+        raise ValueError("input noise needs a single-input single-output system, no feedthrough")
     n = a.shape[0]
     q = 0.5 * noise_density_per_sqrt_hz**2
     big = np.zeros((2 * n, 2 * n))
@@ -121,19 +147,32 @@ def with_input_noise(system: SampledLti, noise_density_per_sqrt_hz: float) -> Sa
     big[n:, n:] = a.T
     e = expm(big * t)
     phi = e[n:, n:].T
-    cov = phi @ e[:n, n:]
-    cov = 0.5 * (cov + cov.T)
-    values, vectors = np.linalg.eigh(cov)
-    root = vectors * np.sqrt(np.clip(values, 0.0, None))
-    zeros_in = np.zeros((n, n))
+    q_d = phi @ e[:n, n:]
+    q_d = 0.5 * (q_d + q_d.T)
+    p = q_d.copy()
+    for _ in range(_RICCATI_MAX_ITERATIONS):
+        r_e = (c @ p @ c.T).item()
+        k = (phi @ p @ c.T) / r_e
+        p_next = phi @ p @ phi.T + q_d - k @ (c @ p @ phi.T)
+        p_next = 0.5 * (p_next + p_next.T)
+        if np.max(np.abs(p_next - p)) <= 1e-15 * np.max(np.abs(p)):
+            p = p_next
+            break
+        p = p_next
+    else:
+        raise ValueError("the noise's innovations form did not settle (Riccati recursion)")
+    r_e = (c @ p @ c.T).item()
+    root = math.sqrt(r_e)
+    gain = (phi @ p @ c.T) / r_e * root
+    zero = np.zeros((n, 1))
     return SampledLti(
         a=a,
-        b=np.hstack([b, zeros_in]),
-        c=system.c,
-        d=np.hstack([system.d, np.zeros((system.d.shape[0], n))]),
+        b=np.hstack([b, zero]),
+        c=c,
+        d=np.hstack([system.d, [[root]]]),
         phi=system.phi,
-        g_prev=np.ascontiguousarray(np.hstack([system.g_prev, zeros_in])),
-        g_next=np.ascontiguousarray(np.hstack([system.g_next, root])),
+        g_prev=np.ascontiguousarray(np.hstack([system.g_prev, gain])),
+        g_next=np.ascontiguousarray(np.hstack([system.g_next, zero])),
         sample_period_s=t,
     )
 

@@ -274,6 +274,30 @@ class BrakeParameters:
         return replace(self, **groups)
 
 
+# Unit of a field from its name's suffix, longest first ("dimensionless" without one).
+UNIT_SUFFIXES: tuple[tuple[str, str], ...] = (
+    ("_n_m_s_per_rad", "N m s/rad"),
+    ("_n_m_per_rad", "N m/rad"),
+    ("_n_s_per_m", "N s/m"),
+    ("_kg_m2", "kg m^2"),
+    ("_rad_s", "rad/s"),
+    ("_m_s", "m/s"),
+    ("_pct", "%"),
+    ("_deg", "deg"),
+    ("_kg", "kg"),
+    ("_pa", "Pa"),
+    ("_m", "m"),
+)
+
+
+def unit_of(field_name: str) -> str:
+    """The unit a field's name ends in (``tip_x_m`` -> ``m``), or ``dimensionless``."""
+    for suffix, unit in UNIT_SUFFIXES:
+        if field_name.endswith(suffix):
+            return unit
+    return "dimensionless"
+
+
 PARAMETER_GROUPS: dict[str, type] = {
     "driveline": DrivelineParameters,
     "shoe": ShoeGeometry,

@@ -59,14 +59,10 @@ class PathState:
 
 def stack_systems(systems: list[SampledLti]) -> tuple[np.ndarray, ...]:
     """``(phi, g_prev, g_next, c, d)`` of same-shaped systems stacked on a first axis (the
-    nominal mounting first, then a loose mount's). ``g_prev`` keeps the signal's column
-    only: a noise draw enters at its own sample (``lti.with_input_noise``), so its
-    ``g_prev`` columns are zero."""
+    nominal mounting first, then a loose mount's)."""
     return tuple(
-        np.ascontiguousarray(np.stack([m[:, :1] if a == "g_prev" else m for m in mats]))
-        for a, mats in (
-            (a, [getattr(s, a) for s in systems]) for a in ("phi", "g_prev", "g_next", "c", "d")
-        )
+        np.ascontiguousarray(np.stack([getattr(s, a) for s in systems]))
+        for a in ("phi", "g_prev", "g_next", "c", "d")
     )
 
 
@@ -167,11 +163,11 @@ def analog_advance(  # pragma: no cover - compiled
 
     ``phi ... d`` hold the path's sampled systems (index 1: loose mount), of zero size for
     a path without dynamics; ``x_unit`` their equilibrium states under a unit input;
-    ``x`` and ``u_prev`` (1,: the last sample's scaled true value) their carried state. On
-    the ``first`` block sample 0 starts at rest under its input (``x = v x_unit``), output,
-    not advanced to. ``draws`` (k, n): the block's
-    unit normal draws (n = the states of a path with dynamics, 1 without, 0 without
-    noise); ``white_gain`` their scale without dynamics. ``adc_step`` 0: no ADC.
+    ``x`` and ``u_prev`` (the last sample's inputs: scaled true value, then its noise
+    draw) their carried state. On the ``first`` block sample 0 starts at rest under its
+    input (``x = v x_unit``), output, not advanced to. ``draws`` (k, 1): the block's unit
+    normal draws (k, 0 without noise), the systems' last input (``lti.with_input_noise``);
+    ``white_gain`` their scale without dynamics. ``adc_step`` 0: no ADC.
     ``hold`` is updated in place."""
     n_x = phi.shape[1]
     n_draw = draws.shape[1]
@@ -197,17 +193,18 @@ def analog_advance(  # pragma: no cover - compiled
                     acc = 0.0
                     for j in range(n_x):
                         acc += phi[s, i, j] * x[j]
-                    acc += g_prev[s, i, 0] * u_prev[0] + g_next[s, i, 0] * u[0]
-                    for j in range(1, n_u):
-                        acc += g_next[s, i, j] * u[j]
+                    for j in range(n_u):
+                        acc += g_prev[s, i, j] * u_prev[j] + g_next[s, i, j] * u[j]
                     x_new[i] = acc
                 for i in range(n_x):
                     x[i] = x_new[i]
-            u_prev[0] = v
+            for j in range(n_u):
+                u_prev[j] = u[j]
             acc = 0.0
             for j in range(n_x):
                 acc += c[s, 0, j] * x[j]
-            acc += d[s, 0, 0] * v  # D is zero on the noise inputs (lti.with_input_noise)
+            for j in range(n_u):
+                acc += d[s, 0, j] * u[j]
             v = acc
         elif n_draw > 0:
             v = v + white_gain * draws[k, 0]

@@ -32,8 +32,9 @@ the Nyquist frequency keeps its true tail in band.
 
 **Noise.** White, input-referred, of one-sided density ``noise_density`` (the datasheet's
 figure), shaped by the path's own resonance and bandwidth. Through a path with dynamics it
-is discretised exactly (:func:`.lti.with_input_noise`: one standard normal draw per state
-of the path per sample), so the recorded noise has the continuous sensor's variance
+is discretised exactly and realised in innovations form (:func:`.lti.with_input_noise`:
+one standard normal draw per sample), so the recorded noise has the continuous sensor's
+spectrum and variance
 ``N^2 int_0^inf |H(f)|^2 df`` even with a bandwidth near the Nyquist frequency; a path without
 dynamics adds ``N sqrt(fs / 2)`` times one standard normal draw per sample (white to the
 Nyquist frequency). Each channel has its own generator,
@@ -511,9 +512,8 @@ class AnalogPath:
         self.systems = systems
         if systems:
             self.matrices = (*stack_systems(systems), unit_equilibria(systems))
-            n_states = systems[0].a.shape[0]
-            self.state = PathState(n_states, 1)
-            self.n_draws = n_states if self.noise > 0.0 else 0  # one per state and sample
+            self.state = PathState(systems[0].a.shape[0], systems[0].n_inputs)
+            self.n_draws = 1 if self.noise > 0.0 else 0  # one per sample (innovations form)
         else:
             self.matrices = no_systems()
             self.state = PathState()

@@ -18,9 +18,22 @@ Metadata records (MCAP ``Metadata``; every value a string):
     ``physics_step_s``, ``substeps_per_sample``, ``step_limit_s``; a live run may re-pick
     the substeps later, which its /diagnostics and log say), ``mode`` (``live`` or
     ``offline``), ``duration_s``, the stream settings (``chunk_rate_hz``,
-    ``state_rate_hz``, ``publish_clock``, ``publish_measured``), ``time_base`` and
+    ``state_rate_hz``, ``publish_clock``, ``publish_measured``, ``measured_rate_hz``),
+    ``time_base`` and
     ``model_note``; a live run adds its node name and ``real_time_factor``; values are
     ``repr()`` of the Python value except strings, which are given as they are.
+``brake_sim_unit``
+    which brake unit was run (:mod:`brake_sim_ros.model.units`): ``unit_id``, ``seed``
+    (the draw's, the run's seed at the start of the recording) and ``unit_parameters``,
+    JSON: a list of ``{key, unit, nominal, value}``, every scattered parameter of the brake
+    and its sensors as the scenario gives it (``nominal``) and as the unit has it
+    (``value``); all equal for unit ``nominal``; and ``conditions``, JSON: the run's
+    operating conditions drawn from the scenario's ``[conditions]`` ranges
+    (:mod:`brake_sim_ros.model.conditions`), per name ``{value, unit, range}`` (``{}``
+    without them). ``brake_sim_model`` holds the drawn
+    values too (with any ROS parameter overrides of a live run on top). The unit at the
+    start of the recording: a live ~/reset with a new seed draws the unit again, and its
+    DefectState then carries the unit id and the new seed that determine it.
 ``brake_sim_ros_parameters`` (live runs)
     every ROS parameter of the node at the start of the recording, ``repr()`` of its value.
 ``rosbag2`` (written when the file is closed)
@@ -54,6 +67,7 @@ from brake_sim_ros.stream.topics import QosSpec
 MODEL = "brake_sim_model"
 SCENARIO = "brake_sim_scenario"
 RUN = "brake_sim_run"
+UNIT = "brake_sim_unit"
 ROS_PARAMETERS = "brake_sim_ros_parameters"
 ROSBAG2 = "rosbag2"
 ROS_DISTRO = "jazzy"
@@ -104,6 +118,16 @@ def scenario_record(scenario: Scenario) -> dict[str, str]:
     }
 
 
+def unit_record(scenario: Scenario) -> dict[str, str]:
+    """The ``brake_sim_unit`` record of ``scenario``'s unit."""
+    return {
+        "unit_id": scenario.unit_id,
+        "seed": repr(scenario.seed),
+        "unit_parameters": json.dumps([v.as_dict() for v in scenario.unit_values()]),
+        "conditions": json.dumps(scenario.conditions_record()),
+    }
+
+
 def run_record(
     *,
     mode: str,
@@ -116,6 +140,7 @@ def run_record(
     state_rate_hz: float,
     publish_clock: bool,
     publish_measured: bool,
+    measured_rate_hz: float,
     extra: Mapping[str, Any] | None = None,
 ) -> dict[str, str]:
     """The ``brake_sim_run`` record (see the module doc); ``stepper`` as it is now."""
@@ -138,6 +163,7 @@ def run_record(
         "state_rate_hz": state_rate_hz,
         "publish_clock": publish_clock,
         "publish_measured": publish_measured,
+        "measured_rate_hz": measured_rate_hz,
         "time_base": TIME_BASE,
         "model_note": (
             "brake_sim_model holds the model at the start of the recording; changes made"

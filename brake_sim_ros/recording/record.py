@@ -47,6 +47,7 @@ def _custom_data(scenario: Scenario, seed: int, mode: str, run_id: str) -> dict[
     return {
         "brake_sim_run_id": run_id,
         "brake_sim_scenario": scenario.name,
+        "brake_sim_unit_id": scenario.unit_id,
         "brake_sim_seed": str(seed),
         "brake_sim_mode": mode,
         "brake_sim_version": metadata.software_version(),
@@ -109,6 +110,7 @@ def record_offline(
     records = {
         metadata.MODEL: metadata.model_record(params, defects),
         metadata.SCENARIO: metadata.scenario_record(scenario),
+        metadata.UNIT: metadata.unit_record(scenario),
         metadata.RUN: metadata.run_record(
             mode="offline",
             run_id=run_id,
@@ -120,6 +122,7 @@ def record_offline(
             state_rate_hz=settings.state_rate_hz,
             publish_clock=settings.publish_clock,
             publish_measured=settings.publish_measured,
+            measured_rate_hz=settings.measured_rate_hz,
         ),
     }
     live_only = (stream.DIAGNOSTICS, stream.ACTUATION)
@@ -181,6 +184,7 @@ def node_recorder(
     records = {
         metadata.MODEL: metadata.model_record(params, defects),
         metadata.SCENARIO: metadata.scenario_record(scenario),
+        metadata.UNIT: metadata.unit_record(scenario),
         metadata.RUN: metadata.run_record(
             mode="live",
             run_id=view.run_id,
@@ -192,6 +196,7 @@ def node_recorder(
             state_rate_hz=values["state_rate_hz"],
             publish_clock=values["publish_clock"],
             publish_measured=values["publish_measured"],
+            measured_rate_hz=values["measured_rate_hz"],
             extra={
                 "node": node.get_fully_qualified_name(),
                 "real_time_factor": values["real_time_factor"],

@@ -85,7 +85,8 @@ def measure_publishing(
     """Publishing costs measured on hidden publishers of ``node``, with ``block``.
 
     The whole per-chunk pipeline (:func:`~brake_sim_ros.stream.block_messages`: the chunk,
-    with ``sensors`` (a bank used for this only) the measured chunk, the contact events
+    with ``sensors`` (a bank used for this only) a measured chunk of the same samples (the
+    node's are longer, so this prices the sensors on the high side), the contact events
     the block holds, one state row, the clock) is timed on ``block``;
     a state row (BrakeState + JointState) and a one-sample chunk separately, so that the
     cost can be scaled to other chunk sizes and state rates.
@@ -115,7 +116,7 @@ def measure_publishing(
                 with_clock=True,
                 contact_events=detector,
                 run_id=_BUDGET_RUN_ID,
-                sensors=sensors,
+                measured=None if sensors is None else stream.MeasuredStream(sensors, 1),
             ):
                 pubs[topic].publish(msg)
 

@@ -132,7 +132,8 @@ class BrakeSimNode(Node):
         except ScenarioError as exc:
             raise ParameterError(str(exc)) from None
         # the operator's choice (command line or parameter): any file, not a request
-        self.scenario: Scenario = load_scenario(self._param("scenario"))
+        self._unit_id = self._param("unit_id")  # "" = each scenario's own
+        self.scenario: Scenario = self._as_unit(load_scenario(self._param("scenario")))
         self._seed = self.scenario.seed
         # the run id of the ground truth: the parameter's, or a fresh one per run (reset)
         self._run_id_fixed = ros_params.check_run_id(self._param("run_id"))
@@ -160,7 +161,8 @@ class BrakeSimNode(Node):
         self._publish_measured = bool(self._param("publish_measured"))
         if self._publish_measured:  # asked for what the scenario's plan does not build
             require_measured(self.scenario, "publish_measured true refused")
-        self._sensors = self._new_sensor_bank()  # carried between blocks, new at each reset
+        # the sensors, their state carried between blocks; new at each reset
+        self._measured = self._new_measured_stream()
         self._run_initial_angles = self._initial_angles(setup)
         self._double_names = {
             name
@@ -433,6 +435,27 @@ class BrakeSimNode(Node):
             return None
         return sensor_bank_for(self.scenario, seed=self._seed)
 
+    def _new_measured_stream(self) -> stream.MeasuredStream | None:
+        """The scenario's sensors (:meth:`_new_sensor_bank`) cut into ~/measured chunks of
+        measured_rate_hz; None when publish_measured is off."""
+        bank = self._new_sensor_bank()
+        if bank is None:
+            return None
+        return stream.MeasuredStream(bank, self._samples_per(self._param("measured_rate_hz")))
+
+    def _flush_measured(self) -> None:
+        """Publish the measured samples still pending (:class:`~brake_sim_ros.stream.
+        MeasuredStream`): the stream stops here, for now or for good."""
+        if self._measured is None:
+            return
+        try:
+            messages = list(self._measured.flush())
+        except Exception as exc:  # the sensors' failure must not stop the node
+            self.get_logger().error(f"measured samples lost: {type(exc).__name__}: {exc}")
+            return
+        for topic, msg, ns in messages:
+            self._emit(topic, msg, ns)
+
     def _max_force_n(self, setup: BrakeSetup) -> float:
         """max_actuation_force_n: as set at start-up, or 2 x the scenario's peak."""
         if self._max_force_explicit:
@@ -587,6 +610,8 @@ class BrakeSimNode(Node):
             self._pacer.set_real_time_factor(changes["real_time_factor"], now, step)
         if "paused" in changes:
             self._pacer.set_paused(changes["paused"], now, step)
+            if changes["paused"]:
+                self._flush_measured()
         if "chunk_rate_hz" in changes:
             self._chunk_samples = self._samples_per(changes["chunk_rate_hz"])
         if "state_rate_hz" in changes:
@@ -723,7 +748,7 @@ class BrakeSimNode(Node):
             with_clock=self._publish_clock,
             contact_events=self._contact_events,
             run_id=self.run_id,
-            sensors=self._sensors,
+            measured=self._measured,
         )
         for topic, msg, ns in messages:
             self._emit(topic, msg, ns)
@@ -772,7 +797,9 @@ class BrakeSimNode(Node):
             self.get_logger().error(f"{sink!r} could not be closed: {exc}")
 
     def close_sinks(self) -> None:
-        """Close every sink (flushes recordings); each failure is logged, none is raised."""
+        """Close every sink (flushes recordings); each failure is logged, none is raised.
+        Measured samples still pending are published first."""
+        self._flush_measured()
         for sink in list(self._sinks):
             self._sinks.remove(sink)
             try:
@@ -782,10 +809,12 @@ class BrakeSimNode(Node):
                 self.get_logger().error(f"{sink!r} could not be closed: {exc}")
 
     def _fail(self, message: str) -> None:
+        self._flush_measured()  # the samples published before the failure
         self._failure = message
         self.get_logger().error(f"simulation stopped: {message}")
 
     def _finish(self) -> None:
+        self._flush_measured()
         if not self._finished:
             self._account_free_run(self._wall())
             self._finished = True
@@ -831,6 +860,7 @@ class BrakeSimNode(Node):
                     error = f"the simulation failed: {self._failure}"
                     break
                 done += n
+            self._flush_measured()  # ~/measured holds every sample this call stepped
         response.success = not error
         index = self._stepper.sample_index
         response.message = error or (
@@ -850,7 +880,12 @@ class BrakeSimNode(Node):
                 raise BrakeSimError(f"seed={seed}: allowed -1 (keep) or a seed >= 0")
             if request.scenario:
                 scenario = load_requested_scenario(request.scenario, self._scenario_dirs)
+                scenario = self._as_unit(scenario, seed=seed if seed >= 0 else None)
                 self._switch_scenario(scenario, request.scenario)
+            elif seed >= 0 and seed != self.scenario.seed and self.scenario.drawn:
+                # the seed draws the unit and the conditions: a new seed, another run
+                scenario = self.scenario.with_unit(seed=seed)
+                self._switch_scenario(scenario, self._param("scenario"))
             else:
                 self._stepper.reset()
                 self._log_step_change("reset")
@@ -866,7 +901,8 @@ class BrakeSimNode(Node):
         self.run_id = self._run_id_fixed or conversion.new_run_id()
         if seed >= 0:
             self._seed = seed
-        self._sensors = self._new_sensor_bank()
+        self._flush_measured()  # the old run's last samples, before its successor's
+        self._measured = self._new_measured_stream()
         if self._planner.clear():
             self.stats.commands_dropped += 1
         now = self._wall()
@@ -884,6 +920,13 @@ class BrakeSimNode(Node):
             f" run id {self.run_id}"
         )
         return response
+
+    def _as_unit(self, scenario: Scenario, *, seed: int | None = None) -> Scenario:
+        """``scenario`` as the node's ``unit_id`` parameter's unit (empty: its own), drawn
+        with ``seed`` (None: the scenario's)."""
+        if not self._unit_id and seed is None:
+            return scenario
+        return scenario.with_unit(self._unit_id or None, seed=seed)
 
     def _switch_scenario(self, scenario: Scenario, name_or_path: str) -> None:
         """Replace scenario, stepper and timing; on error nothing changes.
@@ -942,6 +985,7 @@ class BrakeSimNode(Node):
             ns=ns,
             run_id=self.run_id,
             seed=self._seed,
+            unit_id=self.scenario.unit_id,
         )
         self._emit(stream.DEFECTS, msg, ns)
 

@@ -28,6 +28,7 @@ from importlib import resources
 from typing import Any
 
 from brake_sim_ros.errors import BrakeSimError, ScenarioError
+from brake_sim_ros.model import conditions as operating
 from brake_sim_ros.model.actuation import (
     NOMINAL_PEAK_ACTUATION_N,
     Actuation,
@@ -46,6 +47,13 @@ from brake_sim_ros.model.fidelity import ACCURACY_PRESETS, LEVEL_BY_NAME, OUTPUT
 from brake_sim_ros.model.parameters import PARAMETER_GROUPS, BrakeParameters
 from brake_sim_ros.model.sensors import SensorSet, default_sensor_set
 from brake_sim_ros.model.trajectory import BrakeSetup
+from brake_sim_ros.model.units import (
+    NOMINAL_UNIT,
+    UnitValue,
+    unit_parameters,
+    unit_sensors,
+    unit_values,
+)
 from brake_sim_ros.scenarios.sensors import parse_sensors
 from brake_sim_ros.solvers.fixed_step import MIN_PHYSICS_STEP_S
 from brake_sim_ros.solvers.methods import FIXED_STEP_METHODS, SOLVER_METHODS
@@ -65,7 +73,6 @@ MAX_STEP_RANGE_S = (MIN_PHYSICS_STEP_S, 1e-2)
 MAX_SCENARIO_BYTES = 1024 * 1024
 MAX_NESTING = 32  # tables and arrays inside one another
 MAX_NAME_CHARS = 255  # a file name's limit on common file systems
-NOMINAL_UNIT = "nominal"  # the unit with the drawing's nominal parameters, no scatter
 _UNIT_ID = re.compile(r"[A-Za-z0-9_-][A-Za-z0-9_.-]{0,63}")
 # a value or key is quoted in an error message only up to this many characters (its repr);
 # a longer one is described ("a string of 300 characters"): messages never echo the file
@@ -147,13 +154,105 @@ class Scenario:
     setup: BrakeSetup = field(default_factory=BrakeSetup)
     duration_s: float = 7.5
     seed: int = 0
-    unit_id: str = NOMINAL_UNIT  # which brake of a fleet; "nominal": the drawing's brake
+    # which brake of a fleet; "nominal": the drawing's brake. ``setup.params`` and
+    # ``sensors`` are that unit's (model/units.py), drawn from the scenario's values (kept
+    # in ``nominal_params`` / ``nominal_sensors``) with ``unit_id`` and ``seed``
+    unit_id: str = NOMINAL_UNIT
     solver: SolverSettings = field(default_factory=SolverSettings)
     sample_rate_hz: float = DEFAULT_SAMPLE_RATE_HZ
     source: str = "<built-in>"
     text: str = ""
     needs: Needs | None = None  # None: the full model, every signal
     sensors: SensorSet = field(default_factory=default_sensor_set)  # [structure], [[sensors]]
+    nominal_params: BrakeParameters | None = None  # the scenario's own; None: setup.params
+    nominal_sensors: SensorSet | None = None  # the scenario's own; None: sensors
+    # [conditions]: (name, low, high) ranges drawn per run from the seed (model/conditions.py),
+    # and the values drawn for this run, (name, value), applied to setup
+    condition_ranges: tuple[tuple[str, float, float], ...] = ()
+    conditions: tuple[tuple[str, float], ...] = ()
+    nominal_actuation: Actuation | None = None  # the scenario's own; None: setup.actuation
+
+    @property
+    def drawn(self) -> bool:
+        """Whether the seed draws this scenario's brake or conditions (a unit other than
+        "nominal", or ``[conditions]`` ranges): another seed is then another run."""
+        return self.unit_id != NOMINAL_UNIT or bool(self.condition_ranges)
+
+    @property
+    def drawing_params(self) -> BrakeParameters:
+        """The scenario's parameters before the unit's scatter (its file's values)."""
+        return self.setup.params if self.nominal_params is None else self.nominal_params
+
+    @property
+    def drawing_sensors(self) -> SensorSet:
+        """The scenario's sensors before the unit's scatter."""
+        return self.sensors if self.nominal_sensors is None else self.nominal_sensors
+
+    def conditions_record(self) -> dict[str, dict[str, Any]]:
+        """The run's drawn operating conditions for ground truth: per name its value,
+        unit and range (empty without ``[conditions]``)."""
+        ranges = {name: (low, high) for name, low, high in self.condition_ranges}
+        return {
+            name: {
+                "value": value,
+                "unit": operating.CONDITION_BY_NAME[name].unit,
+                "range": list(ranges[name]),
+            }
+            for name, value in self.conditions
+        }
+
+    def unit_values(self) -> list[UnitValue]:
+        """Every scattered value of this scenario's unit against the scenario's own (the
+        unit's ground truth; all unchanged for unit "nominal")."""
+        return unit_values(
+            self.drawing_params, self.setup.params, self.drawing_sensors, self.sensors
+        )
+
+    def with_unit(self, unit_id: str | None = None, *, seed: int | None = None) -> Scenario:
+        """This scenario as brake unit ``unit_id`` drawn with ``seed`` (None keeps each):
+        the scenario's own parameters and sensors with the unit's manufacturing scatter
+        (:mod:`brake_sim_ros.model.units`); unit "nominal" is the scenario's brake itself.
+        The seed also draws the run's operating conditions from the scenario's
+        ``[conditions]`` ranges (:mod:`brake_sim_ros.model.conditions`), applied to the
+        scenario's own values before the unit's scatter, and seeds the sensor noise, as
+        it always has. Defects and model options are kept as they are.
+
+        Raises:
+            ScenarioError: a malformed unit id or seed, or a unit whose drawn brake leaves
+                the model's validity (one line naming the scenario and the unit).
+        """
+        unit_id = self.unit_id if unit_id is None else unit_id
+        seed = self.seed if seed is None else seed
+        ctx = _Ctx(self.source)
+        _unit_id(ctx, unit_id)
+        if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed < 2**63:
+            raise ctx.fail("seed", seed, "an integer from 0 to 2^63 - 1")
+        params, sensors = self.drawing_params, self.drawing_sensors
+        actuation = (
+            self.setup.actuation if self.nominal_actuation is None else self.nominal_actuation
+        )
+        ranges = {name: (low, high) for name, low, high in self.condition_ranges}
+        try:
+            drawn = operating.draw(ranges, seed)
+            setup = operating.apply(
+                dataclasses.replace(self.setup, params=params, actuation=actuation), drawn
+            )
+            setup = dataclasses.replace(setup, params=unit_parameters(setup.params, unit_id, seed))
+            drawn_sensors = unit_sensors(sensors, unit_id, seed)
+            pack(setup.params, setup.defects, setup.options)
+        except BrakeSimError as exc:
+            raise ScenarioError(f"{self.source}: {exc}") from None
+        return dataclasses.replace(
+            self,
+            setup=setup,
+            sensors=drawn_sensors,
+            unit_id=unit_id,
+            seed=seed,
+            nominal_params=params,
+            nominal_sensors=sensors,
+            nominal_actuation=actuation,
+            conditions=tuple(drawn.items()),
+        )
 
     @property
     def digest(self) -> str:
@@ -421,6 +520,25 @@ def _parameters(ctx: _Ctx, data: Any) -> BrakeParameters:
         raise ScenarioError(f"{ctx.source}: [parameters]: {exc}") from exc
 
 
+def _conditions(ctx: _Ctx, data: Any) -> tuple[tuple[str, float, float], ...]:
+    """``[conditions]``: per condition a range ``[low, high]`` drawn per run."""
+    data = ctx.table(data, "conditions", set(operating.CONDITION_BY_NAME))
+    out = []
+    for c in operating.CONDITIONS:
+        if c.name not in data:
+            continue
+        key, value = f"conditions.{c.name}", data[c.name]
+        unit = "(dimensionless)" if c.unit == "1" else c.unit
+        allowed = f"an array [low, high] with {c.low:g} <= low <= high <= {c.high:g} {unit}"
+        if not isinstance(value, list) or len(value) != 2:
+            raise ctx.fail(key, value, allowed)
+        low, high = (ctx.number(v, f"{key}[{i}]", c.low, c.high) for i, v in enumerate(value))
+        if low > high:
+            raise ctx.fail(key, value, allowed)
+        out.append((c.name, low, high))
+    return tuple(out)
+
+
 def _options(ctx: _Ctx, data: Any) -> ModelOptions:
     data = ctx.table(data, "model", {"rigid_coupling", "shoes"})
     rigid = data.get("rigid_coupling", False)
@@ -634,6 +752,7 @@ def _parse(data: dict[str, Any], text: str, source: str) -> Scenario:
             "needs",
             "structure",
             "sensors",
+            "conditions",
         },
     )
     if "name" not in top:
@@ -658,7 +777,7 @@ def _parse(data: dict[str, Any], text: str, source: str) -> Scenario:
         plan(needs, model_shoes=setup.options.shoes)  # refuse needs no level can serve
     except BrakeSimError as exc:
         raise ScenarioError(f"{source}: {exc}") from exc
-    return Scenario(
+    scenario = Scenario(
         name=name,
         description=ctx.string(top.get("description", ""), "description"),
         setup=setup,
@@ -677,7 +796,9 @@ def _parse(data: dict[str, Any], text: str, source: str) -> Scenario:
         text=text,
         needs=needs,
         sensors=parse_sensors(ctx, top.get("structure"), top.get("sensors")),
+        condition_ranges=_conditions(ctx, top.get("conditions", {})),
     )
+    return scenario.with_unit()  # the file's values are the drawing; the unit scatters them
 
 
 def builtin_names() -> list[str]:

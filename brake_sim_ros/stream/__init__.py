@@ -8,7 +8,12 @@ the Rerun sink and the dataset writer all consume this one stream; nothing here 
 rclpy's transport, a file format or a viewer.
 """
 
-from brake_sim_ros.stream.samples import MessageSink, block_messages, samples_per
+from brake_sim_ros.stream.samples import (
+    MeasuredStream,
+    MessageSink,
+    block_messages,
+    samples_per,
+)
 from brake_sim_ros.stream.topics import (
     ACTUATION,
     CLOCK,
@@ -34,6 +39,7 @@ __all__ = [
     "PIVOT_FORCES",
     "STATE",
     "TOPICS",
+    "MeasuredStream",
     "MessageSink",
     "Topic",
     "block_messages",

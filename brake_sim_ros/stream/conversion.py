@@ -268,7 +268,7 @@ def defect_state(
     ns: int,
     run_id: str,
     seed: int,
-    unit_id: str = "",
+    unit_id: str,
 ) -> DefectState:
     """Ground truth of the defects in force from simulated time ``ns`` on: the
     catalogue's list (:meth:`Defects.active`).
@@ -282,7 +282,8 @@ def defect_state(
         ns: simulated time from which it applies, ns.
         run_id: the run's id (:func:`new_run_id`, or the node's ``run_id`` parameter).
         seed: the run's seed.
-        unit_id: the brake unit's id (empty for a single brake).
+        unit_id: the brake unit's id (the scenario's ``unit_id``; "nominal" for the
+            drawing's brake, :mod:`brake_sim_ros.model.units`).
     """
     left = dataclasses.replace(defects.left, initial_angle_deg=initial_angles_deg[0])
     right = dataclasses.replace(defects.right, initial_angle_deg=initial_angles_deg[1])

@@ -35,6 +35,7 @@ class StreamSettings:
     state_rate_hz: float = _default("state_rate_hz")
     publish_clock: bool = _default("publish_clock")
     publish_measured: bool = _default("publish_measured")
+    measured_rate_hz: float = _default("measured_rate_hz")
 
 
 def offline_messages(
@@ -84,13 +85,20 @@ def offline_messages(
             ns=0,
             run_id=run_id,
             seed=scenario.seed,
+            unit_id=scenario.unit_id,
         ),
         0,
     )
     if settings.publish_clock:
         yield stream.CLOCK, conversion.clock(0), 0
     detector = ContactEventDetector()
-    sensors = sensor_bank_for(scenario) if settings.publish_measured else None
+    measured = (
+        stream.MeasuredStream(
+            sensor_bank_for(scenario), stream.samples_per(settings.measured_rate_hz, period)
+        )
+        if settings.publish_measured
+        else None
+    )
     while stepper.sample_index < end:
         block = stepper.advance(min(chunk, end - stepper.sample_index))
         yield from stream.block_messages(
@@ -99,5 +107,7 @@ def offline_messages(
             with_clock=settings.publish_clock,
             contact_events=detector,
             run_id=run_id,
-            sensors=sensors,
+            measured=measured,
         )
+    if measured is not None:  # the node publishes what is pending when the run ends
+        yield from measured.flush()

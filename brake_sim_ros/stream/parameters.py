@@ -36,7 +36,7 @@ from brake_sim_ros.model.actuation import MAX_ACTUATION_FORCE_N, NOMINAL_PEAK_AC
 from brake_sim_ros.model.catalogue import KINDS
 from brake_sim_ros.model.defects import Defects, DrumDefect, ShoeDefect
 from brake_sim_ros.model.layout import SIDES
-from brake_sim_ros.model.parameters import PARAMETER_GROUPS, BrakeParameters
+from brake_sim_ros.model.parameters import PARAMETER_GROUPS, BrakeParameters, unit_of
 from brake_sim_ros.model.trajectory import BrakeSetup
 
 DEFAULT_SCENARIO = "symmetric"
@@ -84,21 +84,6 @@ _RANGES: dict[str, tuple[float, float]] = {
         if set(k.locations) <= set(SIDES)  # the shoes' (the drum has no node parameter)
     },
 }
-
-# Unit suffixes of the core's field names, longest first.
-_UNITS = (
-    ("_n_m_s_per_rad", "N m s/rad"),
-    ("_n_m_per_rad", "N m/rad"),
-    ("_n_s_per_m", "N s/m"),
-    ("_kg_m2", "kg m^2"),
-    ("_rad_s", "rad/s"),
-    ("_m_s", "m/s"),
-    ("_pct", "%"),
-    ("_deg", "deg"),
-    ("_kg", "kg"),
-    ("_pa", "Pa"),
-    ("_m", "m"),
-)
 
 
 @dataclass(frozen=True)
@@ -152,6 +137,17 @@ def run_parameter_specs() -> list[ParamSpec]:
             constraints="empty, or 1 to 64 characters of A-Z a-z 0-9 . _ -",
         ),
         ParamSpec(
+            "unit_id",
+            "",
+            "Brake unit to simulate (its manufacturing scatter, drawn with the run's seed "
+            "from the scenario's values): empty = the scenario's unit_id; 'nominal' = the "
+            "scenario's brake itself; otherwise 1 to 64 of A-Z a-z 0-9 _ . - (not starting "
+            "with '.'). Applies to every scenario ~/reset loads; a ~/reset with a new seed "
+            "draws the unit (and a scenario's [conditions]) again: the model parameters "
+            "then read the new draw's values. " + fixed,
+            constraints="empty, 'nominal', or 1 to 64 characters of A-Z a-z 0-9 _ . -",
+        ),
+        ParamSpec(
             "duration_s",
             0.0,
             "Simulated time after which the free run ends (s); 0 at start-up = the "
@@ -191,9 +187,18 @@ def run_parameter_specs() -> list[ParamSpec]:
             "publish_measured",
             False,
             "Run the scenario's sensors (noise, dynamics, faults; seeded from the run's seed) "
-            "and publish what they measure on ~/measured (MeasuredChunk), with each "
-            "pivot-force chunk. Off by default: the sensors cost about 0.8 ms of CPU per "
-            "10 ms chunk, a third more CPU than the node without them. " + fixed,
+            "and publish what they measure on ~/measured (MeasuredChunk), measured_rate_hz "
+            "chunks per simulated second. Off by default. " + fixed,
+        ),
+        ParamSpec(
+            "measured_rate_hz",
+            10.0,
+            "MeasuredChunk messages per simulated second (Hz) with publish_measured: a "
+            "chunk is due once round(sample rate / measured_rate_hz) samples are pending, "
+            "and what is pending is also published when the run ends, pauses, at each "
+            "~/step and at ~/reset. Fewer, longer chunks cost the sensors less CPU; the "
+            "samples are the same bits at any rate. " + fixed,
+            (1.0, 1000.0),
         ),
         ParamSpec(
             "diagnostics_period_s", 1.0, "Wall-time period of /diagnostics (s).", (0.05, 60.0)
@@ -236,7 +241,9 @@ FIXED_AT_START = frozenset(
         "exit_at_end",
         "max_actuation_force_n",
         "run_id",
+        "unit_id",
         "publish_measured",
+        "measured_rate_hz",
     }
 )
 _RUN_ID = re.compile(r"[A-Za-z0-9._-]{1,64}")
@@ -255,13 +262,6 @@ def check_run_id(value: str) -> str:
 
 
 # -- model parameters ---------------------------------------------------------------------------
-def _unit(field_name: str) -> str:
-    for suffix, unit in _UNITS:
-        if field_name.endswith(suffix):
-            return unit
-    return "dimensionless"
-
-
 def _first_line(doc: str | None) -> str:
     return (doc or "").strip().splitlines()[0].rstrip(".") if doc else ""
 
@@ -317,7 +317,7 @@ def model_parameter_specs(params: BrakeParameters, defects: Defects) -> list[Par
             what = f"{field_name}"
             doc = _attribute_doc(cls, field_name) or _first_line(cls.__doc__)
             range_key = name
-        text = f"{what} ({_unit(field_name)}): {doc}."
+        text = f"{what} ({unit_of(field_name)}): {doc}."
         if name in INITIAL_CONDITIONS:
             text += " Initial condition: a change applies at the next ~/reset."
         if name.endswith("actuation_share"):

@@ -57,6 +57,59 @@ class MessageSink(Protocol):
     def close(self) -> None: ...
 
 
+class MeasuredStream:
+    """The sensors' part of the stream: sample blocks in, MeasuredChunks out, fewer and
+    longer than the pivot-force chunks.
+
+    Blocks are held until at least ``chunk_samples`` samples are pending; then the bank
+    runs over all of them at once and one MeasuredChunk carries them (with the node's
+    default rates, ten pivot-force chunks of 10 ms make one measured chunk of 100 ms). One
+    call over many samples costs the sensors a fraction of ten calls over few (their state
+    and tables stay in cache), and the values are the same bits either way: the bank
+    carries its state from call to call. :meth:`flush` publishes what is pending; the
+    node calls it wherever the stream stops (end of the run, pause, each ~/step, reset,
+    failure, shutdown), so no measured sample waits for a stream that will not come.
+
+    Attributes:
+        bank: the scenario's sensors, carrying their state from chunk to chunk.
+        chunk_samples: samples that make a measured chunk due, >= 1.
+    """
+
+    def __init__(self, bank: SensorBank, chunk_samples: int) -> None:
+        if chunk_samples < 1:
+            raise ValueError(f"chunk_samples={chunk_samples}: allowed >= 1")
+        self.bank = bank
+        self.chunk_samples = int(chunk_samples)
+        self._pending: list[SampleBlock] = []
+        self._count = 0
+
+    @property
+    def pending_samples(self) -> int:
+        """Samples fed and not yet in a published chunk."""
+        return self._count
+
+    def feed(self, block: SampleBlock) -> Iterator[tuple[Topic, Any, int]]:
+        """Hold ``block``; the MeasuredChunk of everything pending once it is due."""
+        if len(block):
+            self._pending.append(block)
+            self._count += len(block)
+        if self._count >= self.chunk_samples:
+            yield from self.flush()
+
+    def flush(self) -> Iterator[tuple[Topic, Any, int]]:
+        """The MeasuredChunk of every pending sample (stamped with the first), if any."""
+        if not self._pending:
+            return
+        blocks, self._pending, self._count = self._pending, [], 0
+        block = blocks[0] if len(blocks) == 1 else SampleBlock.concatenate(blocks)
+        frame = self.bank.advance(block)
+        yield (
+            MEASURED,
+            conversion.measured_chunk(block, frame, self.bank),
+            conversion.stamp_ns(block.first_index, block.sample_period_s),
+        )
+
+
 def block_messages(
     block: SampleBlock,
     state_stride: int,
@@ -64,13 +117,13 @@ def block_messages(
     with_clock: bool,
     contact_events: ContactEventDetector,
     run_id: str,
-    sensors: SensorBank | None = None,
+    measured: MeasuredStream | None = None,
 ) -> Iterator[tuple[Topic, Any, int]]:
     """The messages one published block produces, in publishing order.
 
-    A PivotForceChunk (stamped with its first sample), with ``sensors`` a MeasuredChunk of
-    the same samples (the bank is fed the block and carries its state to the next one:
-    filters, noise generators, faults' holds), the ContactEvents whose sample lies
+    A PivotForceChunk (stamped with its first sample), with ``measured`` the MeasuredChunk
+    that this block makes due (:class:`MeasuredStream`: the sensors' state is carried to
+    the next block), the ContactEvents whose sample lies
     in the block (from ``contact_events``, which is fed the block and carries open contact
     episodes to the next one; each stamped with its own sample), one BrakeState and one
     JointState per sample index that is a multiple of ``state_stride``, and with
@@ -78,8 +131,8 @@ def block_messages(
     sample's time). ``run_id`` goes into every ContactEvent (the run's id, as in its
     DefectState).
 
-    The bank and the detector are fed when the generator reaches their messages, so
-    consume the whole generator once per block, in order.
+    The measured stream and the detector are fed when the generator reaches their
+    messages, so consume the whole generator once per block, in order.
     """
     dt = block.sample_period_s
     yield (
@@ -87,13 +140,8 @@ def block_messages(
         conversion.pivot_force_chunk(block),
         conversion.stamp_ns(block.first_index, dt),
     )
-    if sensors is not None:
-        frame = sensors.advance(block)
-        yield (
-            MEASURED,
-            conversion.measured_chunk(block, frame, sensors),
-            conversion.stamp_ns(block.first_index, dt),
-        )
+    if measured is not None:
+        yield from measured.feed(block)
     for event in contact_events.feed(block):
         msg = conversion.contact_event(event, dt, run_id=run_id)
         yield CONTACT_EVENTS, msg, conversion.stamp_ns(event.sample_index, dt)

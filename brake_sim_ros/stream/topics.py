@@ -146,7 +146,8 @@ MEASURED = Topic(
     "/brake_sim/measured",
     "brake_sim_msgs/msg/MeasuredChunk",
     STREAM_QOS,
-    "with each pivot-force chunk, the same samples (parameter publish_measured)",
+    "measured_rate_hz chunks per simulated second, default 10 Hz, and when the run ends,"
+    " pauses, steps or resets (parameter publish_measured)",
     "~/measured",
 )
 CLOCK = Topic(

@@ -88,6 +88,12 @@ def _sweep(argv: list[str]) -> int:
     return sweep_bench.main(argv)
 
 
+def _units(argv: list[str]) -> int:
+    from brake_sim_ros.studies import units
+
+    return units.main(argv)
+
+
 BENCHMARKS: dict[str, Study] = {
     s.name: s
     for s in (
@@ -129,6 +135,11 @@ BENCHMARKS: dict[str, Study] = {
             "brake-sim sweep: runs per hour and simulated s per wall s on 1 and 2 workers and"
             " a Dask LocalCluster, peak memory per worker",
             _sweep,
+        ),
+        Study(
+            "units",
+            "spread of stop time and first-impact force across a fleet of units",
+            _units,
         ),
     )
 }

@@ -173,6 +173,12 @@ def test_measured_after_a_reset_with_a_seed_equals_offline(sim):
             run_id=RUN_ID,
         )
         expected = measured_series(m for t, m, _ in messages if t is stream.MEASURED)
+        # each ~/step publishes what it stepped: its samples are one chunk (each call is
+        # shorter than a 100 ms chunk), none wait for the next call
+        sizes: list[int] = []
+        while sum(sizes) < n_steps:  # as step_all cuts them
+            sizes.append(min((1000, 3, 700)[len(sizes) % 3], n_steps - sum(sizes)))
+        assert [m.sample_count for m in sim.rx.measured] == sizes
         got = measured_series(sim.rx.measured)
         assert got.keys() == expected.keys() and len(got) >= 10
         assert got == expected

@@ -31,8 +31,6 @@ rclpy = pytest.importorskip("rclpy", reason="rclpy not installed (run scripts/se
 import yaml  # noqa: E402
 from mcap.reader import make_reader  # noqa: E402
 from rclpy.qos import QoSProfile, ReliabilityPolicy  # noqa: E402
-from rosbags.rosbag2.storage_mcap import McapReader  # noqa: E402
-from rosbags.typesys import Stores, get_types_from_msg, get_typestore  # noqa: E402
 
 from brake_sim_ros import stream  # noqa: E402
 from brake_sim_ros.recording.record import record_offline  # noqa: E402
@@ -42,6 +40,7 @@ from brake_sim_ros.scenarios import load_scenario  # noqa: E402
 from brake_sim_ros.solvers.methods import FIXED_STEP_METHODS  # noqa: E402
 from brake_sim_ros.stream import conversion  # noqa: E402
 from brake_sim_ros.stream.offline import StreamSettings  # noqa: E402
+from tests.bag_helpers import rosbags_decoded  # noqa: E402
 
 SCENARIO = "symmetric"
 SCENARIOS = Path(__file__).parents[2] / "brake_sim_ros" / "scenarios" / "builtin"
@@ -57,28 +56,12 @@ def _messages(path: Path) -> list[tuple[str, int, bytes]]:
         ]
 
 
-def _decoded(path: Path) -> dict[str, list]:
-    """topic -> decoded messages in file order, by rosbags alone."""
-    reader = McapReader(path)
-    reader.open()
-    try:
-        store = get_typestore(Stores.EMPTY)
-        for conn in reader.connections:
-            store.register(get_types_from_msg(conn.msgdef.data, conn.msgtype))
-        out: dict[str, list] = {}
-        for conn, _ns, data in reader.messages(reader.connections):
-            out.setdefault(conn.topic, []).append(store.deserialize_cdr(data, conn.msgtype))
-        return out
-    finally:
-        reader.close()
-
-
 def _run_id(path: Path) -> str:
     """The run id a recording's ``brake_sim_run`` record gives (its DefectState's too)."""
     with path.open("rb") as f:
         records = {m.name: m.metadata for m in make_reader(f).iter_metadata()}
     run_id = records["brake_sim_run"]["run_id"]
-    (defects,) = _decoded(path)[stream.DEFECTS.name]
+    (defects,) = rosbags_decoded(path)[stream.DEFECTS.name]
     assert defects.run_id == run_id and len(run_id) == 32
     return run_id
 
@@ -116,7 +99,7 @@ def test_live_recording_equals_offline_recording(tmp_path):
     assert len(live_msgs) == len(offline_msgs) > 0
     assert live_msgs == offline_msgs  # topic, log time and CDR bytes, one by one
     # the sensors too: the node's bank and the offline one measure the same bits
-    assert sum(m[0] == stream.MEASURED.name for m in live_msgs) == 150  # a chunk per 10 ms
+    assert sum(m[0] == stream.MEASURED.name for m in live_msgs) == 15  # a chunk per 100 ms
     with live.open("rb") as f:
         records = {m.name: m.metadata for m in make_reader(f).iter_metadata()}
     assert records["brake_sim_run"]["mode"] == "live"
@@ -226,7 +209,7 @@ def test_signal_closes_the_file_with_every_message(tmp_path, sig):
         summary = reader.get_summary()
         assert summary is not None, "no summary: the file was not finished"
         assert "rosbag2" in {m.name for m in reader.iter_metadata()}
-    decoded = _decoded(path)
+    decoded = rosbags_decoded(path)
     assert len(decoded[stream.PIVOT_FORCES.name]) == chunks
     assert sum(len(c.left_fx_n) for c in decoded[stream.PIVOT_FORCES.name]) == samples
     assert len(decoded[stream.STATE.name]) == states
@@ -262,7 +245,7 @@ def test_sigkill_then_recover_loses_less_than_the_flush_interval(tmp_path):
     fixed = tmp_path / "fixed.mcap"
     result = recover(path, fixed)
     assert not result.complete  # killed: no summary, open chunk cut off
-    decoded = _decoded(fixed)
+    decoded = rosbags_decoded(fixed)
     chunks = decoded[stream.PIVOT_FORCES.name]
     n = len(chunks)
     assert 0 < n <= len(received)

@@ -1,0 +1,117 @@
+"""Baseline detectors a reader can follow, and the registry that names detectors.
+
+* :class:`VibrationThreshold` (``rms``, ``kurtosis``, ``crest``): one statistic of one
+  measured channel per window (default 0.1 s of the backing plate's y acceleration);
+  fitted on healthy training windows, it alarms when the statistic exceeds their mean by
+  ``k`` standard deviations (default 4). Its health index is the statistic over that
+  threshold, so 1 is the alarm. It detects, it does not isolate: no diagnosis.
+"""
+
+from __future__ import annotations
+
+import importlib
+from collections.abc import Callable, Iterable, Mapping
+
+import numpy as np
+
+from brake_sim_ros.monitoring.detector import Assessment, Detector, TrainingWindow
+
+DEFAULT_CHANNEL = "backing_plate_accel_y"
+
+
+def rms(x: np.ndarray) -> float:
+    """Root mean square, the channel's unit (NaN samples ignored)."""
+    return float(np.sqrt(np.nanmean(np.square(x))))
+
+
+def kurtosis(x: np.ndarray) -> float:
+    """Kurtosis (3 for Gaussian noise; impacts raise it), NaN samples ignored."""
+    centred = x - np.nanmean(x)
+    var = np.nanmean(centred**2)
+    return float(np.nanmean(centred**4) / (var * var)) if var > 0.0 else 0.0
+
+
+def crest_factor(x: np.ndarray) -> float:
+    """Peak over RMS (about 3-4 for Gaussian noise), NaN samples ignored."""
+    r = rms(x)
+    return float(np.nanmax(np.abs(x)) / r) if r > 0.0 else 0.0
+
+
+STATISTICS: dict[str, Callable[[np.ndarray], float]] = {
+    "rms": rms,
+    "kurtosis": kurtosis,
+    "crest": crest_factor,
+}
+
+
+class VibrationThreshold(Detector):
+    """Threshold on a vibration statistic of one channel (module docstring)."""
+
+    def __init__(
+        self,
+        statistic: str = "rms",
+        channel: str = DEFAULT_CHANNEL,
+        *,
+        window_s: float = 0.1,
+        k: float = 4.0,
+    ) -> None:
+        super().__init__()
+        if statistic not in STATISTICS:
+            raise ValueError(f"statistic {statistic!r}: allowed one of {sorted(STATISTICS)}")
+        if not (window_s > 0.0 and k > 0.0):
+            raise ValueError(f"window_s={window_s!r}, k={k!r}: allowed > 0")
+        self.statistic = statistic
+        self.name = statistic
+        self.channels = (channel,)
+        self.window_s = float(window_s)
+        self.k = float(k)
+        self.threshold: float | None = None
+
+    def fit(self, windows: Iterable[TrainingWindow]) -> None:
+        """Threshold = mean + k std of the statistic over the healthy windows."""
+        f = STATISTICS[self.statistic]
+        values = [f(w.channels[self.channels[0]]) for w in windows if w.healthy]
+        values = [v for v in values if np.isfinite(v)]
+        if len(values) < 2:
+            raise ValueError(
+                f"detector {self.name}: {len(values)} healthy training windows; it needs 2 or more"
+            )
+        self.threshold = float(np.mean(values) + self.k * np.std(values))
+
+    def assess(
+        self, window: Mapping[str, np.ndarray], last_sample_index: int, sample_rate_hz: float
+    ) -> Assessment:
+        if self.threshold is None:
+            raise RuntimeError(f"detector {self.name} is not fitted: call fit() first")
+        value = STATISTICS[self.statistic](window[self.channels[0]])
+        index = value / self.threshold if self.threshold > 0.0 else np.inf
+        return Assessment(
+            sample_index=last_sample_index,
+            time_s=last_sample_index / sample_rate_hz,
+            health_index=float(index),
+            alarm=bool(index >= 1.0),
+        )
+
+
+BUILTIN: dict[str, Callable[[], Detector]] = {
+    name: (lambda name=name: VibrationThreshold(name)) for name in STATISTICS
+}
+
+
+def make_detector(name: str) -> Detector:
+    """A built-in detector by name (:data:`BUILTIN`), or a user's as ``module:Class`` (a
+    :class:`Detector` subclass built without arguments)."""
+    if name in BUILTIN:
+        return BUILTIN[name]()
+    module, sep, attr = name.partition(":")
+    if not sep or not module or not attr:
+        raise ValueError(
+            f"detector {name!r}: allowed a built-in ({', '.join(sorted(BUILTIN))}) or module:Class"
+        )
+    try:
+        cls = getattr(importlib.import_module(module), attr)
+    except (ImportError, AttributeError) as exc:
+        raise ValueError(f"detector {name!r}: cannot import it ({type(exc).__name__})") from None
+    if not (isinstance(cls, type) and issubclass(cls, Detector)):
+        raise ValueError(f"detector {name!r}: not a brake_sim_ros.monitoring Detector subclass")
+    return cls()
