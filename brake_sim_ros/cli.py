@@ -225,37 +225,12 @@ def _write_history(job: SimulateJob, result: RunResult) -> None:
 
     path, scenario = job.outputs["--out"], job.scenario
     columns = result.samples.as_dict()
-    meta = {
-        "scenario": scenario.name,
-        "source": scenario.source,
-        "method": result.method,
-        "stop_time_s": result.stop_time_s,
-        "version": __version__,
-        "sample_period_s": result.samples.sample_period_s,
-        "sample_rate_hz": scenario.sample_rate_hz,
-        "preset": scenario.solver.preset,
-        "step": result.step_note,
-        "scenario_toml": scenario.text,
-    }
     with job.atomic("--out") as partial:
         try:
             if path.suffix in (".parquet", ".npz"):
                 from brake_sim_ros.datasets import parquet
-                from brake_sim_ros.stream.build import sensor_bank_for
 
-                meta["seed"] = scenario.seed
-                meta["duration_s"] = job.duration_s
-                meta["fidelity_level"] = result.plan.level.name
-                meta["sensors"] = result.plan.sensors  # no measured columns without them
-                table = parquet.history_table(
-                    result.samples,
-                    sensor_bank_for(scenario),
-                    scenario.setup.defects,
-                    {**meta, "columns": "units in names"},
-                    unit_id=scenario.unit_id,
-                    unit_values=scenario.unit_values(),
-                    conditions=scenario.conditions_record(),
-                )
+                table = parquet.run_table(scenario, result, job.duration_s)
                 if path.suffix == ".parquet":
                     parquet.write_history(partial, table)
                 else:  # the same columns; the metadata as JSON text
@@ -501,6 +476,40 @@ def catalogue_text() -> str:
         ]
     lines.append(f"growth laws: {', '.join(GROWTH_LAWS)} (every defect is in force from t = 0)")
     return "\n".join(lines)
+
+
+# --- sweep and dataset -----------------------------------------------------------------------
+def cmd_sweep(args: argparse.Namespace) -> int:
+    """``brake-sim sweep CAMPAIGN --out DIR``: the campaign checked and planned before the
+    directory is made; then every run, resuming a sweep of the same campaign there."""
+    from brake_sim_ros.campaigns import load_campaign
+    from brake_sim_ros.datasets.sweep import sweep
+
+    if args.workers is not None and not 1 <= args.workers <= 1024:
+        raise BrakeSimError(f"--workers {args.workers}: allowed 1 to 1024 worker processes")
+    campaign = load_campaign(args.campaign)
+    summary, outcomes = sweep(
+        campaign, Path(args.out), workers=args.workers, scheduler=args.scheduler, quiet=args.quiet
+    )
+    print(summary.describe(Path(args.out)))
+    if summary.failed:
+        first = next(o for o in outcomes.values() if o.status == "failed")
+        print(
+            f"brake-sim: error: {summary.failed} run(s) failed (errors in the manifest), the"
+            f" first: {first.run_id}: {first.error}",
+            file=sys.stderr,
+        )
+        return 1
+    return 0
+
+
+def cmd_dataset(args: argparse.Namespace) -> int:
+    """``brake-sim dataset info DIR``: class balance per split, after the leakage and
+    damage checks (non-zero exit with one line on either)."""
+    from brake_sim_ros.datasets.reader import info_text, open_dataset
+
+    print(info_text(open_dataset(args.directory)))
+    return 0
 
 
 # --- unit ----------------------------------------------------------------------------
@@ -767,6 +776,35 @@ def build_parser() -> argparse.ArgumentParser:
     )
 
     p = sub.add_parser(
+        "sweep",
+        help="run a campaign (built-in name or .toml) into a labelled, leak-free Parquet"
+        " dataset: brake-sim sweep demo --out DIR",
+        description="Run every run of a campaign into DIR: manifest.parquet, samples/run=*/"
+        " (Parquet, hive-partitioned), campaign.lock. Running it again resumes: finished runs"
+        " whose files check out are skipped. DIR must be new, empty, or this campaign's.",
+    )
+    p.add_argument("campaign", help="built-in campaign name (demo, reference) or .toml path")
+    p.add_argument("--out", required=True, metavar="DIR", help="output directory")
+    p.add_argument(
+        "--workers", type=int, metavar="N", help="local worker processes (default: every core)"
+    )
+    p.add_argument(
+        "--scheduler",
+        metavar="ADDRESS",
+        help="run on an existing Dask cluster (tcp://host:8786) whose workers share DIR",
+    )
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(func=cmd_sweep)
+
+    p = sub.add_parser("dataset", help="inspect a sweep's dataset: brake-sim dataset info DIR")
+    dataset_sub = p.add_subparsers(dest="dataset_command", required=True)
+    q = dataset_sub.add_parser(
+        "info", help="runs, units and class balance per split; checks leakage and damage"
+    )
+    q.add_argument("directory", help="a sweep's output directory")
+    q.set_defaults(func=cmd_dataset)
+
+    p = sub.add_parser(
         "bench",
         help="benchmarks that print figures: "
         + "; ".join(f"{s.name}: {s.measures}" for s in BENCHMARKS.values()),
@@ -795,7 +833,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 # commands that run the physics kernels (compiled on first use)
-PHYSICS_COMMANDS = ("node", "live", "simulate", "validate", "bench", "severity")
+PHYSICS_COMMANDS = ("node", "live", "simulate", "validate", "bench", "severity", "sweep")
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -35,11 +35,13 @@ ALLOWED: dict[str, set[str]] = {
     "ros": _STREAM,  # never recording or viz: the node is a leaf adapter
     "recording": _STREAM,
     "viz": _STREAM | {"recording"},  # the viewer reads MCAP recordings
-    "datasets": _STREAM,  # tables of runs (Parquet)
+    "campaigns": _LIBRARY,  # campaign files: varied scenarios, read by the scenario loader
+    # tables of runs (Parquet) and sweeps: campaigns run, files written by recording.output
+    "datasets": _STREAM | {"campaigns", "recording"},
     "monitoring": _STREAM | {"datasets"},  # detectors and their scoring, on datasets
-    "studies": _STREAM | _ADAPTERS,
+    "studies": _STREAM | _ADAPTERS | {"campaigns", "datasets"},
     "app": _STREAM | _ADAPTERS,
-    "cli": _STREAM | _ADAPTERS | {"app", "studies", "datasets", "monitoring"},
+    "cli": _STREAM | _ADAPTERS | {"app", "studies", "datasets", "monitoring", "campaigns"},
 }
 
 

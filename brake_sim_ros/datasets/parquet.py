@@ -43,7 +43,7 @@ from __future__ import annotations
 import json
 import os
 from collections.abc import Mapping, Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pyarrow as pa
@@ -54,6 +54,10 @@ from brake_sim_ros.model.sensor_faults import FAULT_BIT
 from brake_sim_ros.model.sensors import SensorBank
 from brake_sim_ros.model.trajectory import SampleBlock
 from brake_sim_ros.model.units import UnitValue
+
+if TYPE_CHECKING:
+    from brake_sim_ros.scenarios.loader import Scenario
+    from brake_sim_ros.stream.run import RunResult
 
 METADATA_KEY = b"brake_sim"
 
@@ -160,6 +164,48 @@ def history_table(
     }
     schema = pa.schema(fields, metadata={METADATA_KEY: json.dumps(meta).encode()})
     return pa.Table.from_arrays([columns[f.name] for f in fields], schema=schema)
+
+
+def run_table(
+    scenario: Scenario,
+    result: RunResult,
+    duration_s: float,
+    extra: Mapping[str, Any] | None = None,
+) -> pa.Table:
+    """The table of a finished run of ``scenario`` (``simulate --out``, each run of a
+    sweep): :func:`history_table` with the scenario's sensors, defects, unit and drawn
+    conditions, and the run's parameters and the full scenario text (``scenario_toml``)
+    in the metadata, plus ``extra`` (a sweep's run id and split)."""
+    from brake_sim_ros import __version__
+    from brake_sim_ros.stream.build import sensor_bank_for
+
+    meta = {
+        "scenario": scenario.name,
+        "source": scenario.source,
+        "method": result.method,
+        "stop_time_s": result.stop_time_s,
+        "version": __version__,
+        "sample_period_s": result.samples.sample_period_s,
+        "sample_rate_hz": scenario.sample_rate_hz,
+        "preset": scenario.solver.preset,
+        "step": result.step_note,
+        "scenario_toml": scenario.text,
+        "seed": scenario.seed,
+        "duration_s": duration_s,
+        "fidelity_level": result.plan.level.name,
+        "sensors": result.plan.sensors,  # no measured columns without them
+        **(extra or {}),
+        "columns": "units in names",
+    }
+    return history_table(
+        result.samples,
+        sensor_bank_for(scenario),
+        scenario.setup.defects,
+        meta,
+        unit_id=scenario.unit_id,
+        unit_values=scenario.unit_values(),
+        conditions=scenario.conditions_record(),
+    )
 
 
 def history_arrays(table: pa.Table) -> dict[str, np.ndarray]:

@@ -82,6 +82,12 @@ def _drum(argv: list[str]) -> int:
     return drum_defect.main(argv)
 
 
+def _sweep(argv: list[str]) -> int:
+    from brake_sim_ros.studies import sweep_bench
+
+    return sweep_bench.main(argv)
+
+
 def _units(argv: list[str]) -> int:
     from brake_sim_ros.studies import units
 
@@ -123,6 +129,12 @@ BENCHMARKS: dict[str, Study] = {
             "drum",
             "severity sweep of drum ovality: the pivot-force line at 2 f_rot per amplitude",
             _drum,
+        ),
+        Study(
+            "sweep",
+            "brake-sim sweep: runs per hour and simulated s per wall s on 1 and 2 workers and"
+            " a Dask LocalCluster, peak memory per worker",
+            _sweep,
         ),
         Study(
             "units",

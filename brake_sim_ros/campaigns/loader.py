@@ -1,0 +1,644 @@
+"""Campaign files (TOML): strict loading, and the plan of runs a campaign makes.
+
+A campaign names a base scenario (a built-in name, or a path relative to the campaign
+file), the axes it varies (:mod:`.axes`), how many units, what each run outputs and the
+split rule (:mod:`.splits`). Loading is strict like a scenario's: an unknown key, a wrong
+type or an out-of-range value is one line naming the file and the key. Every varied
+scenario is written as TOML text and read again by the scenario loader, so each field's
+rule is the scenario loader's and is written once; a varied scenario it refuses refuses
+the campaign, naming the run.
+
+See ``builtin/demo.toml`` for a commented example.
+"""
+
+from __future__ import annotations
+
+import copy
+import hashlib
+import json
+import math
+import os
+import re
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from brake_sim_ros import __version__
+from brake_sim_ros.campaigns.axes import (
+    DEFECT_AXIS,
+    DEFECT_COLUMNS,
+    DRAW_METHODS,
+    AnyAxis,
+    Axis,
+    DefectAxis,
+    DefectChoice,
+    Value,
+    condition_points,
+    defect_choices,
+    defects_table,
+    point_columns,
+)
+from brake_sim_ros.campaigns.splits import SPLITS, HeldOut, assign_units, unit_counts
+from brake_sim_ros.campaigns.toml_text import dumps
+from brake_sim_ros.errors import BrakeSimError
+from brake_sim_ros.model.catalogue import KIND_BY_NAME, KINDS
+from brake_sim_ros.scenarios.loader import (
+    _MISSING,
+    BUILTIN_PACKAGE,
+    MAX_SCENARIO_BYTES,
+    _Ctx,
+    _is_path,
+    builtin_names,
+    parse_scenario,
+    parse_toml,
+    read_scenario_text,
+    show_value,
+)
+
+CAMPAIGN_PACKAGE = "brake_sim_ros.campaigns.builtin"
+# What a run's scenario seed is derived for. The scenario's one seed draws its unit's
+# scatter, its conditions and its sensor noise: "run" gives every run its own (a unit id
+# then names a differently scattered brake in each run), "unit" one per unit (each unit
+# the same brake in all its runs, with the same noise and conditions draws in each)
+SEEDS_PER = ("run", "unit")
+MAX_RUNS = 100_000  # runs of one campaign (a manifest row and a file each)
+MAX_UNITS = 10_000
+DEFAULT_UNITS = 3  # the fewest that fill the default train/validation/test split
+MAX_AXIS_VALUES = 10_000
+# samples of one run: the run's history is kept in memory to be written (about 40 float64
+# columns: 2e6 samples is some 650 MB with the table's copy)
+MAX_RUN_SAMPLES = 2_000_000
+_NAME = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.-]{0,63}")
+_COLUMN = re.compile(r"[a-z][a-z0-9_]{0,63}")
+_KEY_PART = re.compile(r"[A-Za-z0-9_]{1,64}")
+# scenario keys no axis sets: the campaign sets them (name, unit) or they are text
+_NOT_VARIED = ("name", "unit_id", "description")
+# manifest columns of every run: an axis may not take one of these names
+RESERVED_COLUMNS = (
+    "run_id",
+    "unit_id",
+    "seed",
+    "split",
+    "status",
+    "error",
+    "cost_cpu_s",
+    "file",
+    "sha256",
+    "rows",
+    *DEFECT_COLUMNS,
+)
+
+
+class CampaignError(BrakeSimError, ValueError):
+    """A campaign file that cannot be loaded, in one line naming the file and the key."""
+
+
+@dataclass(frozen=True)
+class Outputs:
+    """What every run writes.
+
+    Attributes:
+        duration_s: simulated time per run, s (None: the base scenario's).
+        sample_rate_hz: output samples per second (None: the base scenario's).
+        columns: the history columns kept (``sample_index``, ``time_s`` and the label
+            columns are always kept); empty: every column.
+    """
+
+    duration_s: float | None = None
+    sample_rate_hz: float | None = None
+    columns: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class RunSpec:
+    """One run of a campaign, resolved: everything a worker needs, and its manifest row.
+
+    Attributes:
+        run_id: ``run-NNNNN``, its index among the campaign's unit x condition pairs.
+        unit_id: the brake unit it runs on.
+        seed: the scenario seed (an axis's, or derived from the campaign seed and the
+            run's identity with :class:`numpy.random.SeedSequence`).
+        split: ``train``, ``validation`` or ``test``.
+        columns: the varied values by manifest column.
+        labels: the defect label columns (``defect:<kind>:<location> [<unit>]``) -> severity.
+        scenario_text: the varied scenario as TOML (what the scenario loader read).
+        duration_s: its simulated duration, s.
+        keep: the history columns to keep (empty: all).
+    """
+
+    run_id: str
+    unit_id: str
+    seed: int
+    split: str
+    columns: dict[str, Value]
+    labels: dict[str, float]
+    scenario_text: str
+    duration_s: float
+    keep: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class Campaign:
+    """A loaded campaign file."""
+
+    name: str
+    description: str
+    source: str
+    text: str
+    base: str
+    base_text: str
+    seed: int
+    unit_ids: tuple[str, ...]
+    outputs: Outputs
+    axes: tuple[AnyAxis, ...]
+    draw_method: str
+    seeds_per: str  # "run" or "unit": what a scenario seed is derived for (SEEDS_PER)
+    draw_count: int
+    fractions: dict[str, float]
+    held_out: tuple[HeldOut, ...]
+    base_data: dict[str, Any] = field(default_factory=dict, repr=False, compare=False)
+
+    def runs(self) -> list[RunSpec]:
+        """Every run, in run-id order (see :func:`plan_runs`)."""
+        return plan_runs(self)
+
+    def lock_text(self, runs: list[RunSpec]) -> str:
+        """The ``campaign.lock``: the campaign and base scenario texts, the library version
+        and every run resolved (JSON, keys sorted, so the same campaign gives the same
+        bytes)."""
+        body = {
+            "campaign": self.name,
+            "campaign_source": self.source,
+            "campaign_sha256": hashlib.sha256(self.text.encode()).hexdigest(),
+            "campaign_toml": self.text,
+            "base_toml": self.base_text,
+            "version": __version__,
+            "held_out": [vars(h) for h in self.held_out],
+            "runs": [
+                {
+                    "run_id": r.run_id,
+                    "unit_id": r.unit_id,
+                    "seed": r.seed,
+                    "split": r.split,
+                    "columns": r.columns,
+                    "scenario_sha256": hashlib.sha256(r.scenario_text.encode()).hexdigest(),
+                }
+                for r in runs
+            ],
+        }
+        return json.dumps(body, sort_keys=True, indent=1) + "\n"
+
+
+# --- reading -------------------------------------------------------------------------------
+def builtin_campaigns() -> list[str]:
+    files = resources.files(CAMPAIGN_PACKAGE).iterdir()
+    return sorted(f.name[:-5] for f in files if f.name.endswith(".toml"))
+
+
+def load_campaign(name_or_path: str | os.PathLike[str]) -> Campaign:
+    """A built-in campaign by name, or a campaign file by path (read as hostile input with
+    the scenario files' limits: a regular file, at most 1 MiB of UTF-8 TOML).
+
+    Raises:
+        CampaignError: one line naming the file and the key.
+    """
+    text_path = os.fspath(name_or_path)
+    is_path = _is_path(name_or_path)
+    try:
+        if is_path:
+            text = read_scenario_text(name_or_path)
+            return parse_campaign(text, text_path, directory=Path(text_path).parent)
+        if text_path not in builtin_campaigns():
+            raise CampaignError(
+                f"unknown campaign {show_value(text_path) if text_path else repr('')}: allowed"
+                f" a path to a .toml file or one of the built-in campaigns {builtin_campaigns()}"
+            )
+        text = resources.files(CAMPAIGN_PACKAGE).joinpath(f"{text_path}.toml").read_text("utf-8")
+        return parse_campaign(text, f"<built-in campaign {text_path}>", directory=None)
+    except CampaignError:
+        raise
+    except BrakeSimError as exc:
+        message = str(exc).replace("scenario file", "campaign file")
+        raise CampaignError(message) from None
+
+
+def _base_text(ctx: _Ctx, base: Any, directory: Path | None) -> str:
+    """The base scenario's TOML text: a built-in name, or a path (relative to the
+    campaign file's directory)."""
+    if not isinstance(base, str) or not base:
+        raise ctx.fail("base", base, f"a built-in scenario {builtin_names()} or a .toml path")
+    if base in builtin_names() and not base.endswith(".toml"):
+        return resources.files(BUILTIN_PACKAGE).joinpath(f"{base}.toml").read_text("utf-8")
+    if not base.endswith(".toml"):
+        raise ctx.fail("base", base, f"a built-in scenario {builtin_names()} or a .toml path")
+    if directory is None:
+        raise ctx.fail("base", base, f"a built-in scenario {builtin_names()} (a built-in campaign)")
+    path = Path(base) if os.path.isabs(base) else directory / base
+    try:
+        return read_scenario_text(path)
+    except BrakeSimError as exc:
+        raise CampaignError(f"{ctx.source}: key 'base': {exc}") from None
+
+
+def parse_campaign(text: str, source: str, directory: Path | None = None) -> Campaign:
+    """Parse campaign TOML ``text`` (errors name ``source``); ``directory`` is where a
+    relative base path is found (None: only built-in bases).
+
+    Raises:
+        CampaignError: anything wrong, in one line.
+    """
+    if len(text) > MAX_SCENARIO_BYTES:
+        raise CampaignError(f"{source}: {len(text)} characters: allowed at most 1 MiB")
+    try:
+        data = parse_toml(text, source)
+        return _parse(data, text, source, directory)
+    except CampaignError:
+        raise
+    except BrakeSimError as exc:
+        raise CampaignError(str(exc)) from None
+
+
+def _integer(ctx: _Ctx, value: Any, key: str, lo: int, hi: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, int) or not lo <= value <= hi:
+        raise ctx.fail(key, value, f"an integer from {lo} to {hi}")
+    return value
+
+
+def _parse(data: dict[str, Any], text: str, source: str, directory: Path | None) -> Campaign:
+    ctx = _Ctx(source)
+    keys = {"name", "description", "base", "seed", "seeds", "units", "unit_ids", "outputs", "axes"}
+    top = ctx.table(data, "", keys | {"draws", "split"})
+    if "name" not in top:
+        raise ctx.fail("name", _MISSING, "a campaign name; it is required")
+    name = top["name"]
+    if not isinstance(name, str) or not _NAME.fullmatch(name):
+        raise ctx.fail(
+            "name", name, "1 to 64 characters of A-Z a-z 0-9 _ . -, not starting with '.' or '-'"
+        )
+    if "base" not in top:
+        raise ctx.fail("base", _MISSING, "a base scenario (built-in name or .toml path)")
+    base_text = _base_text(ctx, top["base"], directory)
+    base_data = parse_toml(base_text, f"{source}: base {top['base']}")
+    parse_scenario(base_text, f"{source}: base scenario")  # refused here, not per run
+    seed = _integer(ctx, top.get("seed", 0), "seed", 0, 2**63 - 1)
+    unit_ids = _units(ctx, top)
+    outputs = _outputs(ctx, top.get("outputs", {}))
+    axes = _axes(ctx, top.get("axes", []))
+    method, count = _draws(ctx, top.get("draws"), axes)
+    fractions, held_out = _split(ctx, top.get("split", {}), axes)
+    try:
+        unit_counts(len(unit_ids), fractions)
+    except ValueError as exc:
+        key = "unit_ids" if "unit_ids" in top else "units"
+        raise CampaignError(f"{source}: key '{key}': {exc}") from None
+    campaign = Campaign(
+        name=name,
+        description=ctx.string(top.get("description", ""), "description"),
+        source=source,
+        text=text,
+        base=top["base"],
+        base_text=base_text,
+        seed=seed,
+        unit_ids=unit_ids,
+        outputs=outputs,
+        axes=axes,
+        draw_method=method,
+        seeds_per=ctx.string(top.get("seeds", "run"), "seeds", SEEDS_PER),
+        draw_count=count,
+        fractions=fractions,
+        held_out=held_out,
+        base_data=base_data,
+    )
+    n_points = math.prod(
+        len(a.choices) if isinstance(a, DefectAxis) else len(a.values) or 1 for a in axes
+    ) * (count if any(isinstance(a, Axis) and a.uniform for a in axes) else 1)
+    if n_points * len(unit_ids) > MAX_RUNS:
+        raise ctx.fail(
+            "axes",
+            top.get("axes", []),
+            f"at most {MAX_RUNS} runs (units x conditions); this campaign has"
+            f" {len(unit_ids)} x {n_points}",
+        )
+    return campaign
+
+
+def _units(ctx: _Ctx, top: dict[str, Any]) -> tuple[str, ...]:
+    if "units" in top and "unit_ids" in top:
+        raise ctx.fail(
+            "unit_ids", top["unit_ids"], "either 'units' (a count) or 'unit_ids', not both"
+        )
+    if "unit_ids" in top:
+        ids = top["unit_ids"]
+        if not isinstance(ids, list) or not 0 < len(ids) <= MAX_UNITS:
+            raise ctx.fail("unit_ids", ids, f"an array of 1 to {MAX_UNITS} unit ids")
+        for i, unit in enumerate(ids):
+            if not isinstance(unit, str) or not _NAME.fullmatch(unit):
+                raise ctx.fail(f"unit_ids[{i}]", unit, "1 to 64 characters of A-Z a-z 0-9 _ . -")
+        if len(set(ids)) != len(ids):
+            raise ctx.fail("unit_ids", ids, "distinct unit ids")
+        return tuple(ids)
+    n = _integer(ctx, top.get("units", DEFAULT_UNITS), "units", 1, MAX_UNITS)
+    return tuple(f"unit-{i:04d}" for i in range(n))
+
+
+def _outputs(ctx: _Ctx, data: Any) -> Outputs:
+    data = ctx.table(data, "outputs", {"duration_s", "sample_rate_hz", "columns"})
+    duration = data.get("duration_s")
+    if duration is not None:
+        duration = ctx.number(duration, "outputs.duration_s", 0.0, 3600.0, lo_open=True)
+    rate = data.get("sample_rate_hz")
+    if rate is not None:
+        rate = ctx.number(rate, "outputs.sample_rate_hz", 1.0, 1e6)
+    columns = data.get("columns", [])
+    if (
+        not isinstance(columns, list)
+        or len(columns) > 1000
+        or any(not isinstance(c, str) or not 0 < len(c) <= 200 for c in columns)
+        or len(set(columns)) != len(columns)
+    ):
+        raise ctx.fail("outputs.columns", columns, "an array of distinct column names")
+    return Outputs(duration, rate, tuple(columns))
+
+
+def _values(ctx: _Ctx, values: Any, key: str) -> tuple[Value, ...]:
+    if not isinstance(values, list) or not 0 < len(values) <= MAX_AXIS_VALUES:
+        raise ctx.fail(key, values, f"an array of 1 to {MAX_AXIS_VALUES} values")
+    kinds = set()
+    for i, v in enumerate(values):
+        if isinstance(v, bool):
+            kinds.add("bool")
+        elif isinstance(v, int | float):
+            if isinstance(v, float) and not math.isfinite(v):
+                raise ctx.fail(f"{key}[{i}]", v, "a finite number")
+            kinds.add("number")
+        elif isinstance(v, str):
+            kinds.add("string")
+        else:
+            raise ctx.fail(f"{key}[{i}]", v, "a number, string or boolean")
+    if len(kinds) > 1:
+        raise ctx.fail(key, values, "values of one type (numbers, strings or booleans)")
+    if len(set(values)) != len(values):
+        raise ctx.fail(key, values, "distinct values")
+    return tuple(values)
+
+
+def _axes(ctx: _Ctx, data: Any) -> tuple[AnyAxis, ...]:
+    if not isinstance(data, list) or len(data) > 32:
+        raise ctx.fail("axes", data, "an array of at most 32 [[axes]] tables")
+    axes: list[AnyAxis] = []
+    for i, item in enumerate(data):
+        where = f"axes[{i}]"
+        if isinstance(item, dict) and "defects" in item:
+            axes.append(_defect_axis(ctx, item, where))
+            continue
+        item = ctx.table(item, where, {"name", "key", "values", "linspace", "uniform"})
+        key = item.get("key")
+        parts = key.split(".") if isinstance(key, str) else []
+        if not parts or len(parts) > 8 or not all(_KEY_PART.fullmatch(p) for p in parts):
+            raise ctx.fail(
+                f"{where}.key",
+                _MISSING if key is None else key,
+                "a dotted scenario key, e.g. 'actuation.peak_force_n'",
+            )
+        if parts[0] in _NOT_VARIED or parts[0] == "defects":
+            raise ctx.fail(
+                f"{where}.key",
+                key,
+                "a scenario key other than name, unit_id (set by 'units') and description;"
+                " defects through an axis with 'defects'",
+            )
+        name = item.get("name", key.replace(".", "_"))
+        if not isinstance(name, str) or not _COLUMN.fullmatch(name) or name in RESERVED_COLUMNS:
+            raise ctx.fail(
+                f"{where}.name",
+                name,
+                "a column name of a-z 0-9 _ (starting with a letter), not one of"
+                f" {list(RESERVED_COLUMNS)}",
+            )
+        given = [k for k in ("values", "linspace", "uniform") if k in item]
+        if len(given) != 1:
+            raise ctx.fail(where, item, "exactly one of 'values', 'linspace', 'uniform'")
+        if "values" in item:
+            axes.append(Axis(name, key, values=_values(ctx, item["values"], f"{where}.values")))
+        elif "linspace" in item:
+            axes.append(
+                Axis(name, key, values=_linspace(ctx, item["linspace"], f"{where}.linspace"))
+            )
+        else:
+            lohi = item["uniform"]
+            if not isinstance(lohi, list) or len(lohi) != 2:
+                raise ctx.fail(f"{where}.uniform", lohi, "[low, high]")
+            lo = ctx.number(lohi[0], f"{where}.uniform[0]")
+            hi = ctx.number(lohi[1], f"{where}.uniform[1]", lo, math.inf, lo_open=True)
+            axes.append(Axis(name, key, uniform=(lo, hi)))
+    names = [a.name for a in axes]
+    if len(set(names)) != len(names):
+        raise ctx.fail("axes", data, "axes of distinct names (and at most one defect axis)")
+    keys = [a.key for a in axes if isinstance(a, Axis)]
+    if len(set(keys)) != len(keys):
+        raise ctx.fail("axes", data, "axes of distinct keys")
+    return tuple(axes)
+
+
+def _linspace(ctx: _Ctx, value: Any, key: str) -> tuple[Value, ...]:
+    if not isinstance(value, list) or len(value) != 3:
+        raise ctx.fail(key, value, "[start, stop, num]: num evenly spaced values, both ends in")
+    start = ctx.number(value[0], f"{key}[0]")
+    stop = ctx.number(value[1], f"{key}[1]")
+    num = _integer(ctx, value[2], f"{key}[2]", 2, MAX_AXIS_VALUES)
+    values = tuple(float(v) for v in np.linspace(start, stop, num))
+    if len(set(values)) != len(values):
+        raise ctx.fail(key, value, "distinct values (start differs from stop)")
+    return values
+
+
+def _defect_axis(ctx: _Ctx, item: dict[str, Any], where: str) -> DefectAxis:
+    item = ctx.table(item, where, {"name", "defects", "severities", "healthy"})
+    if item.get("name", DEFECT_AXIS) != DEFECT_AXIS:
+        raise ctx.fail(f"{where}.name", item["name"], f"'{DEFECT_AXIS}' for the defect axis")
+    kinds = item["defects"]
+    allowed = [k.name for k in KINDS]
+    if kinds == "all":
+        kinds = allowed
+    if (
+        not isinstance(kinds, list)
+        or not kinds
+        or any(not isinstance(k, str) or k not in KIND_BY_NAME for k in kinds)
+        or len(set(kinds)) != len(kinds)
+    ):
+        raise ctx.fail(f"{where}.defects", kinds, f'"all" or distinct kinds from {allowed}')
+    fractions = item.get("severities", [1.0])
+    if not isinstance(fractions, list) or not 0 < len(fractions) <= 100:
+        raise ctx.fail(
+            f"{where}.severities", fractions, "an array of fractions of each kind's service limit"
+        )
+    values = tuple(
+        ctx.number(f, f"{where}.severities[{i}]", 0.0, 10.0, lo_open=True)
+        for i, f in enumerate(fractions)
+    )
+    if len(set(values)) != len(values):
+        raise ctx.fail(f"{where}.severities", fractions, "distinct fractions")
+    healthy = item.get("healthy", True)
+    if not isinstance(healthy, bool):
+        raise ctx.fail(f"{where}.healthy", healthy, "true or false")
+    choices = defect_choices(tuple(kinds), values, healthy)
+    for c in choices:  # a fraction beyond a kind's range: refused here, naming it
+        if c.kind in KIND_BY_NAME:
+            try:
+                KIND_BY_NAME[c.kind].check(c.severity, f"{c.location} ")
+            except BrakeSimError as exc:
+                raise CampaignError(f"{ctx.source}: key '{where}.severities': {exc}") from None
+    return DefectAxis(choices)
+
+
+def _draws(ctx: _Ctx, data: Any, axes: tuple[AnyAxis, ...]) -> tuple[str, int]:
+    drawn = any(isinstance(a, Axis) and a.uniform is not None for a in axes)
+    if data is None:
+        if drawn:
+            raise ctx.fail("draws", _MISSING, "a [draws] table (method, n) for the 'uniform' axes")
+        return "lhs", 0
+    data = ctx.table(data, "draws", {"method", "n"})
+    if not drawn:
+        raise ctx.fail("draws", data, "no [draws] table without an axis of 'uniform' values")
+    method = ctx.string(data.get("method", "lhs"), "draws.method", DRAW_METHODS)
+    if "n" not in data:
+        raise ctx.fail("draws.n", _MISSING, "the number of drawn points")
+    return method, _integer(ctx, data["n"], "draws.n", 1, MAX_RUNS)
+
+
+def _split(
+    ctx: _Ctx, data: Any, axes: tuple[AnyAxis, ...]
+) -> tuple[dict[str, float], tuple[HeldOut, ...]]:
+    data = ctx.table(data, "split", {*SPLITS, "held_out"})
+    fractions = {s: ctx.number(data.get(s, 0.0), f"split.{s}", 0.0, 1.0) for s in SPLITS}
+    if not data.keys() & set(SPLITS):
+        fractions = {"train": 0.6, "validation": 0.2, "test": 0.2}
+    if abs(sum(fractions.values()) - 1.0) > 1e-9:
+        raise ctx.fail("split", data, "train + validation + test fractions summing to 1")
+    columns = set()
+    for a in axes:
+        columns |= set(DEFECT_COLUMNS) if isinstance(a, DefectAxis) else {a.name}
+    rules = data.get("held_out", [])
+    if not isinstance(rules, list) or len(rules) > 32:
+        raise ctx.fail(
+            "split.held_out", rules, "an array of at most 32 tables {column, values | min, max}"
+        )
+    held = []
+    for i, rule in enumerate(rules):
+        where = f"split.held_out[{i}]"
+        rule = ctx.table(rule, where, {"column", "values", "min", "max"})
+        column = rule.get("column")
+        if column not in columns:
+            raise ctx.fail(
+                f"{where}.column",
+                _MISSING if column is None else column,
+                f"a varied column, one of {sorted(columns)}",
+            )
+        values = _values(ctx, rule["values"], f"{where}.values") if "values" in rule else ()
+        lo = ctx.number(rule["min"], f"{where}.min") if "min" in rule else None
+        hi = ctx.number(rule["max"], f"{where}.max") if "max" in rule else None
+        if not values and lo is None and hi is None:
+            raise ctx.fail(where, rule, "'values', or a range 'min'/'max'")
+        held.append(HeldOut(column, values, lo, hi))
+    if held and fractions["test"] == 0.0:
+        raise ctx.fail("split.test", 0.0, "a test fraction > 0 when values are held out")
+    return fractions, tuple(held)
+
+
+# --- planning ------------------------------------------------------------------------------
+def _set(data: dict[str, Any], key: str, value: Any, where: str) -> None:
+    """Set the dotted ``key`` in the TOML data (tables made as needed)."""
+    parts = key.split(".")
+    table = data
+    for part in parts[:-1]:
+        table = table.setdefault(part, {})
+        if not isinstance(table, dict):
+            raise CampaignError(
+                f"{where}: key '{key}': '{part}' is not a table in the base scenario"
+            )
+    table[parts[-1]] = value
+
+
+def run_seed(campaign_seed: int, unit_id: str, columns: dict[str, Value]) -> int:
+    """A run's seed from the campaign seed and the run's identity (its unit and varied
+    values), through :class:`numpy.random.SeedSequence`: the same run, the same seed,
+    whatever else the campaign holds; never Python's salted ``hash()``."""
+    identity = json.dumps({"unit_id": unit_id, **columns}, sort_keys=True).encode()
+    digest = hashlib.sha256(identity).digest()
+    words = tuple(int.from_bytes(digest[i : i + 4], "little") for i in range(0, 32, 4))
+    state = np.random.SeedSequence(campaign_seed, spawn_key=words).generate_state(2, np.uint64)
+    return int(((int(state[0]) << 64) | int(state[1])) % 2**63)
+
+
+def plan_runs(campaign: Campaign) -> list[RunSpec]:
+    """Every run of ``campaign``: each unit x each condition point (units outer), a run id
+    by that index; a condition with a held-out value runs on test units only (its index is
+    skipped on the others). Each varied scenario is read by the scenario loader.
+
+    Raises:
+        CampaignError: a varied scenario the scenario loader refuses (naming the run).
+    """
+    base = campaign.base_data
+    points = condition_points(
+        campaign.axes, campaign.draw_method, campaign.draw_count, campaign.seed
+    )
+    split_of = assign_units(campaign.unit_ids, campaign.fractions, campaign.seed)
+    axes = {a.name: a for a in campaign.axes}
+    runs = []
+    index = 0
+    for unit in campaign.unit_ids:
+        for point in points:
+            run_id = f"run-{index:05d}"
+            index += 1
+            columns = point_columns(point)
+            held = any(rule.matches(columns) for rule in campaign.held_out)
+            split = split_of[unit]
+            if held and split != "test":
+                continue
+            data = copy.deepcopy(base)
+            where = f"{campaign.source} {run_id}"
+            for name, value in point.items():
+                if isinstance(value, DefectChoice):
+                    data["defects"] = defects_table(value.defects())
+                else:
+                    _set(data, axes[name].key, value, where)
+            if campaign.outputs.duration_s is not None:
+                data["duration_s"] = campaign.outputs.duration_s
+            if campaign.outputs.sample_rate_hz is not None:
+                data["sample_rate_hz"] = campaign.outputs.sample_rate_hz
+            seeded = any(isinstance(a, Axis) and a.key == "seed" for a in campaign.axes)
+            identity = columns if campaign.seeds_per == "run" else {}
+            seed = data.get("seed", 0) if seeded else run_seed(campaign.seed, unit, identity)
+            data.update(name=f"{campaign.name}.{run_id}", unit_id=unit, seed=seed)
+            text = dumps(data)
+            try:
+                scenario = parse_scenario(text, where)
+            except BrakeSimError as exc:
+                raise CampaignError(f"{exc} (a varied scenario of the campaign)") from None
+            samples = scenario.duration_s * scenario.sample_rate_hz
+            if samples > MAX_RUN_SAMPLES:
+                raise CampaignError(
+                    f"{where}: {scenario.duration_s:g} s at {scenario.sample_rate_hz:g} Hz is"
+                    f" {samples:.3g} samples: allowed at most {MAX_RUN_SAMPLES} per run (the run"
+                    " is kept in memory to be written); shorten the runs or lower the rate"
+                )
+            defect = next((v for v in point.values() if isinstance(v, DefectChoice)), None)
+            if defect is not None and scenario.setup.defects != defect.defects():
+                raise CampaignError(f"{where}: the defect axis's defect did not reach the scenario")
+            runs.append(
+                RunSpec(
+                    run_id=run_id,
+                    unit_id=unit,
+                    seed=seed,
+                    split=split,
+                    columns=columns,
+                    labels=scenario.setup.defects.severities(),
+                    scenario_text=text,
+                    duration_s=scenario.duration_s,
+                    keep=campaign.outputs.columns,
+                )
+            )
+    return runs

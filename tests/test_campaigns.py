@@ -1,0 +1,325 @@
+"""Campaign files: strict loading, the plan of runs, seeds, and leak-free splits."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import tomllib
+
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from brake_sim_ros.campaigns import CampaignError, builtin_campaigns, load_campaign, parse_campaign
+from brake_sim_ros.campaigns.axes import DefectChoice, defect_choices
+from brake_sim_ros.campaigns.loader import run_seed
+from brake_sim_ros.campaigns.splits import SPLITS, HeldOut, leaks, unit_counts
+from brake_sim_ros.campaigns.toml_text import dumps
+from brake_sim_ros.model.catalogue import KINDS
+from brake_sim_ros.scenarios import parse_scenario
+
+TINY = """
+name = "tiny"
+base = "symmetric"
+seed = 3
+units = 4
+[outputs]
+duration_s = 0.2
+sample_rate_hz = 2560.0
+[[axes]]
+defects = ["initial_angle", "drum_out_of_round"]
+severities = [0.5, 1.0]
+[[axes]]
+name = "peak_force_n"
+key = "actuation.peak_force_n"
+values = [1100.0, 1300.0]
+[split]
+train = 0.5
+validation = 0.25
+test = 0.25
+[[split.held_out]]
+column = "defect_severity"
+values = [-2.0]
+"""
+
+
+def _splits_by_unit(runs):
+    out: dict[str, set[str]] = {}
+    for r in runs:
+        out.setdefault(r.unit_id, set()).add(r.split)
+    return out
+
+
+@pytest.mark.parametrize("name", builtin_campaigns())
+def test_builtin_campaigns_are_leak_free(name):
+    campaign = load_campaign(name)
+    runs = campaign.runs()
+    assert runs
+    assert all(len(s) == 1 for s in _splits_by_unit(runs).values())
+    rows = [{"run_id": r.run_id, "unit_id": r.unit_id, "split": r.split, **r.columns} for r in runs]
+    assert leaks(rows, campaign.held_out) == []
+    held = [r for r in rows if any(h.matches(r) for h in campaign.held_out)]
+    assert all(r["split"] == "test" for r in held)
+    assert not campaign.held_out or held  # a held-out rule that matches nothing tests nothing
+
+
+def test_demo_has_every_catalogue_defect_at_two_severities_on_three_units():
+    runs = load_campaign("demo").runs()
+    assert len({r.unit_id for r in runs}) == 3
+    kinds = {(r.columns["defect_kind"], r.columns["defect_location"]) for r in runs}
+    assert kinds >= {(k.name, loc) for k in KINDS for loc in k.locations}
+    for kind in KINDS:
+        severities = {
+            r.columns["defect_severity"] for r in runs if r.columns["defect_kind"] == kind.name
+        }
+        assert severities == {0.5 * kind.service_limit, kind.service_limit}
+        # the label column of the run carries the severity the axis asked for (a share
+        # change is stored as the share, 0.5 + severity: equal to rounding)
+        for r in runs:
+            if r.columns["defect_kind"] == kind.name:
+                label = f"defect:{kind.name}:{r.columns['defect_location']} [{kind.unit}]"
+                assert r.labels[label] == pytest.approx(r.columns["defect_severity"], abs=1e-12)
+                assert sum(v != 0.0 for v in r.labels.values()) == 1 + (
+                    kind.name == "actuation_share_change"
+                )
+
+
+def test_plan_crosses_units_and_axes_and_holds_values_out():
+    campaign = parse_campaign(TINY, "tiny.toml")
+    runs = campaign.runs()
+    # (initial_angle at 2 sides + drum at 1) x 2 severities + healthy, x 2 forces
+    n_points = ((2 + 1) * 2 + 1) * 2
+    by_unit = _splits_by_unit(runs)
+    assert sorted(len(v) for v in by_unit.values()) == [1, 1, 1, 1]
+    assert sorted(s for v in by_unit.values() for s in v) == [
+        "test",
+        "train",
+        "train",
+        "validation",
+    ]
+    held = [r for r in runs if r.columns["defect_severity"] == -2.0]
+    assert held and all(r.split == "test" for r in held)
+    test_units = [u for u, s in by_unit.items() if s == {"test"}]
+    # held-out points (initial angle -2 deg at two sides, two forces) are skipped elsewhere
+    assert len(runs) == 4 * n_points - 3 * 4
+    assert {r.unit_id for r in held} == set(test_units)
+    # every varied scenario is what the scenario loader reads, with unit and seed set
+    for r in runs[:5]:
+        scenario = parse_scenario(r.scenario_text, r.run_id)
+        assert scenario.unit_id == r.unit_id
+        assert scenario.seed == r.seed
+        assert scenario.duration_s == 0.2
+        assert scenario.setup.actuation.left.forces_n[-1] == r.columns["peak_force_n"]
+    assert len({r.run_id for r in runs}) == len(runs)
+
+
+def test_seeds_come_from_the_campaign_seed_and_the_run_identity_not_hash():
+    runs = parse_campaign(TINY, "tiny.toml").runs()
+    assert len({r.seed for r in runs}) == len(runs)
+    more = parse_campaign(TINY.replace("units = 4", "units = 5"), "tiny.toml").runs()
+    seeds = {(r.unit_id, r.run_id): r.seed for r in more}
+    for r in runs:  # adding a unit changes no other run's seed
+        if (r.unit_id, r.run_id) in seeds:
+            assert seeds[(r.unit_id, r.run_id)] == r.seed
+    other = parse_campaign(TINY.replace("seed = 3", "seed = 4"), "tiny.toml").runs()
+    assert not {r.seed for r in runs} & {r.seed for r in other}
+    code = (
+        "from brake_sim_ros.campaigns.loader import run_seed;"
+        "print(run_seed(3, 'u', {'a': 1.0, 'b': 'x'}))"
+    )
+    printed = {
+        subprocess.run(
+            [sys.executable, "-c", code],
+            env={"PYTHONHASHSEED": salt, "PYTHONPATH": ":".join(sys.path)},
+            capture_output=True,
+            text=True,
+            check=True,
+        ).stdout.strip()
+        for salt in ("1", "2")
+    }
+    assert printed == {str(run_seed(3, "u", {"a": 1.0, "b": "x"}))}
+
+
+def test_drawn_axes_are_reproducible_and_within_their_range():
+    text = (
+        TINY.replace("values = [1100.0, 1300.0]", "uniform = [900.0, 1500.0]")
+        + "[draws]\nmethod = 'lhs'\nn = 5\n"
+    )
+    a = parse_campaign(text, "t.toml").runs()
+    b = parse_campaign(text, "t.toml").runs()
+    forces = [r.columns["peak_force_n"] for r in a]
+    assert forces == [r.columns["peak_force_n"] for r in b]
+    assert all(900.0 <= f <= 1500.0 for f in forces)
+    first_unit = sorted({f for r, f in zip(a, forces, strict=True) if r.unit_id == a[0].unit_id})
+    # a Latin hypercube: one draw in each fifth of the range
+    assert sorted(int((f - 900.0) // 120.0) for f in first_unit) == [0, 1, 2, 3, 4]
+
+
+BAD = [
+    ("name = 'x'\nbase = 'symmetric'\nsurprise = 1\n", "key 'surprise'"),
+    ("base = 'symmetric'\n", "key 'name' is missing"),
+    ("name = 'x'\nbase = 'nope'\n", "key 'base'"),
+    ("name = 'x'\nbase = 'symmetric'\nunits = 0\n", "key 'units'"),
+    ("name = 'x'\nbase = 'symmetric'\nunits = 2\n", "2 unit(s) cannot fill"),
+    ("name = 'x'\nbase = 'symmetric'\nseed = -1\n", "key 'seed'"),
+    ("name = 'x'\nbase = 'symmetric'\n[outputs]\nduration_s = 0\n", "outputs.duration_s"),
+    ("name = 'x'\nbase = 'symmetric'\n[[axes]]\nkey = 'actuation.peak_force_n'\n"
+     "values = ['a', 1]\n", "axes[0].values"),
+    ("name = 'x'\nbase = 'symmetric'\n[[axes]]\nkey = 'unit_id'\nvalues = ['a']\n", "axes[0].key"),
+    ("name = 'x'\nbase = 'symmetric'\n[[axes]]\nkey = 'a..b'\nvalues = [1]\n", "axes[0].key"),
+    ("name = 'x'\nbase = 'symmetric'\n[[axes]]\nkey = 'actuation.peak_force_n'\nuniform = [1, 2]\n",
+     "key 'draws' is missing"),
+    ("name = 'x'\nbase = 'symmetric'\n[[axes]]\ndefects = ['rust']\n", "axes[0].defects"),
+    ("name = 'x'\nbase = 'symmetric'\n[[axes]]\ndefects = 'all'\nseverities = [9.0]\n",
+     "axes[0].severities"),
+    ("name = 'x'\nbase = 'symmetric'\n[split]\ntrain = 0.5\ntest = 0.2\n", "key 'split'"),
+    ("name = 'x'\nbase = 'symmetric'\n[[split.held_out]]\ncolumn = 'q'\nvalues = [1]\n",
+     "split.held_out[0].column"),
+    # a varied scenario the scenario loader refuses: the run and the scenario key named
+    ("name = 'x'\nbase = 'symmetric'\nunits = 3\n[[axes]]\nkey = 'actuation.peak_force_n'\n"
+     "values = [1300.0, 60000.0]\n", "key 'actuation.peak_force_n' = 60000.0"),
+    ("name = 'x'\nbase = 'symmetric'\nunits = 3\n[[axes]]\nkey = 'actuation.nonsense'\n"
+     "values = [1.0]\n", "key 'actuation.nonsense'"),
+    ("name = 'x'\nbase = 'symmetric'\nunits = 3\n[outputs]\nduration_s = 3600\n", "samples"),
+    ("name = 'x'\nbase = 'symmetric'\nnot toml", "not valid TOML"),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize(("text", "expected"), BAD)
+def test_bad_campaigns_are_refused_in_one_line_naming_file_and_key(text, expected):
+    with pytest.raises(CampaignError) as info:
+        parse_campaign(text, "bad.toml").runs()
+    message = str(info.value)
+    assert "\n" not in message
+    assert "bad.toml" in message
+    assert expected in message
+
+
+def test_a_relative_base_path_is_read_beside_the_campaign(tmp_path):
+    (tmp_path / "base.toml").write_text("name = 'b'\nduration_s = 0.1\n")
+    (tmp_path / "c.toml").write_text("name = 'c'\nbase = 'base.toml'\nunits = 3\n")
+    runs = load_campaign(tmp_path / "c.toml").runs()
+    assert [parse_scenario(r.scenario_text).duration_s for r in runs] == [0.1, 0.1, 0.1]
+    with pytest.raises(CampaignError, match="no such file"):
+        load_campaign(tmp_path / "missing.toml")
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    st.dictionaries(
+        st.text(min_size=1, max_size=8),
+        st.recursive(
+            st.none().map(lambda _: 0)
+            | st.booleans()
+            | st.integers(-(2**63), 2**63 - 1)
+            | st.floats(allow_nan=False)
+            | st.text(max_size=12),
+            lambda inner: (
+                st.lists(inner, max_size=3)
+                | st.dictionaries(st.text(max_size=5), inner, max_size=3)
+            ),
+            max_leaves=8,
+        ),
+        max_size=5,
+    )
+)
+def test_toml_text_round_trips(data):
+    assert tomllib.loads(dumps(data)) == data
+
+
+@st.composite
+def _campaigns(draw):
+    n_units = draw(st.integers(1, 9))
+    fractions = draw(
+        st.sampled_from(
+            [(0.6, 0.2, 0.2), (0.8, 0.0, 0.2), (0.5, 0.5, 0.0), (1.0, 0.0, 0.0), (0.34, 0.33, 0.33)]
+        )
+    )
+    forces = draw(
+        st.lists(
+            st.sampled_from([900.0, 1100.0, 1300.0, 1500.0]), min_size=1, max_size=3, unique=True
+        )
+    )
+    kinds = draw(
+        st.lists(st.sampled_from([k.name for k in KINDS]), min_size=1, max_size=2, unique=True)
+    )
+    held = draw(st.sampled_from(["", "force", "kind", "range"]))
+    text = (
+        f"name = 'r'\nbase = 'symmetric'\nseed = {draw(st.integers(0, 2**63 - 1))}\n"
+        f"units = {n_units}\n[outputs]\nduration_s = 0.1\n"
+        f"[[axes]]\ndefects = {kinds!r}\nseverities = [1.0]\n"
+        f"[[axes]]\nname = 'force'\nkey = 'actuation.peak_force_n'\nvalues = {forces!r}\n"
+        f"[split]\ntrain = {fractions[0]}\nvalidation = {fractions[1]}\ntest = {fractions[2]}\n"
+    )
+    if held == "force":
+        text += f"[[split.held_out]]\ncolumn = 'force'\nvalues = [{forces[0]}]\n"
+    elif held == "kind":
+        text += f"[[split.held_out]]\ncolumn = 'defect_kind'\nvalues = ['{kinds[0]}']\n"
+    elif held == "range":
+        text += "[[split.held_out]]\ncolumn = 'force'\nmin = 1000.0\nmax = 1200.0\n"
+    return text, n_units, fractions
+
+
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(_campaigns())
+def test_random_campaigns_are_leak_free(case):
+    text, n_units, fractions = case
+    wanted = sum(f > 0 for f in fractions)
+    try:
+        campaign = parse_campaign(text, "r.toml")
+        runs = campaign.runs()
+    except CampaignError as exc:
+        # the only refusals: too few units for the splits, or a held-out rule without test
+        assert n_units < wanted or fractions[2] == 0.0, str(exc)
+        return
+    assert n_units >= wanted
+    by_unit = _splits_by_unit(runs)
+    assert all(len(s) == 1 for s in by_unit.values())  # no unit in two splits
+    counts = unit_counts(n_units, dict(zip(SPLITS, fractions, strict=True)))
+    assert all(counts[s] >= 1 for s, f in zip(SPLITS, fractions, strict=True) if f > 0)
+    rows = [{"run_id": r.run_id, "unit_id": r.unit_id, "split": r.split, **r.columns} for r in runs]
+    assert leaks(rows, campaign.held_out) == []
+    for rule in campaign.held_out:
+        assert all(r["split"] == "test" for r in rows if rule.matches(r))
+
+
+def test_leaks_finds_a_unit_in_two_splits_and_a_held_out_value_outside_test():
+    rows = [
+        {"run_id": "a", "unit_id": "u1", "split": "train", "force": 1.0},
+        {"run_id": "b", "unit_id": "u1", "split": "test", "force": 2.0},
+        {"run_id": "c", "unit_id": "u2", "split": "validation", "force": 2.0},
+    ]
+    problems = leaks(rows, [HeldOut("force", (2.0,))])
+    assert any("unit u1" in p for p in problems)
+    assert any("run c" in p for p in problems)
+    assert leaks(rows[:1] + rows[2:], []) == []
+
+
+def test_defect_choices_cover_the_catalogue_and_build_one_defect_each():
+    choices = defect_choices(tuple(k.name for k in KINDS), (1.0,), healthy=True)
+    assert choices[0] == DefectChoice("healthy", "", 0.0)
+    assert choices[0].defects().is_healthy
+    for c in choices[1:]:
+        found = {(d.kind, d.location): d.severity for d in c.defects().active()}
+        assert found[(c.kind, c.location)] == pytest.approx(c.severity, abs=1e-12)
+        # one defect; a share change moves the other shoe's share with it
+        assert set(found) == {(c.kind, c.location)} or c.kind == "actuation_share_change"
+
+
+def test_seeds_per_unit_make_each_unit_one_brake_in_all_its_runs():
+    """The scenario's one seed draws the unit's scatter: per run, a unit id names another
+    brake in each run; per unit, the same brake (and different brakes across units)."""
+    text = TINY.replace("seed = 3\n", "seed = 3\nseeds = 'unit'\n")
+    runs = parse_campaign(text, "t.toml").runs()
+    brakes: dict[str, set] = {}
+    for r in runs:
+        scenario = parse_scenario(r.scenario_text, r.run_id)
+        brakes.setdefault(r.unit_id, set()).add((r.seed, scenario.setup.params))
+    assert all(len(b) == 1 for b in brakes.values())
+    assert len({next(iter(b)) for b in brakes.values()}) == len(brakes)
+    per_run = parse_campaign(TINY, "t.toml").runs()[:2]
+    assert per_run[0].unit_id == per_run[1].unit_id
+    params = [parse_scenario(r.scenario_text).setup.params for r in per_run]
+    assert params[0] != params[1]
+    with pytest.raises(CampaignError, match="key 'seeds'"):
+        parse_campaign(TINY.replace("seed = 3\n", "seed = 3\nseeds = 'fleet'\n"), "t.toml")
