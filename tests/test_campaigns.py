@@ -306,20 +306,18 @@ def test_defect_choices_cover_the_catalogue_and_build_one_defect_each():
         assert set(found) == {(c.kind, c.location)} or c.kind == "actuation_share_change"
 
 
-def test_seeds_per_unit_make_each_unit_one_brake_in_all_its_runs():
-    """The scenario's one seed draws the unit's scatter: per run, a unit id names another
-    brake in each run; per unit, the same brake (and different brakes across units)."""
-    text = TINY.replace("seed = 3\n", "seed = 3\nseeds = 'unit'\n")
-    runs = parse_campaign(text, "t.toml").runs()
+def test_each_unit_is_one_brake_in_all_its_runs_each_run_its_own_seed():
+    """The campaign's units are one fleet (fleet_seed = the campaign seed): a unit is the
+    same brake in all its runs, units differ from one another, and every run has its own
+    seed (its noise and draws)."""
+    runs = parse_campaign(TINY, "t.toml").runs()
     brakes: dict[str, set] = {}
     for r in runs:
         scenario = parse_scenario(r.scenario_text, r.run_id)
-        brakes.setdefault(r.unit_id, set()).add((r.seed, scenario.setup.params))
+        assert scenario.fleet_seed == 3
+        brakes.setdefault(r.unit_id, set()).add(scenario.setup.params)
     assert all(len(b) == 1 for b in brakes.values())
-    assert len({next(iter(b)) for b in brakes.values()}) == len(brakes)
-    per_run = parse_campaign(TINY, "t.toml").runs()[:2]
-    assert per_run[0].unit_id == per_run[1].unit_id
-    params = [parse_scenario(r.scenario_text).setup.params for r in per_run]
-    assert params[0] != params[1]
+    assert len({next(iter(b)) for b in brakes.values()}) == len(brakes) > 1
+    assert len({r.seed for r in runs}) == len(runs)
     with pytest.raises(CampaignError, match="key 'seeds'"):
-        parse_campaign(TINY.replace("seed = 3\n", "seed = 3\nseeds = 'fleet'\n"), "t.toml")
+        parse_campaign(TINY.replace("seed = 3\n", "seed = 3\nseeds = 'unit'\n"), "t.toml")

@@ -59,11 +59,6 @@ from brake_sim_ros.scenarios.loader import (
 )
 
 CAMPAIGN_PACKAGE = "brake_sim_ros.campaigns.builtin"
-# What a run's scenario seed is derived for. The scenario's one seed draws its unit's
-# scatter, its conditions and its sensor noise: "run" gives every run its own (a unit id
-# then names a differently scattered brake in each run), "unit" one per unit (each unit
-# the same brake in all its runs, with the same noise and conditions draws in each)
-SEEDS_PER = ("run", "unit")
 MAX_RUNS = 100_000  # runs of one campaign (a manifest row and a file each)
 MAX_UNITS = 10_000
 DEFAULT_UNITS = 3  # the fewest that fill the default train/validation/test split
@@ -155,7 +150,6 @@ class Campaign:
     outputs: Outputs
     axes: tuple[AnyAxis, ...]
     draw_method: str
-    seeds_per: str  # "run" or "unit": what a scenario seed is derived for (SEEDS_PER)
     draw_count: int
     fractions: dict[str, float]
     held_out: tuple[HeldOut, ...]
@@ -269,7 +263,7 @@ def _integer(ctx: _Ctx, value: Any, key: str, lo: int, hi: int) -> int:
 
 def _parse(data: dict[str, Any], text: str, source: str, directory: Path | None) -> Campaign:
     ctx = _Ctx(source)
-    keys = {"name", "description", "base", "seed", "seeds", "units", "unit_ids", "outputs", "axes"}
+    keys = {"name", "description", "base", "seed", "units", "unit_ids", "outputs", "axes"}
     top = ctx.table(data, "", keys | {"draws", "split"})
     if "name" not in top:
         raise ctx.fail("name", _MISSING, "a campaign name; it is required")
@@ -306,7 +300,6 @@ def _parse(data: dict[str, Any], text: str, source: str, directory: Path | None)
         outputs=outputs,
         axes=axes,
         draw_method=method,
-        seeds_per=ctx.string(top.get("seeds", "run"), "seeds", SEEDS_PER),
         draw_count=count,
         fractions=fractions,
         held_out=held_out,
@@ -610,8 +603,10 @@ def plan_runs(campaign: Campaign) -> list[RunSpec]:
             if campaign.outputs.sample_rate_hz is not None:
                 data["sample_rate_hz"] = campaign.outputs.sample_rate_hz
             seeded = any(isinstance(a, Axis) and a.key == "seed" for a in campaign.axes)
-            identity = columns if campaign.seeds_per == "run" else {}
-            seed = data.get("seed", 0) if seeded else run_seed(campaign.seed, unit, identity)
+            seed = data.get("seed", 0) if seeded else run_seed(campaign.seed, unit, columns)
+            # the units are one fleet: each the same brake in all its runs (its scatter is
+            # drawn from the unit id and the fleet seed), each run its own noise and draws
+            data.setdefault("fleet_seed", campaign.seed)
             data.update(name=f"{campaign.name}.{run_id}", unit_id=unit, seed=seed)
             text = dumps(data)
             try:

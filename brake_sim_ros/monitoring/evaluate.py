@@ -185,9 +185,11 @@ def score(
                 d = a.diagnosis
                 diagnosed.append("none" if d is None else f"{d.kind}:{d.location}")
                 if d is not None and math.isfinite(d.severity):
-                    k = run.label_names.index(f"{d.kind}:{d.location}") if (
-                        f"{d.kind}:{d.location}" in run.label_names
-                    ) else None
+                    k = (
+                        run.label_names.index(f"{d.kind}:{d.location}")
+                        if (f"{d.kind}:{d.location}" in run.label_names)
+                        else None
+                    )
                     if k is not None:
                         sev_est.append(d.severity)
                         sev_true.append(float(run.labels[row, k]))
