@@ -34,7 +34,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from numba import njit
-from scipy.linalg import expm
+from scipy.linalg import expm, matrix_balance
 
 
 @dataclass(frozen=True)
@@ -106,11 +106,13 @@ def foh_discretise(
 
 # The innovations gain is the fixed point of the Riccati recursion below; its poles are the
 # path's own (the slowest a lightly damped resonance decaying ~20 % per sample), so it
-# converges in tens of iterations: this many means something is wrong with the system.
+# converges in tens of iterations: this many means it will not (then one draw per state).
 _RICCATI_MAX_ITERATIONS = 10_000
 
 
-def with_input_noise(system: SampledLti, noise_density_per_sqrt_hz: float) -> SampledLti:
+def with_input_noise(
+    system: SampledLti, noise_density_per_sqrt_hz: float, *, per_state: bool = False
+) -> SampledLti:
     """``system`` (single input, single output) with white noise of one-sided density
     ``N`` added to its input, realised with one unit normal draw per sample.
 
@@ -132,38 +134,44 @@ def with_input_noise(system: SampledLti, noise_density_per_sqrt_hz: float) -> Sa
     the output at once); ``B`` gains a zero column (the equilibrium ignores the noise).
     ``D`` must be 0 on the signal for white noise to have a finite variance.
 
+    Where the recursion does not settle (a path far faster than the sample rate leaves
+    ``Q_d`` at the edge of rounding), and with ``per_state``, the exact increment is drawn
+    instead: one draw per state (``n`` extra input columns in ``G_next``,
+    ``L L^T = Q_d``). Both forms give the same output statistics; they are different
+    draws.
+
     Raises:
-        ValueError: several inputs or outputs, a feedthrough, or a recursion that does
-            not settle.
+        ValueError: several inputs or outputs, or a feedthrough.
     """
     a, b, c, t = system.a, system.b, system.c, system.sample_period_s
     if b.shape[1] != 1 or c.shape[0] != 1 or np.any(system.d != 0.0):
         raise ValueError("input noise needs a single-input single-output system, no feedthrough")
     n = a.shape[0]
-    q = 0.5 * noise_density_per_sqrt_hz**2
-    big = np.zeros((2 * n, 2 * n))
-    big[:n, :n] = -a
-    big[:n, n:] = q * (b @ b.T)
-    big[n:, n:] = a.T
-    e = expm(big * t)
-    phi = e[n:, n:].T
-    q_d = phi @ e[:n, n:]
-    q_d = 0.5 * (q_d + q_d.T)
-    p = q_d.copy()
-    for _ in range(_RICCATI_MAX_ITERATIONS):
-        r_e = (c @ p @ c.T).item()
-        k = (phi @ p @ c.T) / r_e
-        p_next = phi @ p @ phi.T + q_d - k @ (c @ p @ phi.T)
-        p_next = 0.5 * (p_next + p_next.T)
-        if np.max(np.abs(p_next - p)) <= 1e-15 * np.max(np.abs(p)):
-            p = p_next
-            break
-        p = p_next
-    else:
-        raise ValueError("the noise's innovations form did not settle (Riccati recursion)")
-    r_e = (c @ p @ c.T).item()
-    root = math.sqrt(r_e)
-    gain = (phi @ p @ c.T) / r_e * root
+    # in balanced coordinates x = D x_b: the cascaded filters' states span tens of orders
+    # of magnitude, which the covariance and the recursion could not resolve
+    _, (scale, _) = matrix_balance(a, permute=False, separate=True)
+    a_b = a * scale[None, :] / scale[:, None]
+    b_b = b / scale[:, None]
+    c_b = c * scale[None, :]
+    phi_b, q_b = _noise_increment(a_b, b_b, 0.5 * noise_density_per_sqrt_hz**2, t)
+    # as computed: the output reads its smallest entries, which a semi-definite repair of
+    # rounding-level negative eigenvalues would change by far more than they are
+    form = None if per_state else _innovations(phi_b, q_b, c_b)
+    if form is None:
+        values, vectors = np.linalg.eigh(q_b)
+        root_b = vectors * np.sqrt(np.clip(values, 0.0, None))  # a root needs q_d >= 0
+        columns, zero_in = root_b * scale[:, None], np.zeros((n, n))
+        return SampledLti(
+            a=a,
+            b=np.hstack([b, zero_in]),
+            c=c,
+            d=np.hstack([system.d, np.zeros((1, n))]),
+            phi=system.phi,
+            g_prev=np.ascontiguousarray(np.hstack([system.g_prev, zero_in])),
+            g_next=np.ascontiguousarray(np.hstack([system.g_next, columns])),
+            sample_period_s=t,
+        )
+    gain_b, root = form
     zero = np.zeros((n, 1))
     return SampledLti(
         a=a,
@@ -171,10 +179,70 @@ def with_input_noise(system: SampledLti, noise_density_per_sqrt_hz: float) -> Sa
         c=c,
         d=np.hstack([system.d, [[root]]]),
         phi=system.phi,
-        g_prev=np.ascontiguousarray(np.hstack([system.g_prev, gain])),
+        g_prev=np.ascontiguousarray(np.hstack([system.g_prev, gain_b * scale[:, None]])),
         g_next=np.ascontiguousarray(np.hstack([system.g_next, zero])),
         sample_period_s=t,
     )
+
+
+def _noise_increment(
+    a: np.ndarray, b: np.ndarray, q: float, t: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """``(Phi, Q_d)`` over ``t`` of ``x' = A x + B w``, ``w`` white of two-sided intensity
+    ``q``: ``Phi = e^(A t)``, ``Q_d = int_0^t e^(A s) B q B^T e^(A^T s) ds``.
+
+    Van Loan's matrix exponential over ``h = t / 2^m`` short enough that ``|A| h <= 1``
+    (over a long sample its ``e^(-A t)`` block would overflow for a fast path), then ``m``
+    doublings ``Q(2h) = Q(h) + Phi(h) Q(h) Phi(h)^T``, ``Phi(2h) = Phi(h)^2``: sums of
+    semi-definite terms, exact up to rounding."""
+    n = a.shape[0]
+    norm = float(np.max(np.sum(np.abs(a), axis=1)))
+    m = max(0, math.ceil(math.log2(norm * t))) if norm * t > 1.0 else 0
+    h = t / 2.0**m
+    big = np.zeros((2 * n, 2 * n))
+    big[:n, :n] = -a
+    big[:n, n:] = q * (b @ b.T)
+    big[n:, n:] = a.T
+    e = expm(big * h)
+    phi = e[n:, n:].T
+    q_d = phi @ e[:n, n:]
+    q_d = 0.5 * (q_d + q_d.T)
+    for _ in range(m):
+        q_d = q_d + phi @ q_d @ phi.T
+        q_d = 0.5 * (q_d + q_d.T)
+        phi = phi @ phi
+    return phi, q_d
+
+
+def _innovations(
+    phi: np.ndarray, q_d: np.ndarray, c: np.ndarray
+) -> tuple[np.ndarray, float] | None:
+    """``(K sqrt(R_e), sqrt(R_e))`` of the innovations form (:func:`with_input_noise`), or
+    None when the Riccati recursion does not settle to a positive ``R_e``.
+
+    Settled means ``R_e`` and ``K`` no longer change (to rounding): ``P`` itself is a poor
+    test, its entries spanning tens of orders of magnitude even in balanced coordinates,
+    the output reading the smallest of them."""
+    p = q_d.copy()
+    previous: tuple[float, np.ndarray] | None = None
+    for _ in range(_RICCATI_MAX_ITERATIONS):
+        r_e = (c @ p @ c.T).item()
+        if not (math.isfinite(r_e) and r_e > 0.0):
+            return None
+        k = (phi @ p @ c.T) / r_e
+        if not np.all(np.isfinite(k)):
+            return None
+        if previous is not None:
+            r_old, k_old = previous
+            if abs(r_e - r_old) <= 1e-14 * r_e and np.max(np.abs(k - k_old)) <= 1e-12 * max(
+                np.max(np.abs(k)), 1e-300
+            ):
+                root = math.sqrt(r_e)
+                return k * root, root
+        previous = (r_e, k)
+        p = phi @ p @ phi.T + q_d - k @ (c @ p @ phi.T)
+        p = 0.5 * (p + p.T)
+    return None
 
 
 def _rows(*matrices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -165,8 +165,8 @@ def analog_advance(  # pragma: no cover - compiled
     a path without dynamics; ``x_unit`` their equilibrium states under a unit input;
     ``x`` and ``u_prev`` (the last sample's inputs: scaled true value, then its noise
     draw) their carried state. On the ``first`` block sample 0 starts at rest under its
-    input (``x = v x_unit``), output, not advanced to. ``draws`` (k, 1): the block's unit
-    normal draws (k, 0 without noise), the systems' last input (``lti.with_input_noise``);
+    input (``x = v x_unit``), output, not advanced to. ``draws`` (k, m): the block's unit
+    normal draws (m = 0 without noise), the systems' last inputs (``lti.with_input_noise``);
     ``white_gain`` their scale without dynamics. ``adc_step`` 0: no ADC.
     ``hold`` is updated in place."""
     n_x = phi.shape[1]

@@ -505,15 +505,18 @@ class AnalogPath:
         for factor in (1.0, *(f.size for f in sf.of_kind(channel.faults, "loose_mount"))):
             chain = t.continuous(1.0 / (sample_period_s * decimation), factor)
             if chain is not None:
-                system = foh_discretise(*chain, sample_period_s)
-                if self.noise > 0.0:
-                    system = with_input_noise(system, self.noise)
-                systems.append(system)
+                systems.append(foh_discretise(*chain, sample_period_s))
+        if self.noise > 0.0:
+            noisy = [with_input_noise(s, self.noise) for s in systems]
+            if len({s.n_inputs for s in noisy}) > 1:  # one form for all (they are stacked)
+                noisy = [with_input_noise(s, self.noise, per_state=True) for s in systems]
+            systems = noisy
         self.systems = systems
         if systems:
             self.matrices = (*stack_systems(systems), unit_equilibria(systems))
             self.state = PathState(systems[0].a.shape[0], systems[0].n_inputs)
-            self.n_draws = 1 if self.noise > 0.0 else 0  # one per sample (innovations form)
+            # one per sample (innovations form), or one per state (lti.with_input_noise)
+            self.n_draws = systems[0].n_inputs - 1
         else:
             self.matrices = no_systems()
             self.state = PathState()
