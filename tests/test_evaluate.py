@@ -1,0 +1,105 @@
+"""A detector over a real sweep (real worker processes, real Parquet): fitted on train,
+scored on test, the score's figures checked against what a detector that always alarms
+must get, and the threshold baseline scored twice to the same JSON."""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Mapping
+
+import numpy as np
+import pytest
+
+from brake_sim_ros.campaigns import load_campaign
+from brake_sim_ros.datasets import open as open_dataset
+from brake_sim_ros.datasets.sweep import sweep
+from brake_sim_ros.monitoring import evaluate
+from brake_sim_ros.monitoring.baselines import make_detector
+from brake_sim_ros.monitoring.detector import Assessment, Detector
+
+CAMPAIGN = """
+name = "scored"
+base = "symmetric"
+seed = 5
+units = 3
+[outputs]
+duration_s = 0.5
+sample_rate_hz = 2560.0
+[[axes]]
+defects = ["initial_angle"]
+severities = [1.0]
+healthy = true
+"""
+
+
+class AlwaysAlarm(Detector):
+    """Alarms on every window: every defective run is detected one hold after its onset
+    (all onsets are at 0 here), every healthy run has exactly one false alarm."""
+
+    name = "always"
+    channels = ("backing_plate_accel_y",)
+    window_s = 0.05
+
+    def assess(
+        self, window: Mapping[str, np.ndarray], last_sample_index: int, sample_rate_hz: float
+    ) -> Assessment:
+        return Assessment(last_sample_index, last_sample_index / sample_rate_hz, 2.0, True)
+
+
+@pytest.fixture(scope="module")
+def dataset(tmp_path_factory):
+    path = tmp_path_factory.mktemp("campaign") / "scored.toml"
+    path.write_text(CAMPAIGN)
+    out = tmp_path_factory.mktemp("sweep") / "out"
+    sweep(load_campaign(path), out, workers=2, quiet=True)
+    return open_dataset(out)
+
+
+def test_scores_of_a_detector_that_always_alarms(dataset):
+    detector = make_detector("tests.test_evaluate:AlwaysAlarm")
+    score = evaluate.score(detector, dataset, "test", hold_s=0.1)
+    runs = dataset.runs("test")
+    per_run = {r["run_id"]: r for r in score["per_run"]}
+    assert score["runs"] == len(runs) == len(per_run) > 0
+    healthy = [r for r in per_run.values() if not r["defects"]]
+    defective = [r for r in per_run.values() if r["defects"]]
+    assert healthy and defective
+    # windows of 128 samples (0.05 s at 2560 Hz) end at 0.0496 s, 0.0996 s, ...: the run
+    # of alarms is held 0.1 s at the end of the third window, 0.1496 s after the start
+    first_held = 3 * 128 / 2560.0 - 1 / 2560.0
+    for r in defective:
+        assert r["onset_s"] == 0.0
+        assert r["delay_s"] == pytest.approx(first_held)
+    assert score["detection"] == {
+        "defective_runs": len(defective),
+        "detected": len(defective),
+        "missed": 0,
+        "delays_s": [pytest.approx(first_held)] * len(defective),
+        "median_delay_s": pytest.approx(first_held),
+    }
+    assert score["false_alarms"]["count"] == len(healthy)  # one held run of alarms each
+    hours = len(healthy) * 0.5 / 3600.0  # every sample of a healthy run, 0.5 s each
+    assert score["false_alarms"]["healthy_hours"] == pytest.approx(hours, rel=0.02)
+    assert score["health_index"]["auroc"] == 0.5  # one value for all: no ranking
+    assert score["isolation"] is None and score["severity"] is None
+
+
+def test_the_threshold_baseline_scores_deterministically(dataset):
+    scores = []
+    for _ in range(2):
+        detector = make_detector("rms")
+        assert evaluate.fit(detector, dataset, "train") > 0
+        scores.append(json.dumps(evaluate.score(detector, dataset, "test"), sort_keys=True))
+    assert scores[0] == scores[1]
+    score = json.loads(scores[0])
+    assert score["schema_version"] == evaluate.SCHEMA_VERSION and score["detector"] == "rms"
+    assert 0.0 <= score["health_index"]["auroc"] <= 1.0
+
+
+def test_offline_chunking_does_not_change_the_assessments(dataset):
+    run = evaluate.read_run(dataset, dataset.runs("test")[0])
+    detector = make_detector("rms")
+    evaluate.fit(detector, dataset, "train")
+    a = evaluate.assess_run(detector, run, chunk_s=0.1)
+    b = evaluate.assess_run(detector, run, chunk_s=0.0137)
+    assert a == b and len(a) == 5  # 0.5 s in windows of 0.1 s
