@@ -103,3 +103,20 @@ def test_offline_chunking_does_not_change_the_assessments(dataset):
     a = evaluate.assess_run(detector, run, chunk_s=0.1)
     b = evaluate.assess_run(detector, run, chunk_s=0.0137)
     assert a == b and len(a) == 5  # 0.5 s in windows of 0.1 s
+
+
+def test_the_score_command_writes_the_json_and_refuses_in_one_line(dataset, tmp_path, capsys):
+    from brake_sim_ros import cli
+
+    out = tmp_path / "score.json"
+    assert cli.main(["score", str(dataset.root), "--detector", "kurtosis", "--out", str(out)]) == 0
+    score = json.loads(out.read_text())
+    assert score["detector"] == "kurtosis" and score["split"] == "test"
+    assert "scored on test" in capsys.readouterr().out
+    assert cli.main(["score", str(dataset.root), "--detector", "no_module_xyz:X"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "cannot import" in err
+    link = tmp_path / "link.json"
+    link.symlink_to(out)
+    assert cli.main(["score", str(dataset.root), "--out", str(link)]) == 2
+    assert json.loads(out.read_text())["detector"] == "kurtosis"  # not written through
