@@ -8,22 +8,186 @@ accepts and a line on what it changes. The ground truth of a brake (``Defects.ac
 so a consumer (the ``DefectState`` message, Parquet label columns, file metadata, a
 scorer) needs no change when a kind is added here.
 
-Time: every defect in force today is a step at the start of the run (onset 0 s, growth
-``step``): a run keeps its defects until a reset. The onset and growth fields are part of
-the description so that defects that grow during a run carry them without a new format.
+Time: every defect has an onset and a growth law (:class:`Growth`); its severity at a
+simulated time is :func:`severity_at`, the one definition that the compiled model
+(:mod:`.growth`, each physics step), the label columns and the ground-truth messages all
+evaluate. The scenario gives the final severity (the kind's key) and the law:
 
-Pure data and logic: no numerics, no files.
+* ``step``: 0 before the onset, the final severity from it on (the default, onset 0 s:
+  a defect present from the start);
+* ``linear``: from 0 at the onset, ``rate_per_s`` (the kind's unit per second, > 0) toward
+  the final severity, held there once reached: ``s(t) = sign(s_f) min(r (t - t_0), |s_f|)``;
+* ``exponential``: from ``start`` (same sign as the final severity, smaller) at the onset,
+  doubling every ``doubling_time_s``, held at the final severity once reached:
+  ``s(t) = start 2^((t - t_0) / T_d)`` until ``|s| >= |s_f|``.
+
+Pure data and logic, plus the compiled severity law: no files.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
 
 from brake_sim_ros.errors import ParameterError
 from brake_sim_ros.model.layout import SIDES
 
-GROWTH_LAWS: tuple[str, ...] = ("step",)  # how a severity evolves after its onset
+# how a severity evolves after its onset; the index is the law's id in the compiled model
+GROWTH_LAWS: tuple[str, ...] = ("step", "linear", "exponential")
+LAW_STEP, LAW_LINEAR, LAW_EXPONENTIAL = 0, 1, 2
 DRUM_KIND = "drum_out_of_round"
+# Longest onset and doubling time a scenario may state, s: a day of simulated braking
+MAX_GROWTH_TIME_S = 86_400.0
+
+
+@njit(cache=True)
+def severity_at(t, law, onset_s, rate, start, final):
+    """Severity at simulated time ``t`` (s) of a defect of final severity ``final``.
+
+    Args:
+        t: simulated time, s.
+        law: the law's id (``LAW_*``, the index in :data:`GROWTH_LAWS`).
+        onset_s: the onset, s: 0 before it.
+        rate: linear: the rate, the kind's unit per second (> 0); exponential: the relative
+            rate ``ln 2 / doubling time``, 1/s; step: unused.
+        start: exponential: the severity at the onset (same sign as ``final``); else unused.
+        final: the final severity, in the kind's unit.
+
+    Returns:
+        The severity, in the kind's unit; ``final`` once it is reached (never beyond).
+    """
+    if t < onset_s:
+        return 0.0
+    if law == LAW_LINEAR:
+        grown = rate * (t - onset_s)
+        if grown >= abs(final):
+            return final
+        return grown if final > 0.0 else -grown
+    if law == LAW_EXPONENTIAL:
+        grown = start * math.exp(rate * (t - onset_s))
+        if abs(grown) >= abs(final):
+            return final
+        return grown
+    return final
+
+
+@njit(cache=True)
+def severity_series(times, law, onset_s, rate, start, final):
+    """:func:`severity_at` at each of ``times`` (s, shape (n,)), in the kind's unit."""
+    out = np.empty(times.shape[0])
+    for i in range(times.shape[0]):
+        out[i] = severity_at(times[i], law, onset_s, rate, start, final)
+    return out
+
+
+def _finite(value: object) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
+
+
+@dataclass(frozen=True)
+class Growth:
+    """When a defect starts and how its severity grows (see the module doc for the laws).
+
+    Attributes:
+        onset_s: simulated time it starts, s (>= 0).
+        law: one of :data:`GROWTH_LAWS`.
+        rate_per_s: linear only: the kind's unit per second toward the final severity (> 0).
+        doubling_time_s: exponential only: the time the severity takes to double, s (> 0).
+        start: exponential only: the severity at the onset, in the kind's unit (same sign
+            as the final severity, smaller in size).
+    """
+
+    onset_s: float = 0.0
+    law: str = "step"
+    rate_per_s: float = 0.0
+    doubling_time_s: float = 0.0
+    start: float = 0.0
+
+    def __post_init__(self) -> None:
+        if self.law not in GROWTH_LAWS:
+            raise ParameterError(
+                f"defect growth {self.law!r} is invalid: allowed one of {list(GROWTH_LAWS)}"
+            )
+        for name in ("onset_s", "rate_per_s", "doubling_time_s", "start"):
+            if not _finite(getattr(self, name)):
+                raise ParameterError(
+                    f"defect {name}={getattr(self, name)!r} is invalid: allowed a finite number"
+                )
+        if not 0.0 <= self.onset_s <= MAX_GROWTH_TIME_S:
+            raise ParameterError(
+                f"defect onset_s={self.onset_s:g} is invalid: allowed 0 to"
+                f" {MAX_GROWTH_TIME_S:g} s (simulated time since the start of the run)"
+            )
+        needs = {"linear": "rate_per_s", "exponential": "doubling_time_s"}.get(self.law)
+        for name in ("rate_per_s", "doubling_time_s", "start"):
+            used = name == needs or (name == "start" and self.law == "exponential")
+            value = getattr(self, name)
+            if not used and value != 0.0:
+                raise ParameterError(
+                    f"defect {name}={value:g} with growth {self.law!r} is invalid: allowed"
+                    f" only with growth {'linear' if name == 'rate_per_s' else 'exponential'}"
+                )
+        if needs is not None and not getattr(self, needs) > 0.0:
+            raise ParameterError(
+                f"defect {needs}={getattr(self, needs):g} with growth {self.law!r} is invalid:"
+                " allowed a number > 0"
+            )
+        if needs == "doubling_time_s" and self.doubling_time_s > MAX_GROWTH_TIME_S:
+            raise ParameterError(
+                f"defect doubling_time_s={self.doubling_time_s:g} is invalid: allowed up to"
+                f" {MAX_GROWTH_TIME_S:g} s"
+            )
+
+    @property
+    def is_static(self) -> bool:
+        """A step at the start of the run: the defect is simply present."""
+        return self.law == "step" and self.onset_s == 0.0
+
+    @property
+    def law_id(self) -> int:
+        return GROWTH_LAWS.index(self.law)
+
+    @property
+    def rate(self) -> float:
+        """The law's rate as :func:`severity_at` takes it (and the ground truth's
+        ``growth_rate``): linear unit/s, exponential 1/s (``ln 2 / doubling time``), step 0."""
+        if self.law == "linear":
+            return float(self.rate_per_s)
+        if self.law == "exponential":
+            return math.log(2.0) / self.doubling_time_s
+        return 0.0
+
+    def check(self, final: float, where: str = "", healthy: float = 0.0) -> None:
+        """Refuse a law that cannot reach ``final`` (the final severity, kind's unit;
+        ``healthy``: the healthy value of the key the message names)."""
+        if self.law == "exponential" and not (
+            self.start * final > 0.0 and abs(self.start) < abs(final)
+        ):
+            raise ParameterError(
+                f"defect {where}start={healthy + self.start:g} is invalid: allowed a value"
+                f" between the healthy {healthy:g} and the final {healthy + final:g}"
+                " (exponential growth starts there at the onset)"
+            )
+
+    def severity(self, t: float, final: float) -> float:
+        """Severity at simulated time ``t`` (s) toward ``final`` (:func:`severity_at`)."""
+        return float(severity_at(float(t), self.law_id, self.onset_s, self.rate, self.start, final))
+
+    def series(self, times_s: np.ndarray, final: float) -> np.ndarray:
+        """Severity at each of ``times_s`` (s) toward ``final`` (:func:`severity_series`)."""
+        times = np.ascontiguousarray(times_s, dtype=np.float64)
+        return severity_series(times, self.law_id, self.onset_s, self.rate, self.start, final)
+
+    def reached_s(self, final: float) -> float:
+        """Simulated time the severity reaches ``final``, s."""
+        if self.law == "linear":
+            return self.onset_s + abs(final) / self.rate_per_s
+        if self.law == "exponential":
+            return self.onset_s + self.doubling_time_s * math.log2(abs(final / self.start))
+        return self.onset_s
 
 
 @dataclass(frozen=True)

@@ -15,7 +15,7 @@ import math
 import numpy as np
 from numba import njit
 
-from brake_sim_ros.model import contact, standstill
+from brake_sim_ros.model import contact, growth, standstill
 from brake_sim_ros.model import layout as L
 
 
@@ -478,6 +478,10 @@ def fixed_step_advance(
     calls. At the end of every step the drum's stick/slip rule
     (:mod:`brake_sim_ros.model.standstill`) is applied.
 
+    Defects that change during the run (``p``'s growth entries, :mod:`.growth`) are set
+    at the start of every step, at its time, in a working copy of ``p`` (the actuation
+    gains with them); without entries ``p`` is used as it is.
+
     Returns the number of rows written. Stops early (status in kstate) on a non-finite state.
     """
     n = y.shape[0]
@@ -492,6 +496,10 @@ def fixed_step_advance(
     h_end = np.empty(4)
     gl = p[L.P_SHOE_BASE + L.S_ACTUATION_GAIN]
     gr = p[L.P_SHOE_BASE + L.SHOE_STRIDE + L.S_ACTUATION_GAIN]
+    growing = p[L.P_GROWTH_COUNT] > 0.0
+    pw = growth.working_copy(p) if growing else p
+    if growing:
+        gl, gr, _ = growth.apply(p, pw, step0 * dt)
     if gain_override != 0:
         gl = 1.0
         gr = 1.0
@@ -500,24 +508,32 @@ def fixed_step_advance(
     auto = L.CONTACT_AUTO
     located = scheme == L.SCHEME_RK4_LOCATED
     if located:
-        h_end[0], h_end[1] = _shoe_switch(p, 0, y)
-        h_end[2], h_end[3] = _shoe_switch(p, 1, y)
+        h_end[0], h_end[1] = _shoe_switch(pw, 0, y)
+        h_end[2], h_end[3] = _shoe_switch(pw, 1, y)
     for i in range(n_steps):
         step = step0 + i
         t = step * dt
+        if growing and i > 0:
+            gl, gr, moved = growth.apply(p, pw, t)
+            if gain_override != 0:
+                gl = 1.0
+                gr = 1.0
+            if located and moved:  # the contact modes of the step follow the geometry now
+                h_end[0], h_end[1] = _shoe_switch(pw, 0, y)
+                h_end[2], h_end[3] = _shoe_switch(pw, 1, y)
         stuck = kstate[L.K_STUCK]
         fel = gl * _pwl(t, tl, fl)
         fer = gr * _pwl(t, tr, fr)
         record = i % record_every == 0
-        evaluate(y, p, fel, fer, stuck, auto, auto, k1, out, rows if record else -1, t)
+        evaluate(y, pw, fel, fer, stuck, auto, auto, k1, out, rows if record else -1, t)
         if located:
             touching_l = 1 if h_end[0] > 0.0 else 0
             touching_r = 1 if h_end[2] > 0.0 else 0
             h_start[0] = h_end[1]
             h_start[1] = h_end[3]
         else:
-            touching_l = 1 if _shoe_switch(p, 0, y)[0] > 0.0 else 0
-            touching_r = 1 if _shoe_switch(p, 1, y)[0] > 0.0 else 0
+            touching_l = 1 if _shoe_switch(pw, 0, y)[0] > 0.0 else 0
+            touching_r = 1 if _shoe_switch(pw, 1, y)[0] > 0.0 else 0
         _update_regime(
             kstate,
             L.K_LEFT_REGIME,
@@ -568,16 +584,16 @@ def fixed_step_advance(
                 ml = L.CONTACT_ON if h_start[0] > 0.0 else L.CONTACT_OFF
                 mr = L.CONTACT_ON if h_start[1] > 0.0 else L.CONTACT_OFF
             rk4_step(
-                y, k1, t, dt, p, gl, tl, fl, gr, tr, fr, stuck, ml, mr, k2, k3, k4, tmp, out, y_new
+                y, k1, t, dt, pw, gl, tl, fl, gr, tr, fr, stuck, ml, mr, k2, k3, k4, tmp, out, y_new
             )
             accept = True
             if located:
-                el, hl = _shoe_switch(p, 0, y_new)
-                er, hr = _shoe_switch(p, 1, y_new)
+                el, hl = _shoe_switch(pw, 0, y_new)
+                er, hr = _shoe_switch(pw, 1, y_new)
                 if (hl > 0.0) != (h_start[0] > 0.0) or (hr > 0.0) != (h_start[1] > 0.0):
                     # a contact switches inside this step: redo it split at the switches
                     fstate[L.F_SWITCHES] += _located_step(
-                        y, k1, t, dt, p, gl, tl, fl, gr, tr, fr, stuck, h_start, work, out, h_end
+                        y, k1, t, dt, pw, gl, tl, fl, gr, tr, fr, stuck, h_start, work, out, h_end
                     )
                     accept = False
                 else:
@@ -589,10 +605,10 @@ def fixed_step_advance(
                 for j in range(n):
                     y[j] = y_new[j]
         if stuck:
-            if standstill.slips(p, y):
+            if standstill.slips(pw, y):
                 kstate[L.K_STUCK] = 0
                 kstate[L.K_BREAKAWAYS] += 1
-        elif standstill.sticks(p, y, surface_before):
+        elif standstill.sticks(pw, y, surface_before):
             t_stick = standstill.interpolated_stick_time(
                 t,
                 dt,
@@ -602,11 +618,11 @@ def fixed_step_advance(
             )
             if fstate[L.F_WHEEL_LOCK_TIME] < 0.0:
                 fstate[L.F_WHEEL_LOCK_TIME] = t_stick
-            fstate[L.F_LOCK_LOSS] += standstill.stick(p, y)
+            fstate[L.F_LOCK_LOSS] += standstill.stick(pw, y)
             kstate[L.K_STUCK] = 1
-            if fstate[L.F_STOP_TIME] < 0.0 and standstill.at_rest(p, y):
+            if fstate[L.F_STOP_TIME] < 0.0 and standstill.at_rest(pw, y):
                 fstate[L.F_STOP_TIME] = t_stick
-        if kstate[L.K_STUCK] and fstate[L.F_STOP_TIME] < 0.0 and standstill.at_rest(p, y):
+        if kstate[L.K_STUCK] and fstate[L.F_STOP_TIME] < 0.0 and standstill.at_rest(pw, y):
             fstate[L.F_STOP_TIME] = t + dt
         for j in range(8):
             if not math.isfinite(y[j]):

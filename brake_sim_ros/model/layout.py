@@ -56,7 +56,41 @@ W_AMPLITUDE = 1
 W_PHASE = 2
 MAX_DRUM_HARMONICS = 24  # most harmonics one drum carries (model/defects.py DrumDefect)
 
-N_PARAMS = P_DRUM_WAVE_BASE + MAX_DRUM_HARMONICS * DRUM_WAVE_STRIDE
+# nominal (healthy) geometry of the LEFT shoe, from which model/growth.py re-places a shoe
+# whose pivot moves during the run (model/assembly.py place_shoe's inputs)
+P_NOMINAL_BASE = P_DRUM_WAVE_BASE + MAX_DRUM_HARMONICS * DRUM_WAVE_STRIDE
+N_PIVOT_X = 0
+N_PIVOT_Y = 1
+N_TIP_X = 2
+N_TIP_Y = 3
+N_MASS_CENTRE_X = 4
+N_MASS_CENTRE_Y = 5
+N_INERTIA = 6  # about the nominal pivot, kg m^2
+N_MASS = 7
+N_LINING_MID = 8  # polar angle of the lining arc's middle, rad
+NOMINAL_SIZE = 9
+
+# defects that change during the run (model/defects.py Defects.growth): the number of
+# entries, then per entry what it changes (G_KIND: a GK_* id, G_SHOE: 0 left, 1 right, -1
+# the drum) and its law (catalogue.severity_at's arguments). Defects present from the
+# start are packed into the slots above and have no entry.
+P_GROWTH_COUNT = P_NOMINAL_BASE + NOMINAL_SIZE
+P_GROWTH_BASE = P_GROWTH_COUNT + 1
+GROWTH_STRIDE = 8
+G_KIND = 0
+G_SHOE = 1
+G_LAW = 2
+G_ONSET = 3
+G_RATE = 4
+G_START = 5
+G_FINAL = 6
+G_NOW = 7  # in the kernel's working copy: the severity last set (NaN: none yet)
+MAX_GROWTH_ENTRIES = 16
+GK_PIVOT = 0  # pivot_radius_change, %: the shoe is re-placed (assembly.place_shoe)
+GK_SHARE = 1  # actuation_share_change: this shoe's gain 2 (0.5 + s), the other's 2 (0.5 - s)
+GK_DRUM = 2  # drum_out_of_round, um of peak runout: every harmonic scales with it
+
+N_PARAMS = P_GROWTH_BASE + MAX_GROWTH_ENTRIES * GROWTH_STRIDE
 
 # --- state vector ---------------------------------------------------------------------
 Y_FLYWHEEL_ANGLE = 0

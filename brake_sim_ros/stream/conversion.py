@@ -269,9 +269,11 @@ def defect_state(
     run_id: str,
     seed: int,
     unit_id: str = "",
+    time_s: float | None = None,
 ) -> DefectState:
     """Ground truth of the defects in force from simulated time ``ns`` on: the
-    catalogue's list (:meth:`Defects.active`).
+    catalogue's list (:meth:`Defects.active`) with each severity at that time (a defect
+    before its onset is not listed).
 
     Args:
         scenario: name of the active scenario.
@@ -283,10 +285,12 @@ def defect_state(
         run_id: the run's id (:func:`new_run_id`, or the node's ``run_id`` parameter).
         seed: the run's seed.
         unit_id: the brake unit's id (empty for a single brake).
+        time_s: the simulated time of the severities, s (the sample's; default ``ns``).
     """
     left = dataclasses.replace(defects.left, initial_angle_deg=initial_angles_deg[0])
     right = dataclasses.replace(defects.right, initial_angle_deg=initial_angles_deg[1])
-    active = dataclasses.replace(defects, left=left, right=right).active()
+    at = ns * 1e-9 if time_s is None else time_s
+    active = dataclasses.replace(defects, left=left, right=right).active(at)
     return DefectState(
         header=header(ns),
         run_id=run_id,
