@@ -188,6 +188,9 @@ def pack(
         p[b + L.S_ACTUATION_DIR_X], p[b + L.S_ACTUATION_DIR_Y] = s.actuation_dir
         p[b + L.S_MASS] = params.shoe.mass_kg
         p[b + L.S_ACTUATION_GAIN] = defect.actuation_gain
+        p[b + L.S_FRICTION_COEFFICIENT] = growth.lining_friction.py_func(
+            params.friction.coefficient, defect.friction_change_pct
+        )
         p[b + L.S_ENABLED] = 1.0 if side in options.shoes else 0.0
         _check_shoe(params, side, defect, s, p, b)
     _pack_drum(params, defects, p)
@@ -199,6 +202,7 @@ def pack(
 _GROWTH_KIND_IDS = {
     "pivot_radius_change": L.GK_PIVOT,
     "actuation_share_change": L.GK_SHARE,
+    "friction_change": L.GK_FRICTION,
     DRUM_KIND: L.GK_DRUM,
 }
 
@@ -315,12 +319,18 @@ def _check_shoe(
     if p[base + L.S_ENABLED] <= 0.0:
         return
     arms = contact_arms(p, base, math.radians(defect.initial_angle_deg))
-    mu = params.friction.coefficient
+    mu = p[base + L.S_FRICTION_COEFFICIENT]
     if arms is not None and mu >= arms.self_locking_coefficient:
+        change = (
+            f" (friction change {defect.friction_change_pct:+g} %)"
+            if defect.friction_change_pct
+            else ""
+        )
         raise ParameterError(
-            f"friction coefficient {mu:g} self-locks the {side} shoe when it leads: at first"
-            f" contact the friction arm about its pivot is h = {arms.friction_arm_m * 1e3:.1f}"
-            f" mm and the normal-force arm d = {arms.normal_arm_m * 1e3:.1f} mm, so friction"
+            f"friction coefficient {mu:g}{change} self-locks the {side} shoe when it leads:"
+            " at first contact the friction arm about its pivot is h ="
+            f" {arms.friction_arm_m * 1e3:.1f} mm and the normal-force arm d ="
+            f" {arms.normal_arm_m * 1e3:.1f} mm, so friction"
             " alone holds the shoe on the drum and the normal force grows without bound:"
             f" allowed a coefficient below the self-locking limit d/h ="
             f" {arms.self_locking_coefficient:.4f}"

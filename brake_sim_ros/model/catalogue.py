@@ -276,6 +276,24 @@ KINDS: tuple[DefectKind, ...] = (
         healthy_value=0.5,
     ),
     DefectKind(
+        name="friction_change",
+        locations=SIDES,
+        unit="%",
+        minimum=-90.0,
+        maximum=50.0,
+        limit=(
+            "a lining keeps some friction; +50 % of the nominal 0.285 is 0.43, the top of"
+            " drum-brake linings; a shoe that would self-lock (mu h >= d) is refused at"
+            " assembly"
+        ),
+        description=(
+            "change of the shoe's lining friction coefficient, in % of the nominal one;"
+            " negative for fade (hot) or contamination (oil, water)"
+        ),
+        scenario_key="friction_change_pct",
+        service_limit=-50.0,  # fade and contamination can halve mu (TESTBED.md)
+    ),
+    DefectKind(
         name=DRUM_KIND,
         locations=("drum",),
         unit="um",

@@ -37,14 +37,23 @@ class ShoeDefect:
             tilts the shoe toward the drum centre, away from the drum.
         actuation_share: this shoe's share of the total actuation force (0.5 healthy).
             The shoe's actuation force is multiplied by ``2 * actuation_share``.
+        friction_change_pct: change of this shoe's lining friction coefficient, percent of
+            the nominal one (fade when hot, contamination by oil or water: negative; both
+            can halve it, ``TESTBED.md``). The shoe's coefficient is ``mu (1 + pct/100)``.
     """
 
     pivot_radius_change_pct: float = 0.0
     initial_angle_deg: float = 0.0
     actuation_share: float = 0.5
+    friction_change_pct: float = 0.0
 
     def __post_init__(self) -> None:
-        for name in ("pivot_radius_change_pct", "initial_angle_deg", "actuation_share"):
+        for name in (
+            "pivot_radius_change_pct",
+            "initial_angle_deg",
+            "actuation_share",
+            "friction_change_pct",
+        ):
             value = getattr(self, name)
             if not isinstance(value, int | float) or not math.isfinite(value):
                 raise ParameterError(f"defect {name}={value!r} is invalid: allowed a finite number")
@@ -58,6 +67,7 @@ class ShoeDefect:
             "pivot_radius_change": float(self.pivot_radius_change_pct),
             "initial_angle": float(self.initial_angle_deg),
             "actuation_share_change": float(self.actuation_share) - 0.5,
+            "friction_change": float(self.friction_change_pct),
         }
 
     @classmethod
@@ -68,6 +78,7 @@ class ShoeDefect:
             pivot_radius_change_pct=severities.get("pivot_radius_change", 0.0),
             initial_angle_deg=severities.get("initial_angle", 0.0),
             actuation_share=0.5 + severities.get("actuation_share_change", 0.0),
+            friction_change_pct=severities.get("friction_change", 0.0),
         )
 
     @property

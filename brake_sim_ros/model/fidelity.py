@@ -96,6 +96,7 @@ DEFECT_LEVELS: dict[str, frozenset[str]] = {
     "pivot_radius_change": _ALL_LEVELS,
     "initial_angle": _ALL_LEVELS,
     "actuation_share_change": _ALL_LEVELS,
+    "friction_change": _ALL_LEVELS,  # a coefficient per lining: the same shoe balance
     DRUM_KIND: frozenset({"rigid", "full"}),
 }
 # levels that represent a defect changing during the run (an onset after 0 s or a growth

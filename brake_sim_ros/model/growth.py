@@ -63,6 +63,13 @@ def shoe_placement(shift, mirror, px, py, tx, ty, mcx, mcy, inertia0, mass, mid0
 
 
 @njit(cache=True)
+def lining_friction(mu, change_pct):
+    """Friction coefficient of a lining whose coefficient ``mu`` changed by ``change_pct``
+    percent (fade, contamination: negative), 1."""
+    return mu * (1.0 + change_pct / 100.0)
+
+
+@njit(cache=True)
 def write_placement(p, base, px, py, cx, cy, mid, gx, gy, inertia):
     """Write a shoe's placement (pin, lining centre and middle, mass centre, inertia; as
     :func:`shoe_placement` returns them) into its block at ``base`` of ``p``."""
@@ -95,7 +102,8 @@ def apply(p, pw, t):
     functions must then be re-evaluated).
 
     A pivot re-places its shoe (:func:`shoe_placement`); an actuation share sets this
-    shoe's gain to ``2 (0.5 + s)`` and the other's to ``2 (0.5 - s)``; a drum out of round
+    shoe's gain to ``2 (0.5 + s)`` and the other's to ``2 (0.5 - s)``; a friction change
+    sets the shoe's lining coefficient (:func:`lining_friction`); a drum out of round
     scales every harmonic by ``s / s_final``. A severity equal to the one set last (before
     the onset, once the final one is reached) is not written again.
     """
@@ -137,6 +145,9 @@ def apply(p, pw, t):
                 p[nb + L.N_LINING_MID],
             )
             write_placement(pw, base, pl[0], pl[1], pl[2], pl[3], pl[4], pl[5], pl[6], pl[7])
+        elif kind == L.GK_FRICTION:
+            base = L.P_SHOE_BASE + shoe * L.SHOE_STRIDE
+            pw[base + L.S_FRICTION_COEFFICIENT] = lining_friction(p[L.P_FRICTION_COEFFICIENT], s)
         elif kind == L.GK_DRUM:
             fraction = s / final
             for w in range(int(p[L.P_DRUM_WAVE_COUNT])):

@@ -66,12 +66,11 @@ def evaluate(y, p, fe_left, fe_right, stuck, mode_left, mode_right, dydt, out, r
             standstill.held_torque(coupling, fnl, kl, fnr, kr),
             standstill.static_capacity(p, fnl, kl[5], fnr, kr[5]),
         )
-        mu = p[L.P_FRICTION_COEFFICIENT]
-        ffl = share * mu * fnl
-        ffr = share * mu * fnr
+        ffl = share * p[bl + L.S_FRICTION_COEFFICIENT] * fnl
+        ffr = share * p[br + L.S_FRICTION_COEFFICIENT] * fnr
     else:
-        ffl = contact.sliding_friction(p, fnl, vl)
-        ffr = contact.sliding_friction(p, fnr, vr)
+        ffl = contact.sliding_friction(p, bl, fnl, vl)
+        ffr = contact.sliding_friction(p, br, fnr, vr)
     sl = contact.shoe_forces(p, bl, y[L.Y_LEFT_SPEED], fe_left, kl, fnl, ffl, vl)
     sr = contact.shoe_forces(p, br, y[L.Y_RIGHT_SPEED], fe_right, kr, fnr, ffr, vr)
     dydt[L.Y_LEFT_ANGLE] = y[L.Y_LEFT_SPEED]

@@ -44,6 +44,7 @@ S_LINING_HALF_COS = 18  # cos and sin of the half angle, so the kernel needs no 
 S_LINING_HALF_SIN = 19
 S_LINING_MID_COS = 20  # unit vector toward the arc's middle at rest
 S_LINING_MID_SIN = 21
+S_FRICTION_COEFFICIENT = 22  # this shoe's lining: mu (1 + friction change / 100)
 
 # drum out-of-roundness (model/defects.py DrumDefect), after the shoes: the number of
 # harmonics, then (order k, amplitude m, phase rad) per harmonic; r(psi) = R0 +
@@ -89,6 +90,7 @@ MAX_GROWTH_ENTRIES = 16
 GK_PIVOT = 0  # pivot_radius_change, %: the shoe is re-placed (assembly.place_shoe)
 GK_SHARE = 1  # actuation_share_change: this shoe's gain 2 (0.5 + s), the other's 2 (0.5 - s)
 GK_DRUM = 2  # drum_out_of_round, um of peak runout: every harmonic scales with it
+GK_FRICTION = 3  # friction_change, %: the shoe's lining coefficient (growth.lining_friction)
 
 N_PARAMS = P_GROWTH_BASE + MAX_GROWTH_ENTRIES * GROWTH_STRIDE
 
