@@ -188,6 +188,13 @@ def pack(
         p[b + L.S_ACTUATION_DIR_X], p[b + L.S_ACTUATION_DIR_Y] = s.actuation_dir
         p[b + L.S_MASS] = params.shoe.mass_kg
         p[b + L.S_ACTUATION_GAIN] = defect.actuation_gain
+        p[b + L.S_SHARE] = defect.actuation_share
+        p[b + L.S_PRESSURE_FACTOR] = 1.0 + defect.actuation_gain_change_pct / 100.0
+        p[b + L.S_ACTUATION_DELAY] = defect.actuation_delay_ms * 1e-3
+        p[b + L.S_ACTUATION_LAG] = defect.actuation_lag_ms * 1e-3
+        p[b + L.S_PULSATION_AMPLITUDE] = defect.actuation_pulsation_pct / 100.0
+        p[b + L.S_PULSATION_FREQUENCY] = defect.actuation_pulsation_hz
+        p[b + L.S_ACTUATION_SHAPED] = 1.0 if defect.actuation_shaped else 0.0
         p[b + L.S_FRICTION_COEFFICIENT] = growth.lining_friction.py_func(
             params.friction.coefficient, defect.friction_change_pct
         )
@@ -203,6 +210,8 @@ _GROWTH_KIND_IDS = {
     "pivot_radius_change": L.GK_PIVOT,
     "actuation_share_change": L.GK_SHARE,
     "friction_change": L.GK_FRICTION,
+    "actuation_gain_change": L.GK_GAIN,
+    "actuation_pulsation": L.GK_PULSATION,
     DRUM_KIND: L.GK_DRUM,
 }
 

@@ -294,6 +294,58 @@ KINDS: tuple[DefectKind, ...] = (
         service_limit=-50.0,  # fade and contamination can halve mu (TESTBED.md)
     ),
     DefectKind(
+        name="actuation_gain_change",
+        locations=SIDES,
+        unit="%",
+        minimum=-90.0,
+        maximum=50.0,
+        limit="a wheel cylinder that still pushes, up to half again the commanded force",
+        description=(
+            "change of the force the shoe's wheel cylinder delivers for the commanded one,"
+            " in %; negative for low line pressure"
+        ),
+        scenario_key="actuation_gain_change_pct",
+        service_limit=-27.0,  # graded efficiency down to 73 % (UCI hydraulic rig, TESTBED.md)
+    ),
+    DefectKind(
+        name="actuation_delay",
+        locations=SIDES,
+        unit="ms",
+        minimum=0.0,
+        maximum=500.0,
+        limit="beyond 0.5 s a brake no longer answers within the 0.36 s expected of a car",
+        description="dead time between the commanded actuation and the shoe's, in ms",
+        scenario_key="actuation_delay_ms",
+        service_limit=100.0,  # a whole healthy hydraulic rise (under 0.1 s, TESTBED.md)
+    ),
+    DefectKind(
+        name="actuation_lag",
+        locations=SIDES,
+        unit="ms",
+        minimum=0.0,
+        maximum=500.0,
+        limit="beyond 0.5 s a brake no longer answers within the 0.36 s expected of a car",
+        description=(
+            "time constant of a first-order lag of the shoe's actuation (a slow rise), in ms"
+        ),
+        scenario_key="actuation_lag_ms",
+        service_limit=120.0,  # 95 % of a step in 0.36 s, a car's response (TESTBED.md)
+    ),
+    DefectKind(
+        name="actuation_pulsation",
+        locations=SIDES,
+        unit="%",
+        minimum=0.0,
+        maximum=100.0,
+        limit="a pulsating force still only pushes",
+        description=(
+            "amplitude of a pulsation of the shoe's actuation force, in % of it, at the"
+            " frequency actuation_pulsation_hz (attribute frequency_hz)"
+        ),
+        scenario_key="actuation_pulsation_pct",
+        service_limit=20.0,  # no service figure in TESTBED.md: a clearly felt pulsation
+    ),
+    DefectKind(
         name=DRUM_KIND,
         locations=("drum",),
         unit="um",

@@ -9,6 +9,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from brake_sim_ros.errors import ParameterError
+from brake_sim_ros.model.actuation import shoe_gain
 from brake_sim_ros.model.catalogue import (
     DRUM_KIND,
     KIND_BY_NAME,
@@ -20,6 +21,13 @@ from brake_sim_ros.model.catalogue import (
 
 # Most harmonics one drum carries: the packed parameter vector has this many slots.
 from brake_sim_ros.model.layout import MAX_DRUM_HARMONICS
+
+# Highest pulsation frequency of an actuation, Hz: a hydraulic line's pressure pulsation
+# (a pump, ABS modulation) stays far below the contact's kHz dynamics.
+MAX_PULSATION_HZ = 1000.0
+# The frequency Defects.single gives a pulsation (a severity sweep), Hz: about the ABS
+# modulation rate of a wheel (10-20 Hz).
+DEFAULT_PULSATION_HZ = 15.0
 
 
 @dataclass(frozen=True)
@@ -40,12 +48,31 @@ class ShoeDefect:
         friction_change_pct: change of this shoe's lining friction coefficient, percent of
             the nominal one (fade when hot, contamination by oil or water: negative; both
             can halve it, ``TESTBED.md``). The shoe's coefficient is ``mu (1 + pct/100)``.
+        actuation_gain_change_pct: change of the force the shoe's wheel cylinder delivers
+            for the commanded one, percent (low line pressure: negative); the shoe's
+            force is multiplied by ``2 share (1 + pct/100)`` (``actuation.shoe_gain``).
+        actuation_delay_ms: dead time of the shoe's actuation, ms: it follows the
+            commanded history this late.
+        actuation_lag_ms: time constant of a first-order lag of the shoe's actuation, ms
+            (a slow rise: ``tau F' + F = F_commanded``).
+        actuation_pulsation_pct: amplitude of a pulsation of the shoe's actuation force,
+            percent of it (``F (1 + a sin(2 pi f t))``), at ``actuation_pulsation_hz``.
+        actuation_pulsation_hz: the pulsation's frequency, Hz (> 0 with a pulsation).
+
+    Delay, lag and pulsation act on the scenario's actuation history; the node's live
+    actuation commands (``~/actuation``) reach the shoe with the gain and the pulsation
+    but without delay or lag.
     """
 
     pivot_radius_change_pct: float = 0.0
     initial_angle_deg: float = 0.0
     actuation_share: float = 0.5
     friction_change_pct: float = 0.0
+    actuation_gain_change_pct: float = 0.0
+    actuation_delay_ms: float = 0.0
+    actuation_lag_ms: float = 0.0
+    actuation_pulsation_pct: float = 0.0
+    actuation_pulsation_hz: float = 0.0
 
     def __post_init__(self) -> None:
         for name in (
@@ -53,12 +80,23 @@ class ShoeDefect:
             "initial_angle_deg",
             "actuation_share",
             "friction_change_pct",
+            "actuation_gain_change_pct",
+            "actuation_delay_ms",
+            "actuation_lag_ms",
+            "actuation_pulsation_pct",
+            "actuation_pulsation_hz",
         ):
             value = getattr(self, name)
             if not isinstance(value, int | float) or not math.isfinite(value):
                 raise ParameterError(f"defect {name}={value!r} is invalid: allowed a finite number")
         for kind, severity in self.severities().items():
             KIND_BY_NAME[kind].check(severity)
+        hz = self.actuation_pulsation_hz
+        if not 0.0 <= hz <= MAX_PULSATION_HZ or (self.actuation_pulsation_pct and hz == 0.0):
+            raise ParameterError(
+                f"defect actuation_pulsation_hz={hz:g} is invalid: allowed > 0 to"
+                f" {MAX_PULSATION_HZ:g} Hz with a pulsation (0 without one)"
+            )
 
     def severities(self) -> dict[str, float]:
         """The severity of each catalogue kind a shoe can carry (0: absent), in the kind's
@@ -68,6 +106,10 @@ class ShoeDefect:
             "initial_angle": float(self.initial_angle_deg),
             "actuation_share_change": float(self.actuation_share) - 0.5,
             "friction_change": float(self.friction_change_pct),
+            "actuation_gain_change": float(self.actuation_gain_change_pct),
+            "actuation_delay": float(self.actuation_delay_ms),
+            "actuation_lag": float(self.actuation_lag_ms),
+            "actuation_pulsation": float(self.actuation_pulsation_pct),
         }
 
     @classmethod
@@ -79,6 +121,13 @@ class ShoeDefect:
             initial_angle_deg=severities.get("initial_angle", 0.0),
             actuation_share=0.5 + severities.get("actuation_share_change", 0.0),
             friction_change_pct=severities.get("friction_change", 0.0),
+            actuation_gain_change_pct=severities.get("actuation_gain_change", 0.0),
+            actuation_delay_ms=severities.get("actuation_delay", 0.0),
+            actuation_lag_ms=severities.get("actuation_lag", 0.0),
+            actuation_pulsation_pct=severities.get("actuation_pulsation", 0.0),
+            actuation_pulsation_hz=(
+                DEFAULT_PULSATION_HZ if severities.get("actuation_pulsation") else 0.0
+            ),
         )
 
     @property
@@ -87,8 +136,15 @@ class ShoeDefect:
 
     @property
     def actuation_gain(self) -> float:
-        """Multiplier on this shoe's actuation force, ``2 * actuation_share``."""
-        return 2.0 * self.actuation_share
+        """Multiplier on this shoe's actuation force, ``2 share (1 + gain change/100)``."""
+        return float(shoe_gain.py_func(self.actuation_share, self.actuation_gain_change_pct))
+
+    @property
+    def actuation_shaped(self) -> bool:
+        """The shoe's actuation is delayed, lagged or pulsating."""
+        return bool(
+            self.actuation_delay_ms or self.actuation_lag_ms or self.actuation_pulsation_pct
+        )
 
 
 # Largest order of a drum-radius harmonic (cycles per revolution): the service range of
@@ -356,6 +412,9 @@ class Defects:
         if kind == DRUM_KIND:
             for name, value in self.drum.attributes():
                 attributes.append((name, value * fraction if "amplitude" in name else value))
+        if kind == "actuation_pulsation":
+            shoe = getattr(self, location)
+            attributes.append(("frequency_hz", float(shoe.actuation_pulsation_hz)))
         growth = self.growth_of(kind, location)
         if not growth.is_static:
             unit = KIND_BY_NAME[kind].unit

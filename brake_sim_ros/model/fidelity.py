@@ -97,6 +97,12 @@ DEFECT_LEVELS: dict[str, frozenset[str]] = {
     "initial_angle": _ALL_LEVELS,
     "actuation_share_change": _ALL_LEVELS,
     "friction_change": _ALL_LEVELS,  # a coefficient per lining: the same shoe balance
+    "actuation_gain_change": _ALL_LEVELS,  # a gain, as the share's
+    # a shaped actuation history: the contact-regime levels reuse a balance while the
+    # actuation holds, and a delayed, lagging or pulsating force does not hold
+    "actuation_delay": frozenset({"rigid", "full"}),
+    "actuation_lag": frozenset({"rigid", "full"}),
+    "actuation_pulsation": frozenset({"rigid", "full"}),
     DRUM_KIND: frozenset({"rigid", "full"}),
 }
 # levels that represent a defect changing during the run (an onset after 0 s or a growth

@@ -102,15 +102,19 @@ def apply(p, pw, t):
     functions must then be re-evaluated).
 
     A pivot re-places its shoe (:func:`shoe_placement`); an actuation share sets this
-    shoe's gain to ``2 (0.5 + s)`` and the other's to ``2 (0.5 - s)``; a friction change
+    shoe's share to ``0.5 + s`` and the other's to ``0.5 - s``, an actuation gain change
+    its pressure factor ``1 + s/100`` (the gain is ``2 share factor``,
+    :func:`.actuation.shoe_gain`); a pulsation sets its amplitude; a friction change
     sets the shoe's lining coefficient (:func:`lining_friction`); a drum out of round
     scales every harmonic by ``s / s_final``. A severity equal to the one set last (before
     the onset, once the final one is reached) is not written again.
     """
-    gains = [
-        p[L.P_SHOE_BASE + L.S_ACTUATION_GAIN],
-        p[L.P_SHOE_BASE + L.SHOE_STRIDE + L.S_ACTUATION_GAIN],
-    ]
+    bl = L.P_SHOE_BASE
+    br = L.P_SHOE_BASE + L.SHOE_STRIDE
+    gains = [p[bl + L.S_ACTUATION_GAIN], p[br + L.S_ACTUATION_GAIN]]
+    shares = [p[bl + L.S_SHARE], p[br + L.S_SHARE]]
+    pressure = [p[bl + L.S_PRESSURE_FACTOR], p[br + L.S_PRESSURE_FACTOR]]
+    regain = False
     nb = L.P_NOMINAL_BASE
     moved = False
     for j in range(int(p[L.P_GROWTH_COUNT])):
@@ -122,8 +126,13 @@ def apply(p, pw, t):
         kind = int(p[g + L.G_KIND])
         shoe = int(p[g + L.G_SHOE])
         if kind == L.GK_SHARE:
-            gains[shoe] = 2.0 * (0.5 + s)
-            gains[1 - shoe] = 2.0 * (0.5 - s)
+            shares[shoe] = 0.5 + s
+            shares[1 - shoe] = 0.5 - s
+            regain = True
+            continue
+        if kind == L.GK_GAIN:
+            pressure[shoe] = 1.0 + s / 100.0
+            regain = True
             continue
         if s == pw[g + L.G_NOW]:
             continue
@@ -148,9 +157,14 @@ def apply(p, pw, t):
         elif kind == L.GK_FRICTION:
             base = L.P_SHOE_BASE + shoe * L.SHOE_STRIDE
             pw[base + L.S_FRICTION_COEFFICIENT] = lining_friction(p[L.P_FRICTION_COEFFICIENT], s)
+        elif kind == L.GK_PULSATION:
+            pw[L.P_SHOE_BASE + shoe * L.SHOE_STRIDE + L.S_PULSATION_AMPLITUDE] = s / 100.0
         elif kind == L.GK_DRUM:
             fraction = s / final
             for w in range(int(p[L.P_DRUM_WAVE_COUNT])):
                 a = L.P_DRUM_WAVE_BASE + w * L.DRUM_WAVE_STRIDE + L.W_AMPLITUDE
                 pw[a] = p[a] * fraction
+    if regain:
+        for i in range(2):
+            gains[i] = 2.0 * shares[i] * pressure[i]
     return gains[0], gains[1], moved

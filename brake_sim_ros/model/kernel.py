@@ -15,28 +15,28 @@ import math
 import numpy as np
 from numba import njit
 
-from brake_sim_ros.model import contact, growth, standstill
+from brake_sim_ros.model import actuation, contact, growth, standstill
 from brake_sim_ros.model import layout as L
+
+_pwl = actuation.pwl
 
 
 @njit(cache=True, inline="always")
-def _pwl(t, ts, fs):
-    """Piecewise-linear interpolation, held constant outside the knots."""
-    n = ts.shape[0]
-    if t <= ts[0]:
-        return fs[0]
-    if t >= ts[n - 1]:
-        return fs[n - 1]
-    lo = 0
-    hi = n - 1
-    while hi - lo > 1:
-        mid = (lo + hi) // 2
-        if ts[mid] <= t:
-            lo = mid
-        else:
-            hi = mid
-    w = (t - ts[lo]) / (ts[hi] - ts[lo])
-    return fs[lo] + w * (fs[hi] - fs[lo])
+def _force(p, base, t, ts, fs, gain):
+    """Actuation force on the shoe at ``base`` at ``t`` (s), N: the commanded history
+    (knots ``ts``, ``fs``) times ``gain``, shaped by the shoe's actuation defects
+    (:func:`.actuation.shaped`) when it has any."""
+    if p[base + L.S_ACTUATION_SHAPED] <= 0.0:
+        return gain * _pwl(t, ts, fs)
+    return gain * actuation.shaped(
+        t,
+        ts,
+        fs,
+        p[base + L.S_ACTUATION_DELAY],
+        p[base + L.S_ACTUATION_LAG],
+        p[base + L.S_PULSATION_AMPLITUDE],
+        p[base + L.S_PULSATION_FREQUENCY],
+    )
 
 
 @njit(cache=True)
@@ -228,8 +228,8 @@ def rk4_step(y, k1, t0, h, p, gl, tl, fl, gr, tr, fr, stuck, ml, mr, k2, k3, k4,
     the contact modes ``ml``/``mr`` into ``y_out`` (may be ``y`` itself)."""
     n = y.shape[0]
     th = t0 + 0.5 * h
-    fel = gl * _pwl(th, tl, fl)
-    fer = gr * _pwl(th, tr, fr)
+    fel = _force(p, L.P_SHOE_BASE, th, tl, fl, gl)
+    fer = _force(p, L.P_SHOE_BASE + L.SHOE_STRIDE, th, tr, fr, gr)
     for j in range(n):
         tmp[j] = y[j] + 0.5 * h * k1[j]
     evaluate(tmp, p, fel, fer, stuck, ml, mr, k2, out, -1, t0)
@@ -237,8 +237,8 @@ def rk4_step(y, k1, t0, h, p, gl, tl, fl, gr, tr, fr, stuck, ml, mr, k2, k3, k4,
         tmp[j] = y[j] + 0.5 * h * k2[j]
     evaluate(tmp, p, fel, fer, stuck, ml, mr, k3, out, -1, t0)
     t1 = t0 + h
-    fel = gl * _pwl(t1, tl, fl)
-    fer = gr * _pwl(t1, tr, fr)
+    fel = _force(p, L.P_SHOE_BASE, t1, tl, fl, gl)
+    fer = _force(p, L.P_SHOE_BASE + L.SHOE_STRIDE, t1, tr, fr, gr)
     for j in range(n):
         tmp[j] = y[j] + h * k3[j]
     evaluate(tmp, p, fel, fer, stuck, ml, mr, k4, out, -1, t0)
@@ -426,8 +426,8 @@ def _located_step(y, k1, t, dt, p, gl, tl, fl, gr, tr, fr, stuck, h_start, work,
             break
         ml = L.CONTACT_ON if on_l else L.CONTACT_OFF
         mr = L.CONTACT_ON if on_r else L.CONTACT_OFF
-        fel = gl * _pwl(t + tau, tl, fl)
-        fer = gr * _pwl(t + tau, tr, fr)
+        fel = _force(p, L.P_SHOE_BASE, t + tau, tl, fl, gl)
+        fer = _force(p, L.P_SHOE_BASE + L.SHOE_STRIDE, t + tau, tr, fr, gr)
         evaluate(ya, p, fel, fer, stuck, ml, mr, ka, out, -1, t)
     for j in range(n):
         y[j] = yb[j]
@@ -521,8 +521,8 @@ def fixed_step_advance(
                 h_end[0], h_end[1] = _shoe_switch(pw, 0, y)
                 h_end[2], h_end[3] = _shoe_switch(pw, 1, y)
         stuck = kstate[L.K_STUCK]
-        fel = gl * _pwl(t, tl, fl)
-        fer = gr * _pwl(t, tr, fr)
+        fel = _force(pw, L.P_SHOE_BASE, t, tl, fl, gl)
+        fer = _force(pw, L.P_SHOE_BASE + L.SHOE_STRIDE, t, tr, fr, gr)
         record = i % record_every == 0
         evaluate(y, pw, fel, fer, stuck, auto, auto, k1, out, rows if record else -1, t)
         if located:

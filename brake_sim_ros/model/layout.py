@@ -19,7 +19,7 @@ P_FRICTION_SMOOTHING_SPEED = 8
 P_RIGID_COUPLING = 9  # 1.0: flywheel and drum move as one body (no torsional mode)
 SIDES = ("left", "right")  # the shoes, in slot and column order: leading, trailing
 P_SHOE_BASE = 12  # first slot of the left shoe; the right shoe follows at +SHOE_STRIDE
-SHOE_STRIDE = 24
+SHOE_STRIDE = 32
 
 # offsets inside one shoe's block (world frame, shoe at its symmetric rest angle)
 S_SIGN = 0  # +1 left (outward = counter-clockwise), -1 right (outward = clockwise)
@@ -38,13 +38,24 @@ S_MASS = 12
 S_MASS_CENTRE_X = 13
 S_MASS_CENTRE_Y = 14
 S_INERTIA = 15  # about the pivot, kg m^2
-S_ACTUATION_GAIN = 16  # 2 x actuation share
+S_ACTUATION_GAIN = 16  # 2 x actuation share x (1 + actuation gain change / 100)
 S_ENABLED = 17  # 0.0: shoe removed from the model (held retracted, no forces)
 S_LINING_HALF_COS = 18  # cos and sin of the half angle, so the kernel needs no atan2
 S_LINING_HALF_SIN = 19
 S_LINING_MID_COS = 20  # unit vector toward the arc's middle at rest
 S_LINING_MID_SIN = 21
 S_FRICTION_COEFFICIENT = 22  # this shoe's lining: mu (1 + friction change / 100)
+# the shoe's actuation (model/actuation.py shaped): its share and pressure factor (whose
+# product, doubled, is S_ACTUATION_GAIN), a delay and first-order lag of the commanded
+# history, s, and a pulsation (relative amplitude, frequency Hz); S_ACTUATION_SHAPED 1.0
+# when any of delay, lag, pulsation is set (else the history is used as commanded)
+S_SHARE = 23
+S_PRESSURE_FACTOR = 24
+S_ACTUATION_DELAY = 25
+S_ACTUATION_LAG = 26
+S_PULSATION_AMPLITUDE = 27
+S_PULSATION_FREQUENCY = 28
+S_ACTUATION_SHAPED = 29
 
 # drum out-of-roundness (model/defects.py DrumDefect), after the shoes: the number of
 # harmonics, then (order k, amplitude m, phase rad) per harmonic; r(psi) = R0 +
@@ -91,6 +102,8 @@ GK_PIVOT = 0  # pivot_radius_change, %: the shoe is re-placed (assembly.place_sh
 GK_SHARE = 1  # actuation_share_change: this shoe's gain 2 (0.5 + s), the other's 2 (0.5 - s)
 GK_DRUM = 2  # drum_out_of_round, um of peak runout: every harmonic scales with it
 GK_FRICTION = 3  # friction_change, %: the shoe's lining coefficient (growth.lining_friction)
+GK_GAIN = 4  # actuation_gain_change, %: the shoe's pressure factor (actuation.shoe_gain)
+GK_PULSATION = 5  # actuation_pulsation, %: the shoe's pulsation amplitude
 
 N_PARAMS = P_GROWTH_BASE + MAX_GROWTH_ENTRIES * GROWTH_STRIDE
 

@@ -93,6 +93,13 @@ def run_reference(
             " or a growth law): allowed with a fixed-step method (rk4-located, rk4,"
             " semi-implicit-euler)"
         )
+    shaped = [s for s in SIDES if getattr(setup.defects, s).actuation_shaped]
+    if shaped:
+        raise ParameterError(
+            f"the reference solver takes the actuation history as commanded: the {shaped[0]}"
+            " shoe's actuation is delayed, lagging or pulsating: allowed with a fixed-step"
+            " method (rk4-located, rk4, semi-implicit-euler)"
+        )
     p = pack(setup.params, setup.defects, setup.options)
     y = initial_state(setup.params, setup.defects)
     tl, fl, tr, fr = setup.actuation.as_arrays()

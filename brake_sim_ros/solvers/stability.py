@@ -174,9 +174,10 @@ def step_limit(
     v_lock = p[L.P_FRICTION_SMOOTHING_SPEED]
     direction = 1.0 if setup.params.driveline.initial_speed_rad_s >= 0.0 else -1.0
     drum_speed = direction * v_lock / radius
-    gains = (
-        p[L.P_SHOE_BASE + L.S_ACTUATION_GAIN],
-        p[L.P_SHOE_BASE + L.SHOE_STRIDE + L.S_ACTUATION_GAIN],
+    # a pulsating actuation peaks at (1 + its amplitude) times the force
+    gains = tuple(
+        p[b + L.S_ACTUATION_GAIN] * (1.0 + p[b + L.S_PULSATION_AMPLITUDE])
+        for b in (L.P_SHOE_BASE, L.P_SHOE_BASE + L.SHOE_STRIDE)
     )
     fe = (max_actuation_n * gains[0], max_actuation_n * gains[1])
     y = np.zeros(L.N_STATE)
