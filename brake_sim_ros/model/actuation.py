@@ -41,6 +41,28 @@ def shoe_gain(share, change_pct):
     return 2.0 * share * (1.0 + change_pct / 100.0)
 
 
+# The return spring (the model had none: its healthy brake is calibrated on the net force
+# that moves a shoe off its stop). A drum brake's lines hold a residual pressure (a check
+# valve keeps 0.5-1 bar to seal the cups): about RESIDUAL_FORCE_N on a 19 mm wheel
+# cylinder; the return spring's preload, RETURN_SPRING_PRELOAD_N at the tip, holds the shoe
+# on its stop against it with the margin between the two. The healthy model's actuation is
+# the net force once the shoe has left the stop (cylinder minus spring), 0 on the stop.
+RESIDUAL_FORCE_N = 20.0
+RETURN_SPRING_PRELOAD_N = 60.0
+
+
+@njit(cache=True, inline="always")
+def spring_release(force, released, margin):
+    """Actuation force at the tip (N) when the return spring has lost ``released`` N of its
+    preload, for the healthy model's net force ``force`` (N): off its stop (``force > 0``)
+    the shoe gets the lost preload on top; on its stop only what exceeds the stop's margin
+    (``margin``: preload minus residual force, N) pushes it, so a spring weakened past
+    the margin (or broken) presses the shoe on the drum without actuation: drag."""
+    if force > 0.0:
+        return force + released
+    return released - margin if released > margin else 0.0
+
+
 @njit(cache=True)
 def shaped(t, ts, fs, delay_s, lag_s, amplitude, frequency_hz):
     """The force a shoe's wheel cylinder delivers at ``t`` (s) for the commanded

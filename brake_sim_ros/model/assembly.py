@@ -11,6 +11,7 @@ from scipy.optimize import brentq
 from brake_sim_ros.errors import ParameterError
 from brake_sim_ros.model import growth, kernel
 from brake_sim_ros.model import layout as L
+from brake_sim_ros.model.actuation import RESIDUAL_FORCE_N, RETURN_SPRING_PRELOAD_N
 from brake_sim_ros.model.catalogue import DRUM_KIND
 from brake_sim_ros.model.defects import (
     MAX_DRUM_SLOPE,
@@ -195,6 +196,10 @@ def pack(
         p[b + L.S_PULSATION_AMPLITUDE] = defect.actuation_pulsation_pct / 100.0
         p[b + L.S_PULSATION_FREQUENCY] = defect.actuation_pulsation_hz
         p[b + L.S_ACTUATION_SHAPED] = 1.0 if defect.actuation_shaped else 0.0
+        p[b + L.S_SPRING_RELEASE] = (
+            defect.return_spring_weakening_pct / 100.0 * RETURN_SPRING_PRELOAD_N
+        )
+        p[b + L.S_SPRING_MARGIN] = RETURN_SPRING_PRELOAD_N - RESIDUAL_FORCE_N
         p[b + L.S_FRICTION_COEFFICIENT] = growth.lining_friction.py_func(
             params.friction.coefficient, defect.friction_change_pct
         )

@@ -346,6 +346,20 @@ KINDS: tuple[DefectKind, ...] = (
         service_limit=20.0,  # no service figure in TESTBED.md: a clearly felt pulsation
     ),
     DefectKind(
+        name="return_spring_weakening",
+        locations=SIDES,
+        unit="%",
+        minimum=0.0,
+        maximum=100.0,
+        limit="a spring loses at most all of its preload (100 %: broken)",
+        description=(
+            "preload the shoe's return spring has lost, in %; past 67 % (the stop's margin"
+            " over the residual line pressure) the shoe drags on the drum without actuation"
+        ),
+        scenario_key="return_spring_weakening_pct",
+        service_limit=100.0,  # a broken spring
+    ),
+    DefectKind(
         name=DRUM_KIND,
         locations=("drum",),
         unit="um",

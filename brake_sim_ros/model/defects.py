@@ -58,6 +58,10 @@ class ShoeDefect:
         actuation_pulsation_pct: amplitude of a pulsation of the shoe's actuation force,
             percent of it (``F (1 + a sin(2 pi f t))``), at ``actuation_pulsation_hz``.
         actuation_pulsation_hz: the pulsation's frequency, Hz (> 0 with a pulsation).
+        return_spring_weakening_pct: preload the shoe's return spring has lost, percent
+            (100: broken). Past the stop's margin (``actuation.spring_release``: preload
+            60 N against a residual line force of 20 N, so past 67 %) the residual pressure
+            presses the shoe on the drum without actuation: drag.
 
     Delay, lag and pulsation act on the scenario's actuation history; the node's live
     actuation commands (``~/actuation``) reach the shoe with the gain and the pulsation
@@ -73,6 +77,7 @@ class ShoeDefect:
     actuation_lag_ms: float = 0.0
     actuation_pulsation_pct: float = 0.0
     actuation_pulsation_hz: float = 0.0
+    return_spring_weakening_pct: float = 0.0
 
     def __post_init__(self) -> None:
         for name in (
@@ -85,6 +90,7 @@ class ShoeDefect:
             "actuation_lag_ms",
             "actuation_pulsation_pct",
             "actuation_pulsation_hz",
+            "return_spring_weakening_pct",
         ):
             value = getattr(self, name)
             if not isinstance(value, int | float) or not math.isfinite(value):
@@ -110,6 +116,7 @@ class ShoeDefect:
             "actuation_delay": float(self.actuation_delay_ms),
             "actuation_lag": float(self.actuation_lag_ms),
             "actuation_pulsation": float(self.actuation_pulsation_pct),
+            "return_spring_weakening": float(self.return_spring_weakening_pct),
         }
 
     @classmethod
@@ -125,6 +132,7 @@ class ShoeDefect:
             actuation_delay_ms=severities.get("actuation_delay", 0.0),
             actuation_lag_ms=severities.get("actuation_lag", 0.0),
             actuation_pulsation_pct=severities.get("actuation_pulsation", 0.0),
+            return_spring_weakening_pct=severities.get("return_spring_weakening", 0.0),
             actuation_pulsation_hz=(
                 DEFAULT_PULSATION_HZ if severities.get("actuation_pulsation") else 0.0
             ),

@@ -103,6 +103,9 @@ DEFECT_LEVELS: dict[str, frozenset[str]] = {
     "actuation_delay": frozenset({"rigid", "full"}),
     "actuation_lag": frozenset({"rigid", "full"}),
     "actuation_pulsation": frozenset({"rigid", "full"}),
+    # the spring acts on the force that reaches the shoe in the kernel: the contact-regime
+    # levels take the commanded history
+    "return_spring_weakening": frozenset({"rigid", "full"}),
     DRUM_KIND: frozenset({"rigid", "full"}),
 }
 # levels that represent a defect changing during the run (an onset after 0 s or a growth

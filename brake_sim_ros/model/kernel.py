@@ -27,15 +27,21 @@ def _force(p, base, t, ts, fs, gain):
     (knots ``ts``, ``fs``) times ``gain``, shaped by the shoe's actuation defects
     (:func:`.actuation.shaped`) when it has any."""
     if p[base + L.S_ACTUATION_SHAPED] <= 0.0:
-        return gain * _pwl(t, ts, fs)
-    return gain * actuation.shaped(
-        t,
-        ts,
-        fs,
-        p[base + L.S_ACTUATION_DELAY],
-        p[base + L.S_ACTUATION_LAG],
-        p[base + L.S_PULSATION_AMPLITUDE],
-        p[base + L.S_PULSATION_FREQUENCY],
+        force = gain * _pwl(t, ts, fs)
+    else:
+        force = gain * actuation.shaped(
+            t,
+            ts,
+            fs,
+            p[base + L.S_ACTUATION_DELAY],
+            p[base + L.S_ACTUATION_LAG],
+            p[base + L.S_PULSATION_AMPLITUDE],
+            p[base + L.S_PULSATION_FREQUENCY],
+        )
+    if p[base + L.S_SPRING_RELEASE] <= 0.0:
+        return force
+    return actuation.spring_release(
+        force, p[base + L.S_SPRING_RELEASE], p[base + L.S_SPRING_MARGIN]
     )
 
 

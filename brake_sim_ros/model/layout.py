@@ -56,6 +56,10 @@ S_ACTUATION_LAG = 26
 S_PULSATION_AMPLITUDE = 27
 S_PULSATION_FREQUENCY = 28
 S_ACTUATION_SHAPED = 29
+# a weakened return spring (model/actuation.py spring_release): the preload it lost, N at
+# the tip, and the healthy spring's hold margin over the residual line pressure, N
+S_SPRING_RELEASE = 30
+S_SPRING_MARGIN = 31
 
 # drum out-of-roundness (model/defects.py DrumDefect), after the shoes: the number of
 # harmonics, then (order k, amplitude m, phase rad) per harmonic; r(psi) = R0 +

@@ -93,11 +93,17 @@ def run_reference(
             " or a growth law): allowed with a fixed-step method (rk4-located, rk4,"
             " semi-implicit-euler)"
         )
-    shaped = [s for s in SIDES if getattr(setup.defects, s).actuation_shaped]
+    shaped = [
+        s
+        for s in SIDES
+        if getattr(setup.defects, s).actuation_shaped
+        or getattr(setup.defects, s).return_spring_weakening_pct
+    ]
     if shaped:
         raise ParameterError(
             f"the reference solver takes the actuation history as commanded: the {shaped[0]}"
-            " shoe's actuation is delayed, lagging or pulsating: allowed with a fixed-step"
+            " shoe's actuation is delayed, lagging, pulsating or has a weak return spring:"
+            " allowed with a fixed-step"
             " method (rk4-located, rk4, semi-implicit-euler)"
         )
     p = pack(setup.params, setup.defects, setup.options)

@@ -179,7 +179,11 @@ def step_limit(
         p[b + L.S_ACTUATION_GAIN] * (1.0 + p[b + L.S_PULSATION_AMPLITUDE])
         for b in (L.P_SHOE_BASE, L.P_SHOE_BASE + L.SHOE_STRIDE)
     )
-    fe = (max_actuation_n * gains[0], max_actuation_n * gains[1])
+    # a weakened return spring adds the preload it lost (model/actuation.py spring_release)
+    fe = tuple(
+        max_actuation_n * g + p[b + L.S_SPRING_RELEASE]
+        for g, b in zip(gains, (L.P_SHOE_BASE, L.P_SHOE_BASE + L.SHOE_STRIDE), strict=True)
+    )
     y = np.zeros(L.N_STATE)
     bases = (L.P_SHOE_BASE, L.P_SHOE_BASE + L.SHOE_STRIDE)
     for i, base in enumerate(bases):
