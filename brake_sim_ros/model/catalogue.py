@@ -390,13 +390,17 @@ class ActiveDefect:
     Attributes:
         kind: a name from :data:`KINDS`.
         location: where it sits (one of the kind's locations).
-        severity: its size now, in the kind's unit (non-zero).
+        severity: its size now (or, describing a whole run, its final size), in the
+            kind's unit (non-zero).
         unit: the kind's unit.
         onset_s: simulated time it started, s.
         growth: how it evolves after the onset (:data:`GROWTH_LAWS`).
-        growth_rate: the law's rate, unit/s (0 for a step).
+        growth_rate: the law's rate (:attr:`Growth.rate`): linear the kind's unit per
+            second, exponential 1/s (``ln 2 / doubling time``), step 0.
         attributes: what else describes it, by name (each name ends in its unit), e.g.
-            the amplitude and phase of each harmonic of a drum out of round.
+            the amplitude and phase of each harmonic of a drum out of round; a defect
+            that changes in time adds ``final_severity_<unit>`` (and an exponential
+            ``start_severity_<unit>``; ``%`` spelled ``pct``, none for a ratio).
     """
 
     kind: str
