@@ -195,7 +195,8 @@ def pack(
         p[b + L.S_ACTUATION_LAG] = defect.actuation_lag_ms * 1e-3
         p[b + L.S_PULSATION_AMPLITUDE] = defect.actuation_pulsation_pct / 100.0
         p[b + L.S_PULSATION_FREQUENCY] = defect.actuation_pulsation_hz
-        p[b + L.S_ACTUATION_SHAPED] = 1.0 if defect.actuation_shaped else 0.0
+        shaped = defect.actuation_shaped or defect.return_spring_weakening_pct > 0.0
+        p[b + L.S_ACTUATION_SHAPED] = 1.0 if shaped else 0.0
         p[b + L.S_SPRING_RELEASE] = (
             defect.return_spring_weakening_pct / 100.0 * RETURN_SPRING_PRELOAD_N
         )

@@ -24,20 +24,27 @@ _pwl = actuation.pwl
 @njit(cache=True, inline="always")
 def _force(p, base, t, ts, fs, gain):
     """Actuation force on the shoe at ``base`` at ``t`` (s), N: the commanded history
-    (knots ``ts``, ``fs``) times ``gain``, shaped by the shoe's actuation defects
-    (:func:`.actuation.shaped`) when it has any."""
+    (knots ``ts``, ``fs``) times ``gain``; shaped by the shoe's actuation defects
+    (:func:`_shaped_force`) when it has any. The healthy path stays this one line: the
+    shaping is a call, not inlined into every RK4 stage."""
     if p[base + L.S_ACTUATION_SHAPED] <= 0.0:
-        force = gain * _pwl(t, ts, fs)
-    else:
-        force = gain * actuation.shaped(
-            t,
-            ts,
-            fs,
-            p[base + L.S_ACTUATION_DELAY],
-            p[base + L.S_ACTUATION_LAG],
-            p[base + L.S_PULSATION_AMPLITUDE],
-            p[base + L.S_PULSATION_FREQUENCY],
-        )
+        return gain * _pwl(t, ts, fs)
+    return _shaped_force(p, base, t, ts, fs, gain)
+
+
+@njit(cache=True)
+def _shaped_force(p, base, t, ts, fs, gain):
+    """:func:`_force` of a shoe with a delay, lag or pulsation (:func:`.actuation.shaped`)
+    or a weakened return spring (:func:`.actuation.spring_release`)."""
+    force = gain * actuation.shaped(
+        t,
+        ts,
+        fs,
+        p[base + L.S_ACTUATION_DELAY],
+        p[base + L.S_ACTUATION_LAG],
+        p[base + L.S_PULSATION_AMPLITUDE],
+        p[base + L.S_PULSATION_FREQUENCY],
+    )
     if p[base + L.S_SPRING_RELEASE] <= 0.0:
         return force
     return actuation.spring_release(

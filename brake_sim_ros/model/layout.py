@@ -48,7 +48,8 @@ S_FRICTION_COEFFICIENT = 22  # this shoe's lining: mu (1 + friction change / 100
 # the shoe's actuation (model/actuation.py shaped): its share and pressure factor (whose
 # product, doubled, is S_ACTUATION_GAIN), a delay and first-order lag of the commanded
 # history, s, and a pulsation (relative amplitude, frequency Hz); S_ACTUATION_SHAPED 1.0
-# when any of delay, lag, pulsation is set (else the history is used as commanded)
+# when any of delay, lag, pulsation or a weak return spring (below) is set (else the
+# history is used as commanded)
 S_SHARE = 23
 S_PRESSURE_FACTOR = 24
 S_ACTUATION_DELAY = 25
