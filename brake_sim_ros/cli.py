@@ -474,7 +474,14 @@ def catalogue_text() -> str:
             f" [defects.<location>] or the node's parameter defects.<location>.{k.scenario_key};"
             f" column {label_column(k, k.locations[0])}",
         ]
-    lines.append(f"growth laws: {', '.join(GROWTH_LAWS)} (every defect is in force from t = 0)")
+    lines += [
+        f"growth laws: {', '.join(GROWTH_LAWS)}; a key's value is the final severity, or a"
+        " table {value, onset_s, growth, rate_per_s (linear, unit/s), doubling_time_s and"
+        " start (exponential)} ([defects.drum]: the same keys beside harmonics, in um of"
+        " peak runout); without them a defect is in force from t = 0",
+        "initial_angle is an initial condition: only from t = 0; a growing actuation share"
+        " moves the other shoe's the opposite way",
+    ]
     return "\n".join(lines)
 
 

@@ -85,3 +85,17 @@ def test_the_report_is_never_written_through_a_link(tmp_path, capsys):
     err = capsys.readouterr().err.strip()
     assert err.count("\n") == 0 and "is a symbolic link" in err
     assert victim.read_text() == "keep me" and not list(out.glob("*.png"))
+
+
+def test_a_fading_lining_lowers_the_braking_torque_monotonically():
+    """Friction change swept to its service limit (-50 %): the braking torque over the
+    contact regime falls at each step, and less than in proportion (the trailing shoe
+    keeps its share)."""
+    kind = KIND_BY_NAME["friction_change"]
+    healthy = severity.features(Defects(), "left", severity.ORDER_WINDOW_S[1])
+    result = severity.sweep(
+        kind, "left", severity.ORDER_WINDOW_S[1], healthy, steps=(0.0, 0.5, 1.0)
+    )
+    assert result["severities"] == [0.0, -25.0, -50.0]
+    torque = result["values"]["braking_torque_n_m"]
+    assert torque[0] > torque[1] > torque[2] > 0.5 * torque[0]

@@ -42,10 +42,10 @@ def indentation_bound_m(setup: BrakeSetup, actuation_n: float) -> tuple[float, f
     docstring. ``inf`` when the linearised shoe self-locks (``mu h >= d``)."""
     p = pack(setup.params, setup.defects, setup.options)
     k = p[L.P_CONTACT_STIFFNESS]
-    mu = p[L.P_FRICTION_COEFFICIENT]
     out = []
     for i, side in enumerate(SIDES):
         base = L.P_SHOE_BASE + i * L.SHOE_STRIDE
+        mu = p[base + L.S_FRICTION_COEFFICIENT]
         start = math.radians(getattr(setup.defects, side).initial_angle_deg)
         arms = contact_arms(p, base, start)
         if arms is None:

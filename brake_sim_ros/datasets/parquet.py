@@ -22,15 +22,16 @@ One row per sample of the scenario's rate. Columns, units in the names:
 
 * per kind of the defect catalogue (``model/catalogue.py``, ``brake-sim defects``) and
   location, ``defect:<kind>:<location> [<unit>]`` (float64): the defect's severity at that
-  sample, 0 where it is absent (today's defects are steps at the start of the run, so the
-  column is constant).
+  sample's time, 0 where it is absent or before its onset (the growth law evaluated by
+  ``catalogue.severity_at``, the function the compiled model sets the physics with; a
+  defect present from the start gives a constant column).
 
 Each measured column's field metadata gives ``unit``, ``rate_hz`` and ``decimation``; an
 edge-time column's gives ``unit`` and ``tone_ring_teeth``.
 The file's key-value metadata ``brake_sim`` holds JSON: the run parameters the caller
 gives (scenario, method, seed, rates, ...), ``fault_bits``, ``defects`` (the ground truth:
-one object per defect in force with kind, location, severity, unit, onset_s, growth and
-growth_rate, as the DefectState message), ``unit_id`` (the scenario's brake unit,
+one object per defect of the run with kind, location, final severity, unit, onset_s,
+growth and growth_rate, as the DefectState message), ``unit_id`` (the scenario's brake unit,
 "nominal" for the drawing's brake) and ``unit_parameters`` (the unit's ground truth: a
 list of ``{key, unit, nominal, value}``, every scattered parameter as the scenario gives it
 and as the unit has it, :mod:`brake_sim_ros.model.units`) and ``conditions`` (the run's
@@ -151,8 +152,8 @@ def history_table(
             columns[edge_name] = pa.array(edges_on_rows(np.asarray(samples.time_s), edges))
             info = {b"unit": b"s", b"tone_ring_teeth": str(teeth[name]).encode()}
             fields.append(pa.field(edge_name, pa.float64(), metadata=info))
-    for name, severity in defects.severities().items():
-        columns[name] = pa.array(np.full(n, severity))
+    for name, severity in defects.label_series(np.asarray(history["time_s"])).items():
+        columns[name] = pa.array(severity)
         fields.append(pa.field(name, pa.float64()))
     meta = {
         **metadata,

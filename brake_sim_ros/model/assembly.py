@@ -9,8 +9,10 @@ import numpy as np
 from scipy.optimize import brentq
 
 from brake_sim_ros.errors import ParameterError
-from brake_sim_ros.model import kernel
+from brake_sim_ros.model import growth, kernel
 from brake_sim_ros.model import layout as L
+from brake_sim_ros.model.actuation import RESIDUAL_FORCE_N, RETURN_SPRING_PRELOAD_N
+from brake_sim_ros.model.catalogue import DRUM_KIND
 from brake_sim_ros.model.defects import (
     MAX_DRUM_SLOPE,
     SERVICE_RUNOUT_UM,
@@ -103,46 +105,44 @@ def place_shoe(params: BrakeParameters, side: str, defect: ShoeDefect) -> ShoePl
     The right shoe is the mirror image of the left one about the y axis, defect included.
     """
     g = params.shoe
-    shift = defect.pivot_radius_change_pct / 100.0
+    # the compiled model re-places a shoe whose pin moves during a run with the same
+    # function (model/growth.py); here its Python source runs, so the assembled geometry
+    # keeps CPython's math to the last bit
     px, py = g.pivot_xy_m
-    qx, qy = px * (1.0 + shift), py * (1.0 + shift)  # the displaced pin P'
-    tx, ty = g.tip_x_m, g.tip_y_m
-    ax, ay = px - tx, py - ty  # tip -> nominal pin
-    bx, by = qx - tx, qy - ty  # tip -> displaced pin
-    turn = math.atan2(ax * by - ay * bx, ax * bx + ay * by)
-    c, s = math.cos(turn), math.sin(turn)
-
-    def body(x: float, y: float) -> tuple[float, float]:
-        """A point of the shoe body after the turn about the tip."""
-        dx, dy = x - tx, y - ty
-        return tx + c * dx - s * dy, ty + s * dx + c * dy
-
-    chord = math.hypot(ax, ay)
-    seat = (math.hypot(bx, by) - chord) if chord > 0.0 else 0.0
-    centre = body(0.0, 0.0)
-    mass_centre = body(g.mass_centre_x_m, g.mass_centre_y_m)
-    # parallel-axis theorem: the inertia about the mass centre is the shoe's own
-    arm0 = (g.mass_centre_x_m - px) ** 2 + (g.mass_centre_y_m - py) ** 2
-    arm1 = (mass_centre[0] - qx) ** 2 + (mass_centre[1] - qy) ** 2
-    inertia = g.inertia_about_pivot_kg_m2 + g.mass_kg * (arm1 - arm0)
-    mid = math.radians(0.5 * (g.lining_start_deg + g.lining_end_deg)) + turn
-    half = math.radians(0.5 * (g.lining_end_deg - g.lining_start_deg))
-    # computed for the left shoe; the right one is its mirror image about the y axis
+    qx, qy, cx, cy, mid, mx, my, inertia, turn, seat = growth.shoe_placement.py_func(
+        defect.pivot_radius_change_pct / 100.0,
+        -1.0 if side == "right" else 1.0,
+        px,
+        py,
+        g.tip_x_m,
+        g.tip_y_m,
+        g.mass_centre_x_m,
+        g.mass_centre_y_m,
+        g.inertia_about_pivot_kg_m2,
+        g.mass_kg,
+        _lining_mid_rad(params),
+    )
     m = -1.0 if side == "right" else 1.0
     return ShoePlacement(
         sign=m,
-        pivot_xy_m=(m * qx, qy),
-        lining_centre_xy_m=(m * centre[0], centre[1]),
+        pivot_xy_m=(qx, qy),
+        lining_centre_xy_m=(cx, cy),
         lining_radius_m=g.drum_radius_m - g.running_clearance_m,
-        lining_mid_rad=mid if m > 0 else math.pi - mid,
-        lining_half_rad=half,
-        tip_xy_m=(m * tx, ty),
+        lining_mid_rad=mid,
+        lining_half_rad=math.radians(0.5 * (g.lining_end_deg - g.lining_start_deg)),
+        tip_xy_m=(m * g.tip_x_m, g.tip_y_m),
         actuation_dir=(-m, 0.0),
-        mass_centre_xy_m=(m * mass_centre[0], mass_centre[1]),
+        mass_centre_xy_m=(mx, my),
         inertia_about_pivot_kg_m2=inertia,
         abutment_turn_rad=turn,
         heel_seat_offset_m=seat,
     )
+
+
+def _lining_mid_rad(params: BrakeParameters) -> float:
+    """Polar angle of the nominal left shoe's lining middle, rad."""
+    g = params.shoe
+    return math.radians(0.5 * (g.lining_start_deg + g.lining_end_deg))
 
 
 def pack(
@@ -172,25 +172,94 @@ def pack(
         s = place_shoe(params, side, defect)
         b = L.P_SHOE_BASE + i * L.SHOE_STRIDE
         p[b + L.S_SIGN] = s.sign
-        p[b + L.S_PIVOT_X], p[b + L.S_PIVOT_Y] = s.pivot_xy_m
-        p[b + L.S_LINING_CENTRE_X], p[b + L.S_LINING_CENTRE_Y] = s.lining_centre_xy_m
+        growth.write_placement.py_func(
+            p,
+            b,
+            *s.pivot_xy_m,
+            *s.lining_centre_xy_m,
+            s.lining_mid_rad,
+            *s.mass_centre_xy_m,
+            s.inertia_about_pivot_kg_m2,
+        )
         p[b + L.S_LINING_RADIUS] = s.lining_radius_m
-        p[b + L.S_LINING_MID_ANGLE] = s.lining_mid_rad
         p[b + L.S_LINING_HALF_ANGLE] = s.lining_half_rad
-        p[b + L.S_LINING_MID_COS] = math.cos(s.lining_mid_rad)
-        p[b + L.S_LINING_MID_SIN] = math.sin(s.lining_mid_rad)
         p[b + L.S_LINING_HALF_COS] = math.cos(s.lining_half_rad)
         p[b + L.S_LINING_HALF_SIN] = math.sin(s.lining_half_rad)
         p[b + L.S_TIP_X], p[b + L.S_TIP_Y] = s.tip_xy_m
         p[b + L.S_ACTUATION_DIR_X], p[b + L.S_ACTUATION_DIR_Y] = s.actuation_dir
         p[b + L.S_MASS] = params.shoe.mass_kg
-        p[b + L.S_MASS_CENTRE_X], p[b + L.S_MASS_CENTRE_Y] = s.mass_centre_xy_m
-        p[b + L.S_INERTIA] = s.inertia_about_pivot_kg_m2
         p[b + L.S_ACTUATION_GAIN] = defect.actuation_gain
+        p[b + L.S_SHARE] = defect.actuation_share
+        p[b + L.S_PRESSURE_FACTOR] = 1.0 + defect.actuation_gain_change_pct / 100.0
+        p[b + L.S_ACTUATION_DELAY] = defect.actuation_delay_ms * 1e-3
+        p[b + L.S_ACTUATION_LAG] = defect.actuation_lag_ms * 1e-3
+        p[b + L.S_PULSATION_AMPLITUDE] = defect.actuation_pulsation_pct / 100.0
+        p[b + L.S_PULSATION_FREQUENCY] = defect.actuation_pulsation_hz
+        shaped = defect.actuation_shaped or defect.return_spring_weakening_pct > 0.0
+        p[b + L.S_ACTUATION_SHAPED] = 1.0 if shaped else 0.0
+        p[b + L.S_SPRING_RELEASE] = (
+            defect.return_spring_weakening_pct / 100.0 * RETURN_SPRING_PRELOAD_N
+        )
+        p[b + L.S_SPRING_MARGIN] = RETURN_SPRING_PRELOAD_N - RESIDUAL_FORCE_N
+        p[b + L.S_FRICTION_COEFFICIENT] = growth.lining_friction.py_func(
+            params.friction.coefficient, defect.friction_change_pct
+        )
         p[b + L.S_ENABLED] = 1.0 if side in options.shoes else 0.0
         _check_shoe(params, side, defect, s, p, b)
     _pack_drum(params, defects, p)
+    _pack_growth(params, defects, p)
     return p
+
+
+# growing kind -> its id in the compiled model (model/growth.py apply)
+_GROWTH_KIND_IDS = {
+    "pivot_radius_change": L.GK_PIVOT,
+    "actuation_share_change": L.GK_SHARE,
+    "friction_change": L.GK_FRICTION,
+    "actuation_gain_change": L.GK_GAIN,
+    "actuation_pulsation": L.GK_PULSATION,
+    DRUM_KIND: L.GK_DRUM,
+}
+
+
+def _pack_growth(params: BrakeParameters, defects: Defects, p: np.ndarray) -> None:
+    """Pack the nominal shoe (from which a moving pin re-places it) and one growth entry
+    per defect that changes during the run (layout.P_GROWTH_*). The slots above hold the
+    final severities, checked there: the severities on the way (between healthy and the
+    final one, of the same sign) assemble as well."""
+    g = params.shoe
+    nb = L.P_NOMINAL_BASE
+    p[nb + L.N_PIVOT_X], p[nb + L.N_PIVOT_Y] = g.pivot_xy_m
+    p[nb + L.N_TIP_X], p[nb + L.N_TIP_Y] = g.tip_x_m, g.tip_y_m
+    p[nb + L.N_MASS_CENTRE_X], p[nb + L.N_MASS_CENTRE_Y] = g.mass_centre_x_m, g.mass_centre_y_m
+    p[nb + L.N_INERTIA] = g.inertia_about_pivot_kg_m2
+    p[nb + L.N_MASS] = g.mass_kg
+    p[nb + L.N_LINING_MID] = _lining_mid_rad(params)
+    entries = defects.growth
+    if len(entries) > L.MAX_GROWTH_ENTRIES:
+        raise ParameterError(
+            f"defects: {len(entries)} change during the run: allowed at most {L.MAX_GROWTH_ENTRIES}"
+        )
+    at = {
+        "left": defects.left.severities(),
+        "right": defects.right.severities(),
+        "drum": {DRUM_KIND: defects.drum.peak_runout_um},
+    }
+    for j, (kind, location, law) in enumerate(entries):
+        if kind not in _GROWTH_KIND_IDS:
+            raise ParameterError(
+                f"defect {kind} at {location} cannot change during a run in this model:"
+                " allowed only a step at 0 s"
+            )
+        b = L.P_GROWTH_BASE + j * L.GROWTH_STRIDE
+        p[b + L.G_KIND] = _GROWTH_KIND_IDS[kind]
+        p[b + L.G_SHOE] = SIDES.index(location) if location in SIDES else -1
+        p[b + L.G_LAW] = law.law_id
+        p[b + L.G_ONSET] = law.onset_s
+        p[b + L.G_RATE] = law.rate
+        p[b + L.G_START] = law.start
+        p[b + L.G_FINAL] = at[location][kind]
+    p[L.P_GROWTH_COUNT] = float(len(entries))
 
 
 def _pack_drum(params: BrakeParameters, defects: Defects, p: np.ndarray) -> None:
@@ -265,12 +334,18 @@ def _check_shoe(
     if p[base + L.S_ENABLED] <= 0.0:
         return
     arms = contact_arms(p, base, math.radians(defect.initial_angle_deg))
-    mu = params.friction.coefficient
+    mu = p[base + L.S_FRICTION_COEFFICIENT]
     if arms is not None and mu >= arms.self_locking_coefficient:
+        change = (
+            f" (friction change {defect.friction_change_pct:+g} %)"
+            if defect.friction_change_pct
+            else ""
+        )
         raise ParameterError(
-            f"friction coefficient {mu:g} self-locks the {side} shoe when it leads: at first"
-            f" contact the friction arm about its pivot is h = {arms.friction_arm_m * 1e3:.1f}"
-            f" mm and the normal-force arm d = {arms.normal_arm_m * 1e3:.1f} mm, so friction"
+            f"friction coefficient {mu:g}{change} self-locks the {side} shoe when it leads:"
+            " at first contact the friction arm about its pivot is h ="
+            f" {arms.friction_arm_m * 1e3:.1f} mm and the normal-force arm d ="
+            f" {arms.normal_arm_m * 1e3:.1f} mm, so friction"
             " alone holds the shoe on the drum and the normal force grows without bound:"
             f" allowed a coefficient below the self-locking limit d/h ="
             f" {arms.self_locking_coefficient:.4f}"

@@ -8,22 +8,186 @@ accepts and a line on what it changes. The ground truth of a brake (``Defects.ac
 so a consumer (the ``DefectState`` message, Parquet label columns, file metadata, a
 scorer) needs no change when a kind is added here.
 
-Time: every defect in force today is a step at the start of the run (onset 0 s, growth
-``step``): a run keeps its defects until a reset. The onset and growth fields are part of
-the description so that defects that grow during a run carry them without a new format.
+Time: every defect has an onset and a growth law (:class:`Growth`); its severity at a
+simulated time is :func:`severity_at`, the one definition that the compiled model
+(:mod:`.growth`, each physics step), the label columns and the ground-truth messages all
+evaluate. The scenario gives the final severity (the kind's key) and the law:
 
-Pure data and logic: no numerics, no files.
+* ``step``: 0 before the onset, the final severity from it on (the default, onset 0 s:
+  a defect present from the start);
+* ``linear``: from 0 at the onset, ``rate_per_s`` (the kind's unit per second, > 0) toward
+  the final severity, held there once reached: ``s(t) = sign(s_f) min(r (t - t_0), |s_f|)``;
+* ``exponential``: from ``start`` (same sign as the final severity, smaller) at the onset,
+  doubling every ``doubling_time_s``, held at the final severity once reached:
+  ``s(t) = start 2^((t - t_0) / T_d)`` until ``|s| >= |s_f|``.
+
+Pure data and logic, plus the compiled severity law: no files.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
 
 from brake_sim_ros.errors import ParameterError
 from brake_sim_ros.model.layout import SIDES
 
-GROWTH_LAWS: tuple[str, ...] = ("step",)  # how a severity evolves after its onset
+# how a severity evolves after its onset; the index is the law's id in the compiled model
+GROWTH_LAWS: tuple[str, ...] = ("step", "linear", "exponential")
+LAW_STEP, LAW_LINEAR, LAW_EXPONENTIAL = 0, 1, 2
 DRUM_KIND = "drum_out_of_round"
+# Longest onset and doubling time a scenario may state, s: a day of simulated braking
+MAX_GROWTH_TIME_S = 86_400.0
+
+
+@njit(cache=True)
+def severity_at(t, law, onset_s, rate, start, final):
+    """Severity at simulated time ``t`` (s) of a defect of final severity ``final``.
+
+    Args:
+        t: simulated time, s.
+        law: the law's id (``LAW_*``, the index in :data:`GROWTH_LAWS`).
+        onset_s: the onset, s: 0 before it.
+        rate: linear: the rate, the kind's unit per second (> 0); exponential: the relative
+            rate ``ln 2 / doubling time``, 1/s; step: unused.
+        start: exponential: the severity at the onset (same sign as ``final``); else unused.
+        final: the final severity, in the kind's unit.
+
+    Returns:
+        The severity, in the kind's unit; ``final`` once it is reached (never beyond).
+    """
+    if t < onset_s:
+        return 0.0
+    if law == LAW_LINEAR:
+        grown = rate * (t - onset_s)
+        if grown >= abs(final):
+            return final
+        return grown if final > 0.0 else -grown
+    if law == LAW_EXPONENTIAL:
+        grown = start * math.exp(rate * (t - onset_s))
+        if abs(grown) >= abs(final):
+            return final
+        return grown
+    return final
+
+
+@njit(cache=True)
+def severity_series(times, law, onset_s, rate, start, final):
+    """:func:`severity_at` at each of ``times`` (s, shape (n,)), in the kind's unit."""
+    out = np.empty(times.shape[0])
+    for i in range(times.shape[0]):
+        out[i] = severity_at(times[i], law, onset_s, rate, start, final)
+    return out
+
+
+def _finite(value: object) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
+
+
+@dataclass(frozen=True)
+class Growth:
+    """When a defect starts and how its severity grows (see the module doc for the laws).
+
+    Attributes:
+        onset_s: simulated time it starts, s (>= 0).
+        law: one of :data:`GROWTH_LAWS`.
+        rate_per_s: linear only: the kind's unit per second toward the final severity (> 0).
+        doubling_time_s: exponential only: the time the severity takes to double, s (> 0).
+        start: exponential only: the severity at the onset, in the kind's unit (same sign
+            as the final severity, smaller in size).
+    """
+
+    onset_s: float = 0.0
+    law: str = "step"
+    rate_per_s: float = 0.0
+    doubling_time_s: float = 0.0
+    start: float = 0.0
+
+    def __post_init__(self) -> None:
+        if self.law not in GROWTH_LAWS:
+            raise ParameterError(
+                f"defect growth {self.law!r} is invalid: allowed one of {list(GROWTH_LAWS)}"
+            )
+        for name in ("onset_s", "rate_per_s", "doubling_time_s", "start"):
+            if not _finite(getattr(self, name)):
+                raise ParameterError(
+                    f"defect {name}={getattr(self, name)!r} is invalid: allowed a finite number"
+                )
+        if not 0.0 <= self.onset_s <= MAX_GROWTH_TIME_S:
+            raise ParameterError(
+                f"defect onset_s={self.onset_s:g} is invalid: allowed 0 to"
+                f" {MAX_GROWTH_TIME_S:g} s (simulated time since the start of the run)"
+            )
+        needs = {"linear": "rate_per_s", "exponential": "doubling_time_s"}.get(self.law)
+        for name in ("rate_per_s", "doubling_time_s", "start"):
+            used = name == needs or (name == "start" and self.law == "exponential")
+            value = getattr(self, name)
+            if not used and value != 0.0:
+                raise ParameterError(
+                    f"defect {name}={value:g} with growth {self.law!r} is invalid: allowed"
+                    f" only with growth {'linear' if name == 'rate_per_s' else 'exponential'}"
+                )
+        if needs is not None and not getattr(self, needs) > 0.0:
+            raise ParameterError(
+                f"defect {needs}={getattr(self, needs):g} with growth {self.law!r} is invalid:"
+                " allowed a number > 0"
+            )
+        if needs == "doubling_time_s" and self.doubling_time_s > MAX_GROWTH_TIME_S:
+            raise ParameterError(
+                f"defect doubling_time_s={self.doubling_time_s:g} is invalid: allowed up to"
+                f" {MAX_GROWTH_TIME_S:g} s"
+            )
+
+    @property
+    def is_static(self) -> bool:
+        """A step at the start of the run: the defect is simply present."""
+        return self.law == "step" and self.onset_s == 0.0
+
+    @property
+    def law_id(self) -> int:
+        return GROWTH_LAWS.index(self.law)
+
+    @property
+    def rate(self) -> float:
+        """The law's rate as :func:`severity_at` takes it (and the ground truth's
+        ``growth_rate``): linear unit/s, exponential 1/s (``ln 2 / doubling time``), step 0."""
+        if self.law == "linear":
+            return float(self.rate_per_s)
+        if self.law == "exponential":
+            return math.log(2.0) / self.doubling_time_s
+        return 0.0
+
+    def check(self, final: float, where: str = "", healthy: float = 0.0) -> None:
+        """Refuse a law that cannot reach ``final`` (the final severity, kind's unit;
+        ``healthy``: the healthy value of the key the message names)."""
+        if self.law == "exponential" and not (
+            self.start * final > 0.0 and abs(self.start) < abs(final)
+        ):
+            raise ParameterError(
+                f"defect {where}start={healthy + self.start:g} is invalid: allowed a value"
+                f" between the healthy {healthy:g} and the final {healthy + final:g}"
+                " (exponential growth starts there at the onset)"
+            )
+
+    def severity(self, t: float, final: float) -> float:
+        """Severity at simulated time ``t`` (s) toward ``final`` (:func:`severity_at`)."""
+        return float(severity_at(float(t), self.law_id, self.onset_s, self.rate, self.start, final))
+
+    def series(self, times_s: np.ndarray, final: float) -> np.ndarray:
+        """Severity at each of ``times_s`` (s) toward ``final`` (:func:`severity_series`)."""
+        times = np.ascontiguousarray(times_s, dtype=np.float64)
+        return severity_series(times, self.law_id, self.onset_s, self.rate, self.start, final)
+
+    def reached_s(self, final: float) -> float:
+        """Simulated time the severity reaches ``final``, s."""
+        if self.law == "linear":
+            return self.onset_s + abs(final) / self.rate_per_s
+        if self.law == "exponential":
+            return self.onset_s + self.doubling_time_s * math.log2(abs(final / self.start))
+        return self.onset_s
 
 
 @dataclass(frozen=True)
@@ -112,6 +276,90 @@ KINDS: tuple[DefectKind, ...] = (
         healthy_value=0.5,
     ),
     DefectKind(
+        name="friction_change",
+        locations=SIDES,
+        unit="%",
+        minimum=-90.0,
+        maximum=50.0,
+        limit=(
+            "a lining keeps some friction; +50 % of the nominal 0.285 is 0.43, the top of"
+            " drum-brake linings; a shoe that would self-lock (mu h >= d) is refused at"
+            " assembly"
+        ),
+        description=(
+            "change of the shoe's lining friction coefficient, in % of the nominal one;"
+            " negative for fade (hot) or contamination (oil, water)"
+        ),
+        scenario_key="friction_change_pct",
+        service_limit=-50.0,  # fade and contamination can halve mu (TESTBED.md)
+    ),
+    DefectKind(
+        name="actuation_gain_change",
+        locations=SIDES,
+        unit="%",
+        minimum=-90.0,
+        maximum=50.0,
+        limit="a wheel cylinder that still pushes, up to half again the commanded force",
+        description=(
+            "change of the force the shoe's wheel cylinder delivers for the commanded one,"
+            " in %; negative for low line pressure"
+        ),
+        scenario_key="actuation_gain_change_pct",
+        service_limit=-27.0,  # graded efficiency down to 73 % (UCI hydraulic rig, TESTBED.md)
+    ),
+    DefectKind(
+        name="actuation_delay",
+        locations=SIDES,
+        unit="ms",
+        minimum=0.0,
+        maximum=500.0,
+        limit="beyond 0.5 s a brake no longer answers within the 0.36 s expected of a car",
+        description="dead time between the commanded actuation and the shoe's, in ms",
+        scenario_key="actuation_delay_ms",
+        service_limit=100.0,  # a whole healthy hydraulic rise (under 0.1 s, TESTBED.md)
+    ),
+    DefectKind(
+        name="actuation_lag",
+        locations=SIDES,
+        unit="ms",
+        minimum=0.0,
+        maximum=500.0,
+        limit="beyond 0.5 s a brake no longer answers within the 0.36 s expected of a car",
+        description=(
+            "time constant of a first-order lag of the shoe's actuation (a slow rise), in ms"
+        ),
+        scenario_key="actuation_lag_ms",
+        service_limit=120.0,  # 95 % of a step in 0.36 s, a car's response (TESTBED.md)
+    ),
+    DefectKind(
+        name="actuation_pulsation",
+        locations=SIDES,
+        unit="%",
+        minimum=0.0,
+        maximum=100.0,
+        limit="a pulsating force still only pushes",
+        description=(
+            "amplitude of a pulsation of the shoe's actuation force, in % of it, at the"
+            " frequency actuation_pulsation_hz (attribute frequency_hz)"
+        ),
+        scenario_key="actuation_pulsation_pct",
+        service_limit=20.0,  # no service figure in TESTBED.md: a clearly felt pulsation
+    ),
+    DefectKind(
+        name="return_spring_weakening",
+        locations=SIDES,
+        unit="%",
+        minimum=0.0,
+        maximum=100.0,
+        limit="a spring loses at most all of its preload (100 %: broken)",
+        description=(
+            "preload the shoe's return spring has lost, in %; past 67 % (the stop's margin"
+            " over the residual line pressure) the shoe drags on the drum without actuation"
+        ),
+        scenario_key="return_spring_weakening_pct",
+        service_limit=100.0,  # a broken spring
+    ),
+    DefectKind(
         name=DRUM_KIND,
         locations=("drum",),
         unit="um",
@@ -142,13 +390,17 @@ class ActiveDefect:
     Attributes:
         kind: a name from :data:`KINDS`.
         location: where it sits (one of the kind's locations).
-        severity: its size now, in the kind's unit (non-zero).
+        severity: its size now (or, describing a whole run, its final size), in the
+            kind's unit (non-zero).
         unit: the kind's unit.
         onset_s: simulated time it started, s.
         growth: how it evolves after the onset (:data:`GROWTH_LAWS`).
-        growth_rate: the law's rate, unit/s (0 for a step).
+        growth_rate: the law's rate (:attr:`Growth.rate`): linear the kind's unit per
+            second, exponential 1/s (``ln 2 / doubling time``), step 0.
         attributes: what else describes it, by name (each name ends in its unit), e.g.
-            the amplitude and phase of each harmonic of a drum out of round.
+            the amplitude and phase of each harmonic of a drum out of round; a defect
+            that changes in time adds ``final_severity_<unit>`` (and an exponential
+            ``start_severity_<unit>``; ``%`` spelled ``pct``, none for a ratio).
     """
 
     kind: str

@@ -211,11 +211,13 @@ def switching_function(p, base, theta, omega, drum_angle, drum_speed):
 
 
 @njit(cache=True, inline="always")
-def sliding_friction(p, fn, v_slide):
-    """Smoothed Coulomb friction force while the drum slides, N: ``mu Fn tanh(v / v_s)``."""
+def sliding_friction(p, base, fn, v_slide):
+    """Smoothed Coulomb friction force while the drum slides, N: ``mu Fn tanh(v / v_s)``
+    with ``mu`` the lining's of the shoe at ``base`` (a friction-change defect sets it)."""
     if fn <= 0.0:
         return 0.0
-    return p[L.P_FRICTION_COEFFICIENT] * fn * math.tanh(v_slide / p[L.P_FRICTION_SMOOTHING_SPEED])
+    mu = p[base + L.S_FRICTION_COEFFICIENT]
+    return mu * fn * math.tanh(v_slide / p[L.P_FRICTION_SMOOTHING_SPEED])
 
 
 @njit(cache=True, inline="always")
@@ -302,5 +304,6 @@ def shoe_eval(
     kin = kinematics(p, base, theta, omega, drum_angle, drum_speed)
     fn = normal_force(p, base, kin[0], kin[1], mode)
     v_slide = sliding_speed(kin, drum_speed)
-    ff = share * p[L.P_FRICTION_COEFFICIENT] * fn if stuck else sliding_friction(p, fn, v_slide)
+    mu = p[base + L.S_FRICTION_COEFFICIENT]
+    ff = share * mu * fn if stuck else sliding_friction(p, base, fn, v_slide)
     return shoe_forces(p, base, omega, actuation, kin, fn, ff, v_slide)

@@ -2,20 +2,32 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 
+import numpy as np
+
 from brake_sim_ros.errors import ParameterError
+from brake_sim_ros.model.actuation import shoe_gain
 from brake_sim_ros.model.catalogue import (
     DRUM_KIND,
     KIND_BY_NAME,
     KINDS,
     ActiveDefect,
+    Growth,
     label_column,
 )
 
 # Most harmonics one drum carries: the packed parameter vector has this many slots.
 from brake_sim_ros.model.layout import MAX_DRUM_HARMONICS
+
+# Highest pulsation frequency of an actuation, Hz: a hydraulic line's pressure pulsation
+# (a pump, ABS modulation) stays far below the contact's kHz dynamics.
+MAX_PULSATION_HZ = 1000.0
+# The frequency Defects.single gives a pulsation (a severity sweep), Hz: about the ABS
+# modulation rate of a wheel (10-20 Hz).
+DEFAULT_PULSATION_HZ = 15.0
 
 
 @dataclass(frozen=True)
@@ -33,19 +45,64 @@ class ShoeDefect:
             tilts the shoe toward the drum centre, away from the drum.
         actuation_share: this shoe's share of the total actuation force (0.5 healthy).
             The shoe's actuation force is multiplied by ``2 * actuation_share``.
+        friction_change_pct: change of this shoe's lining friction coefficient, percent of
+            the nominal one (fade when hot, contamination by oil or water: negative; both
+            can halve it, ``TESTBED.md``). The shoe's coefficient is ``mu (1 + pct/100)``.
+        actuation_gain_change_pct: change of the force the shoe's wheel cylinder delivers
+            for the commanded one, percent (low line pressure: negative); the shoe's
+            force is multiplied by ``2 share (1 + pct/100)`` (``actuation.shoe_gain``).
+        actuation_delay_ms: dead time of the shoe's actuation, ms: it follows the
+            commanded history this late.
+        actuation_lag_ms: time constant of a first-order lag of the shoe's actuation, ms
+            (a slow rise: ``tau F' + F = F_commanded``).
+        actuation_pulsation_pct: amplitude of a pulsation of the shoe's actuation force,
+            percent of it (``F (1 + a sin(2 pi f t))``), at ``actuation_pulsation_hz``.
+        actuation_pulsation_hz: the pulsation's frequency, Hz (> 0 with a pulsation).
+        return_spring_weakening_pct: preload the shoe's return spring has lost, percent
+            (100: broken). Past the stop's margin (``actuation.spring_release``: preload
+            60 N against a residual line force of 20 N, so past 67 %) the residual pressure
+            presses the shoe on the drum without actuation: drag.
+
+    Delay, lag and pulsation act on the scenario's actuation history; the node's live
+    actuation commands (``~/actuation``) reach the shoe with the gain and the pulsation
+    but without delay or lag.
     """
 
     pivot_radius_change_pct: float = 0.0
     initial_angle_deg: float = 0.0
     actuation_share: float = 0.5
+    friction_change_pct: float = 0.0
+    actuation_gain_change_pct: float = 0.0
+    actuation_delay_ms: float = 0.0
+    actuation_lag_ms: float = 0.0
+    actuation_pulsation_pct: float = 0.0
+    actuation_pulsation_hz: float = 0.0
+    return_spring_weakening_pct: float = 0.0
 
     def __post_init__(self) -> None:
-        for name in ("pivot_radius_change_pct", "initial_angle_deg", "actuation_share"):
+        for name in (
+            "pivot_radius_change_pct",
+            "initial_angle_deg",
+            "actuation_share",
+            "friction_change_pct",
+            "actuation_gain_change_pct",
+            "actuation_delay_ms",
+            "actuation_lag_ms",
+            "actuation_pulsation_pct",
+            "actuation_pulsation_hz",
+            "return_spring_weakening_pct",
+        ):
             value = getattr(self, name)
             if not isinstance(value, int | float) or not math.isfinite(value):
                 raise ParameterError(f"defect {name}={value!r} is invalid: allowed a finite number")
         for kind, severity in self.severities().items():
             KIND_BY_NAME[kind].check(severity)
+        hz = self.actuation_pulsation_hz
+        if not 0.0 <= hz <= MAX_PULSATION_HZ or (self.actuation_pulsation_pct and hz == 0.0):
+            raise ParameterError(
+                f"defect actuation_pulsation_hz={hz:g} is invalid: allowed > 0 to"
+                f" {MAX_PULSATION_HZ:g} Hz with a pulsation (0 without one)"
+            )
 
     def severities(self) -> dict[str, float]:
         """The severity of each catalogue kind a shoe can carry (0: absent), in the kind's
@@ -54,6 +111,12 @@ class ShoeDefect:
             "pivot_radius_change": float(self.pivot_radius_change_pct),
             "initial_angle": float(self.initial_angle_deg),
             "actuation_share_change": float(self.actuation_share) - 0.5,
+            "friction_change": float(self.friction_change_pct),
+            "actuation_gain_change": float(self.actuation_gain_change_pct),
+            "actuation_delay": float(self.actuation_delay_ms),
+            "actuation_lag": float(self.actuation_lag_ms),
+            "actuation_pulsation": float(self.actuation_pulsation_pct),
+            "return_spring_weakening": float(self.return_spring_weakening_pct),
         }
 
     @classmethod
@@ -64,6 +127,15 @@ class ShoeDefect:
             pivot_radius_change_pct=severities.get("pivot_radius_change", 0.0),
             initial_angle_deg=severities.get("initial_angle", 0.0),
             actuation_share=0.5 + severities.get("actuation_share_change", 0.0),
+            friction_change_pct=severities.get("friction_change", 0.0),
+            actuation_gain_change_pct=severities.get("actuation_gain_change", 0.0),
+            actuation_delay_ms=severities.get("actuation_delay", 0.0),
+            actuation_lag_ms=severities.get("actuation_lag", 0.0),
+            actuation_pulsation_pct=severities.get("actuation_pulsation", 0.0),
+            return_spring_weakening_pct=severities.get("return_spring_weakening", 0.0),
+            actuation_pulsation_hz=(
+                DEFAULT_PULSATION_HZ if severities.get("actuation_pulsation") else 0.0
+            ),
         )
 
     @property
@@ -72,8 +144,15 @@ class ShoeDefect:
 
     @property
     def actuation_gain(self) -> float:
-        """Multiplier on this shoe's actuation force, ``2 * actuation_share``."""
-        return 2.0 * self.actuation_share
+        """Multiplier on this shoe's actuation force, ``2 share (1 + gain change/100)``."""
+        return float(shoe_gain.py_func(self.actuation_share, self.actuation_gain_change_pct))
+
+    @property
+    def actuation_shaped(self) -> bool:
+        """The shoe's actuation is delayed, lagged or pulsating."""
+        return bool(
+            self.actuation_delay_ms or self.actuation_lag_ms or self.actuation_pulsation_pct
+        )
 
 
 # Largest order of a drum-radius harmonic (cycles per revolution): the service range of
@@ -207,13 +286,39 @@ class DrumDefect:
         return tuple(out)
 
 
+# Kinds that act only through the state at t = 0 (the shoe's starting angle): they can
+# only be present from the start, a step at 0 s.
+INITIAL_CONDITION_KINDS = frozenset({"initial_angle"})
+# Kinds whose two shoes are tied (the shares sum to 1): a growth on one shoe moves the
+# other's severity by the opposite amount, so only one shoe states it.
+TIED_KINDS = frozenset({"actuation_share_change"})
+
+
+def _attribute(name: str, unit: str) -> str:
+    """An attribute name ending in ``unit`` (``%`` as ``pct``; none for a ratio)."""
+    suffix = {"%": "pct", "1": ""}.get(unit, unit)
+    return f"{name}_{suffix}" if suffix else name
+
+
 @dataclass(frozen=True)
 class Defects:
-    """Defects of both shoes and of the drum, in any combination."""
+    """Defects of both shoes and of the drum, in any combination, and when each appears.
+
+    The shoe and drum fields hold each defect's final severity; ``growth`` holds, for
+    defects that do not simply exist from the start, their onset and growth law
+    (:class:`~brake_sim_ros.model.catalogue.Growth`) as ``(kind, location, growth)``
+    entries. A defect without an entry is a step at 0 s (present from the start); an
+    entry that is a step at 0 s is dropped, so both spell the same brake. Refused, in one
+    line: an entry for an absent defect or an unknown kind or location, two entries for
+    one defect, growth of a starting angle (an initial condition), entries on both shoes
+    for a tied kind (the actuation shares: the other shoe mirrors the one stated), and
+    an exponential start that cannot grow to the final severity.
+    """
 
     left: ShoeDefect = field(default_factory=ShoeDefect)
     right: ShoeDefect = field(default_factory=ShoeDefect)
     drum: DrumDefect = field(default_factory=DrumDefect)
+    growth: tuple[tuple[str, str, Growth], ...] = ()
 
     def __post_init__(self) -> None:
         total = self.left.actuation_share + self.right.actuation_share
@@ -223,15 +328,82 @@ class Defects:
                 f" right={self.right.actuation_share} = {total}: allowed a sum of exactly 1"
                 " (the total actuation force is kept)"
             )
+        if not isinstance(self.growth, tuple):
+            raise ParameterError(
+                f"defect growth {self.growth!r} is invalid: allowed a tuple of (kind,"
+                " location, Growth)"
+            )
+        at = self._by_location()
+        seen: set[tuple[str, str]] = set()
+        kept = []
+        for entry in self.growth:
+            if not (isinstance(entry, tuple) and len(entry) == 3 and isinstance(entry[2], Growth)):
+                raise ParameterError(
+                    f"defect growth entry {entry!r} is invalid: allowed (kind, location, Growth)"
+                )
+            kind, loc, growth = entry
+            if kind not in KIND_BY_NAME or loc not in KIND_BY_NAME[kind].locations:
+                raise ParameterError(
+                    f"defect growth of {kind!r} at {loc!r} is invalid: allowed a catalogue kind"
+                    " at one of its locations (brake-sim defects)"
+                )
+            key = (kind, loc)
+            tied = (kind, "right" if loc == "left" else "left")
+            if key in seen or (kind in TIED_KINDS and tied in seen):
+                raise ParameterError(
+                    f"defect growth of {kind} at {loc} given twice: allowed one entry per"
+                    " defect"
+                    + (" (the other shoe's share mirrors it)" if kind in TIED_KINDS else "")
+                )
+            seen.add(key)
+            if growth.is_static:
+                continue
+            where = f"{loc} {KIND_BY_NAME[kind].scenario_key} "
+            if kind in INITIAL_CONDITION_KINDS:
+                raise ParameterError(
+                    f"defect {where}onset {growth.onset_s:g} s, growth {growth.law!r} is"
+                    " invalid: allowed only a step at 0 s (the starting angle is an initial"
+                    " condition of the run)"
+                )
+            final = at[loc][kind]
+            if final == 0.0:
+                raise ParameterError(
+                    f"defect {where}has an onset and growth but no final severity: allowed"
+                    " only for a defect that is present (give its value)"
+                )
+            growth.check(final, where, KIND_BY_NAME[kind].healthy_value)
+            kept.append(entry)
+        object.__setattr__(self, "growth", tuple(kept))
 
     @property
     def is_healthy(self) -> bool:
         return self.left.is_healthy and self.right.is_healthy and self.drum.is_healthy
 
     @property
+    def is_static(self) -> bool:
+        """Every defect is present from the start (a step at 0 s): nothing changes in time."""
+        return not self.growth
+
+    @property
     def kinds(self) -> tuple[str, ...]:
         """Catalogue kinds of the defects present, in catalogue order."""
         return tuple(dict.fromkeys(d.kind for d in self.active()))
+
+    @property
+    def growing_kinds(self) -> tuple[str, ...]:
+        """Catalogue kinds of the defects that change during the run, in catalogue order."""
+        names = {kind for kind, _loc, _g in self.growth}
+        return tuple(k.name for k in KINDS if k.name in names)
+
+    def growth_of(self, kind: str, location: str) -> Growth:
+        """Onset and law of the defect ``kind`` at ``location`` (a step at 0 s if none is
+        stated; a tied kind's other shoe mirrors the stated one's start)."""
+        for k, loc, growth in self.growth:
+            if k == kind and loc == location:
+                return growth
+            if k == kind and kind in TIED_KINDS and loc != location:
+                return dataclasses.replace(growth, start=-growth.start)
+        return Growth()
 
     def _by_location(self) -> dict[str, dict[str, float]]:
         return {
@@ -240,29 +412,98 @@ class Defects:
             "drum": {DRUM_KIND: self.drum.peak_runout_um},
         }
 
-    def active(self) -> tuple[ActiveDefect, ...]:
-        """The ground truth: every defect in force, in catalogue order (kind, then
-        location); each a step at the start of the run. A drum out of round carries each
-        harmonic's amplitude and phase as attributes."""
-        at = self._by_location()
-        return tuple(
-            ActiveDefect(
-                kind.name,
-                loc,
-                at[loc][kind.name],
-                kind.unit,
-                attributes=self.drum.attributes() if kind.name == DRUM_KIND else (),
+    def _attributes(self, kind: str, location: str, fraction: float) -> tuple:
+        """Attributes of a defect in force: a drum's harmonics (amplitudes at ``fraction``
+        of the final ones); a defect that changes in time adds its final severity (and an
+        exponential its start)."""
+        attributes = []
+        if kind == DRUM_KIND:
+            for name, value in self.drum.attributes():
+                attributes.append((name, value * fraction if "amplitude" in name else value))
+        if kind == "actuation_pulsation":
+            shoe = getattr(self, location)
+            attributes.append(("frequency_hz", float(shoe.actuation_pulsation_hz)))
+        growth = self.growth_of(kind, location)
+        if not growth.is_static:
+            unit = KIND_BY_NAME[kind].unit
+            attributes.append(
+                (_attribute("final_severity", unit), self._by_location()[location][kind])
             )
-            for kind in KINDS
-            for loc in kind.locations
-            if at[loc][kind.name] != 0.0
-        )
+            if growth.law == "exponential":
+                attributes.append((_attribute("start_severity", unit), growth.start))
+        return tuple(attributes)
 
-    def severities(self) -> dict[str, float]:
-        """The per-sample label columns (:func:`.catalogue.label_columns`) and their value:
-        each kind's severity at each location, 0 where absent."""
+    def active(self, time_s: float | None = None) -> tuple[ActiveDefect, ...]:
+        """The ground truth: every defect in force, in catalogue order (kind, then
+        location), each with its onset and growth law (:mod:`.catalogue`).
+
+        Args:
+            time_s: simulated time, s: each severity is the one at that time and a defect
+                before its onset is not listed. None: the final severities of every
+                defect the run has (the description of the run, e.g. a file's metadata).
+        """
         at = self._by_location()
-        return {label_column(k, loc): at[loc][k.name] for k in KINDS for loc in k.locations}
+        out = []
+        for kind in KINDS:
+            for loc in kind.locations:
+                final = at[loc][kind.name]
+                if final == 0.0:
+                    continue
+                growth = self.growth_of(kind.name, loc)
+                now = final if time_s is None else growth.severity(time_s, final)
+                if now == 0.0:
+                    continue
+                out.append(
+                    ActiveDefect(
+                        kind.name,
+                        loc,
+                        now,
+                        kind.unit,
+                        onset_s=float(growth.onset_s),
+                        growth=growth.law,
+                        growth_rate=growth.rate,
+                        attributes=self._attributes(kind.name, loc, now / final),
+                    )
+                )
+        return tuple(out)
+
+    def severities(self, time_s: float | None = None) -> dict[str, float]:
+        """The per-sample label columns (:func:`.catalogue.label_columns`) and their value:
+        each kind's severity at each location at ``time_s`` (s; None: the final ones), 0
+        where absent."""
+        at = self._by_location()
+        out = {}
+        for k in KINDS:
+            for loc in k.locations:
+                final = at[loc][k.name]
+                if time_s is not None and final != 0.0:
+                    final = self.growth_of(k.name, loc).severity(time_s, final)
+                out[label_column(k, loc)] = final
+        return out
+
+    def label_series(self, times_s: np.ndarray) -> dict[str, np.ndarray]:
+        """The label columns at each of ``times_s`` (s, shape (n,)): each kind's severity at
+        each location (:func:`.catalogue.severity_at`), 0 where absent."""
+        times = np.asarray(times_s, dtype=np.float64)
+        at = self._by_location()
+        out = {}
+        for k in KINDS:
+            for loc in k.locations:
+                final = at[loc][k.name]
+                if final == 0.0:
+                    out[label_column(k, loc)] = np.zeros(times.shape[0])
+                else:
+                    out[label_column(k, loc)] = self.growth_of(k.name, loc).series(times, final)
+        return out
+
+    def change_times(self) -> tuple[float, ...]:
+        """Simulated times (s) at which a defect appears or stops changing, ascending."""
+        at = self._by_location()
+        times = set()
+        for kind, loc, growth in self.growth:
+            times.add(growth.onset_s)
+            times.add(growth.reached_s(at[loc][kind]))
+        return tuple(sorted(times))
 
     @classmethod
     def single(cls, kind: str, location: str, severity: float) -> Defects:

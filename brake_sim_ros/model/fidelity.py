@@ -96,8 +96,23 @@ DEFECT_LEVELS: dict[str, frozenset[str]] = {
     "pivot_radius_change": _ALL_LEVELS,
     "initial_angle": _ALL_LEVELS,
     "actuation_share_change": _ALL_LEVELS,
+    "friction_change": _ALL_LEVELS,  # a coefficient per lining: the same shoe balance
+    "actuation_gain_change": _ALL_LEVELS,  # a gain, as the share's
+    # a shaped actuation history: the contact-regime levels reuse a balance while the
+    # actuation holds, and a delayed, lagging or pulsating force does not hold
+    "actuation_delay": frozenset({"rigid", "full"}),
+    "actuation_lag": frozenset({"rigid", "full"}),
+    "actuation_pulsation": frozenset({"rigid", "full"}),
+    # the spring acts on the force that reaches the shoe in the kernel: the contact-regime
+    # levels take the commanded history
+    "return_spring_weakening": frozenset({"rigid", "full"}),
     DRUM_KIND: frozenset({"rigid", "full"}),
 }
+# levels that represent a defect changing during the run (an onset after 0 s or a growth
+# law): the impact levels step the compiled kernel, which sets each severity at every
+# step (model/growth.py); the contact-regime levels reuse a shoe balance while the
+# actuation holds, which a changing brake would make wrong
+GROWTH_LEVELS = frozenset({"rigid", "full"})
 # outputs that belong to one shoe and do not depend on the other shoe (see module doc)
 SHOE_LOCAL_OUTPUTS = frozenset({"impacts", "contact_regime_forces"})
 # defects whose effect on a shoe follows the drum speed: no one-shoe model (see module doc)
@@ -167,6 +182,8 @@ class Needs:
         level: a forced level name, or None to let the planner choose.
         defects: kinds of the scenario's defects (:data:`DEFECT_LEVELS` keys): the level
             must represent them (the scenario loader fills them in from ``[defects]``).
+        growing: those of ``defects`` that change during the run: the level must be one
+            of :data:`GROWTH_LEVELS`.
     """
 
     outputs: tuple[str, ...]
@@ -174,6 +191,7 @@ class Needs:
     accuracy: str | None = None
     level: str | None = None
     defects: tuple[str, ...] = ()
+    growing: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         unknown = [o for o in self.outputs if o not in OUTPUTS]
@@ -313,8 +331,10 @@ def levels_representing(defect: str) -> list[str]:
     return [lv.name for lv in LEVELS if lv.name in DEFECT_LEVELS[defect]]
 
 
-def _represents(level: Level, defects: tuple[str, ...]) -> bool:
-    return all(level.name in DEFECT_LEVELS[d] for d in defects)
+def _represents(level: Level, defects: tuple[str, ...], growing: tuple[str, ...] = ()) -> bool:
+    return all(level.name in DEFECT_LEVELS[d] for d in defects) and (
+        not growing or level.name in GROWTH_LEVELS
+    )
 
 
 def plan(needs: Needs | None, *, model_shoes: tuple[str, ...] = SIDES) -> Plan:
@@ -357,16 +377,28 @@ def plan(needs: Needs | None, *, model_shoes: tuple[str, ...] = SIDES) -> Plan:
                     f" ({KIND_BY_NAME[defect].description}): allowed levels for it:"
                     f" {levels_representing(defect)}"
                 )
+        if needs.growing and level.name not in GROWTH_LEVELS:
+            raise FidelityError(
+                f"needs level {level.name!r} cannot represent the defect {needs.growing[0]!r}"
+                " changing during the run (an onset after 0 s or a growth law): allowed"
+                f" levels for it: {sorted(GROWTH_LEVELS, key=list(LEVEL_BY_NAME).index)}"
+            )
         reason = f"level {level.name!r} forced by the scenario's [needs]"
     else:
-        level = next(lv for lv in LEVELS if asked <= lv.outputs and _represents(lv, needs.defects))
+        level = next(
+            lv
+            for lv in LEVELS
+            if asked <= lv.outputs and _represents(lv, needs.defects, needs.growing)
+        )
         cheaper = [lv for lv in LEVELS if lv.dof < level.dof]
         if cheaper:
 
             def lack(lv: Level) -> str:
                 if not asked <= lv.outputs:
                     return f"{lv.name} lacks {sorted(asked - lv.outputs)[0]}"
-                defect = next(d for d in needs.defects if lv.name not in DEFECT_LEVELS[d])
+                defect = next((d for d in needs.defects if lv.name not in DEFECT_LEVELS[d]), None)
+                if defect is None:
+                    return f"{lv.name} cannot represent {needs.growing[0]} changing in time"
                 return f"{lv.name} cannot represent {defect}"
 
             lacks = ", ".join(lack(lv) for lv in cheaper)

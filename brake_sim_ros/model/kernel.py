@@ -15,28 +15,41 @@ import math
 import numpy as np
 from numba import njit
 
-from brake_sim_ros.model import contact, standstill
+from brake_sim_ros.model import actuation, contact, growth, standstill
 from brake_sim_ros.model import layout as L
+
+_pwl = actuation.pwl
 
 
 @njit(cache=True, inline="always")
-def _pwl(t, ts, fs):
-    """Piecewise-linear interpolation, held constant outside the knots."""
-    n = ts.shape[0]
-    if t <= ts[0]:
-        return fs[0]
-    if t >= ts[n - 1]:
-        return fs[n - 1]
-    lo = 0
-    hi = n - 1
-    while hi - lo > 1:
-        mid = (lo + hi) // 2
-        if ts[mid] <= t:
-            lo = mid
-        else:
-            hi = mid
-    w = (t - ts[lo]) / (ts[hi] - ts[lo])
-    return fs[lo] + w * (fs[hi] - fs[lo])
+def _force(p, base, t, ts, fs, gain):
+    """Actuation force on the shoe at ``base`` at ``t`` (s), N: the commanded history
+    (knots ``ts``, ``fs``) times ``gain``; shaped by the shoe's actuation defects
+    (:func:`_shaped_force`) when it has any. The healthy path stays this one line: the
+    shaping is a call, not inlined into every RK4 stage."""
+    if p[base + L.S_ACTUATION_SHAPED] <= 0.0:
+        return gain * _pwl(t, ts, fs)
+    return _shaped_force(p, base, t, ts, fs, gain)
+
+
+@njit(cache=True)
+def _shaped_force(p, base, t, ts, fs, gain):
+    """:func:`_force` of a shoe with a delay, lag or pulsation (:func:`.actuation.shaped`)
+    or a weakened return spring (:func:`.actuation.spring_release`)."""
+    force = gain * actuation.shaped(
+        t,
+        ts,
+        fs,
+        p[base + L.S_ACTUATION_DELAY],
+        p[base + L.S_ACTUATION_LAG],
+        p[base + L.S_PULSATION_AMPLITUDE],
+        p[base + L.S_PULSATION_FREQUENCY],
+    )
+    if p[base + L.S_SPRING_RELEASE] <= 0.0:
+        return force
+    return actuation.spring_release(
+        force, p[base + L.S_SPRING_RELEASE], p[base + L.S_SPRING_MARGIN]
+    )
 
 
 @njit(cache=True)
@@ -66,12 +79,11 @@ def evaluate(y, p, fe_left, fe_right, stuck, mode_left, mode_right, dydt, out, r
             standstill.held_torque(coupling, fnl, kl, fnr, kr),
             standstill.static_capacity(p, fnl, kl[5], fnr, kr[5]),
         )
-        mu = p[L.P_FRICTION_COEFFICIENT]
-        ffl = share * mu * fnl
-        ffr = share * mu * fnr
+        ffl = share * p[bl + L.S_FRICTION_COEFFICIENT] * fnl
+        ffr = share * p[br + L.S_FRICTION_COEFFICIENT] * fnr
     else:
-        ffl = contact.sliding_friction(p, fnl, vl)
-        ffr = contact.sliding_friction(p, fnr, vr)
+        ffl = contact.sliding_friction(p, bl, fnl, vl)
+        ffr = contact.sliding_friction(p, br, fnr, vr)
     sl = contact.shoe_forces(p, bl, y[L.Y_LEFT_SPEED], fe_left, kl, fnl, ffl, vl)
     sr = contact.shoe_forces(p, br, y[L.Y_RIGHT_SPEED], fe_right, kr, fnr, ffr, vr)
     dydt[L.Y_LEFT_ANGLE] = y[L.Y_LEFT_SPEED]
@@ -229,8 +241,8 @@ def rk4_step(y, k1, t0, h, p, gl, tl, fl, gr, tr, fr, stuck, ml, mr, k2, k3, k4,
     the contact modes ``ml``/``mr`` into ``y_out`` (may be ``y`` itself)."""
     n = y.shape[0]
     th = t0 + 0.5 * h
-    fel = gl * _pwl(th, tl, fl)
-    fer = gr * _pwl(th, tr, fr)
+    fel = _force(p, L.P_SHOE_BASE, th, tl, fl, gl)
+    fer = _force(p, L.P_SHOE_BASE + L.SHOE_STRIDE, th, tr, fr, gr)
     for j in range(n):
         tmp[j] = y[j] + 0.5 * h * k1[j]
     evaluate(tmp, p, fel, fer, stuck, ml, mr, k2, out, -1, t0)
@@ -238,8 +250,8 @@ def rk4_step(y, k1, t0, h, p, gl, tl, fl, gr, tr, fr, stuck, ml, mr, k2, k3, k4,
         tmp[j] = y[j] + 0.5 * h * k2[j]
     evaluate(tmp, p, fel, fer, stuck, ml, mr, k3, out, -1, t0)
     t1 = t0 + h
-    fel = gl * _pwl(t1, tl, fl)
-    fer = gr * _pwl(t1, tr, fr)
+    fel = _force(p, L.P_SHOE_BASE, t1, tl, fl, gl)
+    fer = _force(p, L.P_SHOE_BASE + L.SHOE_STRIDE, t1, tr, fr, gr)
     for j in range(n):
         tmp[j] = y[j] + h * k3[j]
     evaluate(tmp, p, fel, fer, stuck, ml, mr, k4, out, -1, t0)
@@ -427,8 +439,8 @@ def _located_step(y, k1, t, dt, p, gl, tl, fl, gr, tr, fr, stuck, h_start, work,
             break
         ml = L.CONTACT_ON if on_l else L.CONTACT_OFF
         mr = L.CONTACT_ON if on_r else L.CONTACT_OFF
-        fel = gl * _pwl(t + tau, tl, fl)
-        fer = gr * _pwl(t + tau, tr, fr)
+        fel = _force(p, L.P_SHOE_BASE, t + tau, tl, fl, gl)
+        fer = _force(p, L.P_SHOE_BASE + L.SHOE_STRIDE, t + tau, tr, fr, gr)
         evaluate(ya, p, fel, fer, stuck, ml, mr, ka, out, -1, t)
     for j in range(n):
         y[j] = yb[j]
@@ -478,6 +490,10 @@ def fixed_step_advance(
     calls. At the end of every step the drum's stick/slip rule
     (:mod:`brake_sim_ros.model.standstill`) is applied.
 
+    Defects that change during the run (``p``'s growth entries, :mod:`.growth`) are set
+    at the start of every step, at its time, in a working copy of ``p`` (the actuation
+    gains with them); without entries ``p`` is used as it is.
+
     Returns the number of rows written. Stops early (status in kstate) on a non-finite state.
     """
     n = y.shape[0]
@@ -492,6 +508,10 @@ def fixed_step_advance(
     h_end = np.empty(4)
     gl = p[L.P_SHOE_BASE + L.S_ACTUATION_GAIN]
     gr = p[L.P_SHOE_BASE + L.SHOE_STRIDE + L.S_ACTUATION_GAIN]
+    growing = p[L.P_GROWTH_COUNT] > 0.0
+    pw = growth.working_copy(p) if growing else p
+    if growing:
+        gl, gr, _ = growth.apply(p, pw, step0 * dt)
     if gain_override != 0:
         gl = 1.0
         gr = 1.0
@@ -500,24 +520,32 @@ def fixed_step_advance(
     auto = L.CONTACT_AUTO
     located = scheme == L.SCHEME_RK4_LOCATED
     if located:
-        h_end[0], h_end[1] = _shoe_switch(p, 0, y)
-        h_end[2], h_end[3] = _shoe_switch(p, 1, y)
+        h_end[0], h_end[1] = _shoe_switch(pw, 0, y)
+        h_end[2], h_end[3] = _shoe_switch(pw, 1, y)
     for i in range(n_steps):
         step = step0 + i
         t = step * dt
+        if growing and i > 0:
+            gl, gr, moved = growth.apply(p, pw, t)
+            if gain_override != 0:
+                gl = 1.0
+                gr = 1.0
+            if located and moved:  # the contact modes of the step follow the geometry now
+                h_end[0], h_end[1] = _shoe_switch(pw, 0, y)
+                h_end[2], h_end[3] = _shoe_switch(pw, 1, y)
         stuck = kstate[L.K_STUCK]
-        fel = gl * _pwl(t, tl, fl)
-        fer = gr * _pwl(t, tr, fr)
+        fel = _force(pw, L.P_SHOE_BASE, t, tl, fl, gl)
+        fer = _force(pw, L.P_SHOE_BASE + L.SHOE_STRIDE, t, tr, fr, gr)
         record = i % record_every == 0
-        evaluate(y, p, fel, fer, stuck, auto, auto, k1, out, rows if record else -1, t)
+        evaluate(y, pw, fel, fer, stuck, auto, auto, k1, out, rows if record else -1, t)
         if located:
             touching_l = 1 if h_end[0] > 0.0 else 0
             touching_r = 1 if h_end[2] > 0.0 else 0
             h_start[0] = h_end[1]
             h_start[1] = h_end[3]
         else:
-            touching_l = 1 if _shoe_switch(p, 0, y)[0] > 0.0 else 0
-            touching_r = 1 if _shoe_switch(p, 1, y)[0] > 0.0 else 0
+            touching_l = 1 if _shoe_switch(pw, 0, y)[0] > 0.0 else 0
+            touching_r = 1 if _shoe_switch(pw, 1, y)[0] > 0.0 else 0
         _update_regime(
             kstate,
             L.K_LEFT_REGIME,
@@ -568,16 +596,16 @@ def fixed_step_advance(
                 ml = L.CONTACT_ON if h_start[0] > 0.0 else L.CONTACT_OFF
                 mr = L.CONTACT_ON if h_start[1] > 0.0 else L.CONTACT_OFF
             rk4_step(
-                y, k1, t, dt, p, gl, tl, fl, gr, tr, fr, stuck, ml, mr, k2, k3, k4, tmp, out, y_new
+                y, k1, t, dt, pw, gl, tl, fl, gr, tr, fr, stuck, ml, mr, k2, k3, k4, tmp, out, y_new
             )
             accept = True
             if located:
-                el, hl = _shoe_switch(p, 0, y_new)
-                er, hr = _shoe_switch(p, 1, y_new)
+                el, hl = _shoe_switch(pw, 0, y_new)
+                er, hr = _shoe_switch(pw, 1, y_new)
                 if (hl > 0.0) != (h_start[0] > 0.0) or (hr > 0.0) != (h_start[1] > 0.0):
                     # a contact switches inside this step: redo it split at the switches
                     fstate[L.F_SWITCHES] += _located_step(
-                        y, k1, t, dt, p, gl, tl, fl, gr, tr, fr, stuck, h_start, work, out, h_end
+                        y, k1, t, dt, pw, gl, tl, fl, gr, tr, fr, stuck, h_start, work, out, h_end
                     )
                     accept = False
                 else:
@@ -589,10 +617,10 @@ def fixed_step_advance(
                 for j in range(n):
                     y[j] = y_new[j]
         if stuck:
-            if standstill.slips(p, y):
+            if standstill.slips(pw, y):
                 kstate[L.K_STUCK] = 0
                 kstate[L.K_BREAKAWAYS] += 1
-        elif standstill.sticks(p, y, surface_before):
+        elif standstill.sticks(pw, y, surface_before):
             t_stick = standstill.interpolated_stick_time(
                 t,
                 dt,
@@ -602,11 +630,11 @@ def fixed_step_advance(
             )
             if fstate[L.F_WHEEL_LOCK_TIME] < 0.0:
                 fstate[L.F_WHEEL_LOCK_TIME] = t_stick
-            fstate[L.F_LOCK_LOSS] += standstill.stick(p, y)
+            fstate[L.F_LOCK_LOSS] += standstill.stick(pw, y)
             kstate[L.K_STUCK] = 1
-            if fstate[L.F_STOP_TIME] < 0.0 and standstill.at_rest(p, y):
+            if fstate[L.F_STOP_TIME] < 0.0 and standstill.at_rest(pw, y):
                 fstate[L.F_STOP_TIME] = t_stick
-        if kstate[L.K_STUCK] and fstate[L.F_STOP_TIME] < 0.0 and standstill.at_rest(p, y):
+        if kstate[L.K_STUCK] and fstate[L.F_STOP_TIME] < 0.0 and standstill.at_rest(pw, y):
             fstate[L.F_STOP_TIME] = t + dt
         for j in range(8):
             if not math.isfinite(y[j]):

@@ -19,7 +19,7 @@ P_FRICTION_SMOOTHING_SPEED = 8
 P_RIGID_COUPLING = 9  # 1.0: flywheel and drum move as one body (no torsional mode)
 SIDES = ("left", "right")  # the shoes, in slot and column order: leading, trailing
 P_SHOE_BASE = 12  # first slot of the left shoe; the right shoe follows at +SHOE_STRIDE
-SHOE_STRIDE = 24
+SHOE_STRIDE = 32
 
 # offsets inside one shoe's block (world frame, shoe at its symmetric rest angle)
 S_SIGN = 0  # +1 left (outward = counter-clockwise), -1 right (outward = clockwise)
@@ -38,12 +38,29 @@ S_MASS = 12
 S_MASS_CENTRE_X = 13
 S_MASS_CENTRE_Y = 14
 S_INERTIA = 15  # about the pivot, kg m^2
-S_ACTUATION_GAIN = 16  # 2 x actuation share
+S_ACTUATION_GAIN = 16  # 2 x actuation share x (1 + actuation gain change / 100)
 S_ENABLED = 17  # 0.0: shoe removed from the model (held retracted, no forces)
 S_LINING_HALF_COS = 18  # cos and sin of the half angle, so the kernel needs no atan2
 S_LINING_HALF_SIN = 19
 S_LINING_MID_COS = 20  # unit vector toward the arc's middle at rest
 S_LINING_MID_SIN = 21
+S_FRICTION_COEFFICIENT = 22  # this shoe's lining: mu (1 + friction change / 100)
+# the shoe's actuation (model/actuation.py shaped): its share and pressure factor (whose
+# product, doubled, is S_ACTUATION_GAIN), a delay and first-order lag of the commanded
+# history, s, and a pulsation (relative amplitude, frequency Hz); S_ACTUATION_SHAPED 1.0
+# when any of delay, lag, pulsation or a weak return spring (below) is set (else the
+# history is used as commanded)
+S_SHARE = 23
+S_PRESSURE_FACTOR = 24
+S_ACTUATION_DELAY = 25
+S_ACTUATION_LAG = 26
+S_PULSATION_AMPLITUDE = 27
+S_PULSATION_FREQUENCY = 28
+S_ACTUATION_SHAPED = 29
+# a weakened return spring (model/actuation.py spring_release): the preload it lost, N at
+# the tip, and the healthy spring's hold margin over the residual line pressure, N
+S_SPRING_RELEASE = 30
+S_SPRING_MARGIN = 31
 
 # drum out-of-roundness (model/defects.py DrumDefect), after the shoes: the number of
 # harmonics, then (order k, amplitude m, phase rad) per harmonic; r(psi) = R0 +
@@ -56,7 +73,44 @@ W_AMPLITUDE = 1
 W_PHASE = 2
 MAX_DRUM_HARMONICS = 24  # most harmonics one drum carries (model/defects.py DrumDefect)
 
-N_PARAMS = P_DRUM_WAVE_BASE + MAX_DRUM_HARMONICS * DRUM_WAVE_STRIDE
+# nominal (healthy) geometry of the LEFT shoe, from which model/growth.py re-places a shoe
+# whose pivot moves during the run (model/assembly.py place_shoe's inputs)
+P_NOMINAL_BASE = P_DRUM_WAVE_BASE + MAX_DRUM_HARMONICS * DRUM_WAVE_STRIDE
+N_PIVOT_X = 0
+N_PIVOT_Y = 1
+N_TIP_X = 2
+N_TIP_Y = 3
+N_MASS_CENTRE_X = 4
+N_MASS_CENTRE_Y = 5
+N_INERTIA = 6  # about the nominal pivot, kg m^2
+N_MASS = 7
+N_LINING_MID = 8  # polar angle of the lining arc's middle, rad
+NOMINAL_SIZE = 9
+
+# defects that change during the run (model/defects.py Defects.growth): the number of
+# entries, then per entry what it changes (G_KIND: a GK_* id, G_SHOE: 0 left, 1 right, -1
+# the drum) and its law (catalogue.severity_at's arguments). Defects present from the
+# start are packed into the slots above and have no entry.
+P_GROWTH_COUNT = P_NOMINAL_BASE + NOMINAL_SIZE
+P_GROWTH_BASE = P_GROWTH_COUNT + 1
+GROWTH_STRIDE = 8
+G_KIND = 0
+G_SHOE = 1
+G_LAW = 2
+G_ONSET = 3
+G_RATE = 4
+G_START = 5
+G_FINAL = 6
+G_NOW = 7  # in the kernel's working copy: the severity last set (NaN: none yet)
+MAX_GROWTH_ENTRIES = 16
+GK_PIVOT = 0  # pivot_radius_change, %: the shoe is re-placed (assembly.place_shoe)
+GK_SHARE = 1  # actuation_share_change: this shoe's gain 2 (0.5 + s), the other's 2 (0.5 - s)
+GK_DRUM = 2  # drum_out_of_round, um of peak runout: every harmonic scales with it
+GK_FRICTION = 3  # friction_change, %: the shoe's lining coefficient (growth.lining_friction)
+GK_GAIN = 4  # actuation_gain_change, %: the shoe's pressure factor (actuation.shoe_gain)
+GK_PULSATION = 5  # actuation_pulsation, %: the shoe's pulsation amplitude
+
+N_PARAMS = P_GROWTH_BASE + MAX_GROWTH_ENTRIES * GROWTH_STRIDE
 
 # --- state vector ---------------------------------------------------------------------
 Y_FLYWHEEL_ANGLE = 0

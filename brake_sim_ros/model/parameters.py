@@ -283,6 +283,8 @@ UNIT_SUFFIXES: tuple[tuple[str, str], ...] = (
     ("_rad_s", "rad/s"),
     ("_m_s", "m/s"),
     ("_pct", "%"),
+    ("_ms", "ms"),
+    ("_hz", "Hz"),
     ("_deg", "deg"),
     ("_kg", "kg"),
     ("_pa", "Pa"),

@@ -292,7 +292,6 @@ def advance(y, step0, h, n_steps, p, tl, fl, tr, fr, touch, shoes, cache, kstate
     full = np.zeros(L.N_STATE)
     radius = p[L.P_DRUM_RADIUS]
     v_lock = p[L.P_FRICTION_SMOOTHING_SPEED]
-    mu = p[L.P_FRICTION_COEFFICIENT]
     i_f = p[L.P_FLYWHEEL_INERTIA]
     i_d = p[L.P_DRUM_INERTIA]
     c_s = p[L.P_COUPLING_DAMPING]
@@ -350,6 +349,7 @@ def advance(y, step0, h, n_steps, p, tl, fl, tr, fr, touch, shoes, cache, kstate
                     if stage == 0 and fn > 0.0 and not stuck:
                         dist = cache[i, C_DIST]
                         sf = math.tanh(cache[i, C_OUT + contact.E_V_SLIDE] / v_lock)
+                        mu = p[L.P_SHOE_BASE + i * L.SHOE_STRIDE + L.S_FRICTION_COEFFICIENT]
                         damper_rate += mu * fn * dist * dist * (1.0 - sf * sf) / v_lock
                 ks[stage, R_FRICTION] = power
                 if rigid:

@@ -61,9 +61,13 @@ def coupling_torque(p, flywheel_angle, drum_angle, flywheel_speed, drum_speed):
 
 @njit(cache=True, inline="always")
 def static_capacity(p, fn_left, dist_left, fn_right, dist_right):
-    """Largest torque the pressed shoes hold on the drum, N m: ``mu (Fn_l r_l + Fn_r r_r)``
-    (``r``: the friction arms about the drum centre, m)."""
-    return p[L.P_FRICTION_COEFFICIENT] * (fn_left * dist_left + fn_right * dist_right)
+    """Largest torque the pressed shoes hold on the drum, N m: ``mu_l Fn_l r_l + mu_r Fn_r
+    r_r`` (``r``: the friction arms about the drum centre, m; ``mu``: each lining's)."""
+    mu_l = p[L.P_SHOE_BASE + L.S_FRICTION_COEFFICIENT]
+    mu_r = p[L.P_SHOE_BASE + L.SHOE_STRIDE + L.S_FRICTION_COEFFICIENT]
+    if mu_l == mu_r:  # factored: the same rounding as before linings could differ
+        return mu_l * (fn_left * dist_left + fn_right * dist_right)
+    return mu_l * fn_left * dist_left + mu_r * fn_right * dist_right
 
 
 @njit(cache=True, inline="always")

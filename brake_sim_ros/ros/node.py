@@ -57,6 +57,8 @@ from rclpy.parameter import Parameter
 from brake_sim_ros import stream
 from brake_sim_ros.analysis.contact_events import ContactEventDetector
 from brake_sim_ros.errors import BrakeSimError, ParameterError, ScenarioError
+from brake_sim_ros.model.catalogue import KIND_BY_NAME, label_column
+from brake_sim_ros.model.defects import Defects
 from brake_sim_ros.model.sensors import SensorBank
 from brake_sim_ros.model.trajectory import BrakeSetup, SampleBlock
 from brake_sim_ros.ros import qos
@@ -83,6 +85,7 @@ from brake_sim_ros.solvers.realtime import (
 from brake_sim_ros.stream import MessageSink, Topic, conversion
 from brake_sim_ros.stream import parameters as ros_params
 from brake_sim_ros.stream.build import require_measured, sensor_bank_for, stepper_for
+from brake_sim_ros.stream.ground_truth import TruthUpdates
 
 NODE_NAME = "brake_sim"
 MAX_LAG_S = 0.5  # wall seconds of backlog that are caught up (see pacing)
@@ -240,6 +243,7 @@ class BrakeSimNode(Node):
             except BrakeSimError as exc:
                 self.stats.sink_failures += 1
                 self.get_logger().error(f"{exc}; the node runs on without it")
+        self._truth = TruthUpdates(self._stepper.setup.defects)
         self._publish_defects()
         if self._publish_clock:
             self._emit(stream.CLOCK, conversion.clock(0), 0)
@@ -583,6 +587,7 @@ class BrakeSimNode(Node):
                 params, defects = ros_params.build_model(
                     self._model_values(model_changes), drum=old_setup.defects.drum
                 )
+                defects = _keep_growth(defects, old_setup.defects)
                 setup = dataclasses.replace(old_setup, params=params, defects=defects)
                 self._stepper.replace_setup(setup)  # validates, or changes nothing
             except BrakeSimError as exc:
@@ -745,6 +750,8 @@ class BrakeSimNode(Node):
 
     def _publish_block(self, block: SampleBlock) -> None:
         states = 0
+        for row in self._truth.due_rows(block.time_s):
+            self._publish_defects(block.first_index + row)
         messages = stream.block_messages(
             block,
             self._state_stride,
@@ -978,9 +985,14 @@ class BrakeSimNode(Node):
         self._tick_timer.timer_period_ns = int(self._tick_period_s() * 1e9)
 
     # -- ground truth and diagnostics --------------------------------------------------------
-    def _publish_defects(self) -> None:
+    def _publish_defects(self, sample_index: int | None = None) -> None:
+        """Publish the ground truth at ``sample_index`` (default: the next sample, for the
+        start, a reset or a change of the defects; a sample of a block for a growing
+        defect, :class:`~brake_sim_ros.stream.ground_truth.TruthUpdates`)."""
         setup = self._stepper.setup
-        ns = conversion.stamp_ns(self._stepper.sample_index, self._stepper.sample_period_s)
+        index = self._stepper.sample_index if sample_index is None else sample_index
+        period = self._stepper.sample_period_s
+        ns = conversion.stamp_ns(index, period)
         msg = conversion.defect_state(
             scenario=self.scenario.name,
             defects=setup.defects,
@@ -989,7 +1001,10 @@ class BrakeSimNode(Node):
             run_id=self.run_id,
             seed=self._seed,
             unit_id=self.scenario.unit_id,
+            time_s=index * period,
         )
+        if sample_index is None:
+            self._truth.published(setup.defects, index * period)
         self._emit(stream.DEFECTS, msg, ns)
 
     def run_view(self) -> RunView:
@@ -1042,3 +1057,16 @@ class BrakeSimNode(Node):
 
     def summary(self) -> str:
         return summary(self.run_view(), self.stats)
+
+
+def _keep_growth(defects: Defects, old: Defects) -> Defects:
+    """``defects`` (rebuilt from the node's parameters, which set final values only) with
+    the onsets and growth laws of ``old`` for the defects still present: a live change of a
+    growing defect's value changes where it grows to, not how."""
+    at = defects.severities()
+    kept = tuple(
+        (kind, loc, law)
+        for kind, loc, law in old.growth
+        if at[label_column(KIND_BY_NAME[kind], loc)] != 0.0
+    )
+    return dataclasses.replace(defects, growth=kept)

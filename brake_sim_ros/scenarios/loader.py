@@ -38,6 +38,13 @@ from brake_sim_ros.model.actuation import (
     ForceProfile,
 )
 from brake_sim_ros.model.assembly import SIDES, ModelOptions, pack
+from brake_sim_ros.model.catalogue import (
+    DRUM_KIND,
+    GROWTH_LAWS,
+    KINDS,
+    MAX_GROWTH_TIME_S,
+    Growth,
+)
 from brake_sim_ros.model.defects import (
     MAX_DRUM_HARMONICS,
     MAX_DRUM_ORDER,
@@ -308,7 +315,7 @@ class Scenario:
         pack(setup.params, setup.defects, setup.options)  # validity check
         needs = self.needs
         if needs is not None:  # the level must represent the new defects
-            needs = dataclasses.replace(needs, defects=defects.kinds)
+            needs = dataclasses.replace(needs, defects=defects.kinds, growing=defects.growing_kinds)
             plan(needs, model_shoes=setup.options.shoes)
         return dataclasses.replace(self, setup=setup, needs=needs)
 
@@ -466,10 +473,47 @@ def _actuation(ctx: _Ctx, data: Any) -> Actuation:
     )
 
 
-def _drum(ctx: _Ctx, data: Any) -> DrumDefect:
+# the keys that state when a defect starts and how it grows (catalogue.Growth), beside its
+# final value: in a shoe key's table, or in [defects.drum] itself
+GROWTH_KEYS = ("onset_s", "growth", "rate_per_s", "doubling_time_s", "start")
+
+
+def _growth(ctx: _Ctx, data: dict[str, Any], key: str, healthy: float) -> Growth:
+    """The onset and growth law stated in ``data`` (keys :data:`GROWTH_KEYS`, all optional:
+    a step at 0 s); ``start`` is a value of the key itself, so ``healthy`` (the key's
+    healthy value) is taken off to give a severity."""
+    law = ctx.string(data.get("growth", "step"), f"{key}.growth", GROWTH_LAWS)
+    onset = ctx.number(data.get("onset_s", 0.0), f"{key}.onset_s", 0.0, MAX_GROWTH_TIME_S)
+    values = {"onset_s": onset, "law": law}
+    for name, needed_by in (
+        ("rate_per_s", "linear"),
+        ("doubling_time_s", "exponential"),
+        ("start", "exponential"),
+    ):
+        if name in data and law != needed_by:
+            raise ctx.fail(f"{key}.{name}", data[name], f'a value only with growth = "{needed_by}"')
+        if law == needed_by:
+            if name not in data:
+                raise ctx.fail(f"{key}.{name}", _MISSING, f'a number with growth = "{needed_by}"')
+            if name == "start":
+                values[name] = ctx.number(data[name], f"{key}.{name}") - healthy
+            else:
+                hi = MAX_GROWTH_TIME_S if name == "doubling_time_s" else math.inf
+                values[name] = ctx.number(data[name], f"{key}.{name}", 0.0, hi, lo_open=True)
+    try:
+        return Growth(**values)
+    except BrakeSimError as exc:
+        raise ScenarioError(f"{ctx.source}: [{key}]: {exc}") from exc
+
+
+def _drum(ctx: _Ctx, data: Any) -> tuple[DrumDefect, Growth]:
     """``[defects.drum]``: ``harmonics``, an array of tables ``{order, amplitude_um,
-    phase_deg}`` (phase optional, 0 deg)."""
-    data = ctx.table(data, "defects.drum", {"harmonics"})
+    phase_deg}`` (phase optional, 0 deg); the amplitudes are the final ones and the
+    :data:`GROWTH_KEYS` say when the drum goes out of round and how (``rate_per_s`` and
+    ``start`` in um of peak runout, the sum of the amplitudes; every harmonic grows in
+    proportion)."""
+    data = ctx.table(data, "defects.drum", {"harmonics", *GROWTH_KEYS})
+    growth = _growth(ctx, data, "defects.drum", 0.0)
     rows = data.get("harmonics", [])
     if not isinstance(rows, list):
         raise ctx.fail(
@@ -494,18 +538,35 @@ def _drum(ctx: _Ctx, data: Any) -> DrumDefect:
         except BrakeSimError as exc:
             raise ScenarioError(f"{ctx.source}: [{key}]: {exc}") from exc
     try:
-        return DrumDefect(tuple(harmonics))
+        return DrumDefect(tuple(harmonics)), growth
     except BrakeSimError as exc:
         raise ScenarioError(f"{ctx.source}: [defects.drum]: {exc}") from exc
 
 
 def _defects(ctx: _Ctx, data: Any) -> Defects:
+    """``[defects.left]``, ``[defects.right]``: each key a number (the final value, present
+    from the start) or a table ``{value, onset_s, growth, rate_per_s, doubling_time_s,
+    start}`` (:data:`GROWTH_KEYS`: when it starts and how it grows toward ``value``;
+    ``start`` and ``rate_per_s`` in the key's unit, e.g. 0.52 and 0.05 for a share);
+    ``[defects.drum]``: :func:`_drum`."""
     data = ctx.table(data, "defects", {*SIDES, "drum"})
     shoes = {}
     names = {f.name for f in dataclasses.fields(ShoeDefect)}
+    kind_of = {k.scenario_key: k for k in KINDS if k.name != DRUM_KIND}
+    growth = []
     for side in SIDES:
         d = ctx.table(data.get(side, {}), f"defects.{side}", names)
-        values = {k: ctx.number(v, f"defects.{side}.{k}") for k, v in d.items()}
+        values = {}
+        for k, v in d.items():
+            key = f"defects.{side}.{k}"
+            if isinstance(v, dict):
+                v = ctx.table(v, key, {"value", *GROWTH_KEYS})
+                if "value" not in v:
+                    raise ctx.fail(f"{key}.value", _MISSING, "a number (the final value)")
+                kind = kind_of[k]
+                growth.append((kind.name, side, _growth(ctx, v, key, kind.healthy_value)))
+                v = v["value"]
+            values[k] = ctx.number(v, key)
         shoes[side] = values
     # an actuation share given for one shoe only implies the other's (the sum is kept)
     for side, other in (("left", "right"), ("right", "left")):
@@ -517,9 +578,10 @@ def _defects(ctx: _Ctx, data: Any) -> Defects:
             built[side] = ShoeDefect(**shoes[side])
         except BrakeSimError as exc:
             raise ScenarioError(f"{ctx.source}: [defects.{side}]: {exc}") from exc
-    drum = _drum(ctx, data.get("drum", {}))
+    drum, drum_growth = _drum(ctx, data.get("drum", {}))
+    growth.append((DRUM_KIND, "drum", drum_growth))
     try:
-        return Defects(**built, drum=drum)
+        return Defects(**built, drum=drum, growth=tuple(growth))
     except BrakeSimError as exc:
         raise ScenarioError(f"{ctx.source}: [defects]: {exc}") from exc
 
@@ -791,7 +853,7 @@ def _parse(data: dict[str, Any], text: str, source: str) -> Scenario:
     )
     needs = _needs(ctx, top["needs"], setup.options.shoes) if "needs" in top else None
     if needs is not None:  # the level must represent the scenario's defects
-        needs = dataclasses.replace(needs, defects=defects.kinds)
+        needs = dataclasses.replace(needs, defects=defects.kinds, growing=defects.growing_kinds)
     try:
         pack(setup.params, setup.defects, setup.options)
         plan(needs, model_shoes=setup.options.shoes)  # refuse needs no level can serve

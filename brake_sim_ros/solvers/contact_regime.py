@@ -13,7 +13,7 @@ from brake_sim_ros.model import layout as L
 from brake_sim_ros.model import quasi_static as Q
 from brake_sim_ros.model.assembly import indentation_at, pack
 from brake_sim_ros.model.catalogue import KIND_BY_NAME
-from brake_sim_ros.model.fidelity import DEFECT_LEVELS, levels_representing
+from brake_sim_ros.model.fidelity import DEFECT_LEVELS, GROWTH_LEVELS, levels_representing
 from brake_sim_ros.model.trajectory import BrakeSetup, SampleBlock
 
 SAMPLE_COLUMNS: tuple[str, ...] = (*L.COLUMNS, "braking_torque_n_m")
@@ -88,6 +88,12 @@ def run_contact_regime(
                 f" ({KIND_BY_NAME[defect].description}): allowed levels for it:"
                 f" {levels_representing(defect)}"
             )
+    if not setup.defects.is_static:
+        raise FidelityError(
+            f"the contact-regime model cannot represent the defect"
+            f" {setup.defects.growing_kinds[0]!r} changing during the run (an onset after"
+            f" 0 s or a growth law): allowed levels for it: {sorted(GROWTH_LEVELS)}"
+        )
     p = pack(setup.params, setup.defects, setup.options)
     h = macro_step(setup, accuracy)
     n = max(1, round(duration_s / h))

@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from brake_sim_ros.errors import SimulationError
+from brake_sim_ros.errors import ParameterError, SimulationError
 from brake_sim_ros.model import kernel, standstill
 from brake_sim_ros.model import layout as L
 from brake_sim_ros.model.assembly import indentation_at, initial_state, pack
@@ -86,6 +86,26 @@ def run_reference(
             switches and the lock located as events.
         cpu_budget_s: give up (SimulationError) after this much process CPU time, s.
     """
+    if not setup.defects.is_static:
+        raise ParameterError(
+            f"the reference solver holds the defects fixed: the defect"
+            f" {setup.defects.growing_kinds[0]!r} changes during the run (an onset after 0 s"
+            " or a growth law): allowed with a fixed-step method (rk4-located, rk4,"
+            " semi-implicit-euler)"
+        )
+    shaped = [
+        s
+        for s in SIDES
+        if getattr(setup.defects, s).actuation_shaped
+        or getattr(setup.defects, s).return_spring_weakening_pct
+    ]
+    if shaped:
+        raise ParameterError(
+            f"the reference solver takes the actuation history as commanded: the {shaped[0]}"
+            " shoe's actuation is delayed, lagging, pulsating or has a weak return spring:"
+            " allowed with a fixed-step"
+            " method (rk4-located, rk4, semi-implicit-euler)"
+        )
     p = pack(setup.params, setup.defects, setup.options)
     y = initial_state(setup.params, setup.defects)
     tl, fl, tr, fr = setup.actuation.as_arrays()

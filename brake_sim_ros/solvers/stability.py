@@ -174,11 +174,16 @@ def step_limit(
     v_lock = p[L.P_FRICTION_SMOOTHING_SPEED]
     direction = 1.0 if setup.params.driveline.initial_speed_rad_s >= 0.0 else -1.0
     drum_speed = direction * v_lock / radius
-    gains = (
-        p[L.P_SHOE_BASE + L.S_ACTUATION_GAIN],
-        p[L.P_SHOE_BASE + L.SHOE_STRIDE + L.S_ACTUATION_GAIN],
+    # a pulsating actuation peaks at (1 + its amplitude) times the force
+    gains = tuple(
+        p[b + L.S_ACTUATION_GAIN] * (1.0 + p[b + L.S_PULSATION_AMPLITUDE])
+        for b in (L.P_SHOE_BASE, L.P_SHOE_BASE + L.SHOE_STRIDE)
     )
-    fe = (max_actuation_n * gains[0], max_actuation_n * gains[1])
+    # a weakened return spring adds the preload it lost (model/actuation.py spring_release)
+    fe = tuple(
+        max_actuation_n * g + p[b + L.S_SPRING_RELEASE]
+        for g, b in zip(gains, (L.P_SHOE_BASE, L.P_SHOE_BASE + L.SHOE_STRIDE), strict=True)
+    )
     y = np.zeros(L.N_STATE)
     bases = (L.P_SHOE_BASE, L.P_SHOE_BASE + L.SHOE_STRIDE)
     for i, base in enumerate(bases):

@@ -269,9 +269,11 @@ def defect_state(
     run_id: str,
     seed: int,
     unit_id: str,
+    time_s: float | None = None,
 ) -> DefectState:
     """Ground truth of the defects in force from simulated time ``ns`` on: the
-    catalogue's list (:meth:`Defects.active`).
+    catalogue's list (:meth:`Defects.active`) with each severity at that time (a defect
+    before its onset is not listed).
 
     Args:
         scenario: name of the active scenario.
@@ -284,10 +286,12 @@ def defect_state(
         seed: the run's seed.
         unit_id: the brake unit's id (the scenario's ``unit_id``; "nominal" for the
             drawing's brake, :mod:`brake_sim_ros.model.units`).
+        time_s: the simulated time of the severities, s (the sample's; default ``ns``).
     """
     left = dataclasses.replace(defects.left, initial_angle_deg=initial_angles_deg[0])
     right = dataclasses.replace(defects.right, initial_angle_deg=initial_angles_deg[1])
-    active = dataclasses.replace(defects, left=left, right=right).active()
+    at = ns * 1e-9 if time_s is None else time_s
+    active = dataclasses.replace(defects, left=left, right=right).active(at)
     return DefectState(
         header=header(ns),
         run_id=run_id,

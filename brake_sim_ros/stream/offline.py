@@ -21,6 +21,7 @@ from brake_sim_ros.solvers.fixed_step import FixedStepStepper
 from brake_sim_ros.stream import Topic, conversion
 from brake_sim_ros.stream import parameters as ros_params
 from brake_sim_ros.stream.build import require_measured, sensor_bank_for, stepper_for
+from brake_sim_ros.stream.ground_truth import TruthUpdates
 
 
 def _default(name: str):
@@ -99,8 +100,23 @@ def offline_messages(
         if settings.publish_measured
         else None
     )
+    truth = TruthUpdates(setup.defects)
     while stepper.sample_index < end:
         block = stepper.advance(min(chunk, end - stepper.sample_index))
+        for row in truth.due_rows(block.time_s):
+            index = block.first_index + row
+            ns = conversion.stamp_ns(index, period)
+            msg = conversion.defect_state(
+                scenario=scenario.name,
+                defects=setup.defects,
+                initial_angles_deg=initial_angles,
+                ns=ns,
+                run_id=run_id,
+                seed=scenario.seed,
+                unit_id=scenario.unit_id,
+                time_s=float(block.time_s[row]),
+            )
+            yield stream.DEFECTS, msg, ns
         yield from stream.block_messages(
             block,
             stride,

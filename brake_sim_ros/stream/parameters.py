@@ -34,7 +34,7 @@ from typing import Any
 from brake_sim_ros.errors import ParameterError
 from brake_sim_ros.model.actuation import MAX_ACTUATION_FORCE_N, NOMINAL_PEAK_ACTUATION_N
 from brake_sim_ros.model.catalogue import KINDS
-from brake_sim_ros.model.defects import Defects, DrumDefect, ShoeDefect
+from brake_sim_ros.model.defects import MAX_PULSATION_HZ, Defects, DrumDefect, ShoeDefect
 from brake_sim_ros.model.layout import SIDES
 from brake_sim_ros.model.parameters import PARAMETER_GROUPS, BrakeParameters, unit_of
 from brake_sim_ros.model.trajectory import BrakeSetup
@@ -83,6 +83,7 @@ _RANGES: dict[str, tuple[float, float]] = {
         for k in KINDS
         if set(k.locations) <= set(SIDES)  # the shoes' (the drum has no node parameter)
     },
+    "defects.actuation_pulsation_hz": (0.0, MAX_PULSATION_HZ),  # a pulsation's attribute
 }
 
 

@@ -14,6 +14,9 @@ scenario is run with that one defect at :data:`STEPS` fractions of the kind's se
   angle, :mod:`..analysis.orders`) of that shoe's ``|F_pivot|`` over 0.8-1.9 s, the
   contact regime with the actuation held (N; from ``--duration`` 1.9 s); for the drum the
   leading (left) shoe's;
+* the braking torque: the mean friction torque of both shoes on the drum over the same
+  window (N m; from ``--duration`` 1.9 s): what a friction change or a weak actuation
+  moves first;
 * what a sensor gives (the default set, one noise seed, :mod:`..analysis.measured_features`):
   the rms of the backing-plate acceleration x and y in the drum-brake noise band over the
   impacts (m/s^2), and the first-impact time seen by the accelerometers (ms).
@@ -60,6 +63,7 @@ FEATURES: dict[str, str] = {  # key: label (unit)
     "band_rms_y": "band rms accel y (m/s^2)",
     "first_impact_ms": "first impact, accelerometers (ms)",
     "order_2_line_n": "order-2 line of the pivot force magnitude (N)",
+    "braking_torque_n_m": "mean braking torque, 0.8-1.9 s (N m)",
 }
 # features whose healthy value is zero (up to rounding): reported as values, not changes
 ABSOLUTE = frozenset({"order_2_line_n"})
@@ -73,10 +77,20 @@ def features(defects: Defects, location: str, duration_s: float) -> dict[str, fl
     side = location if location in SIDES else SIDES[0]
     shoe = run.metrics.shoe(side)
     b = run.samples
-    order_line = math.nan
+    order_line = torque = math.nan
     if duration_s >= ORDER_WINDOW_S[1]:  # twice the drum's rotation, by order analysis
         magnitude = np.hypot(b[f"{side}_pivot_fx_n"], b[f"{side}_pivot_fy_n"])
         order_line = order_amplitude(b.time_s, b["drum_angle_rad"], magnitude, 2.0, ORDER_WINDOW_S)
+        window = (b.time_s >= ORDER_WINDOW_S[0]) & (b.time_s < ORDER_WINDOW_S[1])
+        torque = float(
+            sum(
+                (
+                    b[f"{s}_friction_force_n"]
+                    * np.hypot(b[f"{s}_contact_x_m"], b[f"{s}_contact_y_m"])
+                )[window].mean()
+                for s in SIDES
+            )
+        )
     sensors = SensorSet()
     frame = SensorBank(sensors, scenario.sample_rate_hz, SEED).advance(run.samples)
     measured = mf.features(frame, mf.noise_rms(frame), sensors)
@@ -90,6 +104,7 @@ def features(defects: Defects, location: str, duration_s: float) -> dict[str, fl
         "band_rms_y": measured[mf.BAND_RMS[1]],
         "first_impact_ms": measured[mf.FIRST_IMPACT],
         "order_2_line_n": order_line,
+        "braking_torque_n_m": torque,
     }
 
 
@@ -185,8 +200,11 @@ def plot(result: dict[str, object], out_dir: Path) -> Path:
     sev = result["severities"]
     values = result["values"]
     assert isinstance(sev, list) and isinstance(values, dict)
-    fig, axes = plt.subplots(3, 3, figsize=(14, 9), sharex=True)
-    for ax, (key, label) in zip(axes.flat, FEATURES.items(), strict=True):
+    rows = -(-len(FEATURES) // 3)
+    fig, axes = plt.subplots(rows, 3, figsize=(14, 3 * rows), sharex=True)
+    for ax in axes.flat[len(FEATURES) :]:
+        ax.set_visible(False)
+    for ax, (key, label) in zip(axes.flat, FEATURES.items(), strict=False):
         base = values[key][0]
         if key not in ABSOLUTE and math.isfinite(base) and base != 0.0:
             ax.plot(sev, [change_pct(v, base) for v in values[key]], "o-")

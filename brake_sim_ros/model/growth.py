@@ -1,0 +1,170 @@
+"""Defects that change during a run, compiled (numba): the shoe placement for a pivot
+where it is now, and the update of the packed parameters at a simulated time.
+
+The packed vector ``p`` (:mod:`brake_sim_ros.model.layout`) holds every defect at its
+final severity; its growth entries (``P_GROWTH_*``) say which of them change and how
+(:func:`brake_sim_ros.model.catalogue.severity_at`, the one definition of the laws).
+:func:`apply` writes the parameters at time ``t`` into a working copy ``pw``; the
+fixed-step kernel calls it at the start of every physics step, so the physics sees each
+severity as it is at that step (held over the step, as the step's contact modes are).
+A vector without entries is never copied nor touched: a run whose defects are all present
+from the start takes exactly the arithmetic it took before defects could grow.
+"""
+
+from __future__ import annotations
+
+import math
+
+from numba import njit
+
+from brake_sim_ros.model import layout as L
+from brake_sim_ros.model.catalogue import severity_at
+
+
+@njit(cache=True)
+def shoe_placement(shift, mirror, px, py, tx, ty, mcx, mcy, inertia0, mass, mid0):
+    """Assemble a shoe whose pin sits ``shift`` (a fraction of its nominal radius) out of
+    place: the rule of :func:`brake_sim_ros.model.assembly.place_shoe` (documented there).
+
+    Args:
+        shift: the pin's radial displacement over its nominal distance from the drum
+            centre, 1 (``pct / 100``).
+        mirror: +1 for the left shoe, -1 for the right one (the mirror image about y).
+        px, py: the nominal pin of the left shoe, m. tx, ty: its tip, m.
+        mcx, mcy: its mass centre, m. inertia0: its inertia about the nominal pin, kg m^2.
+        mass: the shoe's mass, kg. mid0: the polar angle of its lining arc's middle, rad.
+
+    Returns:
+        (pin x, pin y, lining centre x, lining centre y, lining middle angle rad, mass
+        centre x, mass centre y, inertia about the pin kg m^2, turn about the tip rad,
+        heel seat offset m), in the backing-plate frame (m), for the shoe ``mirror`` says.
+    """
+    qx, qy = px * (1.0 + shift), py * (1.0 + shift)  # the displaced pin P'
+    ax, ay = px - tx, py - ty  # tip -> nominal pin
+    bx, by = qx - tx, qy - ty  # tip -> displaced pin
+    turn = math.atan2(ax * by - ay * bx, ax * bx + ay * by)
+    c, s = math.cos(turn), math.sin(turn)
+    # points of the shoe body after the turn about the tip: the lining centre (the drum
+    # centre at rest) and the mass centre
+    cx = tx + c * (0.0 - tx) - s * (0.0 - ty)
+    cy = ty + s * (0.0 - tx) + c * (0.0 - ty)
+    gx = tx + c * (mcx - tx) - s * (mcy - ty)
+    gy = ty + s * (mcx - tx) + c * (mcy - ty)
+    chord = math.hypot(ax, ay)
+    seat = (math.hypot(bx, by) - chord) if chord > 0.0 else 0.0
+    # parallel-axis theorem: the inertia about the mass centre is the shoe's own
+    arm0 = (mcx - px) ** 2 + (mcy - py) ** 2
+    arm1 = (gx - qx) ** 2 + (gy - qy) ** 2
+    inertia = inertia0 + mass * (arm1 - arm0)
+    mid = mid0 + turn
+    if mirror < 0.0:
+        return -qx, qy, -cx, cy, math.pi - mid, -gx, gy, inertia, turn, seat
+    return qx, qy, cx, cy, mid, gx, gy, inertia, turn, seat
+
+
+@njit(cache=True)
+def lining_friction(mu, change_pct):
+    """Friction coefficient of a lining whose coefficient ``mu`` changed by ``change_pct``
+    percent (fade, contamination: negative), 1."""
+    return mu * (1.0 + change_pct / 100.0)
+
+
+@njit(cache=True)
+def write_placement(p, base, px, py, cx, cy, mid, gx, gy, inertia):
+    """Write a shoe's placement (pin, lining centre and middle, mass centre, inertia; as
+    :func:`shoe_placement` returns them) into its block at ``base`` of ``p``."""
+    p[base + L.S_PIVOT_X] = px
+    p[base + L.S_PIVOT_Y] = py
+    p[base + L.S_LINING_CENTRE_X] = cx
+    p[base + L.S_LINING_CENTRE_Y] = cy
+    p[base + L.S_LINING_MID_ANGLE] = mid
+    p[base + L.S_LINING_MID_COS] = math.cos(mid)
+    p[base + L.S_LINING_MID_SIN] = math.sin(mid)
+    p[base + L.S_MASS_CENTRE_X] = gx
+    p[base + L.S_MASS_CENTRE_Y] = gy
+    p[base + L.S_INERTIA] = inertia
+
+
+@njit(cache=True)
+def working_copy(p):
+    """A copy of ``p`` for :func:`apply`, with no severity set yet."""
+    pw = p.copy()
+    for j in range(int(p[L.P_GROWTH_COUNT])):
+        pw[L.P_GROWTH_BASE + j * L.GROWTH_STRIDE + L.G_NOW] = math.nan
+    return pw
+
+
+@njit(cache=True)
+def apply(p, pw, t):
+    """Write the parameters at simulated time ``t`` (s) of every growing defect of ``p``
+    into ``pw`` (:func:`working_copy` of ``p``); return the shoes' actuation gains (left,
+    right) and whether any geometry changed since the last call (the contact's switching
+    functions must then be re-evaluated).
+
+    A pivot re-places its shoe (:func:`shoe_placement`); an actuation share sets this
+    shoe's share to ``0.5 + s`` and the other's to ``0.5 - s``, an actuation gain change
+    its pressure factor ``1 + s/100`` (the gain is ``2 share factor``,
+    :func:`.actuation.shoe_gain`); a pulsation sets its amplitude; a friction change
+    sets the shoe's lining coefficient (:func:`lining_friction`); a drum out of round
+    scales every harmonic by ``s / s_final``. A severity equal to the one set last (before
+    the onset, once the final one is reached) is not written again.
+    """
+    bl = L.P_SHOE_BASE
+    br = L.P_SHOE_BASE + L.SHOE_STRIDE
+    gains = [p[bl + L.S_ACTUATION_GAIN], p[br + L.S_ACTUATION_GAIN]]
+    shares = [p[bl + L.S_SHARE], p[br + L.S_SHARE]]
+    pressure = [p[bl + L.S_PRESSURE_FACTOR], p[br + L.S_PRESSURE_FACTOR]]
+    regain = False
+    nb = L.P_NOMINAL_BASE
+    moved = False
+    for j in range(int(p[L.P_GROWTH_COUNT])):
+        g = L.P_GROWTH_BASE + j * L.GROWTH_STRIDE
+        final = p[g + L.G_FINAL]
+        s = severity_at(
+            t, int(p[g + L.G_LAW]), p[g + L.G_ONSET], p[g + L.G_RATE], p[g + L.G_START], final
+        )
+        kind = int(p[g + L.G_KIND])
+        shoe = int(p[g + L.G_SHOE])
+        if kind == L.GK_SHARE:
+            shares[shoe] = 0.5 + s
+            shares[1 - shoe] = 0.5 - s
+            regain = True
+            continue
+        if kind == L.GK_GAIN:
+            pressure[shoe] = 1.0 + s / 100.0
+            regain = True
+            continue
+        if s == pw[g + L.G_NOW]:
+            continue
+        pw[g + L.G_NOW] = s
+        moved = True
+        if kind == L.GK_PIVOT:
+            base = L.P_SHOE_BASE + shoe * L.SHOE_STRIDE
+            pl = shoe_placement(
+                s / 100.0,
+                p[base + L.S_SIGN],
+                p[nb + L.N_PIVOT_X],
+                p[nb + L.N_PIVOT_Y],
+                p[nb + L.N_TIP_X],
+                p[nb + L.N_TIP_Y],
+                p[nb + L.N_MASS_CENTRE_X],
+                p[nb + L.N_MASS_CENTRE_Y],
+                p[nb + L.N_INERTIA],
+                p[nb + L.N_MASS],
+                p[nb + L.N_LINING_MID],
+            )
+            write_placement(pw, base, pl[0], pl[1], pl[2], pl[3], pl[4], pl[5], pl[6], pl[7])
+        elif kind == L.GK_FRICTION:
+            base = L.P_SHOE_BASE + shoe * L.SHOE_STRIDE
+            pw[base + L.S_FRICTION_COEFFICIENT] = lining_friction(p[L.P_FRICTION_COEFFICIENT], s)
+        elif kind == L.GK_PULSATION:
+            pw[L.P_SHOE_BASE + shoe * L.SHOE_STRIDE + L.S_PULSATION_AMPLITUDE] = s / 100.0
+        elif kind == L.GK_DRUM:
+            fraction = s / final
+            for w in range(int(p[L.P_DRUM_WAVE_COUNT])):
+                a = L.P_DRUM_WAVE_BASE + w * L.DRUM_WAVE_STRIDE + L.W_AMPLITUDE
+                pw[a] = p[a] * fraction
+    if regain:
+        for i in range(2):
+            gains[i] = 2.0 * shares[i] * pressure[i]
+    return gains[0], gains[1], moved
