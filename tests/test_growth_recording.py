@@ -15,14 +15,13 @@ pytestmark = [
 ]
 pytest.importorskip("rclpy", reason="rclpy not installed (run scripts/setup.sh)")
 
-from rosbags.rosbag2.storage_mcap import McapReader  # noqa: E402
-from rosbags.typesys import Stores, get_types_from_msg, get_typestore  # noqa: E402
 
 from brake_sim_ros import stream  # noqa: E402
 from brake_sim_ros.recording.record import record_offline  # noqa: E402
 from brake_sim_ros.recording.writer import RecordingOptions  # noqa: E402
 from brake_sim_ros.scenarios.loader import parse_scenario  # noqa: E402
 from brake_sim_ros.stream.ground_truth import PUBLISH_FRACTION, PUBLISH_PERIOD_S  # noqa: E402
+from tests.bag_helpers import rosbags_timed  # noqa: E402
 
 RATE_HZ = 25_600.0
 SCENARIO = """
@@ -53,19 +52,7 @@ def drum(t):
 def truths(tmp_path_factory) -> list[tuple[int, object]]:
     path: Path = tmp_path_factory.mktemp("rec") / "growing.mcap"
     record_offline(parse_scenario(SCENARIO), path, options=RecordingOptions(durable=False))
-    reader = McapReader(path)
-    reader.open()
-    try:
-        store = get_typestore(Stores.EMPTY)
-        for conn in reader.connections:
-            store.register(get_types_from_msg(conn.msgdef.data, conn.msgtype))
-        return [
-            (ns, store.deserialize_cdr(data, conn.msgtype))
-            for conn, ns, data in reader.messages(reader.connections)
-            if conn.topic == stream.DEFECTS.name
-        ]
-    finally:
-        reader.close()
+    return rosbags_timed(path)[stream.DEFECTS.name]
 
 
 def _held(truths, kind: str, location: str, times: np.ndarray) -> np.ndarray:
