@@ -519,6 +519,10 @@ def cmd_dataset(args: argparse.Namespace) -> int:
     return 0
 
 
+def _figure(value: float | None) -> str:
+    return "undefined" if value is None else f"{value:.3f}"
+
+
 def cmd_score(args: argparse.Namespace) -> int:
     """``brake-sim score DIR --detector NAME``: fit on one split, score on another, print
     the headline figures and write the JSON (``monitoring.evaluate``)."""
@@ -542,12 +546,14 @@ def cmd_score(args: argparse.Namespace) -> int:
     if args.out:
         replace_output(args.out, lambda tmp: tmp.write_text(text + "\n"))
     d, fa, hi = score["detection"], score["false_alarms"], score["health_index"]
+    median = d["median_delay_s"]
+    delay = "" if median is None else f" (median delay {median:.3f} s)"
     print(
         f"detector {score['detector']} fitted on {args.fit_split} ({windows} windows), scored"
         f" on {args.split}: {score['runs']} runs; detected {d['detected']} of"
-        f" {d['defective_runs']} defective runs (median delay {d['median_delay_s']} s);"
+        f" {d['defective_runs']} defective runs{delay};"
         f" {fa['count']} false alarms in {fa['healthy_hours'] * 3600:.1f} s of healthy"
-        f" operation; AUROC {hi['auroc']}, AUPRC {hi['auprc']}"
+        f" operation; AUROC {_figure(hi['auroc'])}, AUPRC {_figure(hi['auprc'])}"
         + (f"; JSON: {args.out}" if args.out else "")
     )
     return 0
