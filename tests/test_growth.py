@@ -312,7 +312,15 @@ def test_the_ground_truth_lists_a_defect_from_its_onset_with_its_severity_then()
 def test_parquet_label_columns_carry_the_severity_at_each_sample(tmp_path):
     sc = load_scenario("symmetric").with_defects(_growing_pivot())
     run = stepper_for(sc).run(2.5, record_every=64)
-    table = parquet.history_table(run, None, sc.setup.defects, {"scenario": sc.name})
+    table = parquet.history_table(
+        run,
+        None,
+        sc.setup.defects,
+        {"scenario": sc.name},
+        unit_id=sc.unit_id,
+        unit_values=sc.unit_values(),
+        conditions=sc.conditions_record(),
+    )
     path = tmp_path / "run.parquet"
     parquet.write_history(path, table)
     back = pq.read_table(path)
