@@ -265,6 +265,19 @@ def test_output_directories_are_refused_in_one_line(tmp_path, capsys, campaign_f
     assert _files(reference) == before
 
 
+def test_a_new_output_directory_is_made_with_its_parents(tmp_path):
+    from brake_sim_ros.datasets.sweep import SweepError, prepare_output
+
+    out = tmp_path / "data" / "sweeps" / "demo"
+    prepare_output(out, "lock")
+    assert (out / LOCK_NAME).read_text() == "lock"
+    blocker = tmp_path / "file"
+    blocker.write_text("")
+    with pytest.raises(SweepError, match="Not a directory"):
+        prepare_output(blocker / "demo", "lock")
+    assert blocker.read_text() == ""
+
+
 @pytest.mark.parametrize(
     "text",
     [

@@ -214,8 +214,8 @@ def _rss_mb() -> float:
 
 # --- the output directory -------------------------------------------------------------------
 def prepare_output(out: Path, lock_text: str) -> None:
-    """Check ``out`` and write its lock: a new directory (in an existing one), an empty
-    one, or one holding this campaign's lock (resumed). Refused: a link, a non-directory,
+    """Check ``out`` and write its lock: a new directory (made with any missing parents),
+    an empty one, or one holding this campaign's lock (resumed). Refused: a link, a non-directory,
     a directory with other files or another campaign's lock. Stale temporary files of a
     killed sweep are removed.
 
@@ -230,10 +230,8 @@ def prepare_output(out: Path, lock_text: str) -> None:
     except OSError as exc:
         raise SweepError(f"--out {name}: cannot check it ({exc.strerror or exc})") from None
     if info is None:
-        if not out.parent.is_dir():
-            raise SweepError(f"--out {name}: its directory does not exist: allowed a path in one")
         try:
-            out.mkdir()
+            out.mkdir(parents=True)
         except OSError as exc:
             raise SweepError(f"--out {name}: cannot make it ({exc.strerror or exc})") from None
     elif stat.S_ISLNK(info.st_mode):
