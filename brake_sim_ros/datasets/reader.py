@@ -91,6 +91,10 @@ class SweepDataset:
             if r["status"] == "ok" and (split is None or r["split"] == split)
         ]
 
+    def run_table(self, run_id: str) -> pa.Table:
+        """One run's samples, read whole."""
+        return pq.read_table(self.root / SAMPLES_DIR / f"run={run_id}")
+
     def split(self, name: str) -> pads.Dataset:
         """The samples of the split ``name`` (lazy)."""
         return self.samples.filter(pads.field("run").isin(self.runs(name)))
@@ -113,7 +117,7 @@ class SweepDataset:
             r["run_id"]: r for r in self.manifest.select(["run_id", "unit_id", "split"]).to_pylist()
         }
         for run_id in self.runs(split):
-            table = pq.read_table(self.root / SAMPLES_DIR / f"run={run_id}")
+            table = self.run_table(run_id)
             names = table.column_names
             labels = tuple(c for c in names if c.startswith("defect:"))
             chosen = (

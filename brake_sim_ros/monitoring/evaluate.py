@@ -30,16 +30,16 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 
 import numpy as np
-import pyarrow.parquet as pq
 
 from brake_sim_ros.datasets.reader import SweepDataset
-from brake_sim_ros.datasets.sweep import SAMPLES_DIR
+from brake_sim_ros.model.catalogue import KINDS, label_column
 from brake_sim_ros.monitoring import metrics
 from brake_sim_ros.monitoring.detector import Assessment, Detector, SampleChunk, TrainingWindow
 
 SCHEMA_VERSION = 1
 MEASURED_PREFIX = "measured:"
-LABEL_PREFIX = "defect:"
+# label column -> "kind:location", the catalogue's (``brake-sim defects``)
+LABELS = {label_column(k, loc): f"{k.name}:{loc}" for k in KINDS for loc in k.locations}
 
 
 @dataclass(frozen=True)
@@ -73,13 +73,8 @@ def _channel_name(column: str) -> str:
     return column[len(MEASURED_PREFIX) :].rsplit(" [", 1)[0]
 
 
-def _label_name(column: str) -> str:
-    """``defect:<kind>:<location> [<unit>]`` -> ``<kind>:<location>``."""
-    return column[len(LABEL_PREFIX) :].rsplit(" [", 1)[0]
-
-
 def read_run(dataset: SweepDataset, run_id: str) -> RunSamples:
-    table = pq.read_table(dataset.root / SAMPLES_DIR / f"run={run_id}")
+    table = dataset.run_table(run_id)
     names = table.column_names
     time_s = table["time_s"].to_numpy()
     if time_s.size < 2:
@@ -89,7 +84,7 @@ def read_run(dataset: SweepDataset, run_id: str) -> RunSamples:
         for c in names
         if c.startswith(MEASURED_PREFIX) and not c.endswith("_edge_time [s]")
     }
-    label_cols = [c for c in names if c.startswith(LABEL_PREFIX)]
+    label_cols = [c for c in names if c in LABELS]
     labels = (
         np.column_stack([table[c].to_numpy() for c in label_cols])
         if label_cols
@@ -102,7 +97,7 @@ def read_run(dataset: SweepDataset, run_id: str) -> RunSamples:
         sample_rate_hz=1.0 / float(time_s[1] - time_s[0]),
         time_s=time_s,
         channels=channels,
-        label_names=tuple(_label_name(c) for c in label_cols),
+        label_names=tuple(LABELS[c] for c in label_cols),
         labels=labels,
     )
 
@@ -183,16 +178,11 @@ def score(
                 active = run.active(int(row))
                 true_class.append(":".join(active[0]))
                 d = a.diagnosis
-                diagnosed.append("none" if d is None else f"{d.kind}:{d.location}")
-                if d is not None and math.isfinite(d.severity):
-                    k = (
-                        run.label_names.index(f"{d.kind}:{d.location}")
-                        if (f"{d.kind}:{d.location}" in run.label_names)
-                        else None
-                    )
-                    if k is not None:
-                        sev_est.append(d.severity)
-                        sev_true.append(float(run.labels[row, k]))
+                label = "none" if d is None else f"{d.kind}:{d.location}"
+                diagnosed.append(label)
+                if label in run.label_names and math.isfinite(d.severity):
+                    sev_est.append(d.severity)
+                    sev_true.append(float(run.labels[row, run.label_names.index(label)]))
         per_run.append(
             {
                 "run_id": run.run_id,
