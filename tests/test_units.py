@@ -172,6 +172,15 @@ def test_a_unit_beyond_the_models_limits_is_refused_in_one_line():
         assert "running_clearance_m" in message
 
 
+@pytest.mark.parametrize("value", ["-1", "2.5", '"7"', "true", str(2**63)])
+def test_a_bad_fleet_seed_is_refused_in_one_line(value):
+    with pytest.raises(ScenarioError, match="fleet_seed") as info:
+        parse_scenario(f'name = "x"\nunit_id = "u"\nfleet_seed = {value}\n')
+    assert "\n" not in str(info.value)
+    with pytest.raises(ScenarioError, match="fleet_seed"):
+        load_scenario("symmetric").with_unit("u", fleet_seed=-1)
+
+
 @pytest.mark.parametrize("unit_id", ["", ".hidden", "a/b", "x" * 65, "sp ace", 7], ids=repr)
 def test_a_bad_unit_id_is_refused_in_one_line(unit_id):
     with pytest.raises(ScenarioError, match="unit_id") as info:

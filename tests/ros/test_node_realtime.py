@@ -58,6 +58,7 @@ BAD_PARAMETERS = {
     "defects.left.initial_angle_deg": 10.0,  # lining inside the drum (core)
     "driveline.drum_inertia_kg_m2": 1e-6,  # a step limit of 2 ns: pathological (core)
     "max_actuation_force_n": 100.0,  # fixed at start-up
+    "measured_rate_hz": 0.0,  # outside the range, and fixed at start-up
 }
 
 
@@ -217,6 +218,7 @@ def test_bad_commands_and_parameters_are_refused_and_counted(run):
     assert "inside the drum" in reasons["defects.left.initial_angle_deg"]
     assert "smallest step taken" in reasons["driveline.drum_inertia_kg_m2"]
     assert "fixed at start-up" in reasons["max_actuation_force_n"]
+    assert "measured_rate_hz" in reasons and "\n" not in reasons["measured_rate_hz"]
     values = client.get_parameters(list(BAD_PARAMETERS))
     assert values["friction.coefficient"] == 0.285
     assert values["max_actuation_force_n"] == float(diag["max_actuation_force_n"])
