@@ -10,6 +10,8 @@ Options (they override ``--ros-args -p`` values of the same parameters):
                               request may only name files in ``scenario_dirs``)
     --duration S              simulated seconds of the free run (default: the scenario's)
     --exit-at-end             print a summary and exit 0 when the duration is reached
+    --continuous              run without end (the ``continuous`` parameter): until
+                              SIGINT/SIGTERM, following live commands or a cycle
     --record PATH             record the stream and accepted commands to an MCAP file
                               (see brake_sim_ros.recording; --record-compression,
                               --record-flush-s tune it)
@@ -58,6 +60,11 @@ def _parse_cli(argv: list[str], prog: str) -> argparse.Namespace:
         "--exit-at-end",
         action="store_true",
         help="print a summary and exit 0 when the duration is reached",
+    )
+    parser.add_argument(
+        "--continuous",
+        action="store_true",
+        help="run without end, until SIGINT/SIGTERM (duration and --exit-at-end then unused)",
     )
     parser.add_argument(
         "--rerun",
@@ -148,6 +155,8 @@ def _overrides(cli: argparse.Namespace) -> list[Parameter]:
         overrides.append(Parameter("duration_s", value=float(cli.duration)))
     if cli.exit_at_end:
         overrides.append(Parameter("exit_at_end", value=True))
+    if cli.continuous:
+        overrides.append(Parameter("continuous", value=True))
     return overrides
 
 

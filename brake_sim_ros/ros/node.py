@@ -41,6 +41,7 @@ from __future__ import annotations
 import dataclasses
 import difflib
 import math
+import sys
 import time
 from collections.abc import Callable, Iterable
 
@@ -496,6 +497,9 @@ class BrakeSimNode(Node):
         return value if value > 0.0 else self.scenario.duration_s
 
     def _end_step(self) -> int:
+        """The sample index at which the free run ends (never, while ``continuous``)."""
+        if self._param("continuous"):
+            return sys.maxsize
         return round(self._duration_s() / self._stepper.sample_period_s)
 
     def _sample_rate_hz(self) -> float:
@@ -636,6 +640,9 @@ class BrakeSimNode(Node):
             ):
                 self._finished = False
                 self._pacer.restart(now, step)
+        if changes.get("continuous") and self._finished:
+            self._finished = False
+            self._pacer.restart(now, step)
         if changes.keys() & {"real_time_factor", "paused", "chunk_rate_hz"}:
             self._tick_timer.timer_period_ns = int(self._tick_period_s() * 1e9)
 

@@ -156,6 +156,14 @@ def run_parameter_specs() -> list[ParamSpec]:
             (0.0, 86_400.0),
         ),
         ParamSpec(
+            "continuous",
+            False,
+            "Run without end: duration_s is ignored, and the run stops only when asked "
+            "(pause, shutdown, or ~/reset, which starts a new run). For long runs that "
+            "follow live commands or a scenario's cycle; memory stays bounded. Turned off "
+            "at run time, duration_s applies again (the run ends at once if it is past).",
+        ),
+        ParamSpec(
             "exit_at_end",
             False,
             "Print a summary and exit 0 when duration_s is reached (CLI --exit-at-end). " + fixed,

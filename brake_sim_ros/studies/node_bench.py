@@ -1,7 +1,7 @@
 """Benchmark of the ROS node, run as a user would: a node process and a client over DDS.
 
 ``python -m brake_sim_ros.studies.node_bench [--duration S] [--scenario NAME] [--afap-seconds S]
-[--no-measured] [--sensors-overhead ROUNDS]``
+[--no-measured] [--sensors-overhead ROUNDS] [--long-run S [--report-every S]]``
 
 Prints:
     * CPU use of the node process at real-time factor 1, in % of one core, from
@@ -20,6 +20,12 @@ With ``--sensors-overhead ROUNDS`` it prints instead what the sensors (``~/measu
 the node: ROUNDS pairs of real-time runs of ``--duration`` seconds, one node without and
 one with ``publish_measured``, alternated so that drifts of the machine's load fall on
 both, and the extra CPU of the sensors in % of the node's CPU without them.
+
+With ``--long-run S`` it prints instead how a ``continuous`` node holds up over S wall
+seconds at real-time factor 1 (an hour: ``--long-run 3600``): every ``--report-every``
+seconds the simulated time, the real-time factor and deadline misses over the interval, the
+samples the client lost, and the node's resident memory (``VmRSS``); at the end the memory's
+growth from the first report to the last and its least-squares slope, MB per hour.
 
 The client subscribes to every topic with the REP 2003 consumer QoS, so the node does
 all of its publishing work. Both processes share the machine's cores.
@@ -41,6 +47,14 @@ from pathlib import Path
 from brake_sim_ros.ros.harness import NodeProcess, SimClient, domain_id_for
 
 WARM_UP_S = 2.0
+
+
+def resident_mb(pid: int) -> float:
+    """Resident memory of a process, MB (Linux /proc, ``VmRSS``)."""
+    for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+        if line.startswith("VmRSS:"):
+            return int(line.split()[1]) / 1024.0
+    raise RuntimeError(f"no VmRSS for process {pid}")
 
 
 def cpu_seconds(pid: int) -> float:
@@ -115,15 +129,21 @@ def _sustained(factor: float, check: dict) -> bool:
 
 @contextlib.contextmanager
 def _node_and_client(
-    scenario: str, measured: bool, domain_offset: int, exit_codes: list[int] | None = None
+    scenario: str,
+    measured: bool,
+    domain_offset: int,
+    exit_codes: list[int] | None = None,
+    continuous: bool = False,
 ) -> Iterator[tuple[NodeProcess, SimClient]]:
-    """A node running ``scenario`` at real-time factor 1 and a client subscribed to every
-    topic, on a private domain; both warmed up. Yields them; stops both on exit and
-    appends the node's exit code to ``exit_codes``."""
+    """A node running ``scenario`` at real-time factor 1 (for a day of simulated time, or
+    without end with ``continuous``) and a client subscribed to every topic, on a private
+    domain; both warmed up. Yields them; stops both on exit and appends the node's exit
+    code to ``exit_codes``."""
     domain = domain_id_for(domain_offset)
     log = Path(tempfile.mkdtemp(prefix="brake_sim_bench_")) / "node.log"
+    end = ["--continuous"] if continuous else ["--duration", "86400"]
     node = NodeProcess.start(
-        ["--scenario", scenario, "--duration", "86400", "--ros-args", "-p",
+        ["--scenario", scenario, *end, "--ros-args", "-p",
          f"publish_measured:={'true' if measured else 'false'}"],
         domain_id=domain,
         log_path=log,
@@ -172,6 +192,43 @@ def sensors_overhead(duration_s: float, scenario: str, rounds: int) -> str:
         f" {100.0 * (on - off) / off:.1f} % to the node's CPU"
     )
     return "\n".join(lines)
+
+
+def long_run(duration_s: float, scenario: str, report_every_s: float, measured: bool) -> int:
+    """Print how a continuous node at real-time factor 1 holds up over ``duration_s``."""
+    print(
+        f"brake_sim continuous node: scenario '{scenario}', {duration_s:g} s at real-time"
+        f" factor 1, sensors {'on' if measured else 'off'}, {os.cpu_count()} CPUs, load average"
+        f" {os.getloadavg()[0]:.2f} before the start",
+        flush=True,
+    )
+    print("wall (s) | simulated (s) | real-time factor | deadline misses | gaps | RSS (MB)")
+    print("---|---|---|---|---|---")
+    walls: list[float] = []
+    rss: list[float] = []
+    with _node_and_client(scenario, measured, 92, continuous=True) as (node, client):
+        start = time.monotonic()
+        while time.monotonic() - start < duration_s:
+            window = _Window(client, node.pid)
+            client.spin_for(min(report_every_s, duration_s - (time.monotonic() - start)))
+            r = window.close()
+            walls.append(time.monotonic() - start)
+            rss.append(resident_mb(node.pid))
+            sim_s = int(client.diagnostics()["sample_index"]) / float(
+                client.diagnostics()["sample_rate_hz"]
+            )
+            print(
+                f"{walls[-1]:.0f} | {sim_s:.1f} | {r['rtf']:.4f} | {r['deadline_misses']} |"
+                f" {r['gaps']} | {rss[-1]:.1f}",
+                flush=True,
+            )
+    if len(rss) >= 2:
+        slope = statistics.linear_regression(walls, rss).slope * 3600.0
+        print(
+            f"resident memory: {rss[0]:.1f} MB at the first report, {rss[-1]:.1f} MB at the"
+            f" last ({rss[-1] - rss[0]:+.1f} MB), slope {slope:+.2f} MB per hour"
+        )
+    return 0
 
 
 def run(
@@ -265,7 +322,29 @@ def main(argv: list[str] | None = None) -> int:
         metavar="ROUNDS",
         help="print only the sensors' extra CPU, from ROUNDS alternated pairs of runs",
     )
+    parser.add_argument(
+        "--long-run",
+        type=float,
+        default=0.0,
+        metavar="S",
+        help="print only how a continuous node holds up over S wall seconds (up to a day)",
+    )
+    parser.add_argument(
+        "--report-every",
+        type=float,
+        default=60.0,
+        metavar="S",
+        help="with --long-run: wall seconds between reports (default 60)",
+    )
     args = parser.parse_args(argv)
+    if not 0.0 <= args.long_run <= 86_400.0:
+        parser.error(f"--long-run {args.long_run:g}: allowed > 0 to 86400 s")
+    if not 1.0 <= args.report_every <= 3600.0:
+        parser.error(f"--report-every {args.report_every:g}: allowed 1 to 3600 s")
+    if args.long_run:
+        return long_run(
+            args.long_run, args.scenario, args.report_every, measured=not args.no_measured
+        )
     if not 0 <= args.sensors_overhead <= 100:
         parser.error(f"--sensors-overhead {args.sensors_overhead}: allowed 1 to 100 rounds")
     if not 0.0 < args.duration <= 3600.0:

@@ -474,3 +474,38 @@ def test_reset_to_another_scenario_and_seed(sim):
         assert sim.reset(seed=-5).success is False
     finally:
         assert sim.reset(scenario="symmetric").success
+
+
+def test_a_continuous_run_goes_past_its_duration_until_turned_off(sim):
+    """continuous: the free run does not end at duration_s; turned off past it, it ends."""
+    duration = 0.02  # 512 samples
+    try:
+        results = sim.set_parameters(
+            {"duration_s": duration, "continuous": True, "real_time_factor": 0.0}
+        )
+        assert all(r.successful for r in results), [r.reason for r in results]
+        results = sim.set_parameters({"paused": False})
+        assert all(r.successful for r in results), [r.reason for r in results]
+        sim.wait_for(
+            lambda: int(sim.diagnostics().get("sample_index", 0)) > 4 * 512,
+            20.0,
+            "a continuous run past four durations",
+        )
+        assert sim.diagnostics()["state"] == "running"
+        assert sim.set_parameters({"continuous": False})[0].successful
+        sim.wait_for(
+            lambda: sim.diagnostics().get("state") == "finished", 10.0, "the end of the run"
+        )
+        ended = int(sim.next_diagnostics()["sample_index"])
+        sim.next_diagnostics()
+        assert int(sim.diagnostics()["sample_index"]) == ended  # it stays ended
+    finally:
+        sim.set_parameters(
+            {
+                "paused": True,
+                "continuous": False,
+                "real_time_factor": 1.0,
+                "duration_s": load_scenario("symmetric").duration_s,
+            }
+        )
+        sim.reset(scenario="symmetric")
