@@ -98,8 +98,8 @@ class Outputs:
     Attributes:
         duration_s: simulated time per run, s (None: the base scenario's).
         sample_rate_hz: output samples per second (None: the base scenario's).
-        columns: the history columns kept (``sample_index``, ``time_s`` and the label
-            columns are always kept); empty: every column.
+        columns: the history columns kept (``sample_index``, ``time_s``, the label
+            columns and ``rul [s]`` are always kept); empty: every column.
     """
 
     duration_s: float | None = None

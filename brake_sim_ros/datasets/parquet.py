@@ -26,6 +26,11 @@ One row per sample of the scenario's rate. Columns, units in the names:
   ``catalogue.severity_at``, the function the compiled model sets the physics with; a
   defect present from the start gives a constant column).
 
+* ``rul [s]`` (float64): the remaining useful life at each sample, s of simulated time,
+  until the first defect reaches its kind's service limit (:mod:`.life`: from the labels,
+  or from a growth law beyond the run's end); 0 from then on; NaN when unknown (a healthy
+  brake, defects below their limits: right-censored).
+
 Each measured column's field metadata gives ``unit``, ``rate_hz`` and ``decimation``; an
 edge-time column's gives ``unit`` and ``tone_ring_teeth``.
 The file's key-value metadata ``brake_sim`` holds JSON: the run parameters the caller
@@ -36,7 +41,9 @@ growth and growth_rate, as the DefectState message), ``unit_id`` (the scenario's
 list of ``{key, unit, nominal, value}``, every scattered parameter as the scenario gives it
 and as the unit has it, :mod:`brake_sim_ros.model.units`) and ``conditions`` (the run's
 operating conditions drawn from the scenario's ranges: per name ``{value, unit, range}``,
-:mod:`brake_sim_ros.model.conditions`; ``{}`` without them).
+:mod:`brake_sim_ros.model.conditions`; ``{}`` without them) and ``life`` (the failure the
+``rul`` column counts down to: ``time_s``, ``kind``, ``location``, ``service_limit``,
+``unit``, ``source`` "run", "law" or "censored"; :class:`.life.Failure`).
 """
 
 from __future__ import annotations
@@ -50,6 +57,7 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 
+from brake_sim_ros.datasets import life
 from brake_sim_ros.model.defects import Defects
 from brake_sim_ros.model.sensor_faults import FAULT_BIT
 from brake_sim_ros.model.sensors import SensorBank
@@ -152,9 +160,14 @@ def history_table(
             columns[edge_name] = pa.array(edges_on_rows(np.asarray(samples.time_s), edges))
             info = {b"unit": b"s", b"tone_ring_teeth": str(teeth[name]).encode()}
             fields.append(pa.field(edge_name, pa.float64(), metadata=info))
-    for name, severity in defects.label_series(np.asarray(history["time_s"])).items():
+    times = np.asarray(history["time_s"])
+    labels = defects.label_series(times)
+    for name, severity in labels.items():
         columns[name] = pa.array(severity)
         fields.append(pa.field(name, pa.float64()))
+    fail = life.failure(defects, times, labels)
+    columns[life.RUL_COLUMN] = pa.array(life.rul_series(times, fail))
+    fields.append(pa.field(life.RUL_COLUMN, pa.float64()))
     meta = {
         **metadata,
         "fault_bits": FAULT_BIT,
@@ -162,6 +175,7 @@ def history_table(
         "unit_id": unit_id,
         "unit_parameters": [v.as_dict() for v in unit_values],
         "conditions": dict(conditions),
+        "life": fail.as_dict(),
     }
     schema = pa.schema(fields, metadata={METADATA_KEY: json.dumps(meta).encode()})
     return pa.Table.from_arrays([columns[f.name] for f in fields], schema=schema)

@@ -45,6 +45,7 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from brake_sim_ros.datasets import life
 from brake_sim_ros.datasets.threads import limit_threads
 from brake_sim_ros.errors import BrakeSimError
 from brake_sim_ros.recording.output import OutputError, atomic_output
@@ -187,7 +188,7 @@ def run_task(spec: RunSpec, out_dir: str) -> Outcome:
                     f"outputs.columns: {missing[0]!r} is not a column of this run: allowed"
                     f" {table.column_names[:60]}"
                 )
-            always = ("sample_index", "time_s", *spec.labels)
+            always = ("sample_index", "time_s", *spec.labels, life.RUL_COLUMN)
             keep = [c for c in table.column_names if c in always or c in spec.keep]
             table = table.select(keep)
         path = Path(out_dir) / relative

@@ -1,0 +1,126 @@
+"""Remaining useful life labels (datasets/life.py): failure times worked out by hand from
+the laws, then the ``rul [s]`` column of a real run's Parquet file read back by pyarrow."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pyarrow.parquet as pq
+import pytest
+
+from brake_sim_ros.datasets import life, parquet
+from brake_sim_ros.model.catalogue import Growth
+from brake_sim_ros.model.defects import Defects, ShoeDefect
+from brake_sim_ros.scenarios import load_scenario
+from brake_sim_ros.stream.build import stepper_for
+
+TIMES = np.arange(0, 3001) * 1e-3  # 0 .. 3 s in ms
+PIVOT = "pivot_radius_change"  # service limit 3 %
+FRICTION = "friction_change"  # service limit -50 %
+
+
+def _pivot(final: float, growth: Growth) -> Defects:
+    return Defects(
+        left=ShoeDefect(pivot_radius_change_pct=final), growth=((PIVOT, "left", growth),)
+    )
+
+
+def _fail(d: Defects, times=TIMES) -> life.Failure:
+    return life.failure(d, times, d.label_series(times))
+
+
+def test_a_linear_growth_fails_when_it_reaches_the_service_limit_within_the_run():
+    # 0 at 1 s, +2 %/s: 3 % at 1 + 3 / 2 = 2.5 s
+    f = _fail(_pivot(4.0, Growth(1.0, "linear", rate_per_s=2.0)))
+    assert (f.kind, f.location, f.source, f.service_limit, f.unit) == (
+        PIVOT,
+        "left",
+        "run",
+        3.0,
+        "%",
+    )
+    assert f.time_s == pytest.approx(2.5, abs=1e-3)  # the first sample at or past it
+    rul = life.rul_series(TIMES, f)
+    assert rul[0] == pytest.approx(2.5, abs=1e-3)
+    assert rul[1000] == pytest.approx(1.5, abs=1e-3)
+    assert np.all(rul[f.time_s <= TIMES] == 0.0)
+    assert np.all(np.diff(rul) <= 0.0)
+
+
+def test_a_run_cut_short_takes_the_failure_from_the_law():
+    # exponential from 0.5 % at 0.5 s, doubling every 0.5 s: 3 % after log2(6) doublings
+    d = _pivot(5.0, Growth(0.5, "exponential", doubling_time_s=0.5, start=0.5))
+    short = TIMES[TIMES <= 1.0]
+    f = _fail(d, short)
+    assert f.source == "law"
+    assert f.time_s == pytest.approx(0.5 + 0.5 * math.log2(6.0), rel=1e-12)
+    assert life.rul_series(short, f)[0] == pytest.approx(f.time_s, rel=1e-12)
+
+
+def test_a_defect_that_stays_below_its_limit_leaves_the_life_unknown():
+    f = _fail(_pivot(2.0, Growth(0.0, "linear", rate_per_s=1.0)))
+    assert (f.source, f.kind) == ("censored", "")
+    assert math.isnan(f.time_s)
+    assert np.all(np.isnan(life.rul_series(TIMES, f)))
+    assert _fail(Defects()).source == "censored"  # a healthy brake
+    assert f.as_dict()["time_s"] is None  # JSON has no NaN
+
+
+def test_a_signed_limit_is_reached_only_in_its_direction():
+    fade = Defects(
+        left=ShoeDefect(friction_change_pct=-60.0),
+        growth=((FRICTION, "left", Growth(0.0, "linear", rate_per_s=40.0)),),
+    )
+    f = _fail(fade)
+    assert (f.kind, f.source) == (FRICTION, "run")
+    assert f.time_s == pytest.approx(50.0 / 40.0, abs=1e-3)
+    gain = Defects(
+        left=ShoeDefect(friction_change_pct=+50.0),  # more friction: not the fade limit
+        growth=((FRICTION, "left", Growth(0.0, "linear", rate_per_s=40.0)),),
+    )
+    assert _fail(gain).source == "censored"
+
+
+def test_the_first_defect_to_reach_its_limit_ends_the_life():
+    d = Defects(
+        left=ShoeDefect(pivot_radius_change_pct=3.0, friction_change_pct=-50.0),
+        growth=(
+            (PIVOT, "left", Growth(2.0)),  # a step at 2 s
+            (FRICTION, "left", Growth(0.0, "linear", rate_per_s=25.0)),  # -50 % at 2.0 s too
+        ),
+    )
+    f = _fail(d)
+    assert f.time_s == pytest.approx(2.0, abs=1e-3)
+    assert f.kind == PIVOT  # a tie goes to catalogue order
+    later = Defects(
+        left=ShoeDefect(pivot_radius_change_pct=3.0), growth=((PIVOT, "left", Growth(2.5)),)
+    )
+    assert _fail(later).time_s == pytest.approx(2.5, abs=1e-3)
+
+
+def test_a_run_file_counts_its_life_down_to_the_failure(tmp_path):
+    d = _pivot(4.0, Growth(0.2, "linear", rate_per_s=10.0))  # 3 % at 0.5 s
+    sc = load_scenario("symmetric").with_defects(d)
+    run = stepper_for(sc).run(0.8, record_every=64)
+    table = parquet.history_table(
+        run,
+        None,
+        sc.setup.defects,
+        {"scenario": sc.name},
+        unit_id=sc.unit_id,
+        unit_values=sc.unit_values(),
+        conditions=sc.conditions_record(),
+    )
+    path = tmp_path / "run.parquet"
+    parquet.write_history(path, table)
+    back = pq.read_table(path)
+    t = back["time_s"].to_numpy()
+    rul = back[life.RUL_COLUMN].to_numpy()
+    meta = json.loads(back.schema.metadata[parquet.METADATA_KEY])["life"]
+    fail_t = t[np.argmax(t >= 0.5 - 1e-12)]  # the first recorded sample at or past 0.5 s
+    assert np.allclose(rul, np.maximum(0.0, fail_t - t), rtol=0, atol=1e-12)
+    assert rul[0] > 0.45 and rul[-1] == 0.0
+    assert (meta["kind"], meta["source"], meta["service_limit"]) == (PIVOT, "run", 3.0)
+    assert meta["time_s"] == fail_t
