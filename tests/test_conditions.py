@@ -75,7 +75,9 @@ def test_draws_are_uniform_and_each_conditions_own():
         "[conditions]\nload_factor = [1.4, 1.0]",
         "[conditions]\nload_factor = 1.2",
         "[conditions]\nload_factor = [1.0, 1.2, 1.4]",
-        "[conditions]\nambient_temperature_c = [0, 40]",
+        "[conditions]\nambient_temperature_c = [0, 60]",
+        "[conditions]\nbrake_temperature_c = [-50, 100]",
+        "[conditions]\ncabin_temperature_c = [0, 40]",
         "[conditions]\ninitial_speed_rad_s = [0, 500]",
         "[conditions]\npeak_force_n = [1000, 2000]\n[actuation]\npeak_force_n = 0.0",
     ],
@@ -119,6 +121,41 @@ def test_load_moves_the_stop_as_momentum_says_and_the_peak_force_reaches_the_sho
         for side in ("left", "right"):
             assert run.samples[f"{side}_actuation_force_n"].max() == pytest.approx(peak, rel=1e-12)
     assert strong.stop_time_s < base.stop_time_s
+
+
+def test_the_fade_law_is_one_up_to_its_onset_then_falls_linearly_to_half():
+    fade = conditions.FADE
+    assert [fade.ratio(t) for t in (-40.0, 20.0, 250.0)] == [1.0, 1.0, 1.0]
+    assert fade.ratio(300.0) == pytest.approx(0.75, rel=1e-15)
+    assert fade.ratio(350.0) == fade.ratio(600.0) == 0.5
+
+
+def _stop(temperatures: str, friction: str = ""):
+    text = (
+        f'name = "hot"\nduration_s = 6.0\n[solver]\npreset = "fast"\n{friction}[conditions]\n'
+        f"initial_speed_rad_s = [40.0, 40.0]\n{temperatures}"
+    )
+    return parse_scenario(text)
+
+
+def test_a_hot_brake_brakes_with_faded_linings_and_a_cold_one_as_it_is():
+    cool = _stop("ambient_temperature_c = [-20.0, 40.0]")
+    assert cool.setup.params == _stop("").setup.params  # ambient alone: no physics changed
+    assert dict(cool.conditions)["ambient_temperature_c"] != 0.0  # but it is ground truth
+    hot = _stop("brake_temperature_c = [300.0, 300.0]\nambient_temperature_c = [20.0, 20.0]")
+    mu = BrakeParameters().friction.coefficient
+    assert hot.setup.params.friction.coefficient == mu * 0.75
+    same = _stop("", f"[parameters.friction]\ncoefficient = {mu * 0.75!r}\n")
+    hot_run, same_run = run_scenario(hot), run_scenario(same)
+    assert hot_run.stop_time_s == same_run.stop_time_s  # the same brake, bit for bit
+    np.testing.assert_array_equal(hot_run.samples.data, same_run.samples.data)
+    assert hot_run.stop_time_s > run_scenario(cool).stop_time_s  # less friction, longer stop
+    record = hot.conditions_record()
+    assert record["brake_temperature_c"] == {
+        "value": 300.0,
+        "unit": "degC",
+        "range": [300.0, 300.0],
+    }
 
 
 def test_the_drawn_conditions_are_ground_truth(tmp_path):

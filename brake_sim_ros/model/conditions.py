@@ -16,10 +16,21 @@ scenario's value. What each one sets:
   transfer to the front axle in a stop is not modelled.
 * ``peak_force_n``: the actuation profile's peak, N: both shoes' profiles scaled by one
   factor so that their largest force is this (the ramp's timing kept).
+* ``brake_temperature_c``: the linings' and drum's temperature during the run, deg C. The
+  model has no thermal state, so it is held over the run (a stop heats a passenger drum
+  by some 25 K: 92 kJ into 8 kg of cast iron), and it acts through the fade law
+  :data:`FADE` on both linings' friction coefficient.
+* ``ambient_temperature_c``: the air's, deg C; a run that draws no brake temperature has
+  its brake at the ambient (a cold brake). Below the fade law's onset a temperature leaves
+  the friction as it is, so the ambient alone changes no physics: it is ground truth for
+  a detector's features (and sets a cold brake's temperature).
 
-Temperature is not a condition here: the model has no thermal state and no law of friction
-against temperature it could state honestly; fade (TESTBED: fade and contamination can
-halve the friction) belongs with the defects, as a change of friction, not here.
+Fade and contamination can halve a lining's friction (``TESTBED.md``). A real lining's
+curve is its own (the SAE J866 edge code rates its "hot" friction over 204-343 deg C,
+400-650 deg F); :data:`FADE` is a generic organic lining's, stated as an assumption: the
+friction as it is up to 250 deg C, falling linearly to half at 350 deg C (organic binders
+start to decompose near 290-340 deg C, 550-650 deg F, in fleet brake-temperature guides),
+half above. A lining whose curve is known is better given as a ``friction_change`` defect.
 
 Pure: no numerics beyond the draw.
 """
@@ -79,8 +90,44 @@ CONDITIONS: tuple[Condition, ...] = (
         MAX_ACTUATION_FORCE_N,
         "the actuation profile's peak; both shoes scaled by one factor",
     ),
+    Condition(
+        "brake_temperature_c",
+        "degC",
+        -40.0,
+        600.0,
+        "linings' and drum's temperature, held over the run; the friction by the fade law",
+    ),
+    Condition(
+        "ambient_temperature_c",
+        "degC",
+        -40.0,
+        50.0,
+        "air temperature; the brake's too when brake_temperature_c is not drawn",
+    ),
 )
 CONDITION_BY_NAME: dict[str, Condition] = {c.name: c for c in CONDITIONS}
+
+
+@dataclass(frozen=True)
+class FadeLaw:
+    """A lining's friction against its temperature, as a ratio to its friction when cool:
+    1 up to ``onset_c``, linear to ``full_ratio`` at ``full_c``, held above (deg C)."""
+
+    onset_c: float
+    full_c: float
+    full_ratio: float
+
+    def ratio(self, temperature_c: float) -> float:
+        """Friction at ``temperature_c`` (deg C) over the friction when cool."""
+        if temperature_c <= self.onset_c:
+            return 1.0
+        if temperature_c >= self.full_c:
+            return self.full_ratio
+        w = (temperature_c - self.onset_c) / (self.full_c - self.onset_c)
+        return 1.0 - w * (1.0 - self.full_ratio)
+
+
+FADE = FadeLaw(onset_c=250.0, full_c=350.0, full_ratio=0.5)  # the module doc's assumption
 
 
 def check_range(name: str, low: float, high: float) -> None:
@@ -127,6 +174,15 @@ def apply(setup: BrakeSetup, drawn: Mapping[str, float]) -> BrakeSetup:
     if "load_factor" in drawn:
         changes["flywheel_inertia_kg_m2"] = driveline.flywheel_inertia_kg_m2 * drawn["load_factor"]
     params = dataclasses.replace(setup.params, driveline=dataclasses.replace(driveline, **changes))
+    temperature = drawn.get("brake_temperature_c", drawn.get("ambient_temperature_c"))
+    if temperature is not None and FADE.ratio(temperature) != 1.0:
+        friction = params.friction
+        params = dataclasses.replace(
+            params,
+            friction=dataclasses.replace(
+                friction, coefficient=friction.coefficient * FADE.ratio(temperature)
+            ),
+        )
     actuation = setup.actuation
     if "peak_force_n" in drawn:
         peak = max(max(actuation.left.forces_n), max(actuation.right.forces_n))
