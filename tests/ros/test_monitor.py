@@ -22,6 +22,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+import pyarrow.parquet as pq
 import pytest
 import rclpy
 from brake_sim_msgs.msg import Diagnosis, HealthAssessment, MeasuredChunk
@@ -32,6 +33,7 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.serialization import deserialize_message
 
 from brake_sim_ros import stream
+from brake_sim_ros.datasets.parquet import run_table, write_history
 from brake_sim_ros.model.catalogue import KIND_BY_NAME
 from brake_sim_ros.monitoring.baselines import VibrationThreshold
 from brake_sim_ros.monitoring.detector import Diagnosis as DetectorDiagnosis
@@ -43,6 +45,7 @@ from brake_sim_ros.ros.monitor import DIAGNOSES, HEALTH
 from brake_sim_ros.scenarios import load_scenario
 from brake_sim_ros.stream import conversion
 from brake_sim_ros.stream.offline import StreamSettings
+from brake_sim_ros.stream.run import run_scenario
 
 pytestmark = [
     pytest.mark.ros,
@@ -333,6 +336,31 @@ def test_monitor_survives_malformed_and_out_of_order_messages(recording, thresho
 
 def _value(status: DiagnosticStatus, key: str) -> str | None:
     return next((kv.value for kv in status.values if kv.key == key), None)
+
+
+def test_measured_messages_read_as_the_dataset_columns(recording, tmp_path):
+    """What the monitor feeds its detector is what ``brake-sim score`` feeds it: the
+    recording's ~/measured through :func:`chunk_from_measured` equals, bit for bit and NaN
+    for NaN, the measured columns of the same run's Parquet table (a dataset's rows),
+    written and read back by pyarrow."""
+    path, measured, _run = recording
+    scenario = load_scenario(path.with_name("monitor_test.toml"))
+    table_path = tmp_path / "run.parquet"
+    write_history(table_path, run_table(scenario, run_scenario(scenario), scenario.duration_s))
+    table = pq.read_table(table_path)
+    chunks = [chunk_from_measured(m) for m in measured]
+    assert [c.first_sample_index for c in chunks] == list(
+        np.cumsum([0] + [len(c) for c in chunks[:-1]])
+    )
+    names = list(chunks[0].channels)
+    assert len(names) >= 4  # accelerometers, wheel speed, line pressure
+    # (every channel at the full 5120 Hz here; test_monitor_parts checks decimated ones)
+    for name in names:
+        (column,) = [c for c in table.column_names if c.startswith(f"measured:{name} [")]
+        dataset = table[column].to_numpy(zero_copy_only=False).astype(np.float64)
+        live = np.concatenate([c.channels[name] for c in chunks])
+        assert live.shape == dataset.shape == (5120,)
+        np.testing.assert_array_equal(live, dataset, err_msg=name)  # NaN where NaN
 
 
 def test_message_fields():
