@@ -706,7 +706,6 @@ def _monitor_parser() -> argparse.ArgumentParser:
     )
     p.add_argument(
         "--simulator",
-        default="/brake_sim",
         metavar="NODE",
         help="node whose NODE/measured and NODE/defects are read (default /brake_sim)",
     )
@@ -738,8 +737,8 @@ def _topic_name(parser: argparse.ArgumentParser, option: str, name: str) -> str:
 
 def run_monitor(argv: list[str]) -> int:
     """``brake-sim monitor --detector NAME ...``: build (and fit) the detector here, then run
-    the node (:mod:`brake_sim_ros.app.monitor`) until interrupted. Bad options, a detector
-    that cannot be made or fitted: one line, exit 2; a node that refuses to start: 1."""
+    the node (:mod:`brake_sim_ros.app.monitor`) until interrupted. Bad options (--ros-args
+    parameters too), a detector that cannot be made or fitted: one line, exit 2."""
     from rclpy.utilities import remove_ros_args
 
     from brake_sim_ros.monitoring.baselines import BUILTIN, make_detector
@@ -747,9 +746,9 @@ def run_monitor(argv: list[str]) -> int:
 
     parser = _monitor_parser()
     args = parser.parse_args(remove_ros_args(["brake-sim monitor", *argv])[1:])
-    overrides: list[tuple[str, object]] = [
-        ("simulator", _topic_name(parser, "--simulator", args.simulator))
-    ]
+    overrides: list[tuple[str, object]] = []  # they override --ros-args -p values
+    if args.simulator is not None:
+        overrides.append(("simulator", _topic_name(parser, "--simulator", args.simulator)))
     if args.measured_topic is not None:
         topic = _topic_name(parser, "--measured-topic", args.measured_topic)
         overrides.append(("measured_topic", topic))

@@ -20,6 +20,8 @@ from rclpy.parameter import Parameter
 from brake_sim_ros.errors import BrakeSimError
 from brake_sim_ros.ros.monitor import MonitorNode, StreamingDetector
 
+EXIT_REFUSED = 2  # as the CLI's own refusals: every reason to refuse is a bad argument
+
 
 def run(
     ros_argv: list[str],
@@ -37,7 +39,9 @@ def run(
         overrides: node parameters the command line sets, ``(name, value)``.
 
     Returns:
-        0 after an interrupt, 1 when the node refused to start.
+        0 after an interrupt, 2 when the node refused to start (a parameter of
+        ``--ros-args`` out of range or of the wrong type, a topic name ROS refuses: bad
+        arguments, like every other refusal of ``brake-sim monitor``).
     """
     rclpy.init(args=ros_argv)
     node = None
@@ -50,7 +54,7 @@ def run(
             )
         except BrakeSimError as exc:
             print(f"brake-sim monitor: refused to start: {exc}", file=sys.stderr)
-            return 1
+            return EXIT_REFUSED
         print(
             f"brake-sim monitor: detector {detector.name} on {node.measured_topic};"
             f" publishing {', '.join(node.published_topics())}",

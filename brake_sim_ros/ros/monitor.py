@@ -38,7 +38,7 @@ from typing import Any, Protocol
 from brake_sim_msgs.msg import DefectState, Diagnosis, HealthAssessment, MeasuredChunk
 from builtin_interfaces.msg import Time
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-from rclpy.exceptions import InvalidTopicNameException
+from rclpy.exceptions import InvalidTopicNameException, ParameterException
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from std_msgs.msg import Header
@@ -221,7 +221,10 @@ class MonitorNode(Node):
         self.stats = MonitorStats()
         self._period = PeriodView()
         for spec in parameter_specs():
-            self.declare_parameter(spec.name, spec.default, descriptor(spec))
+            try:
+                self.declare_parameter(spec.name, spec.default, descriptor(spec))
+            except ParameterException as exc:  # a bad --ros-args override
+                raise BrakeSimError(f"--ros-args override refused: {exc}") from None
         p = {spec.name: self.get_parameter(spec.name).value for spec in parameter_specs()}
         simulator = str(p["simulator"]).rstrip("/")
         self.measured_topic = str(p["measured_topic"]) or f"{simulator}/measured"

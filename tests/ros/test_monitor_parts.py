@@ -4,6 +4,10 @@ and ``brake-sim monitor``'s refusals of bad options (one line, exit 2)."""
 from __future__ import annotations
 
 import math
+import os
+import subprocess
+import sys
+from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
@@ -12,8 +16,10 @@ from diagnostic_msgs.msg import DiagnosticStatus
 
 from brake_sim_ros.cli import main
 from brake_sim_ros.monitoring.detector import MAX_CHUNK_SAMPLES, chunk_from_measured
+from brake_sim_ros.ros.harness import domain_id_for, ros_environment
 from brake_sim_ros.ros.monitor import MonitorStats, PeriodView, health_level
 
+MONITOR = [sys.executable, "-m", "brake_sim_ros.cli", "monitor"]
 pytestmark = pytest.mark.filterwarnings("ignore:module 'sre_(parse|constants)' is deprecated")
 
 
@@ -112,3 +118,28 @@ def test_fit_on_a_file_that_is_not_a_dataset_is_one_line(tmp_path, capsys):
     assert exit_info.value.code == 2
     err = capsys.readouterr().err
     assert len(err.splitlines()) == 1 and "not json" not in err
+
+
+@pytest.mark.parametrize(
+    ("parameter", "says"),
+    [
+        ("warn_level:=2.0", "warn_level out of range"),
+        ("unit_id:=5", "expecting type 'STRING'"),
+    ],
+)
+def test_a_bad_ros_parameter_is_refused_in_one_line(parameter, says):
+    """--ros-args -p values are arguments too: one line, exit 2, before any topic."""
+    env = ros_environment(domain_id_for(21))
+    env["PYTHONPATH"] = os.pathsep.join([str(Path(__file__).parent), env.get("PYTHONPATH", "")])
+    env["BRAKE_SIM_TEST_RMS_THRESHOLD"] = "1.0"
+    proc = subprocess.run(
+        [*MONITOR, "--detector", "test_monitor:OffsetRms", "--ros-args", "-p", parameter],
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert proc.returncode == 2 and proc.stdout == "", proc.stdout + proc.stderr
+    lines = proc.stderr.splitlines()
+    assert len(lines) == 1 and lines[0].startswith("brake-sim monitor: refused to start: ")
+    assert says in lines[0]
