@@ -15,10 +15,12 @@ windows alarm and the comparison is not all-False.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import subprocess
 import sys
 import time
+from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
@@ -63,6 +65,8 @@ peak_force_n = 1300.0
 """
 THRESHOLD_ENV = "BRAKE_SIM_TEST_RMS_THRESHOLD"
 DETECTOR = "test_monitor:OffsetRms"  # this module, importable by the monitor process
+CLI = [sys.executable, "-m", "brake_sim_ros.cli"]
+TOPICS = ["--topics", stream.MEASURED.name, stream.DEFECTS.name]  # what the monitor reads
 LOSSLESS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
 DIAGNOSED = ("initial_angle", "left")
 
@@ -130,10 +134,34 @@ def _offline(measured: list[MeasuredChunk], threshold: float) -> list:
     return [a for m in measured for a in detector.feed(chunk_from_measured(m))]
 
 
+def _expected(offline: list) -> list[tuple[int, int, float, bool]]:
+    """What ~/health must say of the windows ``offline``, in :func:`_verdicts`' form."""
+    window = OffsetRms().window_samples(5120.0)
+    return [(a.sample_index - window + 1, a.sample_index, a.health_index, a.alarm) for a in offline]
+
+
+@contextlib.contextmanager
+def _monitoring(offset: int, threshold: float, log: Path) -> Iterator[Listener]:
+    """``brake-sim monitor`` in its own process on a private domain, and a listener."""
+    domain = domain_id_for(offset)
+    listener = Listener(domain)
+    monitor = _start_monitor(domain, threshold, log)
+    listener.monitor = monitor
+    try:
+        _wait_for_monitor(listener, monitor, log)
+        yield listener
+    finally:
+        listener.exit_code = _stop(monitor)
+        listener.close()
+
+
 class Listener:
     """The monitor's outputs, received in this process (own context, same domain)."""
 
     def __init__(self, domain_id: int) -> None:
+        self.domain_id = domain_id
+        self.monitor: subprocess.Popen | None = None
+        self.exit_code: int | None = None
         self.context = Context()
         rclpy.init(context=self.context, domain_id=domain_id)
         self.node = rclpy.create_node("monitor_listener", context=self.context)
@@ -174,7 +202,7 @@ def _start_monitor(domain: int, threshold: float, log: Path) -> subprocess.Popen
     ).rstrip(os.pathsep)
     with log.open("w") as out:
         return subprocess.Popen(
-            [sys.executable, "-m", "brake_sim_ros.cli", "monitor", "--detector", DETECTOR],
+            [*CLI, "monitor", "--detector", DETECTOR],
             env=env,
             stdout=out,
             stderr=subprocess.STDOUT,
@@ -210,35 +238,16 @@ def test_offline_and_replayed_through_the_monitor_agree(recording, threshold, tm
     path, measured, run_id = recording
     offline = _offline(measured, threshold)
     window = OffsetRms().window_samples(5120.0)
-    expected = [
-        (a.sample_index - window + 1, a.sample_index, a.health_index, a.alarm) for a in offline
-    ]
+    expected = _expected(offline)
     alarms = [e[3] for e in expected]
     assert len(expected) >= 10 and any(alarms) and not all(alarms)  # not a trivial match
     assert any(a.sample_index // 512 != (a.sample_index - window + 1) // 512 for a in offline)
 
-    domain = domain_id_for(11)
-    listener = Listener(domain)
     log = tmp_path / "monitor.log"
-    monitor = _start_monitor(domain, threshold, log)
-    try:
-        _wait_for_monitor(listener, monitor, log)
+    with _monitoring(11, threshold, log) as listener:
         replay = subprocess.run(
-            [
-                sys.executable,
-                "-m",
-                "brake_sim_ros.cli",
-                "replay",
-                str(path),
-                "--topics",
-                stream.MEASURED.name,
-                stream.DEFECTS.name,
-                "--rate",
-                "2",
-                "--wait-for-subscribers",
-                "1",
-            ],
-            env=ros_environment(domain),
+            [*CLI, "replay", str(path), "--rate", "2", "--wait-for-subscribers", "1", *TOPICS],
+            env=ros_environment(listener.domain_id),
             capture_output=True,
             text=True,
             timeout=60,
@@ -246,11 +255,8 @@ def test_offline_and_replayed_through_the_monitor_agree(recording, threshold, tm
         assert replay.returncode == 0, replay.stdout + replay.stderr
         listener.spin_until(lambda: len(listener.health) >= len(expected), 15.0)
         listener.spin_until(lambda: False, 0.3)  # nothing more should come
-    finally:
-        code = _stop(monitor)
-        listener.close()
     output = log.read_text()
-    assert code == 0, output
+    assert listener.exit_code == 0, output
 
     assert _verdicts(listener.health) == expected  # same windows, same numbers, bit for bit
     # the run id comes on another topic (DefectState): windows before it arrives have none
@@ -295,22 +301,10 @@ def test_monitor_survives_malformed_and_out_of_order_messages(recording, thresho
     no_rate = deserialize_message(_serialize(m2), MeasuredChunk)
     no_rate.sample_rate_hz = 5e-324  # > 0, but no sample period a clock can hold
     sequence = [m0, _malformed(m1), m1, oversized, m1, no_rate, m2, m3]  # m1 repeats
-    expected = _verdicts(
-        HealthAssessment(
-            first_sample_index=a.sample_index - OffsetRms().window_samples(5120.0) + 1,
-            last_sample_index=a.sample_index,
-            health_index=a.health_index,
-            alarm=a.alarm,
-        )
-        for a in _offline([m0, m1, m2, m3], threshold)
-    )
+    expected = _expected(_offline([m0, m1, m2, m3], threshold))
 
-    domain = domain_id_for(12)
-    listener = Listener(domain)
     log = tmp_path / "monitor.log"
-    monitor = _start_monitor(domain, threshold, log)
-    try:
-        _wait_for_monitor(listener, monitor, log)
+    with _monitoring(12, threshold, log) as listener:
         for msg in sequence:
             listener.measured.publish(msg)
             listener.spin_until(lambda: False, 0.05)
@@ -319,12 +313,9 @@ def test_monitor_survives_malformed_and_out_of_order_messages(recording, thresho
         listener.spin_until(
             lambda: any(_value(s, "out_of_order") == "1" for s in listener.diagnostics), 5.0
         )
-        alive = monitor.poll() is None
-    finally:
-        code = _stop(monitor)
-        listener.close()
+        alive = listener.monitor.poll() is None
     output = log.read_text()
-    assert alive and code == 0, output
+    assert alive and listener.exit_code == 0, output
     assert _verdicts(listener.health) == expected
     last = [s for s in listener.diagnostics if _value(s, "out_of_order") == "1"][-1]
     assert _value(last, "malformed") == "3" and _value(last, "chunks") == "4"
