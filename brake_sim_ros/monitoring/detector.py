@@ -61,8 +61,10 @@ class SampleChunk:
 
 
 # The most samples one MeasuredChunk may cover: 2**22, 164 s at 25.6 kHz (the node sends
-# 0.1 s); a larger count is a damaged or hostile message, refused before any allocation.
+# 0.1 s), and the most values its channels may spread over (2**25 float64, 256 MiB); a
+# larger chunk is a damaged or hostile message, refused before any allocation.
 MAX_CHUNK_SAMPLES = 1 << 22
+MAX_CHUNK_VALUES = 1 << 25
 
 
 def chunk_from_measured(msg: Any) -> SampleChunk:
@@ -92,6 +94,11 @@ def chunk_from_measured(msg: Any) -> SampleChunk:
     if n > MAX_CHUNK_SAMPLES:
         raise ValueError(
             f"{where}: sample_count {n}; allowed at most {MAX_CHUNK_SAMPLES} samples a chunk"
+        )
+    if n * len(names) > MAX_CHUNK_VALUES:
+        raise ValueError(
+            f"{where}: {len(names)} channels of {n} samples; allowed at most"
+            f" {MAX_CHUNK_VALUES} values a chunk"
         )
     if len({len(names), len(msg.units), len(decimation), len(counts)}) != 1:
         raise ValueError(

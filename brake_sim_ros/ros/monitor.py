@@ -24,8 +24,8 @@ the same live, replayed or offline. Each message is checked: a malformed one (fi
 do not fit together), one that repeats or goes back in the sample index (out of order),
 a gap (lost samples: the detector restarts at the next aligned window), a detector that
 raises, or a diagnosis outside the defect catalogue each give one warning line and a
-counter in /diagnostics; the node keeps running. A message starting again at sample 0 is
-a new run (the simulator was reset): the detector restarts.
+counter in /diagnostics; the node keeps running. A message starting again at sample 0, or
+at another sample rate, is a new run (the simulator was reset): the detector restarts.
 """
 
 from __future__ import annotations
@@ -38,6 +38,7 @@ from typing import Any, Protocol
 from brake_sim_msgs.msg import DefectState, Diagnosis, HealthAssessment, MeasuredChunk
 from builtin_interfaces.msg import Time
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from rclpy.clock import Clock, ClockType
 from rclpy.exceptions import InvalidTopicNameException, ParameterException
 from rclpy.node import Node
 from rclpy.parameter import Parameter
@@ -66,6 +67,9 @@ MAX_ID_CHARS = 128  # run and unit ids longer than this (from the wire) are cut
 # simulator's 10 Hz chunks, so a briefly busy monitor loses nothing (a loss would show as
 # a gap and cost the windows around it). It matches the simulator's reliable publisher.
 MEASURED_QOS = QosSpec("reliable", "volatile", 100)
+# The monitor's own topics (a second node's, so not in the simulator's table of
+# stream.topics, in the same form). Verdicts are offered reliable with a deep history: a
+# scorer or a logger wants every window, and 100 is 10 s of the baselines' windows.
 HEALTH = Topic(
     f"/{NODE_NAME}/health",
     "brake_sim_msgs/msg/HealthAssessment",
@@ -148,7 +152,7 @@ class MonitorStats:
     out_of_order: int = 0  # messages dropped: repeated or earlier sample index
     gaps: int = 0  # jumps forward in the sample index
     samples_lost: int = 0  # samples those jumps skipped
-    runs: int = 0  # runs seen (a restart at sample 0 begins a new one)
+    runs: int = 0  # runs seen (a restart at sample 0, or a new rate, begins one)
     detector_failures: int = 0  # chunks whose feed() raised
     diagnoses_refused: int = 0  # diagnoses outside the defect catalogue
     last_warning: str = ""
@@ -256,24 +260,30 @@ class MonitorNode(Node):
                 Diagnosis, DIAGNOSES.relative, qos.for_topic(DIAGNOSES)
             )
         except InvalidTopicNameException:
+            shown = f"{self.measured_topic[:80]!r}, {self.defects_topic[:80]!r}"
             raise BrakeSimError(
-                f"topics {self.measured_topic}, {self.defects_topic}: not topic names ROS"
-                " accepts (allowed e.g. /brake_sim/measured)"
+                f"topics {shown}: not topic names ROS accepts (allowed e.g. /brake_sim/measured)"
             ) from None
         self._diagnostics = self.create_publisher(
             DiagnosticArray, DIAGNOSTICS.name, qos.for_topic(DIAGNOSTICS)
         )
-        self.create_timer(period_s, self._publish_diagnostics)
+        # on the steady wall clock, whatever use_sim_time says: a replay's /clock may stop
+        self.create_timer(
+            period_s, self._publish_diagnostics, clock=Clock(clock_type=ClockType.STEADY_TIME)
+        )
 
     def published_topics(self) -> list[str]:
         """The resolved names the node publishes on."""
         return [p.topic_name for p in (self._health, self._diagnoses, self._diagnostics)]
 
     # -- input ---------------------------------------------------------------------------
-    def _warn(self, text: str) -> None:
+    def _warn(self, text: str, *, throttle_s: float = 0.0) -> None:
         self.stats.last_warning = text
         self._period.warnings += 1
-        self.get_logger().warning(text)
+        if throttle_s:
+            self.get_logger().warning(text, throttle_duration_sec=throttle_s)
+        else:
+            self.get_logger().warning(text)
 
     def _on_defects(self, msg: DefectState) -> None:
         self.run_id = _id_text(msg.run_id)
@@ -321,7 +331,12 @@ class MonitorNode(Node):
         except Exception as exc:  # a user's detector may raise anything: one line, run on
             self.stats.detector_failures += 1
             text = " ".join(str(exc).split())[:300]
-            self._warn(f"detector {self.detector.name} failed on samples from {first}: {text}")
+            # a detector that fails once fails on every chunk (a channel it needs is
+            # missing, say): one line every 10 s, the counter counts each
+            self._warn(
+                f"detector {self.detector.name} failed on samples from {first}: {text}",
+                throttle_s=10.0,
+            )
             return
         self.stats.chunks += 1
         n = self.detector.window_samples(rate)

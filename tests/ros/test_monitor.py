@@ -292,15 +292,19 @@ def _serialize(msg: MeasuredChunk) -> bytes:
 
 
 def test_monitor_survives_malformed_and_out_of_order_messages(recording, threshold, tmp_path):
-    """Malformed, oversized and repeated chunks are dropped with one warning line each; the
-    valid chunks around them are assessed as offline, and /diagnostics counts the drops."""
+    """Malformed, oversized, rate-less and repeated chunks are dropped with one warning line
+    each, and a chunk the detector cannot read is one warning; the valid chunks around them
+    are assessed as offline, and /diagnostics counts each."""
     _path, measured, _run = recording
     m0, m1, m2, m3 = measured[:4]
     oversized = deserialize_message(_serialize(m2), MeasuredChunk)
     oversized.sample_count = 2**31
     no_rate = deserialize_message(_serialize(m2), MeasuredChunk)
     no_rate.sample_rate_hz = 5e-324  # > 0, but no sample period a clock can hold
-    sequence = [m0, _malformed(m1), m1, oversized, m1, no_rate, m2, m3]  # m1 repeats
+    foreign = deserialize_message(_serialize(measured[4]), MeasuredChunk)
+    foreign.channel_names = [f"other_{name}" for name in foreign.channel_names]
+    # m1 repeats; the last is well formed but lacks the detector's channel
+    sequence = [m0, _malformed(m1), m1, oversized, m1, no_rate, m2, m3, foreign]
     expected = _expected(_offline([m0, m1, m2, m3], threshold))
 
     log = tmp_path / "monitor.log"
@@ -311,17 +315,19 @@ def test_monitor_survives_malformed_and_out_of_order_messages(recording, thresho
         listener.spin_until(lambda: len(listener.health) >= len(expected), 10.0)
         # the next /diagnostics (1 s period) carries the counters
         listener.spin_until(
-            lambda: any(_value(s, "out_of_order") == "1" for s in listener.diagnostics), 5.0
+            lambda: any(_value(s, "detector_failures") == "1" for s in listener.diagnostics), 5.0
         )
         alive = listener.monitor.poll() is None
     output = log.read_text()
     assert alive and listener.exit_code == 0, output
     assert _verdicts(listener.health) == expected
-    last = [s for s in listener.diagnostics if _value(s, "out_of_order") == "1"][-1]
+    last = [s for s in listener.diagnostics if _value(s, "detector_failures") == "1"][-1]
     assert _value(last, "malformed") == "3" and _value(last, "chunks") == "4"
+    assert _value(last, "out_of_order") == "1"
     warnings = [line for line in output.splitlines() if "[WARN]" in line]
     assert len([w for w in warnings if "malformed" in w]) == 3, output
     assert len([w for w in warnings if "out of order" in w]) == 1, output
+    assert len([w for w in warnings if "no channel 'backing_plate_accel_y'" in w]) == 1, output
     assert "Traceback" not in output
 
 

@@ -15,7 +15,11 @@ import pytest
 from diagnostic_msgs.msg import DiagnosticStatus
 
 from brake_sim_ros.cli import main
-from brake_sim_ros.monitoring.detector import MAX_CHUNK_SAMPLES, chunk_from_measured
+from brake_sim_ros.monitoring.detector import (
+    MAX_CHUNK_SAMPLES,
+    MAX_CHUNK_VALUES,
+    chunk_from_measured,
+)
 from brake_sim_ros.ros.harness import domain_id_for, ros_environment
 from brake_sim_ros.ros.monitor import MonitorStats, PeriodView, health_level
 
@@ -57,6 +61,17 @@ def test_a_measured_chunk_becomes_channels_on_every_sample():
         ({"sample_rate_hz": math.nan}, "sample_rate_hz is not a finite rate > 0"),
         ({"sample_rate_hz": 0.0}, "sample_rate_hz is not a finite rate > 0"),
         ({"sample_count": MAX_CHUNK_SAMPLES + 1}, f"allowed at most {MAX_CHUNK_SAMPLES}"),
+        (
+            {
+                "sample_count": MAX_CHUNK_SAMPLES,
+                "channel_names": [f"c{k}" for k in range(9)],
+                "units": ["1"] * 9,
+                "decimation": [MAX_CHUNK_SAMPLES] * 9,
+                "channel_sample_counts": [0] * 9,
+                "values": [],
+            },
+            f"9 channels of {MAX_CHUNK_SAMPLES} samples; allowed at most {MAX_CHUNK_VALUES}",
+        ),
         ({"channel_names": ["x" * 10_000, "b"], "channel_sample_counts": [5, 3]}, "'xxx"),
     ],
 )
