@@ -254,9 +254,14 @@ def test_offline_and_replayed_through_the_monitor_agree(recording, threshold, tm
         )
         assert replay.returncode == 0, replay.stdout + replay.stderr
         listener.spin_until(lambda: len(listener.health) >= len(expected), 15.0)
-        listener.spin_until(lambda: False, 0.3)  # nothing more should come
+        # /diagnostics: the period that held the alarms says ERROR (next period <= 1 s)
+        listener.spin_until(
+            lambda: any(s.level == DiagnosticStatus.ERROR for s in listener.diagnostics), 3.0
+        )
     output = log.read_text()
     assert listener.exit_code == 0, output
+    error = next(s for s in listener.diagnostics if s.level == DiagnosticStatus.ERROR)
+    assert error.message.startswith("ALARM in ") and _value(error, "detector") == "offset_rms"
 
     assert _verdicts(listener.health) == expected  # same windows, same numbers, bit for bit
     # the run id comes on another topic (DefectState): windows before it arrives have none
