@@ -691,6 +691,94 @@ def run_replay(argv: list[str]) -> int:
     return replay_main(["brake-sim replay", *argv]) or 0
 
 
+# --- monitor ------------------------------------------------------------------------
+def _monitor_parser() -> argparse.ArgumentParser:
+    p = _Parser(
+        prog="brake-sim monitor",
+        description="Run a detector as a ROS 2 node on a brake's measured channels"
+        " (<simulator>/measured, MeasuredChunk: the simulator, a replay, or a real brake's"
+        " driver) and publish its health index (/brake_monitor/health), diagnoses"
+        " (/brake_monitor/diagnoses) and /diagnostics status. ROS options go after"
+        " --ros-args.",
+    )
+    p.add_argument(
+        "--detector", required=True, help="rms, kurtosis, crest, or module:Class (as score)"
+    )
+    p.add_argument(
+        "--simulator",
+        metavar="NODE",
+        help="node whose NODE/measured and NODE/defects are read (default /brake_sim)",
+    )
+    p.add_argument("--measured-topic", metavar="TOPIC", help="default NODE/measured")
+    p.add_argument(
+        "--unit-id", metavar="ID", help="unit id in the outputs (default: DefectState's)"
+    )
+    p.add_argument(
+        "--fit",
+        metavar="DIR",
+        help="fit the detector on a sweep's dataset first (brake-sim sweep ... --out DIR)",
+    )
+    p.add_argument("--fit-split", default="train", help="split to fit on (default train)")
+    return p
+
+
+def _topic_name(parser: argparse.ArgumentParser, option: str, name: str) -> str:
+    """``name`` if ROS accepts it as an absolute topic name; else a one-line error."""
+    from rclpy.exceptions import InvalidTopicNameException
+    from rclpy.validate_full_topic_name import validate_full_topic_name
+
+    try:
+        validate_full_topic_name(name)
+    except InvalidTopicNameException:
+        shown = "".join(c if c.isprintable() else "?" for c in name[:80])
+        parser.error(f"{option} {shown!r}: allowed an absolute ROS name such as /brake_sim")
+    return name
+
+
+def run_monitor(argv: list[str]) -> int:
+    """``brake-sim monitor --detector NAME ...``: build (and fit) the detector here, then run
+    the node (:mod:`brake_sim_ros.app.monitor`) until interrupted. Bad options (--ros-args
+    parameters too), a detector that cannot be made or fitted: one line, exit 2."""
+    from rclpy.utilities import remove_ros_args
+
+    from brake_sim_ros.monitoring.baselines import BUILTIN, make_detector
+    from brake_sim_ros.monitoring.detector import Detector, chunk_from_measured
+
+    parser = _monitor_parser()
+    args = parser.parse_args(remove_ros_args(["brake-sim monitor", *argv])[1:])
+    overrides: list[tuple[str, object]] = []  # they override --ros-args -p values
+    if args.simulator is not None:
+        overrides.append(("simulator", _topic_name(parser, "--simulator", args.simulator)))
+    if args.measured_topic is not None:
+        topic = _topic_name(parser, "--measured-topic", args.measured_topic)
+        overrides.append(("measured_topic", topic))
+    if args.unit_id is not None:
+        overrides.append(("unit_id", args.unit_id))
+    try:
+        detector = make_detector(args.detector)
+    except ValueError as exc:
+        parser.error(str(exc))
+    # a built-in that learns cannot assess unfitted; a user's class may come ready-made
+    learns = type(detector).fit is not Detector.fit
+    if learns and args.fit is None and args.detector in BUILTIN:
+        parser.error(
+            f"detector {detector.name} learns from data: give --fit DIR, a sweep's dataset"
+            " (brake-sim sweep) to fit it on"
+        )
+    if args.fit is not None:
+        from brake_sim_ros.datasets.reader import open_dataset
+        from brake_sim_ros.monitoring import evaluate
+
+        try:
+            windows = evaluate.fit(detector, open_dataset(args.fit), args.fit_split)
+        except (BrakeSimError, ValueError, RuntimeError) as exc:
+            parser.error(f"--fit {args.fit}: {exc}")
+        print(f"brake-sim monitor: {detector.name} fitted on {windows} windows of {args.fit_split}")
+    from brake_sim_ros.app.monitor import run
+
+    return run(["brake-sim monitor", *argv], detector, chunk_from_measured, overrides=overrides)
+
+
 class _Parser(argparse.ArgumentParser):
     """argparse, but a bad command line is one line on stderr (exit 2), not the usage."""
 
@@ -891,6 +979,12 @@ def build_parser() -> argparse.ArgumentParser:
         " and Rerun under bags/live/: brake-sim live [SCENARIO] [--duration S] [--no-viewer]",
     )
     sub.add_parser(
+        "monitor",
+        help="run a detector as a ROS 2 node on the measured channels and publish its health"
+        " index, diagnoses and /diagnostics: brake-sim monitor --detector NAME"
+        " [--simulator /brake_sim] [--fit DIR] [--ros-args ...]",
+    )
+    sub.add_parser(
         "replay",
         help="publish an MCAP recording on ROS 2 with its original timing: brake-sim replay"
         " FILE.mcap [--rate R] [--start-offset S] [--loop] [--topics T ...] [--ros-args ...]",
@@ -912,6 +1006,12 @@ def main(argv: list[str] | None = None) -> int:
         return run_node(argv[1:])
     if argv[:1] == ["replay"]:
         return run_replay(argv[1:])
+    if argv[:1] == ["monitor"]:
+        try:
+            return run_monitor(argv[1:])
+        except BrakeSimError as exc:
+            print(f"brake-sim monitor: error: {exc}", file=sys.stderr)
+            return EXIT_ERROR
     if argv[:1] == ["live"]:
         return run_live(argv[1:])
     if argv[:1] == ["severity"]:

@@ -12,6 +12,10 @@ assessments at the same sample indices offline, replayed or live, however they w
 into chunks. A gap in the sample index drops the partial window and restarts at the next
 aligned window.
 
+:func:`chunk_from_measured` turns one ``MeasuredChunk`` message (live, replayed, or read back
+from an MCAP recording) into a :class:`SampleChunk`, the one conversion every reader of
+``~/measured`` uses, so offline and live detectors see the same numbers.
+
 A user's detector subclasses :class:`Detector` (``name``, ``channels``, ``assess``;
 ``fit`` when it learns) and is named on the command line by ``module:Class``.
 """
@@ -22,6 +26,7 @@ import abc
 import math
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -53,6 +58,78 @@ class SampleChunk:
 
     def __len__(self) -> int:
         return next((len(v) for v in self.channels.values()), 0)
+
+
+# The most samples one MeasuredChunk may cover: 2**22, 164 s at 25.6 kHz (the node sends
+# 0.1 s), and the most values its channels may spread over (2**25 float64, 256 MiB); a
+# larger chunk is a damaged or hostile message, refused before any allocation.
+MAX_CHUNK_SAMPLES = 1 << 22
+MAX_CHUNK_VALUES = 1 << 25
+
+
+def chunk_from_measured(msg: Any) -> SampleChunk:
+    """The :class:`SampleChunk` of one ``brake_sim_msgs/MeasuredChunk`` (or any object with
+    its fields): every channel on the simulator's samples, NaN between a decimated
+    channel's samples, as a dataset's measured columns read (``measured:<name> [<unit>]``;
+    the tone-ring edge times are not channels here, as there).
+
+    Channel ``c`` holds its values at the sample indices in ``[first_sample_index,
+    first_sample_index + sample_count)`` that are multiples of ``decimation[c]``
+    (MeasuredChunk.msg).
+
+    Raises:
+        ValueError: a message whose fields do not fit together (one line: which field,
+            what it should be); its values are never echoed.
+    """
+    first = int(msg.first_sample_index)
+    n = int(msg.sample_count)
+    rate = float(msg.sample_rate_hz)
+    where = f"measured chunk at sample {first}"
+    names = list(msg.channel_names)
+    decimation = [int(d) for d in msg.decimation]
+    counts = [int(c) for c in msg.channel_sample_counts]
+    values = np.asarray(msg.values, dtype=np.float64)
+    if not (math.isfinite(rate) and rate > 0.0):
+        raise ValueError(f"{where}: sample_rate_hz is not a finite rate > 0")
+    if n > MAX_CHUNK_SAMPLES:
+        raise ValueError(
+            f"{where}: sample_count {n}; allowed at most {MAX_CHUNK_SAMPLES} samples a chunk"
+        )
+    if n * len(names) > MAX_CHUNK_VALUES:
+        raise ValueError(
+            f"{where}: {len(names)} channels of {n} samples; allowed at most"
+            f" {MAX_CHUNK_VALUES} values a chunk"
+        )
+    if len({len(names), len(msg.units), len(decimation), len(counts)}) != 1:
+        raise ValueError(
+            f"{where}: {len(names)} channel_names, {len(msg.units)} units,"
+            f" {len(decimation)} decimation, {len(counts)} channel_sample_counts; allowed"
+            " one of each per channel"
+        )
+    if len(set(names)) != len(names):
+        raise ValueError(f"{where}: a channel name appears twice; allowed distinct names")
+    if sum(counts) != values.size:
+        raise ValueError(
+            f"{where}: {values.size} values, its channel_sample_counts say {sum(counts)}"
+        )
+    channels: dict[str, np.ndarray] = {}
+    start = 0
+    for name, step, count in zip(names, decimation, counts, strict=True):
+        shown = repr(name[:40])  # a name from the wire, shown short
+        if step < 1:
+            raise ValueError(f"{where}: channel {shown} has decimation {step}; allowed >= 1")
+        offset = (-first) % step  # the first multiple of the decimation in the chunk
+        expected = 0 if offset >= n else (n - 1 - offset) // step + 1
+        if count != expected:
+            raise ValueError(
+                f"{where}: channel {shown} has {count} values; {n} samples at decimation"
+                f" {step} hold {expected}"
+            )
+        column = np.full(n, np.nan)
+        column[offset::step] = values[start : start + count]
+        channels[name] = column
+        start += count
+    return SampleChunk(first, rate, channels)
 
 
 @dataclass(frozen=True)

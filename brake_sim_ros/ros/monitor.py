@@ -1,0 +1,429 @@
+"""A brake-health monitor as a ROS 2 node: :class:`MonitorNode` (a leaf adapter).
+
+It runs one detector (the streaming contract of :mod:`brake_sim_ros.monitoring.detector`,
+handed in by the composition root with the function that turns a ``MeasuredChunk`` into
+the detector's input) over the measured channels of a brake, and publishes what the
+detector says. It knows nothing of the detector's method; it translates and guards.
+
+Run it with ``brake-sim monitor --detector NAME`` (:mod:`brake_sim_ros.app.monitor`).
+
+Topics (node name ``brake_monitor``; ``~`` = ``/brake_monitor``):
+    <simulator>/measured brake_sim_msgs/MeasuredChunk   (subscribed) the measured channels;
+                                                       any publisher of that name and type
+                                                       (the simulator, a replay, a real
+                                                       brake's driver)
+    <simulator>/defects  brake_sim_msgs/DefectState     (subscribed, optional) only its
+                                                       run_id and unit_id are read, to label
+                                                       the outputs; no ground truth is used
+    ~/health             brake_sim_msgs/HealthAssessment one per detector window
+    ~/diagnoses          brake_sim_msgs/Diagnosis       when the detector diagnoses a defect
+    /diagnostics         diagnostic_msgs/DiagnosticArray every diagnostics_period_s (wall)
+
+Windows are aligned to the sample index (detector contract), so a window's assessment is
+the same live, replayed or offline. Each message is checked: a malformed one (fields that
+do not fit together), one that repeats or goes back in the sample index (out of order),
+a gap (lost samples: the detector restarts at the next aligned window), a detector that
+raises, or a diagnosis outside the defect catalogue each give one warning line and a
+counter in /diagnostics; the node keeps running. A message starting again at sample 0, or
+at another sample rate, is a new run (the simulator was reset): the detector restarts.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any, Protocol
+
+from brake_sim_msgs.msg import DefectState, Diagnosis, HealthAssessment, MeasuredChunk
+from builtin_interfaces.msg import Time
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from rclpy.clock import Clock, ClockType
+from rclpy.exceptions import InvalidTopicNameException, ParameterException
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+from std_msgs.msg import Header
+
+from brake_sim_ros.errors import BrakeSimError
+from brake_sim_ros.model.catalogue import KIND_BY_NAME
+from brake_sim_ros.ros import qos
+from brake_sim_ros.ros.descriptors import descriptor
+from brake_sim_ros.stream.conversion import stamp_ns, time_msg
+from brake_sim_ros.stream.parameters import ParamSpec
+from brake_sim_ros.stream.topics import (
+    DIAGNOSTICS,
+    EVENTS_QOS,
+    LATCHED_QOS,
+    QosSpec,
+    Topic,
+)
+
+NODE_NAME = "brake_monitor"
+_NS_PER_S = 1_000_000_000
+MAX_STAMP_NS = 2**31 * _NS_PER_S  # builtin_interfaces/Time holds int32 seconds
+MAX_ID_CHARS = 128  # run and unit ids longer than this (from the wire) are cut
+
+# The monitor wants every sample: a reliable subscription with room for 10 s of the
+# simulator's 10 Hz chunks, so a briefly busy monitor loses nothing (a loss would show as
+# a gap and cost the windows around it). It matches the simulator's reliable publisher.
+MEASURED_QOS = QosSpec("reliable", "volatile", 100)
+# The monitor's own topics (a second node's, so not in the simulator's table of
+# stream.topics, in the same form). Verdicts are offered reliable with a deep history: a
+# scorer or a logger wants every window, and 100 is 10 s of the baselines' windows.
+HEALTH = Topic(
+    f"/{NODE_NAME}/health",
+    "brake_sim_msgs/msg/HealthAssessment",
+    QosSpec("reliable", "volatile", 100),
+    "one per detector window (window_s of simulated time, 0.1 s for the baselines)",
+    "~/health",
+)
+DIAGNOSES = Topic(
+    f"/{NODE_NAME}/diagnoses",
+    "brake_sim_msgs/msg/Diagnosis",
+    EVENTS_QOS,
+    "one per window the detector diagnoses",
+    "~/diagnoses",
+)
+MONITOR_TOPICS = (HEALTH, DIAGNOSES, DIAGNOSTICS)
+
+
+def parameter_specs() -> list[ParamSpec]:
+    fixed = "Fixed at start-up."
+    return [
+        ParamSpec(
+            "simulator",
+            "/brake_sim",
+            "Fully qualified name of the node whose <name>/measured (and <name>/defects, for"
+            " the run and unit id) the monitor reads. " + fixed,
+        ),
+        ParamSpec(
+            "measured_topic",
+            "",
+            "MeasuredChunk topic to monitor; empty: <simulator>/measured. " + fixed,
+        ),
+        ParamSpec(
+            "defects_topic",
+            "",
+            "DefectState topic whose run_id/unit_id label the outputs; empty:"
+            " <simulator>/defects. " + fixed,
+        ),
+        ParamSpec(
+            "unit_id",
+            "",
+            "Brake unit id written into every output; empty: the one DefectState gives. " + fixed,
+        ),
+        ParamSpec(
+            "warn_level",
+            0.8,
+            "Health index (dimensionless, 1 = alarm) from which /diagnostics says WARN. " + fixed,
+            (0.0, 1.0),
+        ),
+        ParamSpec(
+            "diagnostics_period_s",
+            1.0,
+            "Wall seconds between /diagnostics messages. " + fixed,
+            (0.05, 60.0),
+        ),
+    ]
+
+
+class StreamingDetector(Protocol):
+    """What the node needs of a detector (:class:`brake_sim_ros.monitoring.detector.
+    Detector` has it)."""
+
+    name: str
+
+    def window_samples(self, sample_rate_hz: float) -> int: ...
+
+    def feed(self, chunk: Any) -> list[Any]: ...
+
+    def reset(self) -> None: ...
+
+
+@dataclass
+class MonitorStats:
+    """Counters since the node started (reported in /diagnostics)."""
+
+    chunks: int = 0  # MeasuredChunks fed to the detector
+    windows: int = 0  # assessments published
+    alarms: int = 0  # of which alarms
+    diagnoses: int = 0  # diagnoses published
+    malformed: int = 0  # messages dropped: fields that do not fit together
+    out_of_order: int = 0  # messages dropped: repeated or earlier sample index
+    gaps: int = 0  # jumps forward in the sample index
+    samples_lost: int = 0  # samples those jumps skipped
+    runs: int = 0  # runs seen (a restart at sample 0, or a new rate, begins one)
+    detector_failures: int = 0  # chunks whose feed() raised
+    diagnoses_refused: int = 0  # diagnoses outside the defect catalogue
+    last_warning: str = ""
+
+
+@dataclass
+class PeriodView:
+    """What happened since the last /diagnostics message."""
+
+    windows: int = 0
+    alarms: int = 0
+    max_health: float = -math.inf
+    warnings: int = 0
+
+
+def health_level(period: PeriodView, stats: MonitorStats, warn_level: float) -> tuple[bytes, str]:
+    """The /diagnostics level and message of one period: ERROR on an alarm, WARN from
+    ``warn_level`` or on dropped input, STALE without windows, OK otherwise."""
+    if period.alarms:
+        return DiagnosticStatus.ERROR, (
+            f"ALARM in {period.alarms} of {period.windows} windows (health index up to"
+            f" {period.max_health:.3g})"
+        )
+    if period.windows == 0:
+        if stats.windows == 0:
+            return DiagnosticStatus.STALE, "no window assessed yet: waiting for samples"
+        return DiagnosticStatus.STALE, "no window assessed in the last period"
+    text = f"{period.windows} windows, health index up to {period.max_health:.3g}"
+    if not period.max_health < warn_level:  # NaN too: a detector giving no number
+        return DiagnosticStatus.WARN, f"{text} (warn level {warn_level:g})"
+    if period.warnings:
+        return (
+            DiagnosticStatus.WARN,
+            f"{text}; {period.warnings} input warnings: {stats.last_warning}",
+        )
+    return DiagnosticStatus.OK, text
+
+
+def _id_text(value: str) -> str:
+    return "".join(c for c in value[:MAX_ID_CHARS] if c.isprintable())
+
+
+def _stamp_ns(stamp: Time) -> int:
+    return int(stamp.sec) * _NS_PER_S + int(stamp.nanosec)
+
+
+class MonitorNode(Node):
+    """Feeds ``~/measured`` to ``detector`` and publishes its verdicts (module docstring).
+
+    Args:
+        detector: fitted, ready to :meth:`feed`.
+        to_chunk: MeasuredChunk -> the detector's input chunk; raises ValueError on a
+            malformed message (:func:`brake_sim_ros.monitoring.detector.chunk_from_measured`).
+        parameter_overrides: values that replace the parameters' defaults.
+
+    Raises:
+        BrakeSimError: a parameter out of range or a topic name ROS does not accept.
+    """
+
+    def __init__(
+        self,
+        detector: StreamingDetector,
+        to_chunk: Callable[[Any], Any],
+        *,
+        parameter_overrides: list[Parameter] | None = None,
+    ) -> None:
+        super().__init__(NODE_NAME, parameter_overrides=parameter_overrides or [])
+        self.detector = detector
+        self._to_chunk = to_chunk
+        self.stats = MonitorStats()
+        self._period = PeriodView()
+        for spec in parameter_specs():
+            try:
+                self.declare_parameter(spec.name, spec.default, descriptor(spec))
+            except ParameterException as exc:  # a bad --ros-args override
+                raise BrakeSimError(f"--ros-args override refused: {exc}") from None
+        p = {spec.name: self.get_parameter(spec.name).value for spec in parameter_specs()}
+        simulator = str(p["simulator"]).rstrip("/")
+        self.measured_topic = str(p["measured_topic"]) or f"{simulator}/measured"
+        self.defects_topic = str(p["defects_topic"]) or f"{simulator}/defects"
+        self.unit_id_fixed = _id_text(str(p["unit_id"]))
+        self.warn_level = float(p["warn_level"])
+        period_s = float(p["diagnostics_period_s"])
+        if not 0.0 <= self.warn_level <= 1.0:
+            raise BrakeSimError(f"warn_level {self.warn_level!r}: allowed 0 to 1")
+        if not (math.isfinite(period_s) and 0.05 <= period_s <= 60.0):
+            raise BrakeSimError(f"diagnostics_period_s {period_s!r}: allowed 0.05 to 60 s")
+        self.run_id = ""
+        self.unit_id = self.unit_id_fixed
+        self._next_index: int | None = None
+        self._rate: float | None = None
+        self._last_stamp_ns = 0
+        self._last_assessment: HealthAssessment | None = None
+        try:
+            self.create_subscription(
+                MeasuredChunk, self.measured_topic, self._on_measured, qos.profile(MEASURED_QOS)
+            )
+            self.create_subscription(
+                DefectState, self.defects_topic, self._on_defects, qos.profile(LATCHED_QOS)
+            )
+            self._health = self.create_publisher(
+                HealthAssessment, HEALTH.relative, qos.for_topic(HEALTH)
+            )
+            self._diagnoses = self.create_publisher(
+                Diagnosis, DIAGNOSES.relative, qos.for_topic(DIAGNOSES)
+            )
+        except InvalidTopicNameException:
+            shown = f"{self.measured_topic[:80]!r}, {self.defects_topic[:80]!r}"
+            raise BrakeSimError(
+                f"topics {shown}: not topic names ROS accepts (allowed e.g. /brake_sim/measured)"
+            ) from None
+        self._diagnostics = self.create_publisher(
+            DiagnosticArray, DIAGNOSTICS.name, qos.for_topic(DIAGNOSTICS)
+        )
+        # on the steady wall clock, whatever use_sim_time says: a replay's /clock may stop
+        self.create_timer(
+            period_s, self._publish_diagnostics, clock=Clock(clock_type=ClockType.STEADY_TIME)
+        )
+
+    def published_topics(self) -> list[str]:
+        """The resolved names the node publishes on."""
+        return [p.topic_name for p in (self._health, self._diagnoses, self._diagnostics)]
+
+    # -- input ---------------------------------------------------------------------------
+    def _warn(self, text: str, *, throttle_s: float = 0.0) -> None:
+        self.stats.last_warning = text
+        self._period.warnings += 1
+        if throttle_s:
+            self.get_logger().warning(text, throttle_duration_sec=throttle_s)
+        else:
+            self.get_logger().warning(text)
+
+    def _on_defects(self, msg: DefectState) -> None:
+        self.run_id = _id_text(msg.run_id)
+        if not self.unit_id_fixed:
+            self.unit_id = _id_text(msg.unit_id)
+
+    def _on_measured(self, msg: MeasuredChunk) -> None:
+        try:
+            chunk = self._to_chunk(msg)
+            first, rate = chunk.first_sample_index, chunk.sample_rate_hz
+            # The chunk's stamp is the time of its first sample: the stream's clock is that
+            # stamp less the first sample's time since sample 0 (0 for the simulator), and
+            # a window's time is its last sample's on that clock, by the simulator's rule.
+            epoch_ns = _stamp_ns(msg.header.stamp) - stamp_ns(first, 1.0 / rate)
+            if not (
+                epoch_ns >= 0 and epoch_ns + stamp_ns(first + len(chunk), 1.0 / rate) < MAX_STAMP_NS
+            ):
+                raise ValueError("its stamp and sample index give times outside 0 to 2^31 s")
+        except (ValueError, ArithmeticError) as exc:
+            self.stats.malformed += 1
+            self._warn(f"dropped a malformed MeasuredChunk on {self.measured_topic}: {exc}")
+            return
+        if self._next_index is None or (first == 0 and self._next_index > 0) or rate != self._rate:
+            self.stats.runs += 1
+            self.detector.reset()
+            if self._next_index is not None:
+                self.get_logger().info(f"a new run at sample {first} ({rate:g} Hz)")
+        elif first < self._next_index:
+            self.stats.out_of_order += 1
+            self._warn(
+                f"dropped a MeasuredChunk out of order: it starts at sample {first}, the next"
+                f" expected is {self._next_index}"
+            )
+            return
+        elif first > self._next_index:
+            self.stats.gaps += 1
+            self.stats.samples_lost += first - self._next_index
+            self._warn(
+                f"samples {self._next_index} to {first - 1} never arrived; the detector"
+                " restarts at its next aligned window"
+            )
+        self._next_index, self._rate = first + len(chunk), rate
+        try:
+            assessments = self.detector.feed(chunk)
+        except Exception as exc:  # a user's detector may raise anything: one line, run on
+            self.stats.detector_failures += 1
+            text = " ".join(str(exc).split())[:300]
+            # a detector that fails once fails on every chunk (a channel it needs is
+            # missing, say): one line every 10 s, the counter counts each
+            self._warn(
+                f"detector {self.detector.name} failed on samples from {first}: {text}",
+                throttle_s=10.0,
+            )
+            return
+        self.stats.chunks += 1
+        n = self.detector.window_samples(rate)
+        for a in assessments:
+            ns = epoch_ns + stamp_ns(int(a.sample_index), 1.0 / rate)
+            self._publish(a, Header(stamp=time_msg(ns), frame_id=msg.header.frame_id), n, rate)
+            self._last_stamp_ns = ns
+
+    # -- output --------------------------------------------------------------------------
+    def _diagnosis(self, a: Any, header: Header) -> Diagnosis | None:
+        d = a.diagnosis
+        if d is None:
+            return None
+        kind = KIND_BY_NAME.get(d.kind)
+        if kind is None or d.location not in kind.locations:
+            self.stats.diagnoses_refused += 1
+            self._warn(
+                f"detector {self.detector.name} diagnosed kind {str(d.kind)[:60]!r} at"
+                f" {str(d.location)[:60]!r}: not in the defect catalogue (brake-sim defects);"
+                " not published"
+            )
+            return None
+        return Diagnosis(
+            header=header,
+            run_id=self.run_id,
+            unit_id=self.unit_id,
+            detector=self.detector.name,
+            sample_index=int(a.sample_index),
+            kind=kind.name,
+            location=d.location,
+            severity=float(d.severity),
+            unit=kind.unit,
+            confidence=float(d.confidence),
+        )
+
+    def _publish(self, a: Any, header: Header, window: int, rate: float) -> None:
+        diagnosis = self._diagnosis(a, header)
+        health = HealthAssessment(
+            header=header,
+            run_id=self.run_id,
+            unit_id=self.unit_id,
+            detector=self.detector.name,
+            first_sample_index=max(0, int(a.sample_index) - window + 1),
+            last_sample_index=int(a.sample_index),
+            sample_rate_hz=rate,
+            health_index=float(a.health_index),
+            alarm=bool(a.alarm),
+            has_diagnosis=diagnosis is not None,
+        )
+        self._health.publish(health)
+        if diagnosis is not None:
+            self._diagnoses.publish(diagnosis)
+            self.stats.diagnoses += 1
+        self._last_assessment = health
+        self.stats.windows += 1
+        self.stats.alarms += health.alarm
+        self._period.windows += 1
+        self._period.alarms += health.alarm
+        h = health.health_index
+        self._period.max_health = h if math.isnan(h) else max(self._period.max_health, h)
+
+    def diagnostic_array(self) -> DiagnosticArray:
+        """One DiagnosticStatus ``<node>: health`` for the period since the last one;
+        stamp = the last window's (0 before any)."""
+        level, message = health_level(self._period, self.stats, self.warn_level)
+        last = self._last_assessment
+        values = {
+            "detector": self.detector.name,
+            "measured_topic": self.measured_topic,
+            "run_id": self.run_id,
+            "unit_id": self.unit_id,
+            "last_first_sample_index": "" if last is None else str(last.first_sample_index),
+            "last_sample_index": "" if last is None else str(last.last_sample_index),
+            "last_health_index": "" if last is None else f"{last.health_index:.6g}",
+            "last_alarm": "" if last is None else str(last.alarm).lower(),
+            "warn_level": f"{self.warn_level:g}",
+            **{k: str(v) for k, v in vars(self.stats).items()},
+        }
+        status = DiagnosticStatus(
+            level=level,
+            name=f"{self.get_fully_qualified_name()}: health",
+            message=message,
+            hardware_id=self.unit_id or "brake",
+            values=[KeyValue(key=k, value=v) for k, v in values.items()],
+        )
+        return DiagnosticArray(header=Header(stamp=time_msg(self._last_stamp_ns)), status=[status])
+
+    def _publish_diagnostics(self) -> None:
+        self._diagnostics.publish(self.diagnostic_array())
+        self._period = PeriodView()

@@ -1,0 +1,393 @@
+"""``brake-sim monitor``: the same detector offline and live gives the same verdicts.
+
+A run with the scenario's sensors is recorded to MCAP by the offline writer. (a) Offline:
+its ``~/measured`` messages, read back by the project's checked reader, go through
+:func:`chunk_from_measured` into the detector. (b) Live: ``brake-sim replay`` publishes the
+file over real DDS (own process, private domain) to ``brake-sim monitor`` (own process),
+whose ``~/health`` and ``~/diagnoses`` this process receives. Both must give the same
+windows with the same health index and alarm, bit for bit, and the same diagnoses.
+
+The detector is a real baseline (RMS of the backing plate's y acceleration) with a window
+(0.07 s) that is not a whole number of chunks (0.1 s), so windows straddle messages; its
+threshold is the median of its own statistic over the recording, so about half the
+windows alarm and the comparison is not all-False.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import subprocess
+import sys
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+import numpy as np
+import pyarrow.parquet as pq
+import pytest
+import rclpy
+from brake_sim_msgs.msg import Diagnosis, HealthAssessment, MeasuredChunk
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+from rclpy.context import Context
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from rclpy.serialization import deserialize_message
+
+from brake_sim_ros import stream
+from brake_sim_ros.datasets.parquet import run_table, write_history
+from brake_sim_ros.model.catalogue import KIND_BY_NAME
+from brake_sim_ros.monitoring.baselines import VibrationThreshold
+from brake_sim_ros.monitoring.detector import Diagnosis as DetectorDiagnosis
+from brake_sim_ros.monitoring.detector import chunk_from_measured
+from brake_sim_ros.recording.reader import open_recording
+from brake_sim_ros.recording.record import record_offline
+from brake_sim_ros.ros.harness import domain_id_for, ros_environment
+from brake_sim_ros.ros.monitor import DIAGNOSES, HEALTH
+from brake_sim_ros.scenarios import load_scenario
+from brake_sim_ros.stream import conversion
+from brake_sim_ros.stream.offline import StreamSettings
+from brake_sim_ros.stream.run import run_scenario
+
+pytestmark = [
+    pytest.mark.ros,
+    # lark (pulled in by rclpy's type-description code) imports sre_parse.
+    pytest.mark.filterwarnings("ignore:module 'sre_(parse|constants)' is deprecated"),
+]
+
+SCENARIO = """\
+name = "monitor_test"
+duration_s = 1.0
+sample_rate_hz = 5120.0
+[actuation]
+profile = "ramp"
+peak_force_n = 1300.0
+"""
+THRESHOLD_ENV = "BRAKE_SIM_TEST_RMS_THRESHOLD"
+DETECTOR = "test_monitor:OffsetRms"  # this module, importable by the monitor process
+CLI = [sys.executable, "-m", "brake_sim_ros.cli"]
+TOPICS = ["--topics", stream.MEASURED.name, stream.DEFECTS.name]  # what the monitor reads
+LOSSLESS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
+DIAGNOSED = ("initial_angle", "left")
+
+
+class OffsetRms(VibrationThreshold):
+    """RMS baseline, 0.07 s windows, threshold from the environment; it diagnoses every
+    alarm as a left initial angle with the health index as severity (only so that the
+    diagnosis path has something to carry)."""
+
+    def __init__(self) -> None:
+        super().__init__("rms", window_s=0.07)
+        self.name = "offset_rms"
+        self.threshold = float(os.environ.get(THRESHOLD_ENV, "nan"))  # set by the test
+
+    def assess(self, window, last_sample_index, sample_rate_hz):
+        a = super().assess(window, last_sample_index, sample_rate_hz)
+        if not a.alarm:
+            return a
+        d = DetectorDiagnosis(*DIAGNOSED, severity=a.health_index, confidence=0.5)
+        return type(a)(a.sample_index, a.time_s, a.health_index, a.alarm, d)
+
+
+def _verdicts(health: list) -> list[tuple[int, int, float, bool]]:
+    return [
+        (int(h.first_sample_index), int(h.last_sample_index), float(h.health_index), h.alarm)
+        for h in health
+    ]
+
+
+@pytest.fixture(scope="module")
+def recording(tmp_path_factory) -> tuple[Path, list[MeasuredChunk], str]:
+    """An MCAP with ~/measured; its measured messages read back; its run id."""
+    folder = tmp_path_factory.mktemp("monitor")
+    scenario_path = folder / "monitor_test.toml"
+    scenario_path.write_text(SCENARIO)
+    path = folder / "measured.mcap"
+    run_id = "0123456789abcdef0123456789abcdef"
+    record_offline(
+        load_scenario(scenario_path),
+        path,
+        settings=StreamSettings(publish_measured=True),
+        run_id=run_id,
+    )
+    with open_recording(path) as rec:
+        measured = [
+            deserialize_message(m.data, MeasuredChunk)
+            for m in rec.messages(topics=[stream.MEASURED.name])
+        ]
+    return path, measured, run_id
+
+
+@pytest.fixture(scope="module")
+def threshold(recording) -> float:
+    """The median RMS of the recording's 0.07 s windows (about half of them alarm)."""
+    _path, measured, _run = recording
+    probe = OffsetRms()
+    probe.threshold = 1.0
+    values = [a.health_index for m in measured for a in probe.feed(chunk_from_measured(m))]
+    return float(np.median(values))
+
+
+def _offline(measured: list[MeasuredChunk], threshold: float) -> list:
+    detector = OffsetRms()
+    detector.threshold = threshold
+    return [a for m in measured for a in detector.feed(chunk_from_measured(m))]
+
+
+def _expected(offline: list) -> list[tuple[int, int, float, bool]]:
+    """What ~/health must say of the windows ``offline``, in :func:`_verdicts`' form."""
+    window = OffsetRms().window_samples(5120.0)
+    return [(a.sample_index - window + 1, a.sample_index, a.health_index, a.alarm) for a in offline]
+
+
+@contextlib.contextmanager
+def _monitoring(offset: int, threshold: float, log: Path) -> Iterator[Listener]:
+    """``brake-sim monitor`` in its own process on a private domain, and a listener."""
+    domain = domain_id_for(offset)
+    listener = Listener(domain)
+    monitor = _start_monitor(domain, threshold, log)
+    listener.monitor = monitor
+    try:
+        _wait_for_monitor(listener, monitor, log)
+        yield listener
+    finally:
+        listener.exit_code = _stop(monitor)
+        listener.close()
+
+
+class Listener:
+    """The monitor's outputs, received in this process (own context, same domain)."""
+
+    def __init__(self, domain_id: int) -> None:
+        self.domain_id = domain_id
+        self.monitor: subprocess.Popen | None = None
+        self.exit_code: int | None = None
+        self.context = Context()
+        rclpy.init(context=self.context, domain_id=domain_id)
+        self.node = rclpy.create_node("monitor_listener", context=self.context)
+        self.executor = SingleThreadedExecutor(context=self.context)
+        self.executor.add_node(self.node)
+        self.health: list[HealthAssessment] = []
+        self.diagnoses: list[Diagnosis] = []
+        self.diagnostics: list[DiagnosticStatus] = []
+        self.node.create_subscription(HealthAssessment, HEALTH.name, self.health.append, LOSSLESS)
+        self.node.create_subscription(Diagnosis, DIAGNOSES.name, self.diagnoses.append, LOSSLESS)
+        self.node.create_subscription(
+            DiagnosticArray, "/diagnostics", self._on_diagnostics, LOSSLESS
+        )
+        self.measured = self.node.create_publisher(
+            MeasuredChunk, stream.MEASURED.name, QoSProfile(depth=100)
+        )
+
+    def _on_diagnostics(self, msg: DiagnosticArray) -> None:
+        self.diagnostics.extend(s for s in msg.status if s.name.endswith(": health"))
+
+    def spin_until(self, done, timeout_s: float) -> bool:
+        end = time.monotonic() + timeout_s
+        while not done() and time.monotonic() < end:
+            self.executor.spin_once(timeout_sec=0.02)
+        return done()
+
+    def close(self) -> None:
+        self.executor.shutdown(timeout_sec=1.0)
+        self.node.destroy_node()
+        rclpy.try_shutdown(context=self.context)
+
+
+def _start_monitor(domain: int, threshold: float, log: Path) -> subprocess.Popen:
+    env = ros_environment(domain)
+    env[THRESHOLD_ENV] = repr(threshold)
+    env["PYTHONPATH"] = os.pathsep.join(
+        [str(Path(__file__).parent), env.get("PYTHONPATH", "")]
+    ).rstrip(os.pathsep)
+    with log.open("w") as out:
+        return subprocess.Popen(
+            [*CLI, "monitor", "--detector", DETECTOR],
+            env=env,
+            stdout=out,
+            stderr=subprocess.STDOUT,
+        )
+
+
+def _stop(proc: subprocess.Popen) -> int:
+    if proc.poll() is None:
+        proc.send_signal(2)  # SIGINT: a clean rclpy shutdown
+        try:
+            return proc.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+    return proc.wait(timeout=10)
+
+
+def _wait_for_monitor(listener: Listener, proc: subprocess.Popen, log: Path) -> None:
+    ready = listener.spin_until(
+        lambda: (
+            proc.poll() is not None
+            or (
+                listener.node.count_publishers(HEALTH.name) >= 1
+                and listener.node.count_subscribers(stream.MEASURED.name) >= 1
+            )
+        ),
+        30.0,
+    )
+    assert ready and proc.poll() is None, log.read_text()
+    listener.spin_until(lambda: False, 0.3)  # both ends of every match settled
+
+
+def test_offline_and_replayed_through_the_monitor_agree(recording, threshold, tmp_path):
+    path, measured, run_id = recording
+    offline = _offline(measured, threshold)
+    window = OffsetRms().window_samples(5120.0)
+    expected = _expected(offline)
+    alarms = [e[3] for e in expected]
+    assert len(expected) >= 10 and any(alarms) and not all(alarms)  # not a trivial match
+    assert any(a.sample_index // 512 != (a.sample_index - window + 1) // 512 for a in offline)
+
+    log = tmp_path / "monitor.log"
+    with _monitoring(11, threshold, log) as listener:
+        replay = subprocess.run(
+            [*CLI, "replay", str(path), "--rate", "2", "--wait-for-subscribers", "1", *TOPICS],
+            env=ros_environment(listener.domain_id),
+            capture_output=True,
+            text=True,
+            timeout=60,
+        )
+        assert replay.returncode == 0, replay.stdout + replay.stderr
+        listener.spin_until(lambda: len(listener.health) >= len(expected), 15.0)
+        # /diagnostics: the period that held the alarms says ERROR (next period <= 1 s)
+        listener.spin_until(
+            lambda: any(s.level == DiagnosticStatus.ERROR for s in listener.diagnostics), 3.0
+        )
+    output = log.read_text()
+    assert listener.exit_code == 0, output
+    error = next(s for s in listener.diagnostics if s.level == DiagnosticStatus.ERROR)
+    assert error.message.startswith("ALARM in ") and _value(error, "detector") == "offset_rms"
+
+    assert _verdicts(listener.health) == expected  # same windows, same numbers, bit for bit
+    # the run id comes on another topic (DefectState): windows before it arrives have none
+    assert {h.run_id for h in listener.health} <= {"", run_id}
+    assert listener.health[-1].run_id == run_id
+    assert {h.detector for h in listener.health} == {"offset_rms"}
+    # stamps: simulated time of each window's last sample, as the chunks' stamps say
+    stamps = [h.header.stamp.sec * 10**9 + h.header.stamp.nanosec for h in listener.health]
+    assert stamps == [conversion.stamp_ns(a.sample_index, 1 / 5120.0) for a in offline]
+    # diagnoses: one per alarm window, the catalogue's kind, location and unit
+    diagnosed = [
+        (d.sample_index, d.kind, d.location, d.unit, d.severity) for d in listener.diagnoses
+    ]
+    unit = KIND_BY_NAME[DIAGNOSED[0]].unit
+    assert diagnosed == [
+        (a.sample_index, *DIAGNOSED, unit, a.health_index) for a in offline if a.alarm
+    ]
+    assert [h.has_diagnosis for h in listener.health] == alarms
+    assert "[WARN]" not in output and "[ERROR]" not in output, output
+
+
+def _malformed(msg: MeasuredChunk) -> MeasuredChunk:
+    """``msg`` with one value too few for its channel counts."""
+    bad = deserialize_message(_serialize(msg), MeasuredChunk)
+    bad.values = bad.values[:-1]
+    return bad
+
+
+def _serialize(msg: MeasuredChunk) -> bytes:
+    from rclpy.serialization import serialize_message
+
+    return serialize_message(msg)
+
+
+def test_monitor_survives_malformed_and_out_of_order_messages(recording, threshold, tmp_path):
+    """Malformed, oversized, rate-less and repeated chunks are dropped with one warning line
+    each, and a chunk the detector cannot read is one warning; the valid chunks around them
+    are assessed as offline, and /diagnostics counts each."""
+    _path, measured, _run = recording
+    m0, m1, m2, m3 = measured[:4]
+    oversized = deserialize_message(_serialize(m2), MeasuredChunk)
+    oversized.sample_count = 2**31
+    no_rate = deserialize_message(_serialize(m2), MeasuredChunk)
+    no_rate.sample_rate_hz = 5e-324  # > 0, but no sample period a clock can hold
+    foreign = deserialize_message(_serialize(measured[4]), MeasuredChunk)
+    foreign.channel_names = [f"other_{name}" for name in foreign.channel_names]
+    # m1 repeats; the last is well formed but lacks the detector's channel
+    sequence = [m0, _malformed(m1), m1, oversized, m1, no_rate, m2, m3, foreign]
+    expected = _expected(_offline([m0, m1, m2, m3], threshold))
+
+    log = tmp_path / "monitor.log"
+    with _monitoring(12, threshold, log) as listener:
+        for msg in sequence:
+            listener.measured.publish(msg)
+            listener.spin_until(lambda: False, 0.05)
+        listener.spin_until(lambda: len(listener.health) >= len(expected), 10.0)
+        # the next /diagnostics (1 s period) carries the counters
+        listener.spin_until(
+            lambda: any(_value(s, "detector_failures") == "1" for s in listener.diagnostics), 5.0
+        )
+        alive = listener.monitor.poll() is None
+    output = log.read_text()
+    assert alive and listener.exit_code == 0, output
+    assert _verdicts(listener.health) == expected
+    last = [s for s in listener.diagnostics if _value(s, "detector_failures") == "1"][-1]
+    assert _value(last, "malformed") == "3" and _value(last, "chunks") == "4"
+    assert _value(last, "out_of_order") == "1"
+    warnings = [line for line in output.splitlines() if "[WARN]" in line]
+    assert len([w for w in warnings if "malformed" in w]) == 3, output
+    assert len([w for w in warnings if "out of order" in w]) == 1, output
+    assert len([w for w in warnings if "no channel 'backing_plate_accel_y'" in w]) == 1, output
+    assert "Traceback" not in output
+
+
+def _value(status: DiagnosticStatus, key: str) -> str | None:
+    return next((kv.value for kv in status.values if kv.key == key), None)
+
+
+def test_measured_messages_read_as_the_dataset_columns(recording, tmp_path):
+    """What the monitor feeds its detector is what ``brake-sim score`` feeds it: the
+    recording's ~/measured through :func:`chunk_from_measured` equals, bit for bit and NaN
+    for NaN, the measured columns of the same run's Parquet table (a dataset's rows),
+    written and read back by pyarrow."""
+    path, measured, _run = recording
+    scenario = load_scenario(path.with_name("monitor_test.toml"))
+    table_path = tmp_path / "run.parquet"
+    write_history(table_path, run_table(scenario, run_scenario(scenario), scenario.duration_s))
+    table = pq.read_table(table_path)
+    chunks = [chunk_from_measured(m) for m in measured]
+    assert [c.first_sample_index for c in chunks] == list(
+        np.cumsum([0] + [len(c) for c in chunks[:-1]])
+    )
+    names = list(chunks[0].channels)
+    assert len(names) >= 4  # accelerometers, wheel speed, line pressure
+    # (every channel at the full 5120 Hz here; test_monitor_parts checks decimated ones)
+    for name in names:
+        (column,) = [c for c in table.column_names if c.startswith(f"measured:{name} [")]
+        dataset = table[column].to_numpy(zero_copy_only=False).astype(np.float64)
+        live = np.concatenate([c.channels[name] for c in chunks])
+        assert live.shape == dataset.shape == (5120,)
+        np.testing.assert_array_equal(live, dataset, err_msg=name)  # NaN where NaN
+
+
+def test_message_fields():
+    """The monitor's messages carry what the README says, with these types."""
+    assert HealthAssessment.get_fields_and_field_types() == {
+        "header": "std_msgs/Header",
+        "run_id": "string",
+        "unit_id": "string",
+        "detector": "string",
+        "first_sample_index": "uint64",
+        "last_sample_index": "uint64",
+        "sample_rate_hz": "double",
+        "health_index": "double",
+        "alarm": "boolean",
+        "has_diagnosis": "boolean",
+    }
+    assert Diagnosis.get_fields_and_field_types() == {
+        "header": "std_msgs/Header",
+        "run_id": "string",
+        "unit_id": "string",
+        "detector": "string",
+        "sample_index": "uint64",
+        "kind": "string",
+        "location": "string",
+        "severity": "double",
+        "unit": "string",
+        "confidence": "double",
+    }
