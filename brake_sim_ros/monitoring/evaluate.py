@@ -126,6 +126,8 @@ def fit(detector: Detector, dataset: SweepDataset, split: str = "train") -> int:
                     {c: v[start : start + n] for c, v in run.channels.items()},
                     run.sample_rate_hz,
                     run.active(start + n - 1),
+                    run_id=run.run_id,
+                    last_sample_index=start + n - 1,
                 )
             )
     detector.fit(windows)
