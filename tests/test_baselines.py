@@ -167,3 +167,26 @@ def test_bad_order_detectors_are_refused():
         OrderAnalysis().fit(_tone_ring_windows(0.0, range(1))[:1])
     with pytest.raises(RuntimeError, match="not fitted"):
         OrderAnalysis().feed(SampleChunk(0, 1000.0, {"wheel_speed": np.zeros(200)}))
+
+
+def test_the_learned_baseline_isolates_a_separable_defect_the_same_way_twice():
+    from brake_sim_ros.monitoring.learned import LearnedClassifier
+
+    drum = (("drum_out_of_round", "drum"),)
+    train = _tone_ring_windows(0.0, range(6)) + _tone_ring_windows(3e-3, range(6, 12), drum)
+    test = _tone_ring_windows(3e-3, range(50, 51), drum)
+    runs = []
+    for _ in range(2):
+        detector = LearnedClassifier(channels=("wheel_speed",))
+        detector.fit(train)
+        assert detector.classes == ("drum_out_of_round:drum", "healthy")
+        found = []
+        for w in test:
+            chunk = SampleChunk(w.last_sample_index - 1023, w.sample_rate_hz, w.channels)
+            found += detector.feed(chunk)
+        runs.append(found)
+    assert runs[0] == runs[1]  # a fixed seed and one job: the same forest
+    last = runs[0][-1]
+    assert last.alarm and (last.diagnosis.kind, last.diagnosis.location) == drum[0]
+    with pytest.raises(ValueError, match="healthy and defective"):
+        LearnedClassifier().fit(_tone_ring_windows(0.0, range(2)))

@@ -75,9 +75,16 @@ def _orders() -> Detector:
     return OrderAnalysis()
 
 
+def _learned() -> Detector:
+    from brake_sim_ros.monitoring.learned import LearnedClassifier
+
+    return LearnedClassifier()
+
+
 BUILTIN: dict[str, Callable[[], Detector]] = {
     **{name: (lambda name=name: VibrationThreshold(name)) for name in STATISTICS},
     "orders": _orders,
+    "learned": _learned,
 }
 __all__ = ["BUILTIN", "STATISTICS", "VibrationThreshold", "crest_factor", "kurtosis", "rms"]
 
