@@ -214,3 +214,27 @@ def test_the_order_detector_does_not_judge_a_history_louder_than_quiet_sliding()
             found += detector.feed(chunk)
         assert found[-1].alarm is judged
         assert (found[-1].health_index > 1.0) if judged else found[-1].health_index == 0.0
+
+
+def test_the_detectability_floor_is_the_smallest_fraction_detected_from_there_up():
+    from brake_sim_ros.studies import detectability as study
+
+    # detected at 0.35 by chance, missed at 0.5, detected from 0.75: the floor is 0.75
+    assert study.floor({0.1: 0.0, 0.35: 1.0, 0.5: 0.25, 0.75: 0.5, 1.0: 1.0}) == 0.75
+    assert study.floor({0.1: 1.0, 0.5: 1.0, 1.0: 1.0}) == 0.1
+    assert study.floor({0.5: 1.0, 1.0: 0.0}) is None  # missed at the service limit
+    result = {
+        "false_alarm": 0.01,
+        "detectors": {
+            "orders": {
+                "threshold": 1.0,
+                "false_alarms": 1,
+                "healthy_hours": 0.5,
+                "counts": {"drum_out_of_round@0.5": [3, 4], "drum_out_of_round@1": [4, 4]},
+            }
+        },
+    }
+    text = study.table(result)
+    assert "| drum_out_of_round (150 um) | orders | 0.5 (75 um) |" in text
+    assert "| - | 3/4 | - | 4/4 |" in text and "(2 per hour)" in text  # 0.75 not run
+    assert "| friction_change (-50 %) | orders | not detected |" in text
