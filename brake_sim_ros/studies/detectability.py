@@ -4,14 +4,14 @@ brakes they were not trained on, at a stated false-alarm rate.
 ``brake-sim bench detectability --out DIR [--units N] [--duration S] [--detectors A,B]
 [--false-alarm F] [--workers N]``
 
-1. A campaign (:func:`campaign_text`, written to ``DIR/detectability.toml``, swept into
-   ``DIR``; a rerun resumes it): every kind of the catalogue at each of its locations, at
-   :data:`FRACTIONS` of its service limit (``brake-sim defects``), one defect per run, and
-   a healthy brake; :data:`FORCES` actuation forces (the healthy reference needs more than
-   one healthy run per unit); ``--units`` units (default 6), whole units to train (2/3)
-   and test (1/3); ``--duration`` s runs (default 2: the order detector judges the quiet
-   sliding after the impacts, from about 1.2 s) at 5120 Hz keeping the measured channels
-   and the labels only.
+1. A campaign (:func:`campaign_text`, swept into ``DIR``; a rerun resumes it): every kind
+   of the catalogue at each of its locations, at :data:`FRACTIONS` of its service limit
+   (``brake-sim defects``), one defect per run, and a healthy brake; :data:`FORCES`
+   actuation forces (the healthy reference needs more than one healthy run per unit);
+   ``--units`` units (default 6), whole units to train (2/3) and test (1/3);
+   ``--duration`` s runs (default 2: the order detector judges the quiet sliding after
+   the impacts, from about 1.2 s) at 5120 Hz keeping the measured channels and the
+   labels only.
 2. Each detector (default ``orders`` and ``learned``) is fitted on the train units.
    Its alarm threshold is then set on healthy training data at the stated false-alarm
    rate: the ``1 - F`` quantile (default F = 0.01) of the health index over healthy
@@ -34,21 +34,19 @@ from pathlib import Path
 
 import numpy as np
 
-from brake_sim_ros.campaigns import load_campaign
+from brake_sim_ros.campaigns.loader import parse_campaign
 from brake_sim_ros.datasets import open as open_dataset
 from brake_sim_ros.datasets.sweep import sweep
 from brake_sim_ros.errors import BrakeSimError
 from brake_sim_ros.model.catalogue import KIND_BY_NAME, KINDS
 from brake_sim_ros.monitoring import evaluate, metrics
 from brake_sim_ros.monitoring.baselines import make_detector
-from brake_sim_ros.recording.output import replace_output
 
 FRACTIONS = (0.1, 0.2, 0.35, 0.5, 0.75, 1.0)  # of each kind's service limit
 FORCES = (1150.0, 1400.0)  # N per shoe, around the published 1300 N
 SAMPLE_RATE_HZ = 5120.0
 HOLD_S = 0.2
 DETECTED_SHARE = 0.5  # a fraction is detected when at least this share of its runs is
-CAMPAIGN_NAME = "detectability.toml"
 
 
 def campaign_text(units: int, duration_s: float, seed: int = 16) -> str:
@@ -216,13 +214,9 @@ def main(argv: list[str]) -> int:
     if not 0.0 < args.false_alarm < 0.5:
         raise BrakeSimError(f"--false-alarm {args.false_alarm!r}: allowed between 0 and 0.5")
     out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    path = out / CAMPAIGN_NAME
-    text = campaign_text(args.units, args.duration)
-    if not (path.is_file() and not path.is_symlink() and path.read_text() == text):
-        replace_output(path, lambda tmp: tmp.write_text(text), option="--out")
+    campaign = parse_campaign(campaign_text(args.units, args.duration), "detectability")
     start = time.monotonic()
-    sweep(load_campaign(path), out, workers=args.workers)
+    sweep(campaign, out, workers=args.workers)
     swept = time.monotonic() - start
     dataset = open_dataset(out)
     names = [n for n in args.detectors.split(",") if n]
