@@ -94,6 +94,7 @@ def test_window_features_are_named_and_missing_channels_read_nan():
     assert got["drum_speed_rad_s"] == pytest.approx(SPEED, rel=1e-3)
     assert got["revolutions"] == pytest.approx(0.5 * SPEED / (2 * math.pi), abs=0.1)
     assert got["line_pressure_mean_bar"] == 40.0 and got["line_pressure_std_bar"] == 0.0
+    assert got["deceleration_per_bar"] == got["drum_deceleration_rad_s2"] / 40.0
 
 
 def _tone_ring_windows(

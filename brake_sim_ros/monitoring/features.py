@@ -11,7 +11,10 @@ signals"), per window (:func:`window_features`, names :func:`feature_names`):
 * from the tone ring (:data:`PULSE_CHANNEL`): the amplitude of the drum's angle
   fluctuation at each order (rad, :func:`angle_fluctuation_orders`), the drum's mean speed
   (rad/s), its deceleration (rad/s^2) and the revolutions in the window;
-* from the line pressure (:data:`PRESSURE_CHANNEL`, bar): mean and standard deviation.
+* from the line pressure (:data:`PRESSURE_CHANNEL`, bar): mean and standard deviation,
+  and the drum's deceleration per bar of it (rad/s^2/bar, over at least
+  :data:`MIN_PRESSURE_BAR`): the brake's effectiveness, which a friction change moves and
+  the actuation force does not.
 
 **Drum angle from the tone ring.** The pulse channel is 1 while a tooth is under the
 sensor: each 0 -> 1 step is one tooth pitch (``2 pi / teeth``) of the drum. The edge lies
@@ -54,6 +57,9 @@ BANDS_HZ: tuple[tuple[float, float], ...] = (
 )
 ORDERS: tuple[int, ...] = tuple(range(1, 21))  # the drum's out-of-round orders (TESTBED: 1-20)
 MIN_REVOLUTIONS = 2  # an order spectrum needs this many whole revolutions in the window
+# below this line pressure the brake is not applied: the deceleration per bar is taken
+# over this much, so that the noise of an idle line does not make it explode
+MIN_PRESSURE_BAR = 1.0
 
 
 def rms(x: np.ndarray) -> float:
@@ -212,7 +218,7 @@ def feature_names() -> tuple[str, ...]:
         names += [f"{c}:order_{k}" for k in ORDERS]
     names += [f"{PULSE_CHANNEL}:angle_order_{k}" for k in ORDERS]
     names += ["drum_speed_rad_s", "drum_deceleration_rad_s2", "revolutions"]
-    names += ["line_pressure_mean_bar", "line_pressure_std_bar"]
+    names += ["line_pressure_mean_bar", "line_pressure_std_bar", "deceleration_per_bar"]
     return tuple(names)
 
 
@@ -241,7 +247,8 @@ def window_features(window: Mapping[str, np.ndarray], sample_rate_hz: float) -> 
     out += [speed, decel, revolutions if pulse is not None else math.nan]
     p = window.get(PRESSURE_CHANNEL)
     if p is None or not np.isfinite(p).any():
-        out += [math.nan, math.nan]
+        out += [math.nan, math.nan, math.nan]
     else:
-        out += [float(np.nanmean(p)), float(np.nanstd(p))]
+        mean = float(np.nanmean(p))
+        out += [mean, float(np.nanstd(p)), decel / max(mean, MIN_PRESSURE_BAR)]
     return np.asarray(out, dtype=np.float64)
