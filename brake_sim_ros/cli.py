@@ -543,9 +543,7 @@ def cmd_score(args: argparse.Namespace) -> int:
     if args.out:
         check_output(args.out, overwrite=True, option="--out")  # before the work
     if args.report:
-        from brake_sim_ros.monitoring.report import check_directory
-
-        check_directory(args.report)
+        _check_report_directory(args.report)
     scores = []
     for name in names:
         try:
@@ -570,11 +568,30 @@ def cmd_score(args: argparse.Namespace) -> int:
         replace_output(args.out, lambda tmp: tmp.write_text(text + "\n"))
         print(f"JSON: {args.out}")
     if args.report:
-        from brake_sim_ros.monitoring.report import write_report
+        from brake_sim_ros.monitoring.report import report_files
 
-        written = write_report(scores, args.report)
-        print(f"report: {len(written)} files in {args.report}")
+        files = report_files(scores)
+        for name in files:  # every file's rules before the first is written
+            check_output(Path(args.report) / name, overwrite=True, option="--report")
+        for name, content in files.items():
+            replace_output(
+                Path(args.report) / name,
+                lambda tmp, c=content: tmp.write_bytes(c),
+                option="--report",
+            )
+        print(f"report: {', '.join(files)} in {args.report}")
     return 0
+
+
+def _check_report_directory(directory: str) -> None:
+    """Refuse a report directory that is a link or not a directory, before any work."""
+    from brake_sim_ros.recording.records import describe_path
+
+    out = Path(directory)
+    if out.is_symlink():
+        raise BrakeSimError(f"--report {describe_path(out)}: a link; allowed a directory path")
+    if out.exists() and not out.is_dir():
+        raise BrakeSimError(f"--report {describe_path(out)}: not a directory")
 
 
 # --- unit ----------------------------------------------------------------------------

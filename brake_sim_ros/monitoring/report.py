@@ -1,7 +1,6 @@
 """A scoring report (``brake-sim score DIR --report OUT``): each detector's score JSON and
-the figures of the issue, written to a directory.
-
-Files (each written whole, never through a link, replaced on a rerun):
+the figures of the issue, as files for a directory (the CLI writes them, each whole, never
+through a link, replaced on a rerun):
 
 * ``score-<detector>.json``: :func:`brake_sim_ros.monitoring.evaluate.score`'s JSON (its
   module documents the schema);
@@ -15,15 +14,11 @@ Files (each written whole, never through a link, replaced on a rerun):
 
 from __future__ import annotations
 
+import io
 import json
-import os
 from collections.abc import Sequence
-from pathlib import Path
 
 import numpy as np
-
-from brake_sim_ros.recording.output import OutputError, check_output, replace_output
-from brake_sim_ros.recording.records import describe_path
 
 
 def _safe(name: str) -> str:
@@ -31,46 +26,25 @@ def _safe(name: str) -> str:
     return "".join(c if c.isalnum() or c in "-_." else "_" for c in name)
 
 
-def check_directory(directory: str | os.PathLike[str]) -> Path:
-    """Refuse a report directory that is a link or not a directory (before any work).
-
-    Raises:
-        OutputError: in one line.
-    """
-    out = Path(directory)
-    if out.is_symlink():
-        raise OutputError(f"--report {describe_path(out)}: a link; allowed a directory path")
-    if out.exists() and not out.is_dir():
-        raise OutputError(f"--report {describe_path(out)}: not a directory")
-    return out
-
-
-def write_report(scores: Sequence[dict], directory: str | os.PathLike[str]) -> list[Path]:
-    """Write the JSON and the figures of ``scores`` (one per detector) into ``directory``
-    (made if missing); the files written, in order."""
+def report_files(scores: Sequence[dict]) -> dict[str, bytes]:
+    """The report of ``scores`` (one per detector): file name -> content (JSON text,
+    PNG images), in order. Nothing is written here: the caller writes each file whole
+    (``brake-sim score --report`` through ``recording.output``)."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    out = check_directory(directory)
-    names = [f"score-{_safe(s['detector'])}.json" for s in scores]
-    for name in [*names, "roc.png", "delays.png"]:
-        check_output(out / name, overwrite=True, option="--report")  # before any write
-    written = []
-    for score, name in zip(scores, names, strict=True):
+    files: dict[str, bytes] = {}
+    for score in scores:
         text = json.dumps(score, indent=1, sort_keys=True) + "\n"
-        written.append(
-            replace_output(out / name, lambda tmp, t=text: tmp.write_text(t), option="--report")
-        )
+        files[f"score-{_safe(score['detector'])}.json"] = text.encode()
 
-    def save(fig, name: str) -> None:
-        written.append(
-            replace_output(
-                out / name, lambda tmp: fig.savefig(tmp, format="png", dpi=100), option="--report"
-            )
-        )
+    def png(fig) -> bytes:
+        buffer = io.BytesIO()
+        fig.savefig(buffer, format="png", dpi=100)
         plt.close(fig)
+        return buffer.getvalue()
 
     fig, ax = plt.subplots(figsize=(5.5, 5))
     ax.plot([0, 1], [0, 1], color="0.7", lw=0.8, ls="--")
@@ -78,13 +52,13 @@ def write_report(scores: Sequence[dict], directory: str | os.PathLike[str]) -> l
         roc = s["health_index"]["roc"]
         auroc = s["health_index"]["auroc"]
         label = f"{s['detector']} (AUROC {'undefined' if auroc is None else f'{auroc:.3f}'})"
-        ax.plot(roc["fpr"], roc["tpr"], label=label, drawstyle="default")
+        ax.plot(roc["fpr"], roc["tpr"], label=label)
     ax.set_xlabel("false positive rate (healthy windows)")
     ax.set_ylabel("true positive rate (defective windows)")
     ax.set_title(f"ROC of the health index, split {scores[0]['split'] if scores else ''}")
     ax.legend(fontsize=8, loc="lower right")
     ax.grid(alpha=0.3)
-    save(fig, "roc.png")
+    files["roc.png"] = png(fig)
 
     fig, ax = plt.subplots(figsize=(1.6 * max(len(scores), 2) + 2, 4))
     data = [s["detection"]["delays_s"] for s in scores]
@@ -101,12 +75,11 @@ def write_report(scores: Sequence[dict], directory: str | os.PathLike[str]) -> l
         ],
         fontsize=8,
     )
-    ax.set_ylabel(
-        f"delay from onset to held alarm (s), hold {scores[0]['hold_s'] if scores else ''} s"
-    )
+    hold = scores[0]["hold_s"] if scores else ""
+    ax.set_ylabel(f"delay from onset to held alarm (s), hold {hold} s")
     ax.set_title("Detection delays")
     ax.grid(alpha=0.3, axis="y")
-    save(fig, "delays.png")
+    files["delays.png"] = png(fig)
 
     for s in scores:
         iso = s["isolation"]
@@ -116,19 +89,15 @@ def write_report(scores: Sequence[dict], directory: str | os.PathLike[str]) -> l
         m = np.asarray(iso["matrix"], dtype=np.float64)
         keep = m.sum(axis=1) > 0  # rows: the true classes present
         rows = m[keep] / m[keep].sum(axis=1, keepdims=True)
-        size = 2.5 + 0.35 * len(classes)
-        fig, ax = plt.subplots(figsize=(size + 1.5, 0.35 * int(keep.sum()) + 2.5))
+        fig, ax = plt.subplots(figsize=(4.0 + 0.35 * len(classes), 0.35 * int(keep.sum()) + 2.5))
         image = ax.imshow(rows, cmap="Blues", vmin=0.0, vmax=1.0, aspect="auto")
         ax.set_xticks(range(len(classes)), classes, rotation=90, fontsize=7)
-        ax.set_yticks(
-            range(int(keep.sum())), [c for c, k in zip(classes, keep, strict=True) if k], fontsize=7
-        )
+        true_classes = [c for c, k in zip(classes, keep, strict=True) if k]
+        ax.set_yticks(range(len(true_classes)), true_classes, fontsize=7)
         ax.set_xlabel("diagnosed")
         ax.set_ylabel("true")
         ax.set_title(f"{s['detector']}: isolation (fraction of each true class's windows)")
         fig.colorbar(image, ax=ax)
         fig.tight_layout()
-        name = f"confusion-{_safe(s['detector'])}.png"
-        check_output(out / name, overwrite=True, option="--report")
-        save(fig, name)
-    return written
+        files[f"confusion-{_safe(s['detector'])}.png"] = png(fig)
+    return files
