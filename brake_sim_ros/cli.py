@@ -524,39 +524,74 @@ def _figure(value: float | None) -> str:
 
 
 def cmd_score(args: argparse.Namespace) -> int:
-    """``brake-sim score DIR --detector NAME``: fit on one split, score on another, print
-    the headline figures and write the JSON (``monitoring.evaluate``)."""
+    """``brake-sim score DIR --detector NAME [--detector NAME ...]``: fit each detector on
+    one split, score it on another, print the headline figures and write the JSON
+    (``monitoring.evaluate``) and, with ``--report``, the report (``monitoring.report``)."""
     import json
 
     from brake_sim_ros.datasets.reader import open_dataset
     from brake_sim_ros.monitoring import evaluate
     from brake_sim_ros.monitoring.baselines import make_detector
-    from brake_sim_ros.recording.output import replace_output
+    from brake_sim_ros.recording.output import check_output, replace_output
 
     dataset = open_dataset(args.directory)
     if not (args.hold_s >= 0.0 and args.hold_s <= 3600.0):
         raise BrakeSimError(f"--hold {args.hold_s!r}: allowed 0 to 3600 s")
-    try:
-        detector = make_detector(args.detector)
-        windows = evaluate.fit(detector, dataset, args.fit_split)
-        score = evaluate.score(detector, dataset, args.split, hold_s=args.hold_s)
-    except (ValueError, RuntimeError) as exc:  # the detector's, or the dataset's, one line
-        raise BrakeSimError(" ".join(str(exc).split())) from None
-    text = json.dumps(score, indent=1, sort_keys=True)
+    names = args.detector or ["rms"]
+    if args.out and len(names) > 1:
+        raise BrakeSimError("--out with several --detector: allowed one detector (or --report)")
     if args.out:
+        check_output(args.out, overwrite=True, option="--out")  # before the work
+    if args.report:
+        _check_report_directory(args.report)
+    scores = []
+    for name in names:
+        try:
+            detector = make_detector(name)
+            windows = evaluate.fit(detector, dataset, args.fit_split)
+            score = evaluate.score(detector, dataset, args.split, hold_s=args.hold_s)
+        except (ValueError, RuntimeError) as exc:  # the detector's, or the dataset's, one line
+            raise BrakeSimError(" ".join(str(exc).split())) from None
+        scores.append(score)
+        d, fa, hi = score["detection"], score["false_alarms"], score["health_index"]
+        median = d["median_delay_s"]
+        delay = "" if median is None else f" (median delay {median:.3f} s)"
+        print(
+            f"detector {score['detector']} fitted on {args.fit_split} ({windows} windows),"
+            f" scored on {args.split}: {score['runs']} runs; detected {d['detected']} of"
+            f" {d['defective_runs']} defective runs{delay};"
+            f" {fa['count']} false alarms in {fa['healthy_hours'] * 3600:.1f} s of healthy"
+            f" operation; AUROC {_figure(hi['auroc'])}, AUPRC {_figure(hi['auprc'])}"
+        )
+    if args.out:
+        text = json.dumps(scores[0], indent=1, sort_keys=True)
         replace_output(args.out, lambda tmp: tmp.write_text(text + "\n"))
-    d, fa, hi = score["detection"], score["false_alarms"], score["health_index"]
-    median = d["median_delay_s"]
-    delay = "" if median is None else f" (median delay {median:.3f} s)"
-    print(
-        f"detector {score['detector']} fitted on {args.fit_split} ({windows} windows), scored"
-        f" on {args.split}: {score['runs']} runs; detected {d['detected']} of"
-        f" {d['defective_runs']} defective runs{delay};"
-        f" {fa['count']} false alarms in {fa['healthy_hours'] * 3600:.1f} s of healthy"
-        f" operation; AUROC {_figure(hi['auroc'])}, AUPRC {_figure(hi['auprc'])}"
-        + (f"; JSON: {args.out}" if args.out else "")
-    )
+        print(f"JSON: {args.out}")
+    if args.report:
+        from brake_sim_ros.monitoring.report import report_files
+
+        files = report_files(scores)
+        for name in files:  # every file's rules before the first is written
+            check_output(Path(args.report) / name, overwrite=True, option="--report")
+        for name, content in files.items():
+            replace_output(
+                Path(args.report) / name,
+                lambda tmp, c=content: tmp.write_bytes(c),
+                option="--report",
+            )
+        print(f"report: {', '.join(files)} in {args.report}")
     return 0
+
+
+def _check_report_directory(directory: str) -> None:
+    """Refuse a report directory that is a link or not a directory, before any work."""
+    from brake_sim_ros.recording.records import describe_path
+
+    out = Path(directory)
+    if out.is_symlink():
+        raise BrakeSimError(f"--report {describe_path(out)}: a link; allowed a directory path")
+    if out.exists() and not out.is_dir():
+        raise BrakeSimError(f"--report {describe_path(out)}: not a directory")
 
 
 # --- unit ----------------------------------------------------------------------------
@@ -948,14 +983,22 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("directory", help="a sweep's output directory")
     p.add_argument(
-        "--detector", default="rms", help="rms, kurtosis, crest, or module:Class (default rms)"
+        "--detector",
+        action="append",
+        help="rms, kurtosis, crest, orders, learned, or module:Class (default rms); repeat it"
+        " to score several",
     )
     p.add_argument("--split", default="test", help="split to score (default test)")
     p.add_argument("--fit-split", default="train", help="split to fit on (default train)")
     p.add_argument(
         "--hold", dest="hold_s", type=float, default=0.2, help="alarm hold, s (default 0.2)"
     )
-    p.add_argument("--out", help="write the score as JSON here")
+    p.add_argument("--out", help="write the score as JSON here (one detector)")
+    p.add_argument(
+        "--report",
+        metavar="DIR",
+        help="write each detector's JSON and the figures (ROC, delays, isolation) here",
+    )
     p.set_defaults(func=cmd_score)
 
     p = sub.add_parser(

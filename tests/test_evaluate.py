@@ -70,6 +70,16 @@ def test_scores_of_a_detector_that_always_alarms(dataset):
     for r in defective:
         assert r["onset_s"] == 0.0
         assert r["delay_s"] == pytest.approx(first_held)
+    per_class = score["detection"].pop("per_class")
+    classes = {c for r in defective for c in r["defects"][:1]}
+    assert set(per_class) == classes == {"initial_angle:left", "initial_angle:right"}
+    for c, figures in per_class.items():
+        runs_of_class = sum(r["defects"][:1] == [c] for r in defective)
+        assert figures == {
+            "defective_runs": runs_of_class,
+            "detected": runs_of_class,
+            "median_delay_s": pytest.approx(first_held),
+        }
     assert score["detection"] == {
         "defective_runs": len(defective),
         "detected": len(defective),
@@ -81,6 +91,9 @@ def test_scores_of_a_detector_that_always_alarms(dataset):
     hours = len(healthy) * 0.5 / 3600.0  # every sample of a healthy run, 0.5 s each
     assert score["false_alarms"]["healthy_hours"] == pytest.approx(hours, rel=0.02)
     assert score["health_index"]["auroc"] == 0.5  # one value for all: no ranking
+    assert score["health_index"]["roc"] == {"fpr": [0.0, 1.0], "tpr": [0.0, 1.0]}
+    for figures in score["health_index"]["per_class"].values():
+        assert figures["auroc"] == 0.5 and figures["windows"] > 0
     assert score["isolation"] is None and score["severity"] is None
 
 
@@ -123,3 +136,37 @@ def test_the_score_command_writes_the_json_and_refuses_in_one_line(dataset, tmp_
     link.symlink_to(out)
     assert cli.main(["score", str(dataset.root), "--out", str(link)]) == 2
     assert json.loads(out.read_text())["detector"] == "kurtosis"  # not written through
+
+
+def test_the_baselines_report_is_written_whole_and_the_same_twice(dataset, tmp_path, capsys):
+    from brake_sim_ros import cli
+
+    reports = [tmp_path / "a", tmp_path / "b"]
+    for out in reports:
+        argv = ["score", str(dataset.root), "--detector", "learned", "--detector", "rms"]
+        assert cli.main([*argv, "--report", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "detector learned" in printed and "detector rms" in printed
+    for name in ("score-learned.json", "score-rms.json"):
+        a, b = ((r / name).read_text() for r in reports)
+        assert a == b  # fixed seeds, one job: the same forest, the same figures
+        score = json.loads(a)
+        assert score["schema_version"] == evaluate.SCHEMA_VERSION
+        assert score["runs"] == len(dataset.runs("test"))
+    for name in ("roc.png", "delays.png"):
+        assert (reports[0] / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    learned = json.loads((reports[0] / "score-learned.json").read_text())
+    if learned["isolation"] is not None:  # it diagnosed: its matrix is drawn
+        assert (reports[0] / "confusion-learned.png").is_file()
+    link = tmp_path / "link"
+    link.symlink_to(reports[0], target_is_directory=True)
+    assert cli.main(["score", str(dataset.root), "--report", str(link)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "a link" in err
+    argv = ["score", str(dataset.root), "--detector", "rms", "--detector", "orders"]
+    assert cli.main([*argv, "--out", str(tmp_path / "x.json")]) == 2
+    assert "allowed one detector" in capsys.readouterr().err
+    # 0.5 s runs: the order detector's second of history never sees the quiet sliding
+    assert cli.main(["score", str(dataset.root), "--detector", "orders"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "healthy training histories" in err

@@ -39,7 +39,7 @@ ALLOWED: dict[str, set[str]] = {
     # tables of runs (Parquet) and sweeps: campaigns run, files written by recording.output
     "datasets": _STREAM | {"campaigns", "recording"},
     "monitoring": _STREAM | {"datasets"},  # detectors and their scoring, on datasets
-    "studies": _STREAM | _ADAPTERS | {"campaigns", "datasets"},
+    "studies": _STREAM | _ADAPTERS | {"campaigns", "datasets", "monitoring"},
     "app": _STREAM | _ADAPTERS,
     "cli": _STREAM | _ADAPTERS | {"app", "studies", "datasets", "monitoring", "campaigns"},
 }

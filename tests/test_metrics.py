@@ -60,6 +60,20 @@ def test_auroc_and_auprc_of_known_rankings():
     assert m.auroc(np.ones(3, dtype=bool), [1, 2, 3]) is None  # one class: undefined
 
 
+def test_roc_points_of_a_known_ranking():
+    defective = np.array([0, 0, 1, 1], dtype=bool)
+    # ranking 0.9 (+), 0.5 (-), 0.4 (+), 0.1 (-): the curve goes up, right, up, right
+    fpr, tpr = m.roc_points(defective, [0.1, 0.5, 0.4, 0.9])
+    assert list(zip(fpr, tpr, strict=True)) == [
+        (0.0, 0.0),
+        (0.0, 0.5),
+        (0.5, 0.5),
+        (0.5, 1.0),
+        (1.0, 1.0),
+    ]
+    assert m.roc_points(np.zeros(3, dtype=bool), [1, 2, 3]) == ([], [])  # one class
+
+
 def test_rmse_and_the_asymmetric_rul_score():
     assert m.rmse([1.0, 2.0, 3.0], [1.0, 2.0, 3.0]) == 0.0
     assert m.rmse([0.0, 0.0], [3.0, 4.0]) == pytest.approx(math.sqrt(12.5))

@@ -15,33 +15,9 @@ from collections.abc import Callable, Iterable, Mapping
 import numpy as np
 
 from brake_sim_ros.monitoring.detector import Assessment, Detector, TrainingWindow
+from brake_sim_ros.monitoring.features import STATISTICS, crest_factor, kurtosis, rms
 
 DEFAULT_CHANNEL = "backing_plate_accel_y"
-
-
-def rms(x: np.ndarray) -> float:
-    """Root mean square, the channel's unit (NaN samples ignored)."""
-    return float(np.sqrt(np.nanmean(np.square(x))))
-
-
-def kurtosis(x: np.ndarray) -> float:
-    """Kurtosis (3 for Gaussian noise; impacts raise it), NaN samples ignored."""
-    centred = x - np.nanmean(x)
-    var = np.nanmean(centred**2)
-    return float(np.nanmean(centred**4) / (var * var)) if var > 0.0 else 0.0
-
-
-def crest_factor(x: np.ndarray) -> float:
-    """Peak over RMS (about 3-4 for Gaussian noise), NaN samples ignored."""
-    r = rms(x)
-    return float(np.nanmax(np.abs(x)) / r) if r > 0.0 else 0.0
-
-
-STATISTICS: dict[str, Callable[[np.ndarray], float]] = {
-    "rms": rms,
-    "kurtosis": kurtosis,
-    "crest": crest_factor,
-}
 
 
 class VibrationThreshold(Detector):
@@ -93,9 +69,24 @@ class VibrationThreshold(Detector):
         )
 
 
+def _orders() -> Detector:
+    from brake_sim_ros.monitoring.order_analysis import OrderAnalysis
+
+    return OrderAnalysis()
+
+
+def _learned() -> Detector:
+    from brake_sim_ros.monitoring.learned import LearnedClassifier
+
+    return LearnedClassifier()
+
+
 BUILTIN: dict[str, Callable[[], Detector]] = {
-    name: (lambda name=name: VibrationThreshold(name)) for name in STATISTICS
+    **{name: (lambda name=name: VibrationThreshold(name)) for name in STATISTICS},
+    "orders": _orders,
+    "learned": _learned,
 }
+__all__ = ["BUILTIN", "STATISTICS", "VibrationThreshold", "crest_factor", "kurtosis", "rms"]
 
 
 def make_detector(name: str) -> Detector:

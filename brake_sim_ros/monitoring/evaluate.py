@@ -10,11 +10,16 @@ The score (:func:`score`, written as JSON by ``brake-sim score``; :data:`SCHEMA_
 
 ``detector``, ``split``, ``hold_s``, ``runs``, ``windows``
 ``detection``: ``defective_runs``, ``detected``, ``missed``, ``delays_s`` (one per
-    detected run, from its onset to the first held alarm), ``median_delay_s``
+    detected run, from its onset to the first held alarm), ``median_delay_s``;
+    ``per_class``: the same counts and ``median_delay_s`` per class of run (``kind:location``
+    of its first defect active at its end)
 ``false_alarms``: ``count`` and ``healthy_hours`` over the healthy samples of every run,
     ``per_hour``
 ``health_index``: ``auroc``, ``auprc`` over all windows (defective at the window's last
-    sample = positive); null where undefined
+    sample = positive); null where undefined; ``roc``: ``fpr`` and ``tpr``, the ROC curve's
+    corners (empty where undefined); ``per_class``: per class of defective window
+    (``kind:location`` of its first active defect), ``windows`` and ``auroc`` of that class's
+    windows against the healthy ones (null where undefined)
 ``isolation``: ``classes`` and ``matrix`` (rows true, columns diagnosed; ``none``: no
     diagnosis) over the windows of defective runs after onset, when the detector diagnoses;
     null otherwise
@@ -36,7 +41,8 @@ from brake_sim_ros.model.catalogue import KINDS, label_column
 from brake_sim_ros.monitoring import metrics
 from brake_sim_ros.monitoring.detector import Assessment, Detector, SampleChunk, TrainingWindow
 
-SCHEMA_VERSION = 1
+SCHEMA_VERSION = 2
+HEALTHY = "healthy"  # the class of a healthy window or run in the per-class figures
 MEASURED_PREFIX = "measured:"
 # label column -> "kind:location", the catalogue's (``brake-sim defects``)
 LABELS = {label_column(k, loc): f"{k.name}:{loc}" for k in KINDS for loc in k.locations}
@@ -102,6 +108,10 @@ def read_run(dataset: SweepDataset, run_id: str) -> RunSamples:
     )
 
 
+def _median(values: list[float]) -> float | None:
+    return float(np.median(values)) if values else None
+
+
 def chunks(run: RunSamples, chunk_s: float) -> Iterator[SampleChunk]:
     """The run's measured channels as consecutive chunks of about ``chunk_s``."""
     n = max(1, round(chunk_s * run.sample_rate_hz))
@@ -126,6 +136,8 @@ def fit(detector: Detector, dataset: SweepDataset, split: str = "train") -> int:
                     {c: v[start : start + n] for c, v in run.channels.items()},
                     run.sample_rate_hz,
                     run.active(start + n - 1),
+                    run_id=run.run_id,
+                    last_sample_index=start + n - 1,
                 )
             )
     detector.fit(windows)
@@ -149,6 +161,8 @@ def score(
     per_run, delays, missed = [], [], 0
     fa_count, fa_hours = 0, 0.0
     truth, index, true_class, diagnosed, sev_est, sev_true = [], [], [], [], [], []
+    window_class: list[str] = []
+    run_class: dict[str, list[float | None]] = {}
     for run_id in dataset.runs(split):
         run = read_run(dataset, run_id)
         found = assess_run(detector, run, chunk_s)
@@ -158,6 +172,10 @@ def score(
         defective = np.any(run.labels[rows] != 0.0, axis=1) if rows.size else np.zeros(0, bool)
         truth.extend(defective.tolist())
         index.extend(a.health_index for a in found)
+        window_class.extend(
+            ":".join(run.active(int(row))[0]) if bad else HEALTHY
+            for row, bad in zip(rows, defective, strict=True)
+        )
         onset = run.onset_index
         onset_s = None if onset is None else float(run.time_s[onset])
         delay = None
@@ -172,6 +190,8 @@ def score(
                 missed += 1
             else:
                 delays.append(delay)
+            final = run.active(run.time_s.size - 1)
+            run_class.setdefault(":".join(final[0]) if final else HEALTHY, []).append(delay)
             for a, row, bad in zip(found, rows, defective, strict=True):
                 if not bad:
                     continue
@@ -196,6 +216,8 @@ def score(
     y = np.array(truth, dtype=bool)
     h = np.array(index, dtype=np.float64)
     classes = sorted(set(true_class) | set(diagnosed))
+    cls = np.array(window_class, dtype=object)
+    fpr, tpr = metrics.roc_points(y, h) if y.size else ([], [])
     diagnoses = any(d != "none" for d in diagnosed)
     return {
         "schema_version": SCHEMA_VERSION,
@@ -210,6 +232,14 @@ def score(
             "missed": missed,
             "delays_s": delays,
             "median_delay_s": float(np.median(delays)) if delays else None,
+            "per_class": {
+                c: {
+                    "defective_runs": len(found_delays),
+                    "detected": sum(x is not None for x in found_delays),
+                    "median_delay_s": _median([x for x in found_delays if x is not None]),
+                }
+                for c, found_delays in sorted(run_class.items())
+            },
         },
         "false_alarms": {
             "count": fa_count,
@@ -219,6 +249,17 @@ def score(
         "health_index": {
             "auroc": metrics.auroc(y, h) if y.size else None,
             "auprc": metrics.auprc(y, h) if y.size else None,
+            "roc": {"fpr": fpr, "tpr": tpr},
+            "per_class": {
+                c: {
+                    "windows": int(np.count_nonzero(cls == c)),
+                    "auroc": metrics.auroc(
+                        (cls == c)[(cls == c) | (cls == HEALTHY)],
+                        h[(cls == c) | (cls == HEALTHY)],
+                    ),
+                }
+                for c in sorted(set(window_class) - {HEALTHY})
+            },
         },
         "isolation": (
             {

@@ -110,6 +110,17 @@ def auroc(defective: np.ndarray, health_index: np.ndarray) -> float | None:
     return float(skm.roc_auc_score(y, np.asarray(health_index, dtype=np.float64)))
 
 
+def roc_points(defective: np.ndarray, health_index: np.ndarray) -> tuple[list[float], list[float]]:
+    """The ROC curve's corners ``(false positive rates, true positive rates)``
+    (``sklearn.metrics.roc_curve``, collinear points dropped), from (0, 0) to (1, 1);
+    empty lists when only one class is present."""
+    y = np.asarray(defective, dtype=bool)
+    if y.all() or not y.any():
+        return [], []
+    fpr, tpr, _ = skm.roc_curve(y, np.asarray(health_index, dtype=np.float64))
+    return fpr.tolist(), tpr.tolist()
+
+
 def auprc(defective: np.ndarray, health_index: np.ndarray) -> float | None:
     """Average precision (area under the precision-recall curve); None without positives."""
     y = np.asarray(defective, dtype=bool)

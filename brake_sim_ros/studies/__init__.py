@@ -82,6 +82,12 @@ def _drum(argv: list[str]) -> int:
     return drum_defect.main(argv)
 
 
+def _detectability(argv: list[str]) -> int:
+    from brake_sim_ros.studies import detectability
+
+    return detectability.main(argv)
+
+
 def _sweep(argv: list[str]) -> int:
     from brake_sim_ros.studies import sweep_bench
 
@@ -140,6 +146,12 @@ BENCHMARKS: dict[str, Study] = {
             "units",
             "spread of stop time and first-impact force across a fleet of units",
             _units,
+        ),
+        Study(
+            "detectability",
+            "per defect, the smallest severity the baselines detect on unseen units at a"
+            " stated false-alarm rate",
+            _detectability,
         ),
     )
 }

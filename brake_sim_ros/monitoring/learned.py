@@ -1,0 +1,159 @@
+"""The learned baseline (``learned``): a random forest on windowed features, trained on the
+train split, that detects (P(defective)) and isolates (which defect, where).
+
+Features: :func:`~brake_sim_ros.monitoring.features.window_features` (the one feature
+function of every baseline: rms, kurtosis, crest and band levels of both backing-plate
+accelerations, their amplitudes at drum orders 1-20, the drum's angle fluctuation at those
+orders from the tone ring, its speed and deceleration, the line pressure's mean and
+spread) over the last :attr:`LearnedClassifier.history_s` = 0.5 s, assessed every 0.1 s
+(:mod:`.history`). Classes: ``healthy`` and each ``kind:location`` of the catalogue seen in
+training (a window's class is the first active defect at its last sample).
+
+Model: ``sklearn.pipeline.Pipeline`` of a constant imputer (a missing channel's features
+read 0) and ``RandomForestClassifier`` (:data:`N_TREES` trees, leaves of at least
+:data:`MIN_LEAF` windows, ``random_state`` fixed, one job: the same data give the same
+forest, bit for bit). Trees need no scaling of the features. The healthy windows together
+weigh as much as all defective ones together: many windows of a defective run look healthy
+(before the brake is applied, most defects change nothing), and with every class weighted
+alike (1/19 each for healthy) such a window would read P(defective) = 0.95, which set the
+alarm threshold so high on the reference campaign that the forest found 56 of 304
+defective test runs; weighted so, a window that tells nothing reads about 0.5.
+
+Health index: P(defective) = 1 - P(healthy) over the alarm threshold. The threshold is set
+on healthy training windows the forest did not see: the windows of each training run are
+scored by a forest trained on the other runs' (:data:`FOLDS` folds grouped by run, so no
+window is scored by trees that saw its run), and the threshold is their
+``1 - FALSE_ALARM_FRACTION`` quantile (at least 0.5). Diagnosis on alarm: the most
+probable defective class, its probability as confidence (no severity estimate).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping
+
+import numpy as np
+from sklearn.ensemble import RandomForestClassifier
+from sklearn.impute import SimpleImputer
+from sklearn.model_selection import GroupKFold
+from sklearn.pipeline import Pipeline
+
+from brake_sim_ros.monitoring.detector import Assessment, Diagnosis, TrainingWindow
+from brake_sim_ros.monitoring.features import CHANNELS, window_features
+from brake_sim_ros.monitoring.history import HistoryDetector
+
+HEALTHY = "healthy"
+N_TREES = 100
+MIN_LEAF = 2
+FOLDS = 3
+FALSE_ALARM_FRACTION = 0.01  # of healthy training windows over the threshold, out of fold
+SEED = 0
+
+
+def _pipeline() -> Pipeline:
+    return Pipeline(
+        [
+            (
+                "impute",
+                SimpleImputer(strategy="constant", fill_value=0.0, keep_empty_features=True),
+            ),
+            (
+                "forest",
+                RandomForestClassifier(
+                    n_estimators=N_TREES,
+                    min_samples_leaf=MIN_LEAF,
+                    random_state=SEED,
+                    n_jobs=1,
+                ),
+            ),
+        ]
+    )
+
+
+def _weights(labels: np.ndarray) -> np.ndarray:
+    """Sample weights: the healthy windows together weigh as much as the defective ones
+    together (each defect's windows as their share of the defective ones)."""
+    healthy = labels == HEALTHY
+    return np.where(healthy, 0.5 / max(1, healthy.sum()), 0.5 / max(1, (~healthy).sum()))
+
+
+class LearnedClassifier(HistoryDetector):
+    """A random forest on windowed features (module docstring)."""
+
+    def __init__(
+        self,
+        *,
+        history_s: float = 0.5,
+        window_s: float = 0.1,
+        channels: tuple[str, ...] = CHANNELS,
+    ) -> None:
+        super().__init__()
+        if not (window_s > 0.0 and history_s >= window_s):
+            raise ValueError(
+                f"window_s={window_s!r}, history_s={history_s!r}: allowed window_s > 0 and"
+                " history_s >= window_s"
+            )
+        self.name = "learned"
+        self.channels = tuple(channels)  # the features of a channel it does not read are 0
+        self.window_s, self.history_s = float(window_s), float(history_s)
+        self.model: Pipeline | None = None
+        self.classes: tuple[str, ...] = ()
+        self.threshold: float | None = None
+        self.healthy_index: np.ndarray = np.zeros(0)  # healthy training windows, out of fold
+
+    def fit(self, windows: Iterable[TrainingWindow]) -> None:
+        """Features of every training history, the forest, and the out-of-fold threshold
+        (module docstring)."""
+        X, y, groups = [], [], []
+        for history, w in self.histories(windows):
+            mine = {c: history[c] for c in self.channels if c in history}  # as assessed
+            X.append(window_features(mine, w.sample_rate_hz))
+            y.append(HEALTHY if w.healthy else ":".join(w.defects[0]))
+            groups.append(w.run_id)
+        labels = np.array(y)
+        if HEALTHY not in y or len(set(y)) < 2:
+            raise ValueError(
+                f"detector {self.name}: training windows of {sorted(set(y))}; it needs healthy"
+                " and defective ones"
+            )
+        features = np.array(X)
+        healthy = labels == HEALTHY
+        p_defective = np.full(labels.size, np.nan)
+        run_ids = np.array(groups)
+        folds = min(FOLDS, len(set(groups)))
+        if folds >= 2:
+            for train, held in GroupKFold(n_splits=folds).split(features, labels, run_ids):
+                if len(set(labels[train])) < 2 or HEALTHY not in labels[train]:
+                    continue
+                model = _pipeline().fit(
+                    features[train],
+                    labels[train],
+                    forest__sample_weight=_weights(labels[train]),
+                )
+                proba = model.predict_proba(features[held])
+                p_defective[held] = 1.0 - proba[:, list(model.classes_).index(HEALTHY)]
+        scored = p_defective[healthy & np.isfinite(p_defective)]
+        quantile = float(np.quantile(scored, 1.0 - FALSE_ALARM_FRACTION)) if scored.size else 0.5
+        self.threshold = max(0.5, quantile)
+        self.healthy_index = scored / self.threshold
+        self.model = _pipeline().fit(features, labels, forest__sample_weight=_weights(labels))
+        self.classes = tuple(str(c) for c in self.model.classes_)
+
+    def judge(
+        self, history: Mapping[str, np.ndarray], last_sample_index: int, sample_rate_hz: float
+    ) -> Assessment:
+        if self.model is None or self.threshold is None:
+            raise RuntimeError(f"detector {self.name} is not fitted: call fit() first")
+        x = window_features(history, sample_rate_hz)[None, :]
+        proba = self.model.predict_proba(x)[0]
+        healthy = self.classes.index(HEALTHY)
+        index = (1.0 - float(proba[healthy])) / self.threshold
+        alarm = index >= 1.0
+        diagnosis = None
+        if alarm:
+            proba[healthy] = -1.0
+            j = int(np.argmax(proba))
+            kind, location = self.classes[j].split(":", 1)
+            diagnosis = Diagnosis(kind, location, confidence=float(proba[j]))
+        return Assessment(
+            last_sample_index, last_sample_index / sample_rate_hz, index, alarm, diagnosis
+        )
