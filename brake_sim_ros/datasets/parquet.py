@@ -55,6 +55,7 @@ from brake_sim_ros.model.sensor_faults import FAULT_BIT
 from brake_sim_ros.model.sensors import SensorBank
 from brake_sim_ros.model.trajectory import SampleBlock
 from brake_sim_ros.model.units import UnitValue
+from brake_sim_ros.stream.ground_truth import recorded_wear
 
 if TYPE_CHECKING:
     from brake_sim_ros.scenarios.loader import Scenario
@@ -152,7 +153,8 @@ def history_table(
             columns[edge_name] = pa.array(edges_on_rows(np.asarray(samples.time_s), edges))
             info = {b"unit": b"s", b"tone_ring_teeth": str(teeth[name]).encode()}
             fields.append(pa.field(edge_name, pa.float64(), metadata=info))
-    for name, severity in defects.label_series(np.asarray(history["time_s"])).items():
+    wear = recorded_wear(samples)  # a lining wearing with its friction work: the model's
+    for name, severity in defects.label_series(np.asarray(history["time_s"]), wear).items():
         columns[name] = pa.array(severity)
         fields.append(pa.field(name, pa.float64()))
     meta = {

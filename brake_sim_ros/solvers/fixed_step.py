@@ -230,8 +230,9 @@ class FixedStepStepper:
     def set_state(self, y: np.ndarray) -> None:
         """Replace the state vector (layout.Y_*), e.g. to start from a twisted coupling."""
         y = np.asarray(y, dtype=float)
-        if y.shape != (L.N_STATE,) or not np.all(np.isfinite(y)):
-            raise ParameterError(f"state of shape {y.shape}: allowed {L.N_STATE} finite values")
+        size = self._y.shape[0]  # N_STATE, or N_STATE_WEAR with a lining wearing with work
+        if y.shape != (size,) or not np.all(np.isfinite(y)):
+            raise ParameterError(f"state of shape {y.shape}: allowed {size} finite values")
         self._y = y.copy()
 
     @property
@@ -280,6 +281,9 @@ class FixedStepStepper:
         self._base_force_n = max(self._base_force_n, _peak_n(setup))
         self._profile = setup.actuation.as_arrays()
         self._use_substeps(substeps)
+        if setup.defects.wearing_with_work and self._y.shape[0] < L.N_STATE_WEAR:
+            # a lining starts wearing with its friction work: its wear state starts at 0
+            self._y = np.concatenate([self._y, np.zeros(L.N_STATE_WEAR - self._y.shape[0])])
 
     def _raise_limit_force(self, force_n: float) -> None:
         """Recompute the step limit for a larger actuation force and re-pick the substeps."""
