@@ -76,9 +76,9 @@ class ShoeDefect:
             contact length of the model's line contact is the lining's width along the drum
             axis, which wear does not change.
 
-    Delay, lag and pulsation act on the scenario's actuation history; the node's live
-    actuation commands (``~/actuation``) reach the shoe with the gain and the pulsation
-    but without delay or lag.
+    Delay, lag and pulsation act on the commanded actuation history: the scenario's, or
+    the node's live actuation commands (``~/actuation``), which the stepper keeps as a
+    history for a delayed or lagging shoe (``solvers.fixed_step.CommandHistory``).
     """
 
     pivot_radius_change_pct: float = 0.0
