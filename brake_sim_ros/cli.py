@@ -461,6 +461,7 @@ def catalogue_text() -> str:
     scenario key that sets it, and what it changes; a block each."""
     from brake_sim_ros.model.catalogue import (
         DEFAULT_WEAR_RATE_MM_PER_MJ,
+        DRUM_KIND,
         GROWTH_LAWS,
         KINDS,
         label_column,
@@ -472,11 +473,14 @@ def catalogue_text() -> str:
     ]
     for k in KINDS:
         h = k.healthy_value
-        where = (
-            "[defects.drum] (no node parameter)"
-            if k.locations == ("drum",)
-            else f"[defects.<location>] or the node's parameter defects.<location>.{k.scenario_key}"
-        )
+        if k.name == DRUM_KIND:
+            where = "[defects.drum] (no node parameter: the scenario's)"
+        elif k.locations == ("drum",):
+            where = f"[defects.drum] or the node's parameter defects.drum.{k.scenario_key}"
+        else:
+            where = (
+                f"[defects.<location>] or the node's parameter defects.<location>.{k.scenario_key}"
+            )
         lines += [
             f"  {k.name} [{k.unit}] at {', '.join(k.locations)}: {k.description}",
             f"    range {k.minimum:g} to {k.maximum:g} {k.unit} ({k.limit});"

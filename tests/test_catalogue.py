@@ -22,7 +22,10 @@ def test_every_kind_is_set_by_a_defect_field_and_a_node_parameter_with_its_range
     assert {k.name for k in drum_kinds} == {catalogue.DRUM_KIND, catalogue.FLAT_KIND}
     for drum in drum_kinds:
         assert drum.scenario_key in {f.name for f in dataclasses.fields(DrumDefect)}
-        assert not any(name.startswith(f"defects.{drum.scenario_key}") for name in RANGES)
+    # the harmonics have no node parameter; the flat has, with the catalogue's range
+    assert not any(name.startswith("defects.harmonics") for name in RANGES)
+    flat = catalogue.KIND_BY_NAME[catalogue.FLAT_KIND]
+    assert RANGES["defects.flat_depth_um"] == (flat.minimum, flat.maximum)
     for kind in catalogue.KINDS:
         if kind in drum_kinds:
             continue

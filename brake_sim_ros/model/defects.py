@@ -68,8 +68,8 @@ class ShoeDefect:
             (100: broken). Past the stop's margin (``actuation.spring_release``: preload
             60 N against a residual line force of 20 N, so past 67 %) the residual pressure
             presses the shoe on the drum without actuation: drag.
-        lining_wear_mm: lining thickness lost, mm (0 to the new lining's
-            :data:`~brake_sim_ros.model.catalogue.LINING_THICKNESS_MM`). The lining's
+        lining_wear_mm: lining thickness lost, mm (0 to 5, the thickness of a new lining,
+            catalogue.LINING_THICKNESS_MM). The lining's
             surface, an arc about the shoe's lining centre, moves in by as much: the running
             clearance grows by the wear and the shoe turns further before it touches (an
             adjuster that takes up wear is not modelled: a brake between adjustments). The
@@ -267,7 +267,7 @@ class DrumDefect:
         harmonics: the radius harmonics, in any order; empty for a round drum.
         flat_depth_um: the flat's depth ``d``, um (0: none; the catalogue's ``drum_flat``).
         flat_centre_deg: its centre ``c`` in the drum's frame, deg.
-        flat_width_deg: its whole width ``2 w``, deg (> 0 to :data:`MAX_FLAT_WIDTH_DEG`).
+        flat_width_deg: its whole width ``2 w``, deg (> 0 to 90).
     """
 
     harmonics: tuple[DrumHarmonic, ...] = ()

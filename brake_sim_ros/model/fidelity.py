@@ -50,7 +50,9 @@ Why each level serves what it serves (the physics behind the capability table):
   cheapest impact level that serves it; a forced contact-regime level is refused, naming
   the defect and the levels that represent it. Never a one-shoe model: the wave passes the
   shoe at ``k`` times the drum speed, which the other shoe's braking sets (one shoe alone
-  stops the drum more slowly: the line of 50 um of ovality differs by 6 %).
+  stops the drum more slowly: the line of 50 um of ovality differs by 6 %). A drum flat
+  (``drum_flat``) likewise: it passes the shoe once per revolution. A worn lining
+  (``lining_wear``) is geometry, as a pivot's place: every level represents it.
 
 Pure logic: no numerics, no files.
 """
