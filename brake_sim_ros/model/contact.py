@@ -169,6 +169,19 @@ def kinematics(p, base, theta, omega, drum_angle, drum_speed):
         eps_dot = nx * vx + ny * vy
         vt = -ny * vx + nx * vy
         return eps, eps_dot, vt, xx, xy, dist, nx, ny, c, sn, nx, ny, 0.0
+    # a call, not inlined into every kinematics of the round drum's path
+    return _out_of_round(
+        p, px, py, xx, xy, dist, nx, ny, turn, vx, vy, w, c, sn, drum_angle, drum_speed
+    )
+
+
+@njit(cache=True)
+def _out_of_round(p, px, py, xx, xy, dist, nx, ny, turn, vx, vy, w, c, sn, drum_angle, drum_speed):
+    """:func:`kinematics` on an out-of-round drum (harmonics, a flat), from the lining point
+    ``X`` = (``xx``, ``xy``) at ``dist`` from the centre, its radial unit vector
+    (``nx``, ``ny``) and turn rate ``turn`` (:func:`contact_point`), the pin (``px``,
+    ``py``), the material point's velocity (``vx``, ``vy``), the shoe's turn rate ``w``
+    (rad/s, outward) and ``cos``/``sin`` of its angle (``c``, ``sn``)."""
     radius, r_slope = drum_radius(p, math.atan2(xy, xx) - drum_angle)
     eps = dist - radius
     tilt = r_slope / dist

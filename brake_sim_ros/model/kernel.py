@@ -94,7 +94,7 @@ def evaluate(y, p, fe_left, fe_right, stuck, mode_left, mode_right, dydt, out, r
     dydt[L.Y_CONTACT_LOSS] = sl[contact.E_CONTACT_POWER] + sr[contact.E_CONTACT_POWER]
     dydt[L.Y_ACTUATION_WORK] = sl[contact.E_ACTUATION_POWER] + sr[contact.E_ACTUATION_POWER]
     if y.shape[0] > L.Y_LEFT_WEAR:  # a lining wears with its friction work (layout.Y_*_WEAR)
-        _wear_rates(p, sl, sr, dydt)
+        _wear_rates(p, sl[contact.E_FRICTION_POWER], sr[contact.E_FRICTION_POWER], dydt)
     drum_torque = sl[contact.E_DRUM_TORQUE] + sr[contact.E_DRUM_TORQUE]
     rigid = p[L.P_RIGID_COUPLING] > 0.0
     if rigid:
@@ -162,13 +162,13 @@ def evaluate(y, p, fe_left, fe_right, stuck, mode_left, mode_right, dydt, out, r
 
 
 @njit(cache=True)
-def _wear_rates(p, sl, sr, dydt):
+def _wear_rates(p, power_left, power_right, dydt):
     """Wear rates of the linings, m/s: each shoe's wear per joule (layout.LN_WEAR_RATE,
     0 but for a lining that wears with its friction work, from its onset) times its own
     friction power (contact.E_FRICTION_POWER, W)."""
     b = L.P_LINING_BASE + L.LN_WEAR_RATE
-    dydt[L.Y_LEFT_WEAR] = p[b] * sl[contact.E_FRICTION_POWER]
-    dydt[L.Y_RIGHT_WEAR] = p[b + L.LINING_STRIDE] * sr[contact.E_FRICTION_POWER]
+    dydt[L.Y_LEFT_WEAR] = p[b] * power_left
+    dydt[L.Y_RIGHT_WEAR] = p[b + L.LINING_STRIDE] * power_right
 
 
 @njit(cache=True)
