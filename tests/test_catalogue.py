@@ -18,17 +18,24 @@ from brake_sim_ros.stream.parameters import _RANGES as RANGES
 
 def test_every_kind_is_set_by_a_defect_field_and_a_node_parameter_with_its_range():
     fields = {f.name for f in dataclasses.fields(ShoeDefect)}
-    drum = catalogue.KIND_BY_NAME[catalogue.DRUM_KIND]
-    assert drum.scenario_key in {f.name for f in dataclasses.fields(DrumDefect)}
-    assert not any(name.startswith(f"defects.{drum.scenario_key}") for name in RANGES)
+    drum_kinds = [k for k in catalogue.KINDS if k.locations == ("drum",)]
+    assert {k.name for k in drum_kinds} == {catalogue.DRUM_KIND, catalogue.FLAT_KIND}
+    for drum in drum_kinds:
+        assert drum.scenario_key in {f.name for f in dataclasses.fields(DrumDefect)}
+    # the harmonics have no node parameter; the flat has, with the catalogue's range
+    assert not any(name.startswith("defects.harmonics") for name in RANGES)
+    flat = catalogue.KIND_BY_NAME[catalogue.FLAT_KIND]
+    assert RANGES["defects.flat_depth_um"] == (flat.minimum, flat.maximum)
     for kind in catalogue.KINDS:
-        if kind is drum:
+        if kind in drum_kinds:
             continue
         assert kind.scenario_key in fields
         lo, hi = RANGES[f"defects.{kind.scenario_key}"]
         assert (lo, hi) == (kind.healthy_value + kind.minimum, kind.healthy_value + kind.maximum)
         assert getattr(ShoeDefect(), kind.scenario_key) == kind.healthy_value
-    assert set(ShoeDefect().severities()) == set(catalogue.KIND_BY_NAME) - {drum.name}
+    assert set(ShoeDefect().severities()) == set(catalogue.KIND_BY_NAME) - {
+        k.name for k in drum_kinds
+    }
     columns = catalogue.label_columns()
     assert len(set(columns)) == len(columns) == sum(len(k.locations) for k in catalogue.KINDS)
 

@@ -103,3 +103,33 @@ def test_at_every_sample_the_held_truth_is_within_the_publication_rule(truths):
     stamps = np.array([ns for ns, _ in truths]) * 1e-9
     changing = stamps[stamps <= 2.0]
     assert np.max(np.diff(changing)) <= PUBLISH_PERIOD_S + 1e-9
+
+
+WEARING = """
+name = "left_lining_wearing"
+duration_s = 1.5
+[defects.left.lining_wear_mm]
+value = 3.0
+growth = "friction_work"
+wear_rate_mm_per_mj = 100.0
+"""
+
+
+def test_a_lining_wearing_with_its_work_reads_back_as_the_models_wear(tmp_path):
+    """The wear follows the motion, not time: each DefectState read back by rosbags
+    carries the wear the model recorded at its stamp (the run's own samples)."""
+    from brake_sim_ros.stream.build import stepper_for
+
+    scenario = parse_scenario(WEARING)
+    path = tmp_path / "wearing.mcap"
+    record_offline(scenario, path, options=RecordingOptions(durable=False))
+    truths = rosbags_timed(path)[stream.DEFECTS.name]
+    run = stepper_for(scenario).run(scenario.duration_s)
+    wear_mm = run["left_lining_wear_m"] * 1e3
+    held = []
+    for ns, msg in truths[1:]:
+        row = round(ns * 1e-9 * RATE_HZ)
+        (severity,) = [d.severity for d in msg.defects if d.kind == "lining_wear"]
+        assert severity == pytest.approx(wear_mm[row], rel=1e-12)
+        held.append(severity)
+    assert len(held) >= 2 and held == sorted(held) and held[-1] > 0.0

@@ -25,6 +25,7 @@ def test_every_core_field_is_a_parameter():
         for group, cls in PARAMETER_GROUPS.items()
         for f in dataclasses.fields(cls)
     }
+    expected |= {f"defects.drum.{name}" for name in ros_params.DRUM_FIELDS}
     assert set(names) == expected
     for required in (
         "defects.left.pivot_radius_change_pct",
@@ -125,3 +126,22 @@ def test_descriptors():
     assert desc.floating_point_range[0].to_value == 1.0
     flag = descriptor(ros_params.ParamSpec("paused", False, "t"))
     assert flag.type == ParameterType.PARAMETER_BOOL
+
+
+def test_the_drums_flat_is_a_node_parameter_and_the_scenarios_harmonics_are_kept():
+    from brake_sim_ros.model.defects import Defects as _Defects
+    from brake_sim_ros.model.defects import DrumDefect as _DrumDefect
+    from brake_sim_ros.model.parameters import BrakeParameters as _Params
+    from brake_sim_ros.stream import parameters as _p
+
+    oval = _DrumDefect.from_orders((2, 20.0, 0.0))
+    values = _p.model_values(_Params(), _Defects(drum=oval))
+    assert values["defects.drum.flat_depth_um"] == 0.0
+    values["defects.drum.flat_depth_um"] = 40.0
+    values["defects.drum.flat_centre_deg"] = 90.0
+    _params, defects = _p.build_model(values, drum=oval)
+    assert defects.drum.harmonics == oval.harmonics
+    assert (defects.drum.flat_depth_um, defects.drum.flat_centre_deg) == (40.0, 90.0)
+    values["defects.drum.flat_depth_um"] = 1500.0
+    with pytest.raises(ParameterError, match="flat_depth_um=1500 is invalid: allowed 0 to 1000"):
+        _p.build_model(values, drum=oval)

@@ -99,3 +99,21 @@ def test_a_fading_lining_lowers_the_braking_torque_monotonically():
     assert result["severities"] == [0.0, -25.0, -50.0]
     torque = result["values"]["braking_torque_n_m"]
     assert torque[0] > torque[1] > torque[2] > 0.5 * torque[0]
+
+
+def test_lining_wear_raises_its_shoes_first_impact_actuation_monotonically():
+    """Wear opens the gap: the shoe strikes later on the ramp, at a larger force."""
+    kind = KIND_BY_NAME["lining_wear"]
+    healthy = severity.features(Defects(), "left", DURATION_S)
+    result = severity.sweep(kind, "left", DURATION_S, healthy, steps=(0.0, 0.5, 1.0))
+    assert result["severities"] == [0.0, 1.7, 3.4]
+    force = result["values"]["first_impact_actuation_n"]
+    assert force[0] < force[1] < force[2]
+
+
+def test_a_drum_flat_grows_the_once_per_revolution_line():
+    kind = KIND_BY_NAME["drum_flat"]
+    healthy = severity.features(Defects(), "drum", 1.9)
+    result = severity.sweep(kind, "drum", 1.9, healthy, steps=(0.0, 0.2, 1.0))
+    line = result["values"]["order_1_line_n"]
+    assert line[0] < 1e-6 * line[1] and line[1] < line[2]

@@ -29,8 +29,6 @@ from brake_sim_ros.model.catalogue import KIND_BY_NAME, label_column
 from brake_sim_ros.model.defects import Defects
 
 RUL_COLUMN = "rul [s]"
-# laws whose severity is a function of simulated time alone, so its future is known
-PREDICTABLE_LAWS = ("step", "linear", "exponential")
 
 
 @dataclass(frozen=True)
@@ -91,8 +89,9 @@ def failure(defects: Defects, times_s: np.ndarray, labels: Mapping[str, np.ndarr
                 )
                 continue
         growth = defects.growth_of(active.kind, active.location)
-        # active() without a time: each defect's final severity
-        if growth.law in PREDICTABLE_LAWS and bool(_reaches(np.array([active.severity]), limit)[0]):
+        # active() without a time: each defect's final severity; a law that follows time
+        # alone (not friction work) knows its future
+        if growth.follows_time and bool(_reaches(np.array([active.severity]), limit)[0]):
             t = max(growth.onset_s, growth.reached_s(limit))
             found.append((t, rank, Failure(t, **common, source="law")))
     if not found:

@@ -63,6 +63,7 @@ from brake_sim_ros.model.sensor_faults import FAULT_BIT
 from brake_sim_ros.model.sensors import SensorBank
 from brake_sim_ros.model.trajectory import SampleBlock
 from brake_sim_ros.model.units import UnitValue
+from brake_sim_ros.stream.ground_truth import recorded_wear
 
 if TYPE_CHECKING:
     from brake_sim_ros.scenarios.loader import Scenario
@@ -161,7 +162,8 @@ def history_table(
             info = {b"unit": b"s", b"tone_ring_teeth": str(teeth[name]).encode()}
             fields.append(pa.field(edge_name, pa.float64(), metadata=info))
     times = np.asarray(history["time_s"])
-    labels = defects.label_series(times)
+    wear = recorded_wear(samples)  # a lining wearing with its friction work: the model's
+    labels = defects.label_series(times, wear)
     for name, severity in labels.items():
         columns[name] = pa.array(severity)
         fields.append(pa.field(name, pa.float64()))

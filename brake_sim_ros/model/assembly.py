@@ -12,7 +12,7 @@ from brake_sim_ros.errors import ParameterError
 from brake_sim_ros.model import growth, kernel
 from brake_sim_ros.model import layout as L
 from brake_sim_ros.model.actuation import RESIDUAL_FORCE_N, RETURN_SPRING_PRELOAD_N
-from brake_sim_ros.model.catalogue import DRUM_KIND
+from brake_sim_ros.model.catalogue import DRUM_KIND, FLAT_KIND, WEAR_KIND
 from brake_sim_ros.model.defects import (
     MAX_DRUM_SLOPE,
     SERVICE_RUNOUT_UM,
@@ -102,6 +102,8 @@ def place_shoe(params: BrakeParameters, side: str, defect: ShoeDefect) -> ShoePl
     bottom of the drum moves mostly along the line (``D`` small), so it turns the shoe
     little.
 
+    A worn lining's arc has the radius of the new one less the wear (its surface moves in).
+
     The right shoe is the mirror image of the left one about the y axis, defect included.
     """
     g = params.shoe
@@ -127,7 +129,7 @@ def place_shoe(params: BrakeParameters, side: str, defect: ShoeDefect) -> ShoePl
         sign=m,
         pivot_xy_m=(qx, qy),
         lining_centre_xy_m=(cx, cy),
-        lining_radius_m=g.drum_radius_m - g.running_clearance_m,
+        lining_radius_m=g.drum_radius_m - g.running_clearance_m - defect.lining_wear_mm * 1e-3,
         lining_mid_rad=mid,
         lining_half_rad=math.radians(0.5 * (g.lining_end_deg - g.lining_start_deg)),
         tip_xy_m=(m * g.tip_x_m, g.tip_y_m),
@@ -205,6 +207,9 @@ def pack(
             params.friction.coefficient, defect.friction_change_pct
         )
         p[b + L.S_ENABLED] = 1.0 if side in options.shoes else 0.0
+        lb = L.P_LINING_BASE + i * L.LINING_STRIDE
+        p[lb + L.LN_RADIUS] = params.shoe.drum_radius_m - params.shoe.running_clearance_m
+        p[lb + L.LN_WEAR] = defect.lining_wear_mm * 1e-3
         _check_shoe(params, side, defect, s, p, b)
     _pack_drum(params, defects, p)
     _pack_growth(params, defects, p)
@@ -219,6 +224,8 @@ _GROWTH_KIND_IDS = {
     "actuation_gain_change": L.GK_GAIN,
     "actuation_pulsation": L.GK_PULSATION,
     DRUM_KIND: L.GK_DRUM,
+    WEAR_KIND: L.GK_WEAR,
+    FLAT_KIND: L.GK_FLAT,
 }
 
 
@@ -243,7 +250,7 @@ def _pack_growth(params: BrakeParameters, defects: Defects, p: np.ndarray) -> No
     at = {
         "left": defects.left.severities(),
         "right": defects.right.severities(),
-        "drum": {DRUM_KIND: defects.drum.peak_runout_um},
+        "drum": {DRUM_KIND: defects.drum.peak_runout_um, FLAT_KIND: defects.drum.flat_depth_um},
     }
     for j, (kind, location, law) in enumerate(entries):
         if kind not in _GROWTH_KIND_IDS:
@@ -270,6 +277,7 @@ def _pack_drum(params: BrakeParameters, defects: Defects, p: np.ndarray) -> None
     kernels take exactly the round drum's arithmetic.
     """
     drum: DrumDefect = defects.drum
+    _pack_flat(params, drum, p)
     waves = [h for h in drum.harmonics if h.amplitude_um > 0.0]
     if not waves:
         return
@@ -305,6 +313,23 @@ def _pack_drum(params: BrakeParameters, defects: Defects, p: np.ndarray) -> None
         p[b + L.W_ORDER] = float(h.order)
         p[b + L.W_AMPLITUDE] = h.amplitude_um * 1e-6
         p[b + L.W_PHASE] = math.radians(h.phase_deg)
+
+
+def _pack_flat(params: BrakeParameters, drum: DrumDefect, p: np.ndarray) -> None:
+    """Pack the drum's flat (layout.P_FLAT_*) after checking its slope against the drum's
+    radius; none (depth 0) leaves the round drum's arithmetic."""
+    if drum.flat_depth_um <= 0.0:
+        return
+    slope = drum.flat_slope(params.shoe.drum_radius_m)
+    if slope > MAX_DRUM_SLOPE:
+        raise ParameterError(
+            f"drum flat of {drum.flat_depth_um:g} um over {drum.flat_width_deg:g} deg: slope"
+            f" pi d / (2 w R0) = {slope:.4f}, allowed at most {MAX_DRUM_SLOPE} (the contact"
+            " geometry tilts the normal by a small slope): make it wider or shallower"
+        )
+    p[L.P_FLAT_DEPTH] = drum.flat_depth_um * 1e-6
+    p[L.P_FLAT_CENTRE] = math.radians(drum.flat_centre_deg)
+    p[L.P_FLAT_HALF_WIDTH] = math.radians(0.5 * drum.flat_width_deg)
 
 
 def _check_shoe(
@@ -426,8 +451,10 @@ def indentation_at(
 
 
 def initial_state(params: BrakeParameters, defects: Defects) -> np.ndarray:
-    """State at t = 0: flywheel and drum at the initial speed, shoes at rest."""
-    y = np.zeros(L.N_STATE)
+    """State at t = 0: flywheel and drum at the initial speed, shoes at rest; with the
+    linings' wear states (layout ``N_STATE_WEAR``, from 0) when a lining wears with its
+    friction work."""
+    y = np.zeros(L.N_STATE_WEAR if defects.wearing_with_work else L.N_STATE)
     y[L.Y_FLYWHEEL_SPEED] = params.driveline.initial_speed_rad_s
     y[L.Y_DRUM_SPEED] = params.driveline.initial_speed_rad_s
     y[L.Y_LEFT_ANGLE] = math.radians(defects.left.initial_angle_deg)

@@ -19,7 +19,13 @@ evaluate. The scenario gives the final severity (the kind's key) and the law:
   the final severity, held there once reached: ``s(t) = sign(s_f) min(r (t - t_0), |s_f|)``;
 * ``exponential``: from ``start`` (same sign as the final severity, smaller) at the onset,
   doubling every ``doubling_time_s``, held at the final severity once reached:
-  ``s(t) = start 2^((t - t_0) / T_d)`` until ``|s| >= |s_f|``.
+  ``s(t) = start 2^((t - t_0) / T_d)`` until ``|s| >= |s_f|``;
+* ``friction_work`` (lining wear only): Archard-like, the wear grows with the shoe's own
+  friction work from the onset, ``ds/dt = k_w P_f`` (``P_f`` the shoe's friction power,
+  ``k_w`` = ``wear_rate_mm_per_mj``, mm per MJ), held at the final severity once reached.
+  It depends on the motion, not on time alone: the compiled model integrates it with the
+  state (layout ``Y_*_WEAR``) and records it (``*_lining_wear_m`` columns), and the labels
+  and ground truth read it from there (:meth:`.defects.Defects.label_series`).
 
 Pure data and logic, plus the compiled severity law: no files.
 """
@@ -36,9 +42,26 @@ from brake_sim_ros.errors import ParameterError
 from brake_sim_ros.model.layout import SIDES
 
 # how a severity evolves after its onset; the index is the law's id in the compiled model
-GROWTH_LAWS: tuple[str, ...] = ("step", "linear", "exponential")
-LAW_STEP, LAW_LINEAR, LAW_EXPONENTIAL = 0, 1, 2
+GROWTH_LAWS: tuple[str, ...] = ("step", "linear", "exponential", "friction_work")
+LAW_STEP, LAW_LINEAR, LAW_EXPONENTIAL, LAW_FRICTION_WORK = 0, 1, 2, 3
 DRUM_KIND = "drum_out_of_round"
+WEAR_KIND = "lining_wear"
+FLAT_KIND = "drum_flat"
+# Thickness of a new lining, mm: passenger-car drum-brake shoe linings are typically 4-6
+# mm thick new (a typical figure, not from TESTBED.md); a wear beyond it is refused.
+LINING_THICKNESS_MM = 5.0
+# Thickness left at the usual replacement limit, mm: 1.6 mm (1/16 in) above the shoe
+# table for bonded linings (a typical workshop figure), so 3.4 mm of wear.
+LINING_MINIMUM_MM = 1.6
+# Default wear per friction work, mm/MJ: a volumetric specific wear of about 0.3 cm^3/MJ
+# (organic friction materials in dynamometer wear tests run about 0.1-0.5 cm^3/MJ: an
+# order of magnitude, not a measured figure for this lining) spread over the lining's
+# rubbing area, 80 deg of arc at 176.5 mm times 45 mm wide = 111 cm^2: 0.027 mm/MJ. A stop
+# from 100 km/h puts about 55 kJ into the leading shoe: 1.5 um of wear.
+DEFAULT_WEAR_RATE_MM_PER_MJ = 0.027
+# Largest wear rate a scenario may state, mm/MJ: an accelerated wear test that wears a
+# lining through in one stop is within it.
+MAX_WEAR_RATE_MM_PER_MJ = 1000.0
 # Longest onset and doubling time a scenario may state, s: a day of simulated braking
 MAX_GROWTH_TIME_S = 86_400.0
 
@@ -52,12 +75,14 @@ def severity_at(t, law, onset_s, rate, start, final):
         law: the law's id (``LAW_*``, the index in :data:`GROWTH_LAWS`).
         onset_s: the onset, s: 0 before it.
         rate: linear: the rate, the kind's unit per second (> 0); exponential: the relative
-            rate ``ln 2 / doubling time``, 1/s; step: unused.
+            rate ``ln 2 / doubling time``, 1/s; step, friction work: unused.
         start: exponential: the severity at the onset (same sign as ``final``); else unused.
         final: the final severity, in the kind's unit.
 
     Returns:
-        The severity, in the kind's unit; ``final`` once it is reached (never beyond).
+        The severity, in the kind's unit; ``final`` once it is reached (never beyond). A
+        friction-work law does not follow time: 0 before the onset, ``final`` after it (the
+        bound; its value is the compiled model's, :mod:`.growth`).
     """
     if t < onset_s:
         return 0.0
@@ -98,6 +123,9 @@ class Growth:
         doubling_time_s: exponential only: the time the severity takes to double, s (> 0).
         start: exponential only: the severity at the onset, in the kind's unit (same sign
             as the final severity, smaller in size).
+        wear_rate_mm_per_mj: friction work only: ``k_w``, mm of lining wear per MJ of the
+            shoe's friction work (> 0; scenarios default to
+            :data:`DEFAULT_WEAR_RATE_MM_PER_MJ`).
     """
 
     onset_s: float = 0.0
@@ -105,13 +133,14 @@ class Growth:
     rate_per_s: float = 0.0
     doubling_time_s: float = 0.0
     start: float = 0.0
+    wear_rate_mm_per_mj: float = 0.0
 
     def __post_init__(self) -> None:
         if self.law not in GROWTH_LAWS:
             raise ParameterError(
                 f"defect growth {self.law!r} is invalid: allowed one of {list(GROWTH_LAWS)}"
             )
-        for name in ("onset_s", "rate_per_s", "doubling_time_s", "start"):
+        for name in ("onset_s", "rate_per_s", "doubling_time_s", "start", "wear_rate_mm_per_mj"):
             if not _finite(getattr(self, name)):
                 raise ParameterError(
                     f"defect {name}={getattr(self, name)!r} is invalid: allowed a finite number"
@@ -121,19 +150,33 @@ class Growth:
                 f"defect onset_s={self.onset_s:g} is invalid: allowed 0 to"
                 f" {MAX_GROWTH_TIME_S:g} s (simulated time since the start of the run)"
             )
-        needs = {"linear": "rate_per_s", "exponential": "doubling_time_s"}.get(self.law)
-        for name in ("rate_per_s", "doubling_time_s", "start"):
-            used = name == needs or (name == "start" and self.law == "exponential")
+        needs = {
+            "linear": "rate_per_s",
+            "exponential": "doubling_time_s",
+            "friction_work": "wear_rate_mm_per_mj",
+        }.get(self.law)
+        needed_by = {
+            "rate_per_s": "linear",
+            "doubling_time_s": "exponential",
+            "start": "exponential",
+            "wear_rate_mm_per_mj": "friction_work",
+        }
+        for name, law in needed_by.items():
             value = getattr(self, name)
-            if not used and value != 0.0:
+            if law != self.law and value != 0.0:
                 raise ParameterError(
                     f"defect {name}={value:g} with growth {self.law!r} is invalid: allowed"
-                    f" only with growth {'linear' if name == 'rate_per_s' else 'exponential'}"
+                    f" only with growth {law!r}"
                 )
         if needs is not None and not getattr(self, needs) > 0.0:
             raise ParameterError(
                 f"defect {needs}={getattr(self, needs):g} with growth {self.law!r} is invalid:"
                 " allowed a number > 0"
+            )
+        if needs == "wear_rate_mm_per_mj" and self.wear_rate_mm_per_mj > MAX_WEAR_RATE_MM_PER_MJ:
+            raise ParameterError(
+                f"defect wear_rate_mm_per_mj={self.wear_rate_mm_per_mj:g} is invalid: allowed"
+                f" > 0 to {MAX_WEAR_RATE_MM_PER_MJ:g} mm/MJ"
             )
         if needs == "doubling_time_s" and self.doubling_time_s > MAX_GROWTH_TIME_S:
             raise ParameterError(
@@ -151,13 +194,21 @@ class Growth:
         return GROWTH_LAWS.index(self.law)
 
     @property
+    def follows_time(self) -> bool:
+        """The severity is a function of time alone (every law but friction work)."""
+        return self.law != "friction_work"
+
+    @property
     def rate(self) -> float:
         """The law's rate as :func:`severity_at` takes it (and the ground truth's
-        ``growth_rate``): linear unit/s, exponential 1/s (``ln 2 / doubling time``), step 0."""
+        ``growth_rate``): linear unit/s, exponential 1/s (``ln 2 / doubling time``), friction
+        work mm/MJ (``k_w``), step 0."""
         if self.law == "linear":
             return float(self.rate_per_s)
         if self.law == "exponential":
             return math.log(2.0) / self.doubling_time_s
+        if self.law == "friction_work":
+            return float(self.wear_rate_mm_per_mj)
         return 0.0
 
     def check(self, final: float, where: str = "", healthy: float = 0.0) -> None:
@@ -182,7 +233,10 @@ class Growth:
         return severity_series(times, self.law_id, self.onset_s, self.rate, self.start, final)
 
     def reached_s(self, final: float) -> float:
-        """Simulated time the severity reaches ``final``, s."""
+        """Simulated time the severity reaches ``final``, s (friction work: not known
+        beforehand, ``inf``)."""
+        if self.law == "friction_work":
+            return math.inf
         if self.law == "linear":
             return self.onset_s + abs(final) / self.rate_per_s
         if self.law == "exponential":
@@ -378,6 +432,41 @@ KINDS: tuple[DefectKind, ...] = (
         ),
         scenario_key="harmonics",
         service_limit=150.0,  # service runouts 50-150 um (about 50 um a common limit)
+    ),
+    DefectKind(
+        name=WEAR_KIND,
+        locations=SIDES,
+        unit="mm",
+        minimum=0.0,
+        maximum=LINING_THICKNESS_MM,
+        limit=f"a new lining is {LINING_THICKNESS_MM:g} mm thick (a typical passenger-car figure)",
+        description=(
+            "lining thickness the shoe has lost, in mm: the lining surface moves in, the gap"
+            " to the drum grows by as much (the shoe turns further before it touches);"
+            " growth friction_work wears it with the shoe's own friction work"
+        ),
+        scenario_key="lining_wear_mm",
+        # replaced at 1.6 mm left of 5 mm (1/16 in above the table: a typical workshop limit)
+        service_limit=LINING_THICKNESS_MM - LINING_MINIMUM_MM,
+    ),
+    DefectKind(
+        name=FLAT_KIND,
+        locations=("drum",),
+        unit="um",
+        minimum=0.0,
+        maximum=1000.0,
+        limit=(
+            "a flat deeper than 1 mm is a broken drum; the flat's slope pi d / (2 w R0) at"
+            " most 0.05 (w its half width), as the harmonics'"
+        ),
+        description=(
+            "a local flat or crack edge of the drum: its radius dips by up to the depth over"
+            " an angular window (attributes centre_deg, in the drum's frame, and width_deg),"
+            " d (1 + cos(pi x / w)) / 2 within x = psi - centre of |x| < w = width / 2; the"
+            " severity is the depth"
+        ),
+        scenario_key="flat_depth_um",
+        service_limit=100.0,  # no service figure in TESTBED.md: twice the 50 um runout limit
     ),
 )
 KIND_BY_NAME: dict[str, DefectKind] = {k.name: k for k in KINDS}

@@ -100,7 +100,10 @@ def drum_radius(p, psi):
     """Radius of the drum at the angle ``psi`` of its own frame (rad) and its slope.
 
     ``r(psi) = R0 + sum_k a_k cos(k psi + phi_k)`` over the packed harmonics
-    (layout.P_DRUM_WAVE_*; :class:`brake_sim_ros.model.defects.DrumDefect`). Returns
+    (layout.P_DRUM_WAVE_*; :class:`brake_sim_ros.model.defects.DrumDefect`), less a local
+    flat (layout.P_FLAT_*; :class:`brake_sim_ros.model.defects.DrumFlat`): a dip of depth
+    ``d`` and half width ``w`` about the angle ``c``, ``d (1 + cos(pi x / w)) / 2`` for
+    ``|x| < w`` (``x = psi - c`` wrapped to [-pi, pi)), whose slope is continuous. Returns
     (r m, dr/dpsi m/rad).
     """
     r = p[L.P_DRUM_RADIUS]
@@ -112,6 +115,15 @@ def drum_radius(p, psi):
         arg = k * psi + p[b + L.W_PHASE]
         r += a * math.cos(arg)
         slope -= k * a * math.sin(arg)
+    depth = p[L.P_FLAT_DEPTH]
+    if depth > 0.0:
+        x = psi - p[L.P_FLAT_CENTRE]
+        x -= 2.0 * math.pi * math.floor(x / (2.0 * math.pi) + 0.5)
+        half = p[L.P_FLAT_HALF_WIDTH]
+        if abs(x) < half:
+            arg = math.pi * x / half
+            r -= 0.5 * depth * (1.0 + math.cos(arg))
+            slope += 0.5 * depth * math.pi / half * math.sin(arg)
     return r, slope
 
 
@@ -124,10 +136,11 @@ def kinematics(p, base, theta, omega, drum_angle, drum_speed):
     contact along the drum's tangent (-ny, nx) m/s, contact x m, contact y m, friction arm
     m, normal x, normal y, cos phi, sin phi, contact-force direction x, y, wave arm m):
 
-    * round drum (no harmonics packed): ``eps = |X| - R0`` at the lining point ``X``
+    * round drum (no harmonics nor flat packed): ``eps = |X| - R0`` at the lining point ``X``
       farthest from the centre, the normal and the contact-force direction are the radial
       unit vector, the friction arm is ``|X|`` and the wave arm 0.
-    * out-of-round drum: ``eps = g = |X| - r(psi)``, the radial penetration of ``X`` into
+    * out-of-round drum (harmonics, a flat): ``eps = g = |X| - r(psi)``, the radial
+      penetration of ``X`` into
       the drum's local radius (``psi = alpha - drum_angle``, ``alpha`` the polar angle of
       ``X``). The normal is the drum surface's, tilted by its slope:
       ``grad g = e_r - (r'/|X|) e_t`` normalised; friction acts along its tangent, whose
@@ -151,11 +164,24 @@ def kinematics(p, base, theta, omega, drum_angle, drum_speed):
     # velocity of the shoe's material point at the contact
     vx = -w * (xy - py)
     vy = w * (xx - px)
-    if p[L.P_DRUM_WAVE_COUNT] <= 0.0:
+    if p[L.P_DRUM_WAVE_COUNT] <= 0.0 and p[L.P_FLAT_DEPTH] <= 0.0:
         eps = dist - p[L.P_DRUM_RADIUS]
         eps_dot = nx * vx + ny * vy
         vt = -ny * vx + nx * vy
         return eps, eps_dot, vt, xx, xy, dist, nx, ny, c, sn, nx, ny, 0.0
+    # a call, not inlined into every kinematics of the round drum's path
+    return _out_of_round(
+        p, px, py, xx, xy, dist, nx, ny, turn, vx, vy, w, c, sn, drum_angle, drum_speed
+    )
+
+
+@njit(cache=True)
+def _out_of_round(p, px, py, xx, xy, dist, nx, ny, turn, vx, vy, w, c, sn, drum_angle, drum_speed):
+    """:func:`kinematics` on an out-of-round drum (harmonics, a flat), from the lining point
+    ``X`` = (``xx``, ``xy``) at ``dist`` from the centre, its radial unit vector
+    (``nx``, ``ny``) and turn rate ``turn`` (:func:`contact_point`), the pin (``px``,
+    ``py``), the material point's velocity (``vx``, ``vy``), the shoe's turn rate ``w``
+    (rad/s, outward) and ``cos``/``sin`` of its angle (``c``, ``sn``)."""
     radius, r_slope = drum_radius(p, math.atan2(xy, xx) - drum_angle)
     eps = dist - radius
     tilt = r_slope / dist

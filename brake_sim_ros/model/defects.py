@@ -12,8 +12,10 @@ from brake_sim_ros.errors import ParameterError
 from brake_sim_ros.model.actuation import shoe_gain
 from brake_sim_ros.model.catalogue import (
     DRUM_KIND,
+    FLAT_KIND,
     KIND_BY_NAME,
     KINDS,
+    WEAR_KIND,
     ActiveDefect,
     Growth,
     label_column,
@@ -28,6 +30,10 @@ MAX_PULSATION_HZ = 1000.0
 # The frequency Defects.single gives a pulsation (a severity sweep), Hz: about the ABS
 # modulation rate of a wheel (10-20 Hz).
 DEFAULT_PULSATION_HZ = 15.0
+
+
+def _finite(value: object) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
 
 
 @dataclass(frozen=True)
@@ -62,10 +68,17 @@ class ShoeDefect:
             (100: broken). Past the stop's margin (``actuation.spring_release``: preload
             60 N against a residual line force of 20 N, so past 67 %) the residual pressure
             presses the shoe on the drum without actuation: drag.
+        lining_wear_mm: lining thickness lost, mm (0 to 5, the thickness of a new lining,
+            catalogue.LINING_THICKNESS_MM). The lining's
+            surface, an arc about the shoe's lining centre, moves in by as much: the running
+            clearance grows by the wear and the shoe turns further before it touches (an
+            adjuster that takes up wear is not modelled: a brake between adjustments). The
+            contact length of the model's line contact is the lining's width along the drum
+            axis, which wear does not change.
 
-    Delay, lag and pulsation act on the scenario's actuation history; the node's live
-    actuation commands (``~/actuation``) reach the shoe with the gain and the pulsation
-    but without delay or lag.
+    Delay, lag and pulsation act on the commanded actuation history: the scenario's, or
+    the node's live actuation commands (``~/actuation``), which the stepper keeps as a
+    history for a delayed or lagging shoe (``solvers.fixed_step.CommandHistory``).
     """
 
     pivot_radius_change_pct: float = 0.0
@@ -78,6 +91,7 @@ class ShoeDefect:
     actuation_pulsation_pct: float = 0.0
     actuation_pulsation_hz: float = 0.0
     return_spring_weakening_pct: float = 0.0
+    lining_wear_mm: float = 0.0
 
     def __post_init__(self) -> None:
         for name in (
@@ -91,6 +105,7 @@ class ShoeDefect:
             "actuation_pulsation_pct",
             "actuation_pulsation_hz",
             "return_spring_weakening_pct",
+            "lining_wear_mm",
         ):
             value = getattr(self, name)
             if not isinstance(value, int | float) or not math.isfinite(value):
@@ -117,6 +132,7 @@ class ShoeDefect:
             "actuation_lag": float(self.actuation_lag_ms),
             "actuation_pulsation": float(self.actuation_pulsation_pct),
             "return_spring_weakening": float(self.return_spring_weakening_pct),
+            WEAR_KIND: float(self.lining_wear_mm),
         }
 
     @classmethod
@@ -133,6 +149,7 @@ class ShoeDefect:
             actuation_lag_ms=severities.get("actuation_lag", 0.0),
             actuation_pulsation_pct=severities.get("actuation_pulsation", 0.0),
             return_spring_weakening_pct=severities.get("return_spring_weakening", 0.0),
+            lining_wear_mm=severities.get(WEAR_KIND, 0.0),
             actuation_pulsation_hz=(
                 DEFAULT_PULSATION_HZ if severities.get("actuation_pulsation") else 0.0
             ),
@@ -165,6 +182,11 @@ MAX_DRUM_SLOPE = 0.05
 # Service figures, for the documentation of the range (``TESTBED.md``): drum runout of
 # 50-150 um in service, about 50 um a common service limit, judder from 10-20 um.
 SERVICE_RUNOUT_UM = 150.0
+# The width a flat gets when a scenario names none (and in a severity sweep), deg: about
+# 16 mm of arc on a 180 mm drum, a short window as a crack's edge or a local flat is.
+DEFAULT_FLAT_WIDTH_DEG = 5.0
+# Widest flat, deg: a wider dip is a low lobe, a harmonic (drum_out_of_round).
+MAX_FLAT_WIDTH_DEG = 90.0
 
 
 @dataclass(frozen=True)
@@ -234,11 +256,24 @@ class DrumDefect:
     50-150 um, about 50 um is a common service limit, and judder starts from 10-20 um
     (``TESTBED.md``); order 2 (ovality) dominates.
 
+    A local flat (or the edge of a crack) lowers the radius in a short window: by
+    ``d (1 + cos(pi x / w)) / 2`` for ``|x| < w``, ``x = psi - c`` (wrapped to [-pi, pi)),
+    ``c`` the flat's centre and ``w`` half its width (:func:`brake_sim_ros.model.contact.
+    drum_radius`); its slope is continuous and at most ``pi d / (2 w)``, refused at assembly
+    above :data:`MAX_DRUM_SLOPE` of ``R0``. A flat only lowers the surface: it never
+    touches a retracted shoe. Once per revolution it passes each shoe.
+
     Attributes:
         harmonics: the radius harmonics, in any order; empty for a round drum.
+        flat_depth_um: the flat's depth ``d``, um (0: none; the catalogue's ``drum_flat``).
+        flat_centre_deg: its centre ``c`` in the drum's frame, deg.
+        flat_width_deg: its whole width ``2 w``, deg (> 0 to 90).
     """
 
     harmonics: tuple[DrumHarmonic, ...] = ()
+    flat_depth_um: float = 0.0
+    flat_centre_deg: float = 0.0
+    flat_width_deg: float = DEFAULT_FLAT_WIDTH_DEG
 
     def __post_init__(self) -> None:
         if not isinstance(self.harmonics, tuple) or not all(
@@ -254,6 +289,20 @@ class DrumDefect:
         orders = [h.order for h in self.harmonics]
         if len(set(orders)) != len(orders):
             raise ParameterError(f"drum harmonic orders {orders}: allowed each order at most once")
+        for name in ("flat_depth_um", "flat_centre_deg", "flat_width_deg"):
+            value = getattr(self, name)
+            if not _finite(value):
+                raise ParameterError(f"drum {name}={value!r} is invalid: allowed a finite number")
+        KIND_BY_NAME[FLAT_KIND].check(self.flat_depth_um)
+        if not 0.0 < self.flat_width_deg <= MAX_FLAT_WIDTH_DEG:
+            raise ParameterError(
+                f"drum flat_width_deg={self.flat_width_deg:g} is invalid: allowed > 0 to"
+                f" {MAX_FLAT_WIDTH_DEG:g} deg (a wider dip is a harmonic, drum_out_of_round)"
+            )
+        if not -360.0 <= self.flat_centre_deg <= 360.0:
+            raise ParameterError(
+                f"drum flat_centre_deg={self.flat_centre_deg:g} is invalid: allowed -360 to 360 deg"
+            )
 
     @classmethod
     def from_orders(cls, *orders: tuple[int, float, float]) -> DrumDefect:
@@ -262,8 +311,20 @@ class DrumDefect:
 
     @property
     def is_healthy(self) -> bool:
-        """Round: no harmonic of non-zero amplitude."""
-        return all(h.amplitude_um == 0.0 for h in self.harmonics)
+        """Round: no harmonic of non-zero amplitude, no flat."""
+        return all(h.amplitude_um == 0.0 for h in self.harmonics) and not self.flat_depth_um
+
+    def flat_slope(self, drum_radius_m: float) -> float:
+        """Largest surface slope of the flat ``|dr/dpsi| / R0``: ``pi d / (2 w R0)``, rad."""
+        half = math.radians(0.5 * self.flat_width_deg)
+        return math.pi * self.flat_depth_um * 1e-6 / (2.0 * half * drum_radius_m)
+
+    def flat_attributes(self) -> tuple[tuple[str, float], ...]:
+        """The flat's centre and width (deg), by name, for the ground truth."""
+        return (
+            ("centre_deg", float(self.flat_centre_deg)),
+            ("width_deg", float(self.flat_width_deg)),
+        )
 
     @property
     def peak_runout_um(self) -> float:
@@ -356,9 +417,15 @@ class Defects:
                     + (" (the other shoe's share mirrors it)" if kind in TIED_KINDS else "")
                 )
             seen.add(key)
+            where = f"{loc} {KIND_BY_NAME[kind].scenario_key} "
+            if growth.law == "friction_work" and kind != WEAR_KIND:
+                raise ParameterError(
+                    f"defect {where}growth 'friction_work' is invalid: allowed only for"
+                    f" {KIND_BY_NAME[WEAR_KIND].scenario_key} (a lining wears with its friction"
+                    " work)"
+                )
             if growth.is_static:
                 continue
-            where = f"{loc} {KIND_BY_NAME[kind].scenario_key} "
             if kind in INITIAL_CONDITION_KINDS:
                 raise ParameterError(
                     f"defect {where}onset {growth.onset_s:g} s, growth {growth.law!r} is"
@@ -390,6 +457,12 @@ class Defects:
         return tuple(dict.fromkeys(d.kind for d in self.active()))
 
     @property
+    def wearing_with_work(self) -> tuple[str, ...]:
+        """Shoes whose lining wears with their friction work (growth ``friction_work``):
+        their wear is the compiled model's state (layout ``N_STATE_WEAR``)."""
+        return tuple(loc for kind, loc, g in self.growth if not g.follows_time)
+
+    @property
     def growing_kinds(self) -> tuple[str, ...]:
         """Catalogue kinds of the defects that change during the run, in catalogue order."""
         names = {kind for kind, _loc, _g in self.growth}
@@ -409,7 +482,10 @@ class Defects:
         return {
             "left": self.left.severities(),
             "right": self.right.severities(),
-            "drum": {DRUM_KIND: self.drum.peak_runout_um},
+            "drum": {
+                DRUM_KIND: self.drum.peak_runout_um,
+                FLAT_KIND: float(self.drum.flat_depth_um),
+            },
         }
 
     def _attributes(self, kind: str, location: str, fraction: float) -> tuple:
@@ -420,6 +496,8 @@ class Defects:
         if kind == DRUM_KIND:
             for name, value in self.drum.attributes():
                 attributes.append((name, value * fraction if "amplitude" in name else value))
+        if kind == FLAT_KIND:
+            attributes.extend(self.drum.flat_attributes())
         if kind == "actuation_pulsation":
             shoe = getattr(self, location)
             attributes.append(("frequency_hz", float(shoe.actuation_pulsation_hz)))
@@ -433,7 +511,23 @@ class Defects:
                 attributes.append((_attribute("start_severity", unit), growth.start))
         return tuple(attributes)
 
-    def active(self, time_s: float | None = None) -> tuple[ActiveDefect, ...]:
+    def _worn(
+        self, location: str, final: float, wear_m: dict[str, np.ndarray] | None, time_s: object
+    ) -> np.ndarray:
+        """A friction-work wear at ``location`` (mm) from the model's recorded wear
+        ``wear_m[location]`` (m, the ``*_lining_wear_m`` columns), the final wear where the
+        model holds it there."""
+        if wear_m is None or location not in wear_m:
+            raise ValueError(
+                f"the {location} lining's wear at {time_s} s follows its friction work: it is"
+                " read from the model's recorded wear (pass wear_m, the *_lining_wear_m columns)"
+            )
+        worn = np.asarray(wear_m[location], dtype=np.float64)
+        return np.where(worn >= final * 1e-3, final, worn * 1e3)
+
+    def active(
+        self, time_s: float | None = None, wear_m: dict[str, float] | None = None
+    ) -> tuple[ActiveDefect, ...]:
         """The ground truth: every defect in force, in catalogue order (kind, then
         location), each with its onset and growth law (:mod:`.catalogue`).
 
@@ -441,6 +535,9 @@ class Defects:
             time_s: simulated time, s: each severity is the one at that time and a defect
                 before its onset is not listed. None: the final severities of every
                 defect the run has (the description of the run, e.g. a file's metadata).
+            wear_m: with ``time_s``, the lining wear the model recorded at that time, m, by
+                shoe (its ``*_lining_wear_m`` columns): the severity of a wear that grows
+                with friction work (required for one).
         """
         at = self._by_location()
         out = []
@@ -450,7 +547,12 @@ class Defects:
                 if final == 0.0:
                     continue
                 growth = self.growth_of(kind.name, loc)
-                now = final if time_s is None else growth.severity(time_s, final)
+                if time_s is None:
+                    now = final
+                elif growth.follows_time:
+                    now = growth.severity(time_s, final)
+                else:
+                    now = float(self._worn(loc, final, wear_m, time_s))
                 if now == 0.0:
                     continue
                 out.append(
@@ -467,33 +569,46 @@ class Defects:
                 )
         return tuple(out)
 
-    def severities(self, time_s: float | None = None) -> dict[str, float]:
+    def severities(
+        self, time_s: float | None = None, wear_m: dict[str, float] | None = None
+    ) -> dict[str, float]:
         """The per-sample label columns (:func:`.catalogue.label_columns`) and their value:
         each kind's severity at each location at ``time_s`` (s; None: the final ones), 0
-        where absent."""
+        where absent; ``wear_m`` as for :meth:`active`."""
         at = self._by_location()
         out = {}
         for k in KINDS:
             for loc in k.locations:
                 final = at[loc][k.name]
                 if time_s is not None and final != 0.0:
-                    final = self.growth_of(k.name, loc).severity(time_s, final)
+                    growth = self.growth_of(k.name, loc)
+                    if growth.follows_time:
+                        final = growth.severity(time_s, final)
+                    else:
+                        final = float(self._worn(loc, final, wear_m, time_s))
                 out[label_column(k, loc)] = final
         return out
 
-    def label_series(self, times_s: np.ndarray) -> dict[str, np.ndarray]:
+    def label_series(
+        self, times_s: np.ndarray, wear_m: dict[str, np.ndarray] | None = None
+    ) -> dict[str, np.ndarray]:
         """The label columns at each of ``times_s`` (s, shape (n,)): each kind's severity at
-        each location (:func:`.catalogue.severity_at`), 0 where absent."""
+        each location (:func:`.catalogue.severity_at`), 0 where absent. A lining wear that
+        grows with friction work is the model's own, read from ``wear_m`` (m, by shoe,
+        each shape (n,): the samples' ``*_lining_wear_m`` columns; required for one)."""
         times = np.asarray(times_s, dtype=np.float64)
         at = self._by_location()
         out = {}
         for k in KINDS:
             for loc in k.locations:
                 final = at[loc][k.name]
+                growth = self.growth_of(k.name, loc)
                 if final == 0.0:
                     out[label_column(k, loc)] = np.zeros(times.shape[0])
+                elif growth.follows_time:
+                    out[label_column(k, loc)] = growth.series(times, final)
                 else:
-                    out[label_column(k, loc)] = self.growth_of(k.name, loc).series(times, final)
+                    out[label_column(k, loc)] = self._worn(loc, final, wear_m, "the samples'")
         return out
 
     def change_times(self) -> tuple[float, ...]:
@@ -509,7 +624,8 @@ class Defects:
     def single(cls, kind: str, location: str, severity: float) -> Defects:
         """A brake with one catalogue defect of ``severity`` at ``location`` (the other
         shoe's actuation share follows a share change: the shares sum to 1; a drum out of
-        round is an ovality, order 2 at phase 0, of that peak runout)."""
+        round is an ovality, order 2 at phase 0, of that peak runout; a drum flat is
+        :data:`DEFAULT_FLAT_WIDTH_DEG` wide, centred at 0 deg)."""
         if location not in KIND_BY_NAME[kind].locations:
             raise ParameterError(
                 f"defect {kind} at {location!r} is invalid: allowed at"
@@ -517,6 +633,8 @@ class Defects:
             )
         if kind == DRUM_KIND:
             return cls(drum=DrumDefect.from_orders((2, severity, 0.0)))
+        if kind == FLAT_KIND:
+            return cls(drum=DrumDefect(flat_depth_um=severity))
         shoes = {side: ShoeDefect() for side in ("left", "right")}
         shoes[location] = ShoeDefect.from_severities({kind: severity})
         if kind == "actuation_share_change":

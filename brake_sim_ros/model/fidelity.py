@@ -50,7 +50,9 @@ Why each level serves what it serves (the physics behind the capability table):
   cheapest impact level that serves it; a forced contact-regime level is refused, naming
   the defect and the levels that represent it. Never a one-shoe model: the wave passes the
   shoe at ``k`` times the drum speed, which the other shoe's braking sets (one shoe alone
-  stops the drum more slowly: the line of 50 um of ovality differs by 6 %).
+  stops the drum more slowly: the line of 50 um of ovality differs by 6 %). A drum flat
+  (``drum_flat``) likewise: it passes the shoe once per revolution. A worn lining
+  (``lining_wear``) is geometry, as a pivot's place: every level represents it.
 
 Pure logic: no numerics, no files.
 """
@@ -61,7 +63,7 @@ from dataclasses import dataclass
 
 from brake_sim_ros.errors import FidelityError
 from brake_sim_ros.model import layout as L
-from brake_sim_ros.model.catalogue import DRUM_KIND, KIND_BY_NAME
+from brake_sim_ros.model.catalogue import DRUM_KIND, FLAT_KIND, KIND_BY_NAME, WEAR_KIND
 
 SIDES = L.SIDES
 # the solver presets by name (their schemes and steps: solvers/presets.py)
@@ -107,6 +109,12 @@ DEFECT_LEVELS: dict[str, frozenset[str]] = {
     # levels take the commanded history
     "return_spring_weakening": frozenset({"rigid", "full"}),
     DRUM_KIND: frozenset({"rigid", "full"}),
+    # a worn lining is geometry (the lining's radius), as a pivot's place: the same shoe
+    # balance; wear that grows is a growth (GROWTH_LEVELS)
+    WEAR_KIND: _ALL_LEVELS,
+    # a flat passes the shoe once per revolution: the drum angle and the shoes' dynamics,
+    # as the harmonics
+    FLAT_KIND: frozenset({"rigid", "full"}),
 }
 # levels that represent a defect changing during the run (an onset after 0 s or a growth
 # law): the impact levels step the compiled kernel, which sets each severity at every
@@ -116,7 +124,10 @@ GROWTH_LEVELS = frozenset({"rigid", "full"})
 # outputs that belong to one shoe and do not depend on the other shoe (see module doc)
 SHOE_LOCAL_OUTPUTS = frozenset({"impacts", "contact_regime_forces"})
 # defects whose effect on a shoe follows the drum speed: no one-shoe model (see module doc)
-SPEED_DEPENDENT_DEFECTS = frozenset({DRUM_KIND})
+SPEED_DEPENDENT_DEFECTS = frozenset({DRUM_KIND, FLAT_KIND})
+# columns a plan keeps whatever it is asked when the defect changes during the run: a
+# lining's wear may follow its friction work, and its labels are read from these
+WEAR_COLUMNS: tuple[str, ...] = tuple(f"{s}_lining_wear_m" for s in SIDES)
 
 
 @dataclass(frozen=True)
@@ -421,10 +432,13 @@ def plan(needs: Needs | None, *, model_shoes: tuple[str, ...] = SIDES) -> Plan:
     sensors = "measured_signals" in asked
     if not sensors:
         reason += "; no sensors ([needs] do not ask measured_signals): no structure"
+    columns = columns_for(needs.outputs, needs.shoes)
+    if WEAR_KIND in needs.growing:
+        columns = (*columns, *WEAR_COLUMNS)
     return Plan(
         level,
         shoes,
-        columns_for(needs.outputs, needs.shoes),
+        columns,
         needs.accuracy,
         reason,
         sensors=sensors,

@@ -18,7 +18,10 @@ import math
 from numba import njit
 
 from brake_sim_ros.model import layout as L
-from brake_sim_ros.model.catalogue import severity_at
+from brake_sim_ros.model.catalogue import LAW_FRICTION_WORK, severity_at
+
+# mm of wear per MJ of friction work (the scenario's unit) -> m per J (the kernel's)
+_MM_PER_MJ_TO_M_PER_J = 1e-9
 
 
 @njit(cache=True)
@@ -95,19 +98,41 @@ def working_copy(p):
 
 
 @njit(cache=True)
-def apply(p, pw, t):
+def lining_wear(p, pw, g, shoe, t, y, severity):
+    """Lining wear of ``shoe`` (0 left, 1 right) at time ``t`` (s) for the growth entry at
+    ``g`` of ``p``, m: ``severity`` (mm, :func:`severity_at` of the entry) for a law of
+    time; for a wear driven by friction work (``LAW_FRICTION_WORK``) also sets
+    the shoe's wear per joule in ``pw`` (``LN_WEAR_RATE``, used by the motion's wear state
+    ``y[Y_LEFT_WEAR + shoe]``): the entry's rate (mm/MJ) from the onset on, 0 before it and
+    once the final wear is reached, where the wear is held.
+    """
+    final = p[g + L.G_FINAL] * 1e-3
+    if int(p[g + L.G_LAW]) != LAW_FRICTION_WORK:
+        return severity * 1e-3
+    worn = y[L.Y_LEFT_WEAR + shoe]
+    rate = 0.0
+    if t >= p[g + L.G_ONSET] and worn < final:
+        rate = p[g + L.G_RATE] * _MM_PER_MJ_TO_M_PER_J
+    pw[L.P_LINING_BASE + shoe * L.LINING_STRIDE + L.LN_WEAR_RATE] = rate
+    return worn if worn < final else final
+
+
+@njit(cache=True)
+def apply(p, pw, t, y):
     """Write the parameters at simulated time ``t`` (s) of every growing defect of ``p``
     into ``pw`` (:func:`working_copy` of ``p``); return the shoes' actuation gains (left,
     right) and whether any geometry changed since the last call (the contact's switching
-    functions must then be re-evaluated).
+    functions must then be re-evaluated). ``y``: the state at ``t`` (a lining that wears
+    with friction work reads its wear there, :func:`lining_wear`).
 
     A pivot re-places its shoe (:func:`shoe_placement`); an actuation share sets this
     shoe's share to ``0.5 + s`` and the other's to ``0.5 - s``, an actuation gain change
     its pressure factor ``1 + s/100`` (the gain is ``2 share factor``,
     :func:`.actuation.shoe_gain`); a pulsation sets its amplitude; a friction change
     sets the shoe's lining coefficient (:func:`lining_friction`); a drum out of round
-    scales every harmonic by ``s / s_final``. A severity equal to the one set last (before
-    the onset, once the final one is reached) is not written again.
+    scales every harmonic by ``s / s_final``, a drum flat sets its depth, a lining wear
+    the shoe's lining radius (the unworn one less the wear). A severity equal to the one
+    set last (before the onset, once the final one is reached) is not written again.
     """
     bl = L.P_SHOE_BASE
     br = L.P_SHOE_BASE + L.SHOE_STRIDE
@@ -125,6 +150,8 @@ def apply(p, pw, t):
         )
         kind = int(p[g + L.G_KIND])
         shoe = int(p[g + L.G_SHOE])
+        if kind == L.GK_WEAR:
+            s = lining_wear(p, pw, g, shoe, t, y, s)
         if kind == L.GK_SHARE:
             shares[shoe] = 0.5 + s
             shares[1 - shoe] = 0.5 - s
@@ -164,6 +191,12 @@ def apply(p, pw, t):
             for w in range(int(p[L.P_DRUM_WAVE_COUNT])):
                 a = L.P_DRUM_WAVE_BASE + w * L.DRUM_WAVE_STRIDE + L.W_AMPLITUDE
                 pw[a] = p[a] * fraction
+        elif kind == L.GK_FLAT:
+            pw[L.P_FLAT_DEPTH] = s * 1e-6
+        elif kind == L.GK_WEAR:
+            lb = L.P_LINING_BASE + shoe * L.LINING_STRIDE
+            pw[lb + L.LN_WEAR] = s
+            pw[L.P_SHOE_BASE + shoe * L.SHOE_STRIDE + L.S_LINING_RADIUS] = p[lb + L.LN_RADIUS] - s
     if regain:
         for i in range(2):
             gains[i] = 2.0 * shares[i] * pressure[i]

@@ -93,6 +93,8 @@ def evaluate(y, p, fe_left, fe_right, stuck, mode_left, mode_right, dydt, out, r
     dydt[L.Y_FRICTION_WORK] = sl[contact.E_FRICTION_POWER] + sr[contact.E_FRICTION_POWER]
     dydt[L.Y_CONTACT_LOSS] = sl[contact.E_CONTACT_POWER] + sr[contact.E_CONTACT_POWER]
     dydt[L.Y_ACTUATION_WORK] = sl[contact.E_ACTUATION_POWER] + sr[contact.E_ACTUATION_POWER]
+    if y.shape[0] > L.Y_LEFT_WEAR:  # a lining wears with its friction work (layout.Y_*_WEAR)
+        _wear_rates(p, sl[contact.E_FRICTION_POWER], sr[contact.E_FRICTION_POWER], dydt)
     drum_torque = sl[contact.E_DRUM_TORQUE] + sr[contact.E_DRUM_TORQUE]
     rigid = p[L.P_RIGID_COUPLING] > 0.0
     if rigid:
@@ -153,6 +155,20 @@ def evaluate(y, p, fe_left, fe_right, stuck, mode_left, mode_right, dydt, out, r
     for i in range(4):
         o[L.C_ENERGY + i] = y[L.Y_FRICTION_WORK + i]
     o[L.C_DRUM_STICKING] = 1.0 if stuck else 0.0
+    for i in range(2):
+        o[L.C_LINING_WEAR + L.RIGHT_OF_SCALAR * i] = p[
+            L.P_LINING_BASE + i * L.LINING_STRIDE + L.LN_WEAR
+        ]
+
+
+@njit(cache=True)
+def _wear_rates(p, power_left, power_right, dydt):
+    """Wear rates of the linings, m/s: each shoe's wear per joule (layout.LN_WEAR_RATE,
+    0 but for a lining that wears with its friction work, from its onset) times its own
+    friction power (contact.E_FRICTION_POWER, W)."""
+    b = L.P_LINING_BASE + L.LN_WEAR_RATE
+    dydt[L.Y_LEFT_WEAR] = p[b] * power_left
+    dydt[L.Y_RIGHT_WEAR] = p[b + L.LINING_STRIDE] * power_right
 
 
 @njit(cache=True)
@@ -511,7 +527,7 @@ def fixed_step_advance(
     growing = p[L.P_GROWTH_COUNT] > 0.0
     pw = growth.working_copy(p) if growing else p
     if growing:
-        gl, gr, _ = growth.apply(p, pw, step0 * dt)
+        gl, gr, _ = growth.apply(p, pw, step0 * dt, y)
     if gain_override != 0:
         gl = 1.0
         gr = 1.0
@@ -526,7 +542,7 @@ def fixed_step_advance(
         step = step0 + i
         t = step * dt
         if growing and i > 0:
-            gl, gr, moved = growth.apply(p, pw, t)
+            gl, gr, moved = growth.apply(p, pw, t, y)
             if gain_override != 0:
                 gl = 1.0
                 gr = 1.0

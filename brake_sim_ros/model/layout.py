@@ -109,8 +109,25 @@ GK_DRUM = 2  # drum_out_of_round, um of peak runout: every harmonic scales with 
 GK_FRICTION = 3  # friction_change, %: the shoe's lining coefficient (growth.lining_friction)
 GK_GAIN = 4  # actuation_gain_change, %: the shoe's pressure factor (actuation.shoe_gain)
 GK_PULSATION = 5  # actuation_pulsation, %: the shoe's pulsation amplitude
+GK_WEAR = 6  # lining_wear, mm: the shoe's lining radius (growth.apply; friction work: its state)
+GK_FLAT = 7  # drum_flat, um: the flat's depth
 
-N_PARAMS = P_GROWTH_BASE + MAX_GROWTH_ENTRIES * GROWTH_STRIDE
+# lining wear per shoe (model/growth.py apply), after the growth entries: the lining's
+# unworn radius, the thickness lost now and, for wear driven by friction work, the wear per
+# joule of the shoe's friction work (0 before the onset and once the final wear is reached)
+P_LINING_BASE = P_GROWTH_BASE + MAX_GROWTH_ENTRIES * GROWTH_STRIDE
+LINING_STRIDE = 3
+LN_RADIUS = 0  # the unworn lining's arc radius, m (S_LINING_RADIUS is it minus the wear)
+LN_WEAR = 1  # thickness lost now, m
+LN_WEAR_RATE = 2  # m of wear per J of this shoe's friction work (catalogue LAW_FRICTION_WORK)
+
+# a local flat of the drum (model/defects.py DrumFlat, model/contact.py drum_radius): its
+# depth (0: none), its centre in the drum's frame and its half width
+P_FLAT_DEPTH = P_LINING_BASE + 2 * LINING_STRIDE  # m
+P_FLAT_CENTRE = P_FLAT_DEPTH + 1  # rad, the angle psi of the drum's own frame
+P_FLAT_HALF_WIDTH = P_FLAT_DEPTH + 2  # rad
+
+N_PARAMS = P_FLAT_HALF_WIDTH + 1
 
 # --- state vector ---------------------------------------------------------------------
 Y_FLYWHEEL_ANGLE = 0
@@ -127,6 +144,12 @@ Y_COUPLING_DAMPER_LOSS = 9
 Y_CONTACT_LOSS = 10
 Y_ACTUATION_WORK = 11
 N_STATE = 12
+# the lining wear of a shoe that wears with its friction work (catalogue LAW_FRICTION_WORK),
+# m, integrated with the motion from its onset: only a run with such a wear carries these
+# two states (N_STATE_WEAR), so every other run steps exactly the N_STATE above
+Y_LEFT_WEAR = 12
+Y_RIGHT_WEAR = 13
+N_STATE_WEAR = 14
 
 # --- recorded sample columns -------------------------------------------------------------
 COLUMNS: tuple[str, ...] = (
@@ -168,6 +191,8 @@ COLUMNS: tuple[str, ...] = (
     "left_sliding_speed_m_s",
     "right_sliding_speed_m_s",
     "drum_sticking",  # 1.0 while static friction holds the drum at standstill, else 0.0
+    "left_lining_wear_m",  # lining thickness lost, as the physics step of the sample has it
+    "right_lining_wear_m",
 )
 COL = {name: i for i, name in enumerate(COLUMNS)}
 N_COLUMNS = len(COLUMNS)
@@ -192,6 +217,7 @@ C_SHOE_REGIME = COL["left_regime"]
 C_INDENTATION_RATE = COL["left_indentation_rate_m_s"]
 C_SLIDING_SPEED = COL["left_sliding_speed_m_s"]
 C_DRUM_STICKING = COL["drum_sticking"]
+C_LINING_WEAR = COL["left_lining_wear_m"]
 RIGHT_OF_SCALAR = 1  # right-shoe column = left-shoe column + 1 for scalar per-shoe pairs
 RIGHT_OF_VECTOR = 2  # right-shoe (x, y) columns = left-shoe ones + 2
 

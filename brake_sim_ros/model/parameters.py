@@ -288,6 +288,8 @@ UNIT_SUFFIXES: tuple[tuple[str, str], ...] = (
     ("_deg", "deg"),
     ("_kg", "kg"),
     ("_pa", "Pa"),
+    ("_mm", "mm"),
+    ("_um", "um"),
     ("_m", "m"),
 )
 

@@ -258,6 +258,9 @@ def _record(o, t, y, p, fel, fer, stuck, cache, fstate):
             regime = L.REGIME_CONTACT
             any_contact = True
         o[L.C_SHOE_REGIME + L.RIGHT_OF_SCALAR * i] = regime
+        o[L.C_LINING_WEAR + L.RIGHT_OF_SCALAR * i] = p[
+            L.P_LINING_BASE + i * L.LINING_STRIDE + L.LN_WEAR
+        ]
     o[L.C_ENERGY + L.Y_FRICTION_WORK - L.Y_FRICTION_WORK] = y[R_FRICTION]
     o[L.C_ENERGY + L.Y_COUPLING_DAMPER_LOSS - L.Y_FRICTION_WORK] = y[R_DAMPER]
     o[L.C_LOCK_LOSS] = fstate[L.F_LOCK_LOSS]

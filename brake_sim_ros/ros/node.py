@@ -86,7 +86,7 @@ from brake_sim_ros.solvers.realtime import (
 from brake_sim_ros.stream import MessageSink, Topic, conversion
 from brake_sim_ros.stream import parameters as ros_params
 from brake_sim_ros.stream.build import require_measured, sensor_bank_for, stepper_for
-from brake_sim_ros.stream.ground_truth import TruthUpdates
+from brake_sim_ros.stream.ground_truth import TruthUpdates, recorded_wear, state_wear
 
 NODE_NAME = "brake_sim"
 MAX_LAG_S = 0.5  # wall seconds of backlog that are caught up (see pacing)
@@ -757,8 +757,8 @@ class BrakeSimNode(Node):
 
     def _publish_block(self, block: SampleBlock) -> None:
         states = 0
-        for row in self._truth.due_rows(block.time_s):
-            self._publish_defects(block.first_index + row)
+        for row in self._truth.due_rows(block.time_s, recorded_wear(block)):
+            self._publish_defects(block.first_index + row, recorded_wear(block, row))
         messages = stream.block_messages(
             block,
             self._state_stride,
@@ -992,14 +992,19 @@ class BrakeSimNode(Node):
         self._tick_timer.timer_period_ns = int(self._tick_period_s() * 1e9)
 
     # -- ground truth and diagnostics --------------------------------------------------------
-    def _publish_defects(self, sample_index: int | None = None) -> None:
+    def _publish_defects(
+        self, sample_index: int | None = None, wear_m: dict[str, float] | None = None
+    ) -> None:
         """Publish the ground truth at ``sample_index`` (default: the next sample, for the
         start, a reset or a change of the defects; a sample of a block for a growing
-        defect, :class:`~brake_sim_ros.stream.ground_truth.TruthUpdates`)."""
+        defect, :class:`~brake_sim_ros.stream.ground_truth.TruthUpdates`, with the linings'
+        wear recorded there, ``wear_m``; default the stepper's wear state now)."""
         setup = self._stepper.setup
         index = self._stepper.sample_index if sample_index is None else sample_index
         period = self._stepper.sample_period_s
         ns = conversion.stamp_ns(index, period)
+        if wear_m is None:
+            wear_m = state_wear(self._stepper.state)
         msg = conversion.defect_state(
             scenario=self.scenario.name,
             defects=setup.defects,
@@ -1009,9 +1014,10 @@ class BrakeSimNode(Node):
             seed=self._seed,
             unit_id=self.scenario.unit_id,
             time_s=index * period,
+            wear_m=wear_m,
         )
         if sample_index is None:
-            self._truth.published(setup.defects, index * period)
+            self._truth.published(setup.defects, index * period, wear_m)
         self._emit(stream.DEFECTS, msg, ns)
 
     def run_view(self) -> RunView:

@@ -39,10 +39,13 @@ from brake_sim_ros.model.actuation import (
 )
 from brake_sim_ros.model.assembly import SIDES, ModelOptions, pack
 from brake_sim_ros.model.catalogue import (
+    DEFAULT_WEAR_RATE_MM_PER_MJ,
     DRUM_KIND,
+    FLAT_KIND,
     GROWTH_LAWS,
     KINDS,
     MAX_GROWTH_TIME_S,
+    MAX_WEAR_RATE_MM_PER_MJ,
     Growth,
 )
 from brake_sim_ros.model.defects import (
@@ -475,16 +478,32 @@ def _actuation(ctx: _Ctx, data: Any) -> Actuation:
 
 # the keys that state when a defect starts and how it grows (catalogue.Growth), beside its
 # final value: in a shoe key's table, or in [defects.drum] itself
-GROWTH_KEYS = ("onset_s", "growth", "rate_per_s", "doubling_time_s", "start")
+GROWTH_KEYS = ("onset_s", "growth", "rate_per_s", "doubling_time_s", "start", "wear_rate_mm_per_mj")
 
 
 def _growth(ctx: _Ctx, data: dict[str, Any], key: str, healthy: float) -> Growth:
     """The onset and growth law stated in ``data`` (keys :data:`GROWTH_KEYS`, all optional:
     a step at 0 s); ``start`` is a value of the key itself, so ``healthy`` (the key's
-    healthy value) is taken off to give a severity."""
+    healthy value) is taken off to give a severity. ``wear_rate_mm_per_mj`` (growth
+    ``friction_work``, mm of wear per MJ of the shoe's friction work) defaults to
+    :data:`~brake_sim_ros.model.catalogue.DEFAULT_WEAR_RATE_MM_PER_MJ`."""
     law = ctx.string(data.get("growth", "step"), f"{key}.growth", GROWTH_LAWS)
     onset = ctx.number(data.get("onset_s", 0.0), f"{key}.onset_s", 0.0, MAX_GROWTH_TIME_S)
     values = {"onset_s": onset, "law": law}
+    if "wear_rate_mm_per_mj" in data and law != "friction_work":
+        raise ctx.fail(
+            f"{key}.wear_rate_mm_per_mj",
+            data["wear_rate_mm_per_mj"],
+            'a value only with growth = "friction_work"',
+        )
+    if law == "friction_work":
+        values["wear_rate_mm_per_mj"] = ctx.number(
+            data.get("wear_rate_mm_per_mj", DEFAULT_WEAR_RATE_MM_PER_MJ),
+            f"{key}.wear_rate_mm_per_mj",
+            0.0,
+            MAX_WEAR_RATE_MM_PER_MJ,
+            lo_open=True,
+        )
     for name, needed_by in (
         ("rate_per_s", "linear"),
         ("doubling_time_s", "exponential"),
@@ -506,14 +525,33 @@ def _growth(ctx: _Ctx, data: dict[str, Any], key: str, healthy: float) -> Growth
         raise ScenarioError(f"{ctx.source}: [{key}]: {exc}") from exc
 
 
-def _drum(ctx: _Ctx, data: Any) -> tuple[DrumDefect, Growth]:
+def _drum(ctx: _Ctx, data: Any) -> tuple[DrumDefect, Growth, Growth]:
     """``[defects.drum]``: ``harmonics``, an array of tables ``{order, amplitude_um,
     phase_deg}`` (phase optional, 0 deg); the amplitudes are the final ones and the
     :data:`GROWTH_KEYS` say when the drum goes out of round and how (``rate_per_s`` and
     ``start`` in um of peak runout, the sum of the amplitudes; every harmonic grows in
-    proportion)."""
-    data = ctx.table(data, "defects.drum", {"harmonics", *GROWTH_KEYS})
+    proportion). A flat: ``flat_depth_um`` (a number, or a table ``{value, onset_s, growth,
+    ...}`` as a shoe's keys), ``flat_centre_deg`` (default 0) and ``flat_width_deg``
+    (default :data:`~brake_sim_ros.model.defects.DEFAULT_FLAT_WIDTH_DEG`). Returns the drum,
+    the harmonics' growth and the flat's."""
+    flat_keys = {"flat_depth_um", "flat_centre_deg", "flat_width_deg"}
+    data = ctx.table(data, "defects.drum", {"harmonics", *GROWTH_KEYS, *flat_keys})
     growth = _growth(ctx, data, "defects.drum", 0.0)
+    flat: dict[str, float] = {}
+    flat_growth = Growth()
+    depth = data.get("flat_depth_um", 0.0)
+    if isinstance(depth, dict):
+        depth = ctx.table(depth, "defects.drum.flat_depth_um", {"value", *GROWTH_KEYS})
+        if "value" not in depth:
+            raise ctx.fail(
+                "defects.drum.flat_depth_um.value", _MISSING, "a number (the final value)"
+            )
+        flat_growth = _growth(ctx, depth, "defects.drum.flat_depth_um", 0.0)
+        depth = depth["value"]
+    flat["flat_depth_um"] = ctx.number(depth, "defects.drum.flat_depth_um")
+    for name in ("flat_centre_deg", "flat_width_deg"):
+        if name in data:
+            flat[name] = ctx.number(data[name], f"defects.drum.{name}")
     rows = data.get("harmonics", [])
     if not isinstance(rows, list):
         raise ctx.fail(
@@ -538,7 +576,7 @@ def _drum(ctx: _Ctx, data: Any) -> tuple[DrumDefect, Growth]:
         except BrakeSimError as exc:
             raise ScenarioError(f"{ctx.source}: [{key}]: {exc}") from exc
     try:
-        return DrumDefect(tuple(harmonics)), growth
+        return DrumDefect(tuple(harmonics), **flat), growth, flat_growth
     except BrakeSimError as exc:
         raise ScenarioError(f"{ctx.source}: [defects.drum]: {exc}") from exc
 
@@ -578,8 +616,9 @@ def _defects(ctx: _Ctx, data: Any) -> Defects:
             built[side] = ShoeDefect(**shoes[side])
         except BrakeSimError as exc:
             raise ScenarioError(f"{ctx.source}: [defects.{side}]: {exc}") from exc
-    drum, drum_growth = _drum(ctx, data.get("drum", {}))
+    drum, drum_growth, flat_growth = _drum(ctx, data.get("drum", {}))
     growth.append((DRUM_KIND, "drum", drum_growth))
+    growth.append((FLAT_KIND, "drum", flat_growth))
     try:
         return Defects(**built, drum=drum, growth=tuple(growth))
     except BrakeSimError as exc:

@@ -24,6 +24,9 @@ limit was computed for re-picks the substeps at once; only a limit below
 
 The stepper owns the state between calls, so a caller (the ROS node, the offline
 simulator) advances it in chunks and may change the actuation between any two calls.
+Live actuation commands reach a shoe whose actuation is delayed or lagging (an actuation
+defect) through the same shaping as the scenario's history: the stepper keeps the shoe's
+commanded history (:class:`CommandHistory`).
 """
 
 from __future__ import annotations
@@ -57,6 +60,59 @@ FIXED_STEP_SCHEMES: dict[str, int] = {
     "semi-implicit-euler": L.SCHEME_SEMI_IMPLICIT_EULER,
 }
 DEFAULT_SCHEME = "rk4-located"
+
+
+# How far back a command history keeps its knots beyond the delay, in lag time constants:
+# a slope change that old weighs exp(-40) (4e-18) in the lag's sum, below rounding.
+HISTORY_LAGS = 40.0
+
+
+class CommandHistory:
+    """The commanded force history of one shoe under live commands: piecewise-linear knots
+    (s, N) for :func:`brake_sim_ros.model.actuation.shaped`, so that a delayed or lagging
+    shoe (``S_ACTUATION_DELAY``, ``S_ACTUATION_LAG``) answers a live command as it answers
+    the scenario's history.
+
+    It starts from what the line was commanded until the first live command it sees: the
+    scenario's history, or the live force in force (a shoe that became delayed or lagging
+    during live commands, its history before unknown to it: held), and takes each new
+    command as a ramp over one physics step from the previous force (a command holds from
+    its sample on; the knots must increase).
+    Knots older than the delay plus :data:`HISTORY_LAGS` lag time constants are dropped.
+
+    Args:
+        ts, fs: the commanded knots so far for this shoe (s, N).
+        t_s: simulated time of the first live command, s.
+        keep_s: how far back knots are kept, s (the delay plus ``HISTORY_LAGS`` lags).
+    """
+
+    def __init__(self, ts: np.ndarray, fs: np.ndarray, t_s: float, keep_s: float) -> None:
+        self.keep_s = keep_s
+        before = ts < t_s
+        self.ts = [float(t) for t in ts[before]]
+        self.fs = [float(f) for f in fs[before]]
+        self.ts.append(t_s)
+        self.fs.append(float(np.interp(t_s, ts, fs)))
+
+    def command(self, t_s: float, force_n: float, ramp_s: float) -> None:
+        """A command of ``force_n`` (N) from ``t_s`` (s) on, reached within ``ramp_s``."""
+        if force_n == self.fs[-1]:
+            return
+        if self.ts[-1] > t_s:  # a command within the last ramp: it ends at the new force
+            self.fs[-1] = force_n
+            return
+        if self.ts[-1] < t_s:
+            self.ts.append(t_s)
+            self.fs.append(self.fs[-1])
+        self.ts.append(t_s + ramp_s)
+        self.fs.append(force_n)
+        old = 0
+        while old + 1 < len(self.ts) and self.ts[old + 1] < t_s - self.keep_s:
+            old += 1
+        del self.ts[:old], self.fs[:old]
+
+    def knots(self) -> tuple[np.ndarray, np.ndarray]:
+        return np.array(self.ts), np.array(self.fs)
 
 
 class StepperStatus(enum.Enum):
@@ -152,6 +208,8 @@ class FixedStepStepper:
             )
         self.substeps = self._substeps_for(self.limit, "these parameters")
         self._y = initial_state(self.setup.params, self.setup.defects)
+        self._histories: list[CommandHistory | None] = [None, None]
+        self._live_n: tuple[float, float] | None = None  # the live forces in force, N
         self._sample = 0
         self._kstate = np.zeros(L.N_KSTATE, np.int64)
         self._fstate = np.zeros(L.N_FSTATE)
@@ -230,8 +288,9 @@ class FixedStepStepper:
     def set_state(self, y: np.ndarray) -> None:
         """Replace the state vector (layout.Y_*), e.g. to start from a twisted coupling."""
         y = np.asarray(y, dtype=float)
-        if y.shape != (L.N_STATE,) or not np.all(np.isfinite(y)):
-            raise ParameterError(f"state of shape {y.shape}: allowed {L.N_STATE} finite values")
+        size = self._y.shape[0]  # N_STATE, or N_STATE_WEAR with a lining wearing with work
+        if y.shape != (size,) or not np.all(np.isfinite(y)):
+            raise ParameterError(f"state of shape {y.shape}: allowed {size} finite values")
         self._y = y.copy()
 
     @property
@@ -280,6 +339,9 @@ class FixedStepStepper:
         self._base_force_n = max(self._base_force_n, _peak_n(setup))
         self._profile = setup.actuation.as_arrays()
         self._use_substeps(substeps)
+        if setup.defects.wearing_with_work and self._y.shape[0] < L.N_STATE_WEAR:
+            # a lining starts wearing with its friction work: its wear state starts at 0
+            self._y = np.concatenate([self._y, np.zeros(L.N_STATE_WEAR - self._y.shape[0])])
 
     def _raise_limit_force(self, force_n: float) -> None:
         """Recompute the step limit for a larger actuation force and re-pick the substeps."""
@@ -329,11 +391,40 @@ class FixedStepStepper:
             tl = tr = np.zeros(1)
             fl = np.array([left])
             fr = np.array([right])
+            knots = [(tl, fl), (tr, fr)]
+            for i, force in enumerate((left, right)):
+                keep_s = self._history_keep_s(i)
+                if keep_s is None:
+                    continue
+                history = self._histories[i]
+                t_s = self._sample * self.sample_period_s
+                if history is None:
+                    ts, fs = self._profile[2 * i], self._profile[2 * i + 1]
+                    if self._live_n is not None:
+                        ts, fs = np.zeros(1), np.array([self._live_n[i]])
+                    history = self._histories[i] = CommandHistory(ts, fs, t_s, keep_s)
+                history.command(t_s, force, self.physics_step_s)
+                knots[i] = history.knots()
+            (tl, fl), (tr, fr) = knots
+            self._live_n = (left, right)
+        if actuation_n is None:
+            self._histories = [None, None]  # back on the scenario's history
+            self._live_n = None
         rows = -(-n_samples // record_every)
         out = np.empty((rows, L.N_COLUMNS))
         first = self._sample
         written = self._integrate(n_samples, record_every, (tl, fl, tr, fr), out)
         return SampleBlock(out[:written], first, self.sample_period_s * record_every)
+
+    def _history_keep_s(self, shoe: int) -> float | None:
+        """How far back the commanded history of ``shoe`` (0 left, 1 right) matters, s:
+        its delay plus :data:`HISTORY_LAGS` lags; None for a shoe that is neither delayed
+        nor lagging (a live command then reaches it at once, as a constant)."""
+        base = L.P_SHOE_BASE + shoe * L.SHOE_STRIDE
+        delay, lag = self._p[base + L.S_ACTUATION_DELAY], self._p[base + L.S_ACTUATION_LAG]
+        if delay <= 0.0 and lag <= 0.0:
+            return None
+        return float(delay + HISTORY_LAGS * lag)
 
     def _integrate(self, n_samples: int, record_every: int, knots, out: np.ndarray) -> int:
         """Run the kernel over ``n_samples`` samples into ``out``; rows written."""

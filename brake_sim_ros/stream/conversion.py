@@ -270,6 +270,7 @@ def defect_state(
     seed: int,
     unit_id: str,
     time_s: float | None = None,
+    wear_m: dict[str, float] | None = None,
 ) -> DefectState:
     """Ground truth of the defects in force from simulated time ``ns`` on: the
     catalogue's list (:meth:`Defects.active`) with each severity at that time (a defect
@@ -287,11 +288,16 @@ def defect_state(
         unit_id: the brake unit's id (the scenario's ``unit_id``; "nominal" for the
             drawing's brake, :mod:`brake_sim_ros.model.units`).
         time_s: the simulated time of the severities, s (the sample's; default ``ns``).
+        wear_m: the linings' wear the model recorded at that sample, m, by shoe
+            (:func:`~brake_sim_ros.stream.ground_truth.recorded_wear`): the severity of a
+            lining wearing with its friction work (default unworn: the start of a run).
     """
     left = dataclasses.replace(defects.left, initial_angle_deg=initial_angles_deg[0])
     right = dataclasses.replace(defects.right, initial_angle_deg=initial_angles_deg[1])
     at = ns * 1e-9 if time_s is None else time_s
-    active = dataclasses.replace(defects, left=left, right=right).active(at)
+    if wear_m is None:
+        wear_m = {"left": 0.0, "right": 0.0}
+    active = dataclasses.replace(defects, left=left, right=right).active(at, wear_m)
     return DefectState(
         header=header(ns),
         run_id=run_id,

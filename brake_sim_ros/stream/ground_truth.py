@@ -15,7 +15,9 @@ sample where
 Each message carries the severities at its own sample's time (``Defects.active``), so a
 subscriber holds the truth to within that fraction of the service limit, and knows it at
 least once a second while anything changes. Defects present from the start publish nothing
-beyond the start and resets. Pure logic on arrays: no transport.
+beyond the start and resets. A lining wearing with its friction work is read from the
+samples' recorded wear (:func:`recorded_wear`), not from time. Pure logic on arrays: no
+transport.
 """
 
 from __future__ import annotations
@@ -24,9 +26,36 @@ import numpy as np
 
 from brake_sim_ros.model.catalogue import KINDS
 from brake_sim_ros.model.defects import Defects
+from brake_sim_ros.model.layout import N_STATE_WEAR, SIDES, Y_LEFT_WEAR
+from brake_sim_ros.model.trajectory import SampleBlock
 
 PUBLISH_FRACTION = 0.05  # of the kind's service limit
 PUBLISH_PERIOD_S = 1.0  # longest silence while a severity changes, simulated s
+
+
+def wear_column(side: str) -> str:
+    """The samples' column of a shoe's lining wear, m (``layout.COLUMNS``)."""
+    return f"{side}_lining_wear_m"
+
+
+def recorded_wear(samples: SampleBlock, row: int | None = None) -> dict:
+    """The linings' wear the model recorded in ``samples`` (m, by shoe: each column, or
+    its value at ``row``), for :meth:`Defects.label_series` and :meth:`Defects.active`;
+    empty when the samples do not carry it."""
+    names = [wear_column(side) for side in SIDES]
+    if not samples.has(*names):
+        return {}
+    if row is None:
+        return {side: samples[name] for side, name in zip(SIDES, names, strict=True)}
+    return {side: float(samples[name][row]) for side, name in zip(SIDES, names, strict=True)}
+
+
+def state_wear(y: np.ndarray) -> dict[str, float]:
+    """The linings' wear in a stepper's state ``y`` (layout ``Y_*_WEAR``), m by shoe; 0
+    for a state without them (no lining wears with its friction work)."""
+    if y.shape[0] < N_STATE_WEAR:
+        return dict.fromkeys(SIDES, 0.0)
+    return {side: float(y[Y_LEFT_WEAR + i]) for i, side in enumerate(SIDES)}
 
 
 class TruthUpdates:
@@ -42,19 +71,28 @@ class TruthUpdates:
         )
         self.published(defects, 0.0)
 
-    def published(self, defects: Defects, time_s: float) -> None:
-        """A ``DefectState`` of ``defects`` went out at ``time_s`` (start, reset, change)."""
+    def published(
+        self, defects: Defects, time_s: float, wear_m: dict[str, float] | None = None
+    ) -> None:
+        """A ``DefectState`` of ``defects`` went out at ``time_s`` (start, reset, change);
+        ``wear_m``: the linings' wear then, m (:meth:`Defects.active`; default: unworn, as
+        at the start of a run)."""
         self._defects = defects
         self._final = np.array(list(defects.severities().values()))
-        self._last = np.array(list(defects.severities(time_s).values()))
+        if wear_m is None:
+            wear_m = dict.fromkeys(SIDES, 0.0)
+        self._last = np.array(list(defects.severities(time_s, wear_m).values()))
         self._last_time = float(time_s)
 
-    def due_rows(self, times_s: np.ndarray) -> list[int]:
+    def due_rows(self, times_s: np.ndarray, wear_m: dict | None = None) -> list[int]:
         """Rows of ``times_s`` (s, ascending: a block's sample times) at which a
-        ``DefectState`` is due, in order; each is recorded as published."""
+        ``DefectState`` is due, in order; each is recorded as published. ``wear_m``: the
+        block's recorded wear (:func:`recorded_wear`), for a lining wearing with its
+        friction work."""
         if self._defects.is_static or len(times_s) == 0:
             return []
-        values = np.column_stack(list(self._defects.label_series(times_s).values()))
+        series = self._defects.label_series(times_s, wear_m)
+        values = np.column_stack(list(series.values()))
         rows: list[int] = []
         start = 0
         while start < len(times_s):

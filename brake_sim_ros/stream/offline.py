@@ -21,7 +21,7 @@ from brake_sim_ros.solvers.fixed_step import FixedStepStepper
 from brake_sim_ros.stream import Topic, conversion
 from brake_sim_ros.stream import parameters as ros_params
 from brake_sim_ros.stream.build import require_measured, sensor_bank_for, stepper_for
-from brake_sim_ros.stream.ground_truth import TruthUpdates
+from brake_sim_ros.stream.ground_truth import TruthUpdates, recorded_wear
 
 
 def _default(name: str):
@@ -103,7 +103,7 @@ def offline_messages(
     truth = TruthUpdates(setup.defects)
     while stepper.sample_index < end:
         block = stepper.advance(min(chunk, end - stepper.sample_index))
-        for row in truth.due_rows(block.time_s):
+        for row in truth.due_rows(block.time_s, recorded_wear(block)):
             index = block.first_index + row
             ns = conversion.stamp_ns(index, period)
             msg = conversion.defect_state(
@@ -115,6 +115,7 @@ def offline_messages(
                 seed=scenario.seed,
                 unit_id=scenario.unit_id,
                 time_s=float(block.time_s[row]),
+                wear_m=recorded_wear(block, row),
             )
             yield stream.DEFECTS, msg, ns
         yield from stream.block_messages(

@@ -2,13 +2,15 @@
 
 Model parameters are not a second source of truth. Their names, types and default values
 come from the core's frozen dataclasses (``BrakeParameters``'s groups in
-``model/parameters.py``, ``ShoeDefect`` in ``model/defects.py``), read from the loaded
+``model/parameters.py``, ``ShoeDefect`` and the drum's flat in ``model/defects.py``), read
+from the loaded
 scenario, and a new value is validated by building the core objects again and handing
 them to the stepper: the core's ``ParameterError`` message (or ``StepSizeError``, for a
 pathological step limit) is the refusal reason. A change that needs a smaller physics step
 is not refused: the stepper re-picks its substeps per sample. Names are
-``<group>.<field>`` (``friction.coefficient``, ``shoe.running_clearance_m``) and
-``defects.<side>.<field>``.
+``<group>.<field>`` (``friction.coefficient``, ``shoe.running_clearance_m``),
+``defects.<side>.<field>`` and ``defects.drum.<field>`` for the drum's flat
+(:data:`DRUM_FIELDS`; the drum's harmonics are the scenario's and have no parameter).
 
 The ``FloatingPointRange`` of each descriptor is an envelope for tools such as
 rqt_reconfigure; where the core has fixed bounds (defects, friction, drum radius, ...)
@@ -26,6 +28,7 @@ This module imports no rclpy; ``brake_sim_ros.ros.descriptors`` turns a spec int
 
 from __future__ import annotations
 
+import dataclasses
 import inspect
 import re
 from dataclasses import dataclass, fields
@@ -33,8 +36,14 @@ from typing import Any
 
 from brake_sim_ros.errors import ParameterError
 from brake_sim_ros.model.actuation import MAX_ACTUATION_FORCE_N, NOMINAL_PEAK_ACTUATION_N
-from brake_sim_ros.model.catalogue import KINDS
-from brake_sim_ros.model.defects import MAX_PULSATION_HZ, Defects, DrumDefect, ShoeDefect
+from brake_sim_ros.model.catalogue import DRUM_KIND, KINDS
+from brake_sim_ros.model.defects import (
+    MAX_FLAT_WIDTH_DEG,
+    MAX_PULSATION_HZ,
+    Defects,
+    DrumDefect,
+    ShoeDefect,
+)
 from brake_sim_ros.model.layout import SIDES
 from brake_sim_ros.model.parameters import PARAMETER_GROUPS, BrakeParameters, unit_of
 from brake_sim_ros.model.trajectory import BrakeSetup
@@ -81,10 +90,14 @@ _RANGES: dict[str, tuple[float, float]] = {
     **{
         f"defects.{k.scenario_key}": (k.healthy_value + k.minimum, k.healthy_value + k.maximum)
         for k in KINDS
-        if set(k.locations) <= set(SIDES)  # the shoes' (the drum has no node parameter)
+        if k.name != DRUM_KIND  # the harmonics have no node parameter
     },
     "defects.actuation_pulsation_hz": (0.0, MAX_PULSATION_HZ),  # a pulsation's attribute
+    "defects.flat_centre_deg": (-360.0, 360.0),  # [core] a flat's attributes
+    "defects.flat_width_deg": (0.0, MAX_FLAT_WIDTH_DEG),  # [core] (0 itself refused)
 }
+# the drum's fields that are node parameters (defects.drum.<field>): its flat
+DRUM_FIELDS = ("flat_depth_um", "flat_centre_deg", "flat_width_deg")
 
 
 @dataclass(frozen=True)
@@ -304,6 +317,8 @@ def model_values(params: BrakeParameters, defects: Defects) -> dict[str, Any]:
         shoe = getattr(defects, side)
         for f in fields(ShoeDefect):
             values[f"defects.{side}.{f.name}"] = getattr(shoe, f.name)
+    for name in DRUM_FIELDS:
+        values[f"defects.drum.{name}"] = float(getattr(defects.drum, name))
     for group in PARAMETER_GROUPS:
         obj = getattr(params, group)
         for f in fields(obj):
@@ -317,7 +332,11 @@ def model_parameter_specs(params: BrakeParameters, defects: Defects) -> list[Par
     for name, value in model_values(params, defects).items():
         parts = name.split(".")
         field_name = parts[-1]
-        if parts[0] == "defects":
+        if parts[0] == "defects" and parts[1] == "drum":
+            what = f"Drum defect, {field_name}"
+            doc = _attribute_doc(DrumDefect, field_name)
+            range_key = f"defects.{field_name}"
+        elif parts[0] == "defects":
             what = f"{parts[1].capitalize()} shoe defect, {field_name}"
             doc = _attribute_doc(ShoeDefect, field_name)
             range_key = f"defects.{field_name}"
@@ -348,7 +367,8 @@ def build_model(
     values: dict[str, Any], drum: DrumDefect | None = None
 ) -> tuple[BrakeParameters, Defects]:
     """Core objects from flat ROS values (every model field present), with ``drum`` (the
-    scenario's drum: it has no flat values; default round).
+    scenario's drum: its harmonics, which have no flat values; default round) and the
+    flat the values give it.
 
     Raises:
         ParameterError: from the core, with its message, when a value or combination is
@@ -358,7 +378,9 @@ def build_model(
     for side in SIDES:
         kwargs = {f.name: values[f"defects.{side}.{f.name}"] for f in fields(ShoeDefect)}
         shoes[side] = ShoeDefect(**kwargs)
-    defects = Defects(left=shoes["left"], right=shoes["right"], drum=drum or DrumDefect())
+    flat = {name: values[f"defects.drum.{name}"] for name in DRUM_FIELDS}
+    drum = dataclasses.replace(drum or DrumDefect(), **flat)
+    defects = Defects(left=shoes["left"], right=shoes["right"], drum=drum)
     groups = {}
     for group, cls in PARAMETER_GROUPS.items():
         groups[group] = cls(**{f.name: values[f"{group}.{f.name}"] for f in fields(cls)})

@@ -13,7 +13,7 @@ scenario is run with that one defect at :data:`STEPS` fractions of the kind's se
 * the order-2 line (twice the drum's rotation frequency, by order analysis on the drum
   angle, :mod:`..analysis.orders`) of that shoe's ``|F_pivot|`` over 0.8-1.9 s, the
   contact regime with the actuation held (N; from ``--duration`` 1.9 s); for the drum the
-  leading (left) shoe's;
+  leading (left) shoe's; and the order-1 line (once per revolution: a drum flat's);
 * the braking torque: the mean friction torque of both shoes on the drum over the same
   window (N m; from ``--duration`` 1.9 s): what a friction change or a weak actuation
   moves first;
@@ -63,10 +63,11 @@ FEATURES: dict[str, str] = {  # key: label (unit)
     "band_rms_y": "band rms accel y (m/s^2)",
     "first_impact_ms": "first impact, accelerometers (ms)",
     "order_2_line_n": "order-2 line of the pivot force magnitude (N)",
+    "order_1_line_n": "order-1 line (once per revolution) of the pivot force magnitude (N)",
     "braking_torque_n_m": "mean braking torque, 0.8-1.9 s (N m)",
 }
 # features whose healthy value is zero (up to rounding): reported as values, not changes
-ABSOLUTE = frozenset({"order_2_line_n"})
+ABSOLUTE = frozenset({"order_2_line_n", "order_1_line_n"})
 
 
 def features(defects: Defects, location: str, duration_s: float) -> dict[str, float]:
@@ -77,10 +78,12 @@ def features(defects: Defects, location: str, duration_s: float) -> dict[str, fl
     side = location if location in SIDES else SIDES[0]
     shoe = run.metrics.shoe(side)
     b = run.samples
-    order_line = torque = math.nan
+    order_line = once_line = torque = math.nan
     if duration_s >= ORDER_WINDOW_S[1]:  # twice the drum's rotation, by order analysis
         magnitude = np.hypot(b[f"{side}_pivot_fx_n"], b[f"{side}_pivot_fy_n"])
         order_line = order_amplitude(b.time_s, b["drum_angle_rad"], magnitude, 2.0, ORDER_WINDOW_S)
+        # once per revolution: what a drum flat (a crack's edge) gives
+        once_line = order_amplitude(b.time_s, b["drum_angle_rad"], magnitude, 1.0, ORDER_WINDOW_S)
         window = (b.time_s >= ORDER_WINDOW_S[0]) & (b.time_s < ORDER_WINDOW_S[1])
         torque = float(
             sum(
@@ -104,6 +107,7 @@ def features(defects: Defects, location: str, duration_s: float) -> dict[str, fl
         "band_rms_y": measured[mf.BAND_RMS[1]],
         "first_impact_ms": measured[mf.FIRST_IMPACT],
         "order_2_line_n": order_line,
+        "order_1_line_n": once_line,
         "braking_torque_n_m": torque,
     }
 
