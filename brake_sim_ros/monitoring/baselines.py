@@ -5,6 +5,12 @@
   fitted on healthy training windows, it alarms when the statistic exceeds their mean by
   ``k`` standard deviations (default 4). Its health index is the statistic over that
   threshold, so 1 is the alarm. It detects, it does not isolate: no diagnosis.
+* ``orders``: order analysis of the tone ring (:mod:`.order_analysis`), for a drum that
+  is out of round.
+* ``learned``: a random forest on the shared window features (:mod:`.learned`), which
+  detects and isolates.
+
+All of them read their features through :mod:`.features`.
 """
 
 from __future__ import annotations
