@@ -94,6 +94,12 @@ def _units(argv: list[str]) -> int:
     return units.main(argv)
 
 
+def _cycle(argv: list[str]) -> int:
+    from brake_sim_ros.studies import cycle_bench
+
+    return cycle_bench.main(argv)
+
+
 BENCHMARKS: dict[str, Study] = {
     s.name: s
     for s in (
@@ -140,6 +146,12 @@ BENCHMARKS: dict[str, Study] = {
             "units",
             "spread of stop time and first-impact force across a fleet of units",
             _units,
+        ),
+        Study(
+            "cycle",
+            "a drive cycle (urban) offline: x real time with and without the default sensors,"
+            " its energy books",
+            _cycle,
         ),
     )
 }
