@@ -8,7 +8,10 @@ stays bounded by a chunk. Printed, best of ``--repeats`` (process CPU time, one 
 the physics alone and physics plus sensors as multiples of real time (the issue's target:
 at least 30x with the default sensors), the stops and phases the cycle went through, and
 the energy books over the whole cycle (drive work in against the losses, road load and the
-change of stored energy; :func:`brake_sim_ros.analysis.energy.energy_balance`).
+change of stored energy; :func:`brake_sim_ros.analysis.energy.energy_balance`); and what
+the vehicle costs per sample where the shoes ride free (4 s without braking, recording every
+sample): the published model, the same with a ``[vehicle]`` (road load), and with a
+``[cycle]`` (road load and the controller).
 """
 
 from __future__ import annotations
@@ -20,10 +23,21 @@ import numpy as np
 
 from brake_sim_ros.analysis.energy import energy_balance
 from brake_sim_ros.model.trajectory import SampleBlock
-from brake_sim_ros.scenarios import load_scenario
+from brake_sim_ros.scenarios import load_scenario, parse_scenario
 from brake_sim_ros.stream.build import sensor_bank_for, stepper_for
 
 TARGET_RTF = 30.0
+# free-rolling runs for the vehicle's cost: no brake force, shoes off the drum
+_FREE = 'name = "free"\n[actuation]\npeak_force_n = 0.0\n'
+_OVERHEAD_CASES = (
+    ("published model", _FREE),
+    ("with [vehicle] (road load)", _FREE + "[vehicle]\n"),
+    (
+        "with [cycle] (road load, controller)",
+        'name = "free"\n[parameters.driveline]\ninitial_speed_rad_s = 0.0\n'
+        '[[cycle.segments]]\nkind = "accelerate"\nkmh = 100.0\n',
+    ),
+)
 
 
 def _run(scenario, chunk_samples: int, with_sensors: bool):
@@ -87,4 +101,16 @@ def main(argv: list[str] | None = None) -> int:
         f" {books.stored_end_j:.3f} J; residual {books.residual_j:.2e} J"
         f" ({abs(books.residual_j) / max(books.turnover_j, 1e-300):.1e} of the energy in)"
     )
+    print("  cost per sample with the shoes off the drum (4 s, recording every sample):")
+    for label, text in _OVERHEAD_CASES:
+        scenario = parse_scenario(text).with_solver(preset=args.preset)
+        n = round(4.0 / scenario.sample_period_s)
+        best = float("inf")
+        for _ in range(args.repeats):
+            stepper = stepper_for(scenario)
+            stepper.advance(1)
+            start = time.process_time()
+            stepper.advance(n)
+            best = min(best, time.process_time() - start)
+        print(f"    {label}: {1e9 * best / n:.0f} ns")
     return 0
