@@ -82,6 +82,15 @@ class Segment:
     duration_s: float = 0.0
 
 
+# the controller's settings: (low, high) each (the scenario's [cycle] keys)
+LIMITS: dict[str, tuple[float, float]] = {
+    "max_drive_torque_n_m": (0.0, 10_000.0),
+    "speed_time_constant_s": (0.01, 100.0),
+    "brake_rise_s": (1e-3, 10.0),
+    "max_force_n": (0.0, MAX_ACTUATION_FORCE_N),
+}
+
+
 @dataclass(frozen=True)
 class Cycle:
     """A drive cycle: segments and the controller's settings.
@@ -105,12 +114,8 @@ class Cycle:
         n = len(self.segments)
         if not 1 <= n <= L.MAX_CYCLE_SEGMENTS:
             raise ParameterError(f"cycle with {n} segments: allowed 1 to {L.MAX_CYCLE_SEGMENTS}")
-        for name, value, lo, hi in (
-            ("max_drive_torque_n_m", self.max_drive_torque_n_m, 0.0, 10_000.0),
-            ("speed_time_constant_s", self.speed_time_constant_s, 0.01, 100.0),
-            ("brake_rise_s", self.brake_rise_s, 1e-3, 10.0),
-            ("max_force_n", self.max_force_n, 0.0, MAX_ACTUATION_FORCE_N),
-        ):
+        for name, (lo, hi) in LIMITS.items():
+            value = getattr(self, name)
             if not (math.isfinite(value) and lo <= value <= hi):
                 raise ParameterError(f"cycle {name} {value!r}: allowed {lo:g} to {hi:g}")
         for i, s in enumerate(self.segments):

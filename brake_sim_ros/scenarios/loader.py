@@ -45,6 +45,7 @@ from brake_sim_ros.model.catalogue import (
     MAX_GROWTH_TIME_S,
     Growth,
 )
+from brake_sim_ros.model.cycle import LIMITS as CYCLE_LIMITS
 from brake_sim_ros.model.cycle import Cycle, Segment, pack_drive
 from brake_sim_ros.model.defects import (
     MAX_DRUM_HARMONICS,
@@ -620,12 +621,6 @@ _SEGMENT_KEYS: dict[str, tuple[set[str], set[str]]] = {
     "release": ({"duration_s"}, {"duration_s"}),
     "drag": ({"kmh", "duration_s"}, {"duration_s"}),
 }
-_CYCLE_SETTINGS = {
-    "max_drive_torque_n_m": (0.0, 10_000.0),
-    "speed_time_constant_s": (0.01, 100.0),
-    "brake_rise_s": (1e-3, 10.0),
-    "max_force_n": (0.0, 50_000.0),
-}
 
 
 def force_from_pressure_n(pressure_bar: float) -> float:
@@ -666,13 +661,13 @@ def _segment(ctx: _Ctx, data: Any, key: str) -> Segment:
 
 def _cycle(ctx: _Ctx, data: Any) -> Cycle:
     """``[cycle]``: the controller's settings and ``[[cycle.segments]]`` (model/cycle.py)."""
-    data = ctx.table(data, "cycle", {"segments", *_CYCLE_SETTINGS})
+    data = ctx.table(data, "cycle", {"segments", *CYCLE_LIMITS})
     segments = data.get("segments", _MISSING)
     if not isinstance(segments, list) or not 1 <= len(segments) <= 64:
         raise ctx.fail("cycle.segments", segments, "an array of 1 to 64 segment tables")
     settings = {
         name: ctx.number(data[name], f"cycle.{name}", lo, hi)
-        for name, (lo, hi) in _CYCLE_SETTINGS.items()
+        for name, (lo, hi) in CYCLE_LIMITS.items()
         if name in data
     }
     built = tuple(_segment(ctx, seg, f"cycle.segments[{i}]") for i, seg in enumerate(segments))
