@@ -22,6 +22,8 @@ from brake_sim_ros.model.parameters import BrakeParameters
 from brake_sim_ros.model.trajectory import SampleBlock
 
 _LOSSES = ("friction_work_j", "coupling_damper_loss_j", "contact_loss_j", "lock_loss_j")
+# a vehicle's (model/vehicle.py): the drive's work in, the road load's out; read when kept
+_VEHICLE_WORK = ("drive_work_j", "road_load_work_j")
 # every column the books read (a run restricted to some outputs may not keep them all)
 ENERGY_COLUMNS: tuple[str, ...] = (
     "flywheel_angle_rad",
@@ -41,8 +43,9 @@ class EnergyBalance:
     Attributes:
         stored_start_j: kinetic + elastic energy at the first sample.
         stored_end_j: kinetic + elastic energy at the last sample.
-        supplied_j: actuator work done between them.
-        spent_j: friction, coupling-damper, contact and lock losses between them.
+        supplied_j: actuator work (and a vehicle's drive work) done between them.
+        spent_j: friction, coupling-damper, contact and lock losses (and a vehicle's
+            road-load work) between them.
         residual_j: ``stored_start + supplied - stored_end - spent`` (0 for exact books).
     """
 
@@ -101,6 +104,10 @@ def energy_balance(block: SampleBlock, params: BrakeParameters) -> EnergyBalance
     work = block["actuation_work_j"]
     supplied = float(work[-1] - work[0])
     spent = float(sum(block[name][-1] - block[name][0] for name in _LOSSES))
+    if block.has(*_VEHICLE_WORK):  # a vehicle's drive in and road load out (model/vehicle.py)
+        drive, road = (block[name][-1] - block[name][0] for name in _VEHICLE_WORK)
+        supplied = float(supplied + drive)
+        spent = float(spent + road)
     return EnergyBalance(
         stored_start_j=start,
         stored_end_j=end,

@@ -30,6 +30,11 @@ One row per sample of the scenario's rate. Columns, units in the names:
   until the first defect reaches its kind's service limit (:mod:`.life`: from the labels,
   or from a growth law beyond the run's end); 0 from then on; NaN when unknown (a healthy
   brake, defects below their limits: right-censored).
+* with a drive cycle (``[cycle]``, ``model/cycle.py``), the label column ``phase``
+  (dictionary-encoded string): the cycle's segment at that sample, ``"<index>:<kind>"``
+  (kinds ``accelerate``, ``cruise``, ``brake``, ``hold``, ``release``, ``drag``;
+  ``"<n>:end"`` after the last segment), from the history's ``cycle_segment``; the
+  metadata's ``cycle`` lists the segment kinds in order.
 
 Each measured column's field metadata gives ``unit``, ``rate_hz`` and ``decimation``; an
 edge-time column's gives ``unit`` and ``tone_ring_teeth``.
@@ -58,6 +63,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from brake_sim_ros.datasets import life
+from brake_sim_ros.model.cycle import Cycle
 from brake_sim_ros.model.defects import Defects
 from brake_sim_ros.model.sensor_faults import FAULT_BIT
 from brake_sim_ros.model.sensors import SensorBank
@@ -116,13 +122,15 @@ def history_table(
     unit_id: str,
     unit_values: Sequence[UnitValue],
     conditions: Mapping[str, Any],
+    cycle: Cycle | None = None,
 ) -> pa.Table:
     """The table of ``samples``, with ``sensors`` (a fresh bank, fed the whole run here)
     what they measured, and the ground truth of ``defects`` (the brake's defects in force
     over the run), of the unit (``unit_id``, ``unit_values``: its scattered parameters,
     ``Scenario.unit_values()``) and of the run's ``conditions``
-    (``Scenario.conditions_record()``); ``metadata`` goes into the ``brake_sim`` key as
-    JSON."""
+    (``Scenario.conditions_record()``); with the run's drive ``cycle``, the label column
+    ``phase`` (from the samples' ``cycle_segment``); ``metadata`` goes into the
+    ``brake_sim`` key as JSON."""
     n = len(samples)
     index = samples.first_index + np.arange(n, dtype=np.int64)
     history = samples.as_dict()
@@ -170,8 +178,13 @@ def history_table(
     fail = life.failure(defects, times, labels)
     columns[life.RUL_COLUMN] = pa.array(life.rul_series(times, fail))
     fields.append(pa.field(life.RUL_COLUMN, pa.float64()))
+    if cycle is not None and "cycle_segment" in history:
+        phase = pa.array(cycle.phase_names(history["cycle_segment"])).dictionary_encode()
+        columns["phase"] = phase
+        fields.append(pa.field("phase", phase.type))
     meta = {
         **metadata,
+        "cycle": None if cycle is None else list(cycle.kinds),
         "fault_bits": FAULT_BIT,
         "defects": [d.as_dict() for d in defects.active()],
         "unit_id": unit_id,
@@ -222,6 +235,7 @@ def run_table(
         unit_id=scenario.unit_id,
         unit_values=scenario.unit_values(),
         conditions=scenario.conditions_record(),
+        cycle=scenario.setup.cycle,
     )
 
 

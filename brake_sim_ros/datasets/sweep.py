@@ -188,7 +188,7 @@ def run_task(spec: RunSpec, out_dir: str) -> Outcome:
                     f"outputs.columns: {missing[0]!r} is not a column of this run: allowed"
                     f" {table.column_names[:60]}"
                 )
-            always = ("sample_index", "time_s", *spec.labels, life.RUL_COLUMN)
+            always = ("sample_index", "time_s", *spec.labels, life.RUL_COLUMN, "phase")
             keep = [c for c in table.column_names if c in always or c in spec.keep]
             table = table.select(keep)
         path = Path(out_dir) / relative

@@ -121,6 +121,12 @@ DEFECT_LEVELS: dict[str, frozenset[str]] = {
 # step (model/growth.py); the contact-regime levels reuse a shoe balance while the
 # actuation holds, which a changing brake would make wrong
 GROWTH_LEVELS = frozenset({"rigid", "full"})
+# levels that represent a vehicle's road load and drive on the flywheel ([vehicle],
+# [cycle]: model/vehicle.py, model/cycle.py): only the full model. The rigid levels have no
+# flywheel apart from the drum (their standstill rule holds the whole rotor, so a grade
+# would not reach the brake through the coupling), and the contact-regime levels reuse a
+# shoe balance while the actuation holds and have no cycle controller.
+DRIVEN_LEVELS = frozenset({"full"})
 # outputs that belong to one shoe and do not depend on the other shoe (see module doc)
 SHOE_LOCAL_OUTPUTS = frozenset({"impacts", "contact_regime_forces"})
 # defects whose effect on a shoe follows the drum speed: no one-shoe model (see module doc)
@@ -195,6 +201,8 @@ class Needs:
             must represent them (the scenario loader fills them in from ``[defects]``).
         growing: those of ``defects`` that change during the run: the level must be one
             of :data:`GROWTH_LEVELS`.
+        driven: the scenario has a vehicle (road load, a drive cycle): the level must be
+            one of :data:`DRIVEN_LEVELS` (the scenario loader sets it).
     """
 
     outputs: tuple[str, ...]
@@ -203,6 +211,7 @@ class Needs:
     level: str | None = None
     defects: tuple[str, ...] = ()
     growing: tuple[str, ...] = ()
+    driven: bool = False
 
     def __post_init__(self) -> None:
         unknown = [o for o in self.outputs if o not in OUTPUTS]
@@ -257,6 +266,16 @@ class Plan:
     sensors: bool = True
 
 
+# what a driven run keeps whatever its outputs: the vehicle's speed, its drive and road
+# load, their work (the energy books) and the cycle's segment (the phase label)
+DRIVEN_COLUMNS: tuple[str, ...] = (
+    "flywheel_speed_rad_s",
+    "drive_torque_n_m",
+    "road_load_torque_n_m",
+    "drive_work_j",
+    "road_load_work_j",
+    "cycle_segment",
+)
 # columns computed from the recorded ones, appended after layout.COLUMNS
 DERIVED_COLUMNS: tuple[str, ...] = ("braking_torque_n_m",)
 
@@ -342,9 +361,13 @@ def levels_representing(defect: str) -> list[str]:
     return [lv.name for lv in LEVELS if lv.name in DEFECT_LEVELS[defect]]
 
 
-def _represents(level: Level, defects: tuple[str, ...], growing: tuple[str, ...] = ()) -> bool:
-    return all(level.name in DEFECT_LEVELS[d] for d in defects) and (
-        not growing or level.name in GROWTH_LEVELS
+def _represents(
+    level: Level, defects: tuple[str, ...], growing: tuple[str, ...] = (), driven: bool = False
+) -> bool:
+    return (
+        all(level.name in DEFECT_LEVELS[d] for d in defects)
+        and (not growing or level.name in GROWTH_LEVELS)
+        and (not driven or level.name in DRIVEN_LEVELS)
     )
 
 
@@ -394,12 +417,18 @@ def plan(needs: Needs | None, *, model_shoes: tuple[str, ...] = SIDES) -> Plan:
                 " changing during the run (an onset after 0 s or a growth law): allowed"
                 f" levels for it: {sorted(GROWTH_LEVELS, key=list(LEVEL_BY_NAME).index)}"
             )
+        if needs.driven and level.name not in DRIVEN_LEVELS:
+            raise FidelityError(
+                f"needs level {level.name!r} cannot represent the vehicle's road load and"
+                " drive on the flywheel ([vehicle], [cycle]): allowed levels for it:"
+                f" {sorted(DRIVEN_LEVELS)}"
+            )
         reason = f"level {level.name!r} forced by the scenario's [needs]"
     else:
         level = next(
             lv
             for lv in LEVELS
-            if asked <= lv.outputs and _represents(lv, needs.defects, needs.growing)
+            if asked <= lv.outputs and _represents(lv, needs.defects, needs.growing, needs.driven)
         )
         cheaper = [lv for lv in LEVELS if lv.dof < level.dof]
         if cheaper:
@@ -408,6 +437,8 @@ def plan(needs: Needs | None, *, model_shoes: tuple[str, ...] = SIDES) -> Plan:
                 if not asked <= lv.outputs:
                     return f"{lv.name} lacks {sorted(asked - lv.outputs)[0]}"
                 defect = next((d for d in needs.defects if lv.name not in DEFECT_LEVELS[d]), None)
+                if needs.driven and lv.name not in DRIVEN_LEVELS:
+                    return f"{lv.name} cannot represent the vehicle ([vehicle], [cycle])"
                 if defect is None:
                     return f"{lv.name} cannot represent {needs.growing[0]} changing in time"
                 return f"{lv.name} cannot represent {defect}"
@@ -430,6 +461,9 @@ def plan(needs: Needs | None, *, model_shoes: tuple[str, ...] = SIDES) -> Plan:
             " depend on the other"
         )
     sensors = "measured_signals" in asked
+    columns = columns_for(needs.outputs, needs.shoes)
+    if needs.driven:
+        columns = (*columns, *(c for c in DRIVEN_COLUMNS if c not in columns))
     if not sensors:
         reason += "; no sensors ([needs] do not ask measured_signals): no structure"
     columns = columns_for(needs.outputs, needs.shoes)

@@ -15,7 +15,7 @@ import math
 import numpy as np
 from numba import njit
 
-from brake_sim_ros.model import actuation, contact, growth, standstill
+from brake_sim_ros.model import actuation, contact, cycle, growth, standstill, vehicle
 from brake_sim_ros.model import layout as L
 
 _pwl = actuation.pwl
@@ -50,6 +50,19 @@ def _shaped_force(p, base, t, ts, fs, gain):
     return actuation.spring_release(
         force, p[base + L.S_SPRING_RELEASE], p[base + L.S_SPRING_MARGIN]
     )
+
+
+@njit(cache=True)
+def _driven_flywheel(p, flywheel_speed, coupling, dydt):
+    """The flywheel's acceleration and the drive and road-load powers of a vehicle
+    (layout.P_DRIVEN): the step's drive torque minus the road load
+    (:func:`.vehicle.road_load_torque`) act on it besides the coupling. A call, not inlined:
+    the published model's path stays as it was."""
+    drive = p[L.P_DRIVE_TORQUE]
+    road = vehicle.road_load_torque(p, flywheel_speed)
+    dydt[L.Y_FLYWHEEL_SPEED] = (drive - road - coupling) / p[L.P_FLYWHEEL_INERTIA]
+    dydt[L.Y_DRIVE_WORK] = drive * flywheel_speed
+    dydt[L.Y_ROAD_LOAD_WORK] = road * flywheel_speed
 
 
 @njit(cache=True)
@@ -96,6 +109,8 @@ def evaluate(y, p, fe_left, fe_right, stuck, mode_left, mode_right, dydt, out, r
     if y.shape[0] > L.Y_LEFT_WEAR:  # a lining wears with its friction work (layout.Y_*_WEAR)
         _wear_rates(p, sl[contact.E_FRICTION_POWER], sr[contact.E_FRICTION_POWER], dydt)
     drum_torque = sl[contact.E_DRUM_TORQUE] + sr[contact.E_DRUM_TORQUE]
+    dydt[L.Y_DRIVE_WORK] = 0.0
+    dydt[L.Y_ROAD_LOAD_WORK] = 0.0
     rigid = p[L.P_RIGID_COUPLING] > 0.0
     if rigid:
         # one rotor body: held as a whole while stuck (its friction share is then 0)
@@ -108,7 +123,10 @@ def evaluate(y, p, fe_left, fe_right, stuck, mode_left, mode_right, dydt, out, r
     else:
         slip = y[L.Y_FLYWHEEL_SPEED] - wd
         dydt[L.Y_FLYWHEEL_ANGLE] = y[L.Y_FLYWHEEL_SPEED]
-        dydt[L.Y_FLYWHEEL_SPEED] = -coupling / p[L.P_FLYWHEEL_INERTIA]
+        if p[L.P_DRIVEN] > 0.0:
+            _driven_flywheel(p, y[L.Y_FLYWHEEL_SPEED], coupling, dydt)
+        else:
+            dydt[L.Y_FLYWHEEL_SPEED] = -coupling / p[L.P_FLYWHEEL_INERTIA]
         dydt[L.Y_DRUM_ANGLE] = wd
         dydt[L.Y_DRUM_SPEED] = 0.0 if stuck else (coupling + drum_torque) / p[L.P_DRUM_INERTIA]
         dydt[L.Y_COUPLING_DAMPER_LOSS] = p[L.P_COUPLING_DAMPING] * slip * slip
@@ -159,6 +177,14 @@ def evaluate(y, p, fe_left, fe_right, stuck, mode_left, mode_right, dydt, out, r
         o[L.C_LINING_WEAR + L.RIGHT_OF_SCALAR * i] = p[
             L.P_LINING_BASE + i * L.LINING_STRIDE + L.LN_WEAR
         ]
+
+    o[L.C_DRIVE_TORQUE] = p[L.P_DRIVE_TORQUE]
+    o[L.C_ROAD_LOAD_TORQUE] = (
+        vehicle.road_load_torque(p, y[L.Y_FLYWHEEL_SPEED]) if p[L.P_DRIVEN] > 0.0 else 0.0
+    )
+    o[L.C_DRIVE_WORK] = y[L.Y_DRIVE_WORK]
+    o[L.C_ROAD_LOAD_WORK] = y[L.Y_ROAD_LOAD_WORK]
+    o[L.C_PHASE] = -1.0  # no cycle; fixed_step_advance writes a cycle's segment
 
 
 @njit(cache=True)
@@ -510,6 +536,10 @@ def fixed_step_advance(
     at the start of every step, at its time, in a working copy of ``p`` (the actuation
     gains with them); without entries ``p`` is used as it is.
 
+    A drive cycle (``p``'s P_CYCLE_COUNT > 0, :mod:`.cycle`) replaces the actuation knots
+    by its brake force ramp and sets the drive torque: its controller runs at the start of
+    every step, from the state then, in the working copy (its state in kstate/fstate).
+
     Returns the number of rows written. Stops early (status in kstate) on a non-finite state.
     """
     n = y.shape[0]
@@ -525,7 +555,16 @@ def fixed_step_advance(
     gl = p[L.P_SHOE_BASE + L.S_ACTUATION_GAIN]
     gr = p[L.P_SHOE_BASE + L.SHOE_STRIDE + L.S_ACTUATION_GAIN]
     growing = p[L.P_GROWTH_COUNT] > 0.0
-    pw = growth.working_copy(p) if growing else p
+    # a vehicle's controller writes the step's drive torque into the working copy
+    cycling = p[L.P_CYCLE_COUNT] > 0.0
+    pw = growth.working_copy(p) if growing or cycling else p
+    ramp_t = np.zeros(2)
+    ramp_f = np.zeros(2)
+    if cycling:  # the cycle commands both shoes' brake force (model/cycle.py)
+        tl = ramp_t
+        fl = ramp_f
+        tr = ramp_t
+        fr = ramp_f
     if growing:
         gl, gr, _ = growth.apply(p, pw, step0 * dt, y)
     if gain_override != 0:
@@ -549,6 +588,12 @@ def fixed_step_advance(
             if located and moved:  # the contact modes of the step follow the geometry now
                 h_end[0], h_end[1] = _shoe_switch(pw, 0, y)
                 h_end[2], h_end[3] = _shoe_switch(pw, 1, y)
+        if cycling:
+            cycle.control(pw, y, kstate, fstate, t, dt)
+            ramp_t[0] = fstate[L.F_RAMP_T0]
+            ramp_t[1] = fstate[L.F_RAMP_T1]
+            ramp_f[0] = fstate[L.F_RAMP_F0]
+            ramp_f[1] = fstate[L.F_RAMP_F1]
         stuck = kstate[L.K_STUCK]
         fel = _force(pw, L.P_SHOE_BASE, t, tl, fl, gl)
         fer = _force(pw, L.P_SHOE_BASE + L.SHOE_STRIDE, t, tr, fr, gr)
@@ -595,6 +640,8 @@ def fixed_step_advance(
             else:
                 o[L.C_REGIME] = L.REGIME_FREE
             o[L.C_LOCK_LOSS] = fstate[L.F_LOCK_LOSS]
+            if cycling:
+                o[L.C_PHASE] = kstate[L.K_SEGMENT]
             rows += 1
         surface_before = abs(y[L.Y_DRUM_SPEED]) * radius
         if scheme == L.SCHEME_SEMI_IMPLICIT_EULER:

@@ -127,7 +127,42 @@ P_FLAT_DEPTH = P_LINING_BASE + 2 * LINING_STRIDE  # m
 P_FLAT_CENTRE = P_FLAT_DEPTH + 1  # rad, the angle psi of the drum's own frame
 P_FLAT_HALF_WIDTH = P_FLAT_DEPTH + 2  # rad
 
-N_PARAMS = P_FLAT_HALF_WIDTH + 1
+
+# the vehicle around the brake (model/vehicle.py) and its drive cycle (model/cycle.py):
+# P_DRIVEN 1.0 when road load and drive torque act on the flywheel (else the flywheel
+# equation is the published one, with no external torque). Forces are this brake's share.
+P_DRIVEN = P_FLAT_HALF_WIDTH + 1
+P_WHEEL_RADIUS = P_DRIVEN + 1  # rolling radius, m: vehicle speed = flywheel speed x it
+P_ROLLING_FORCE = P_DRIVEN + 2  # m_share g c_rr cos(grade), N (before the smoothed sign)
+P_GRADE_FORCE = P_DRIVEN + 3  # m_share g sin(grade), N (uphill positive)
+P_DRAG_FACTOR = P_DRIVEN + 4  # share x rho C_d A / 2, N s^2/m^2
+P_ROLLING_SMOOTHING_SPEED = P_DRIVEN + 5  # width of the rolling resistance's sign, m/s
+P_DRIVE_TORQUE = P_DRIVEN + 6  # in the kernel's working copy: the step's drive torque, N m
+# the cycle: its segment count (0: no cycle, the actuation history commands the brake),
+# the speed controller's limits, then per segment (kind, target speed rad/s, brake force
+# N per shoe, duration s)
+P_CYCLE_COUNT = P_DRIVEN + 7
+P_CYCLE_MAX_DRIVE_TORQUE = P_DRIVEN + 8  # N m at the flywheel
+P_CYCLE_TIME_CONSTANT = P_DRIVEN + 9  # speed controller's time constant, s
+P_CYCLE_RISE = P_DRIVEN + 10  # brake force ramp on apply and release, s
+P_CYCLE_MAX_FORCE = P_DRIVEN + 11  # drag segments' brake force limit, N per shoe
+P_CYCLE_BASE = P_DRIVEN + 12
+CYCLE_STRIDE = 4
+Q_KIND = 0  # a SEG_* id
+Q_SPEED = 1
+Q_FORCE = 2
+Q_DURATION = 3
+MAX_CYCLE_SEGMENTS = 64
+SEG_ACCELERATE = 0  # drive to the target speed (speed controller, torque up to the max)
+SEG_CRUISE = 1  # hold the target speed with the drive for the duration
+SEG_BRAKE = 2  # brake force ramped to the segment's until the speed falls to the target
+SEG_HOLD = 3  # keep the brake force for the duration
+SEG_RELEASE = 4  # ramp the brake force to 0; no drive, for the duration
+SEG_DRAG = 5  # hold the target speed with the brake (no drive) for the duration
+SEG_END = 6  # after the last segment: no drive, the brake force kept
+SEGMENT_KINDS = ("accelerate", "cruise", "brake", "hold", "release", "drag", "end")
+
+N_PARAMS = P_CYCLE_BASE + MAX_CYCLE_SEGMENTS * CYCLE_STRIDE
 
 # --- state vector ---------------------------------------------------------------------
 Y_FLYWHEEL_ANGLE = 0
@@ -143,13 +178,15 @@ Y_FRICTION_WORK = 8
 Y_COUPLING_DAMPER_LOSS = 9
 Y_CONTACT_LOSS = 10
 Y_ACTUATION_WORK = 11
-N_STATE = 12
+Y_DRIVE_WORK = 12  # work of the drive torque on the flywheel (0 without P_DRIVEN)
+Y_ROAD_LOAD_WORK = 13  # work of the flywheel against the road load (0 without P_DRIVEN)
+N_STATE = 14
 # the lining wear of a shoe that wears with its friction work (catalogue LAW_FRICTION_WORK),
 # m, integrated with the motion from its onset: only a run with such a wear carries these
 # two states (N_STATE_WEAR), so every other run steps exactly the N_STATE above
-Y_LEFT_WEAR = 12
-Y_RIGHT_WEAR = 13
-N_STATE_WEAR = 14
+Y_LEFT_WEAR = 14
+Y_RIGHT_WEAR = 15
+N_STATE_WEAR = 16
 
 # --- recorded sample columns -------------------------------------------------------------
 COLUMNS: tuple[str, ...] = (
@@ -193,6 +230,11 @@ COLUMNS: tuple[str, ...] = (
     "drum_sticking",  # 1.0 while static friction holds the drum at standstill, else 0.0
     "left_lining_wear_m",  # lining thickness lost, as the physics step of the sample has it
     "right_lining_wear_m",
+    "drive_torque_n_m",  # on the flywheel, this brake's share of the traction (model/cycle.py)
+    "road_load_torque_n_m",  # against the flywheel's motion (model/vehicle.py)
+    "drive_work_j",
+    "road_load_work_j",
+    "cycle_segment",  # the drive cycle's segment index (its kind: P_CYCLE_*); -1: no cycle
 )
 COL = {name: i for i, name in enumerate(COLUMNS)}
 N_COLUMNS = len(COLUMNS)
@@ -218,6 +260,11 @@ C_INDENTATION_RATE = COL["left_indentation_rate_m_s"]
 C_SLIDING_SPEED = COL["left_sliding_speed_m_s"]
 C_DRUM_STICKING = COL["drum_sticking"]
 C_LINING_WEAR = COL["left_lining_wear_m"]
+C_DRIVE_TORQUE = COL["drive_torque_n_m"]
+C_ROAD_LOAD_TORQUE = COL["road_load_torque_n_m"]
+C_DRIVE_WORK = COL["drive_work_j"]
+C_ROAD_LOAD_WORK = COL["road_load_work_j"]
+C_PHASE = COL["cycle_segment"]
 RIGHT_OF_SCALAR = 1  # right-shoe column = left-shoe column + 1 for scalar per-shoe pairs
 RIGHT_OF_VECTOR = 2  # right-shoe (x, y) columns = left-shoe ones + 2
 
@@ -238,14 +285,24 @@ K_LEFT_LAST_CHANGE_STEP = 5  # step index at which the contact flag last changed
 K_RIGHT_LAST_CHANGE_STEP = 6
 K_STATUS = 7  # 0 running, 1 non-finite state
 K_BREAKAWAYS = 8  # stick -> slip transitions so far
-N_KSTATE = 9
+K_SEGMENT = 9  # the drive cycle's current segment (model/cycle.py); P_CYCLE_COUNT: ended
+N_KSTATE = 10
 
 # float bookkeeping carried between calls (fstate)
 F_STOP_TIME = 0  # instant the vehicle came to rest (standstill.at_rest), s; < 0 until then
 F_LOCK_LOSS = 1  # kinetic energy removed at stick instants, J
 F_SWITCHES = 2  # contact switches located inside steps (rk4-located)
 F_WHEEL_LOCK_TIME = 3  # instant the drum first stuck, s; < 0 until then
-N_FSTATE = 4
+# the drive cycle's controller (model/cycle.py): when the segment began, s; the brake
+# force ramp in force (from F_RAMP_T0, F_RAMP_F0 to F_RAMP_T1, F_RAMP_F1: s, N per shoe);
+# the drag segment's integrated brake force, N
+F_SEGMENT_START = 4
+F_RAMP_T0 = 5
+F_RAMP_F0 = 6
+F_RAMP_T1 = 7
+F_RAMP_F1 = 8
+F_DRAG_FORCE = 9
+N_FSTATE = 10
 
 # contact modes of the right-hand side (the adaptive reference forces them per segment)
 CONTACT_AUTO = -1

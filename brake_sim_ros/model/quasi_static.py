@@ -271,6 +271,7 @@ def _record(o, t, y, p, fel, fer, stuck, cache, fstate):
     else:
         o[L.C_REGIME] = L.REGIME_FREE
     o[L.C_DRUM_STICKING] = 1.0 if stuck else 0.0
+    o[L.C_PHASE] = -1.0  # no drive cycle at these levels (model/fidelity.py)
     o[COL_BRAKING_TORQUE] = -torque
 
 

@@ -9,18 +9,41 @@ import numpy as np
 from brake_sim_ros.model import layout as L
 from brake_sim_ros.model.actuation import Actuation
 from brake_sim_ros.model.assembly import ModelOptions
+from brake_sim_ros.model.cycle import Cycle
 from brake_sim_ros.model.defects import Defects
 from brake_sim_ros.model.parameters import BrakeParameters
+from brake_sim_ros.model.vehicle import Vehicle
 
 
 @dataclass(frozen=True)
 class BrakeSetup:
-    """Everything that defines a braking event apart from the numerical method."""
+    """Everything that defines a braking event apart from the numerical method.
+
+    ``vehicle``: road load and grade on the flywheel (model/vehicle.py); None: the
+    published model, no external torque. ``cycle``: a drive cycle (model/cycle.py) that
+    commands the drive torque and the brake force instead of ``actuation``; it needs a
+    vehicle.
+    """
 
     params: BrakeParameters = field(default_factory=BrakeParameters)
     defects: Defects = field(default_factory=Defects)
     actuation: Actuation = field(default_factory=Actuation.published_ramp)
     options: ModelOptions = field(default_factory=ModelOptions)
+    vehicle: Vehicle | None = None
+    cycle: Cycle | None = None
+
+    @property
+    def driven(self) -> bool:
+        """Whether a vehicle's road load (and a cycle's drive) act on the flywheel."""
+        return self.vehicle is not None
+
+    @property
+    def peak_force_n(self) -> float:
+        """The largest actuation force per shoe commanded, N: the cycle's with a cycle,
+        else the actuation profile's."""
+        if self.cycle is not None:
+            return self.cycle.peak_force_n
+        return max(self.actuation.left.peak_n, self.actuation.right.peak_n)
 
 
 @dataclass(frozen=True)

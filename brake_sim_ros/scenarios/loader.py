@@ -48,6 +48,8 @@ from brake_sim_ros.model.catalogue import (
     MAX_WEAR_RATE_MM_PER_MJ,
     Growth,
 )
+from brake_sim_ros.model.cycle import LIMITS as CYCLE_LIMITS
+from brake_sim_ros.model.cycle import Cycle, Segment, pack_drive
 from brake_sim_ros.model.defects import (
     MAX_DRUM_HARMONICS,
     MAX_DRUM_ORDER,
@@ -58,7 +60,12 @@ from brake_sim_ros.model.defects import (
 )
 from brake_sim_ros.model.fidelity import ACCURACY_PRESETS, LEVEL_BY_NAME, OUTPUTS, Needs, plan
 from brake_sim_ros.model.parameters import PARAMETER_GROUPS, BrakeParameters
-from brake_sim_ros.model.sensors import SensorSet, default_sensor_set
+from brake_sim_ros.model.sensors import (
+    DEFAULT_PISTON_DIAMETER_M,
+    PA_PER_BAR,
+    SensorSet,
+    default_sensor_set,
+)
 from brake_sim_ros.model.trajectory import BrakeSetup
 from brake_sim_ros.model.units import (
     NOMINAL_UNIT,
@@ -67,6 +74,8 @@ from brake_sim_ros.model.units import (
     unit_sensors,
     unit_values,
 )
+from brake_sim_ros.model.vehicle import LIMITS as VEHICLE_LIMITS
+from brake_sim_ros.model.vehicle import Vehicle
 from brake_sim_ros.scenarios.sensors import parse_sensors
 from brake_sim_ros.solvers.fixed_step import MIN_PHYSICS_STEP_S
 from brake_sim_ros.solvers.methods import FIXED_STEP_METHODS, SOLVER_METHODS
@@ -266,7 +275,7 @@ class Scenario:
                 setup, params=unit_parameters(setup.params, unit_id, fleet_seed)
             )
             drawn_sensors = unit_sensors(sensors, unit_id, fleet_seed)
-            pack(setup.params, setup.defects, setup.options)
+            pack_drive(pack(setup.params, setup.defects, setup.options), setup)
         except BrakeSimError as exc:
             raise ScenarioError(f"{self.source}: {exc}") from None
         return dataclasses.replace(
@@ -315,7 +324,7 @@ class Scenario:
 
     def with_defects(self, defects: Defects) -> Scenario:
         setup = dataclasses.replace(self.setup, defects=defects)
-        pack(setup.params, setup.defects, setup.options)  # validity check
+        pack_drive(pack(setup.params, setup.defects, setup.options), setup)  # validity check
         needs = self.needs
         if needs is not None:  # the level must represent the new defects
             needs = dataclasses.replace(needs, defects=defects.kinds, growing=defects.growing_kinds)
@@ -625,6 +634,88 @@ def _defects(ctx: _Ctx, data: Any) -> Defects:
         raise ScenarioError(f"{ctx.source}: [defects]: {exc}") from exc
 
 
+def _vehicle(ctx: _Ctx, data: Any) -> Vehicle:
+    """``[vehicle]``: road load and grade on the flywheel (model/vehicle.py), every key
+    optional (the defaults there)."""
+    data = ctx.table(data, "vehicle", {name for name, _lo, _hi in VEHICLE_LIMITS})
+    values = {}
+    for name, lo, hi in VEHICLE_LIMITS:
+        if name in data:
+            values[name] = ctx.number(
+                data[name],
+                f"vehicle.{name}",
+                lo,
+                hi,
+                lo_open=name in ("wheel_radius_m", "mass_share"),
+            )
+    return Vehicle(**values)
+
+
+# per segment kind: the keys it takes (besides "kind"), and those it needs
+_SEGMENT_KEYS: dict[str, tuple[set[str], set[str]]] = {
+    "accelerate": ({"kmh"}, {"kmh"}),
+    "cruise": ({"kmh", "duration_s"}, {"duration_s"}),
+    "brake": ({"pressure_bar", "force_n", "until_kmh"}, set()),
+    "hold": ({"pressure_bar", "force_n", "duration_s"}, {"duration_s"}),
+    "release": ({"duration_s"}, {"duration_s"}),
+    "drag": ({"kmh", "duration_s"}, {"duration_s"}),
+}
+
+
+def force_from_pressure_n(pressure_bar: float) -> float:
+    """Force of one wheel-cylinder piston at ``pressure_bar``, N: the line-pressure
+    sensor's relation (model/sensors.py) inverted, on its default piston."""
+    return pressure_bar * PA_PER_BAR * math.pi * DEFAULT_PISTON_DIAMETER_M**2 / 4.0
+
+
+def _segment(ctx: _Ctx, data: Any, key: str) -> Segment:
+    if not isinstance(data, dict):
+        raise ctx.fail(key, data, "a table with a 'kind'")
+    kind = ctx.string(data.get("kind"), f"{key}.kind", tuple(_SEGMENT_KEYS))
+    allowed, needed = _SEGMENT_KEYS[kind]
+    data = ctx.table(data, key, {"kind", *allowed})
+    for name in sorted(needed - set(data)):
+        raise ctx.fail(f"{key}.{name}", _MISSING, f"a number for a {kind} segment")
+    if kind == "brake" and not {"pressure_bar", "force_n"} & set(data):
+        raise ctx.fail(f"{key}.pressure_bar", _MISSING, "pressure_bar or force_n for a brake")
+    if {"pressure_bar", "force_n"} <= set(data):
+        raise ctx.fail(f"{key}.force_n", data["force_n"], "pressure_bar or force_n, not both")
+    force = 0.0
+    if "pressure_bar" in data:
+        bar = ctx.number(data["pressure_bar"], f"{key}.pressure_bar", 0.0, 250.0)
+        force = force_from_pressure_n(bar)
+    elif "force_n" in data:
+        force = ctx.number(data["force_n"], f"{key}.force_n", 0.0, 50_000.0)
+    speed_key = "until_kmh" if kind == "brake" else "kmh"
+    speed = 0.0
+    if speed_key in data:
+        speed = ctx.number(data[speed_key], f"{key}.{speed_key}", 0.0, 250.0)
+        if kind == "accelerate" and speed == 0.0:
+            raise ctx.fail(f"{key}.kmh", speed, "a target speed > 0 km/h")
+    duration = 0.0
+    if "duration_s" in data:
+        duration = ctx.number(data["duration_s"], f"{key}.duration_s", 0.0, 86_400.0)
+    return Segment(kind, speed, force, duration)
+
+
+def _cycle(ctx: _Ctx, data: Any) -> Cycle:
+    """``[cycle]``: the controller's settings and ``[[cycle.segments]]`` (model/cycle.py)."""
+    data = ctx.table(data, "cycle", {"segments", *CYCLE_LIMITS})
+    segments = data.get("segments", _MISSING)
+    if not isinstance(segments, list) or not 1 <= len(segments) <= 64:
+        raise ctx.fail("cycle.segments", segments, "an array of 1 to 64 segment tables")
+    settings = {
+        name: ctx.number(data[name], f"cycle.{name}", lo, hi)
+        for name, (lo, hi) in CYCLE_LIMITS.items()
+        if name in data
+    }
+    built = tuple(_segment(ctx, seg, f"cycle.segments[{i}]") for i, seg in enumerate(segments))
+    try:
+        return Cycle(built, **settings)
+    except BrakeSimError as exc:
+        raise ScenarioError(f"{ctx.source}: [cycle]: {exc}") from exc
+
+
 def _parameters(ctx: _Ctx, data: Any) -> BrakeParameters:
     data = ctx.table(data, "parameters", set(PARAMETER_GROUPS))
     overrides: dict[str, dict[str, float]] = {}
@@ -873,6 +964,8 @@ def _parse(data: dict[str, Any], text: str, source: str) -> Scenario:
             "structure",
             "sensors",
             "conditions",
+            "vehicle",
+            "cycle",
         },
     )
     if "name" not in top:
@@ -884,17 +977,29 @@ def _parse(data: dict[str, Any], text: str, source: str) -> Scenario:
             raise ctx.fail(key, value, "an integer from 0 to 2^63 - 1")
     params = _parameters(ctx, top.get("parameters", {}))
     defects = _defects(ctx, top.get("defects", {}))
+    cycle = _cycle(ctx, top["cycle"]) if "cycle" in top else None
+    if cycle is not None and "actuation" in top:
+        raise ctx.fail(
+            "actuation", top["actuation"], "no [actuation] with a [cycle] (the cycle brakes)"
+        )
+    vehicle = _vehicle(ctx, top.get("vehicle", {})) if "vehicle" in top or cycle else None
     setup = BrakeSetup(
         params=params,
         defects=defects,
         actuation=_actuation(ctx, top.get("actuation", {})),
         options=_options(ctx, top.get("model", {})),
+        vehicle=vehicle,
+        cycle=cycle,
     )
+    if cycle is not None:
+        _check_cycle_setup(ctx, top, setup)
     needs = _needs(ctx, top["needs"], setup.options.shoes) if "needs" in top else None
-    if needs is not None:  # the level must represent the scenario's defects
-        needs = dataclasses.replace(needs, defects=defects.kinds, growing=defects.growing_kinds)
+    if needs is not None:  # the level must represent the scenario's defects and vehicle
+        needs = dataclasses.replace(
+            needs, defects=defects.kinds, growing=defects.growing_kinds, driven=setup.driven
+        )
     try:
-        pack(setup.params, setup.defects, setup.options)
+        pack_drive(pack(setup.params, setup.defects, setup.options), setup)
         plan(needs, model_shoes=setup.options.shoes)  # refuse needs no level can serve
     except BrakeSimError as exc:
         raise ScenarioError(f"{source}: {exc}") from exc
@@ -921,6 +1026,26 @@ def _parse(data: dict[str, Any], text: str, source: str) -> Scenario:
         condition_ranges=_conditions(ctx, top.get("conditions", {})),
     )
     return scenario.with_unit()  # the file's values are the drawing; the unit scatters them
+
+
+def _check_cycle_setup(ctx: _Ctx, top: dict[str, Any], setup: BrakeSetup) -> None:
+    """Refuse what a drive cycle cannot carry: a shaped actuation (its history is the
+    cycle's ramp, which the delay and lag formulas would read as the whole history) and a
+    drawn peak force (the cycle's segments give the forces)."""
+    for side in SIDES:
+        defect = getattr(setup.defects, side)
+        if defect.actuation_shaped or defect.return_spring_weakening_pct:
+            raise ScenarioError(
+                f"{ctx.source}: [defects.{side}]: an actuation delay, lag, pulsation or weak"
+                " return spring with a [cycle]: not represented (the cycle's brake ramp is not"
+                " a whole actuation history): allowed without a cycle"
+            )
+    if "peak_force_n" in top.get("conditions", {}):
+        raise ctx.fail(
+            "conditions.peak_force_n",
+            top["conditions"]["peak_force_n"],
+            "no drawn peak force with a [cycle] (its segments give the brake forces)",
+        )
 
 
 def builtin_names() -> list[str]:

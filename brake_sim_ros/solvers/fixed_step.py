@@ -41,6 +41,7 @@ from brake_sim_ros.model import kernel
 from brake_sim_ros.model import layout as L
 from brake_sim_ros.model.actuation import MAX_ACTUATION_FORCE_N
 from brake_sim_ros.model.assembly import initial_state, pack
+from brake_sim_ros.model.cycle import pack_drive
 from brake_sim_ros.model.trajectory import BrakeSetup, SampleBlock
 from brake_sim_ros.solvers.stability import StepLimit, step_limit
 
@@ -191,7 +192,7 @@ class FixedStepStepper:
         force = peak if limit_force_n is None else max(peak, float(limit_force_n))
         _check_force("limit_force_n", force)
         self._base_force_n = force
-        self._p = pack(setup.params, setup.defects, setup.options)
+        self._p = _packed(setup)
         self._profile = setup.actuation.as_arrays()
         self.limit_force_n = force
         self.limit: StepLimit = step_limit(setup, force, packed=self._p, scheme=scheme)
@@ -215,6 +216,7 @@ class FixedStepStepper:
         self._fstate = np.zeros(L.N_FSTATE)
         self._fstate[L.F_STOP_TIME] = -1.0  # the vehicle has not stopped yet
         self._fstate[L.F_WHEEL_LOCK_TIME] = -1.0  # the drum has not stuck yet
+        self._kstate[L.K_SEGMENT] = -1  # a drive cycle starts its first segment at once
         self.status = StepperStatus.RUNNING
 
     def fresh(self) -> FixedStepStepper:
@@ -331,7 +333,7 @@ class FixedStepStepper:
         Validity is checked and the substeps re-picked for the new step limit; on error
         (invalid parameters, a limit below MIN_PHYSICS_STEP_S) nothing changes.
         """
-        p = pack(setup.params, setup.defects, setup.options)
+        p = _packed(setup)
         force = max(self.limit_force_n, _peak_n(setup))
         limit = step_limit(setup, force, packed=p, scheme=self.scheme)
         substeps = self._substeps_for(limit, "the new parameters")
@@ -382,6 +384,11 @@ class FixedStepStepper:
             raise SimulationError("the stepper failed earlier (non-finite state); reset it")
         if actuation_n is None:
             tl, fl, tr, fr = self._profile
+        elif self.setup.cycle is not None:
+            raise ParameterError(
+                "actuation commands: this run's drive cycle commands the brake ([cycle]):"
+                " allowed only for a scenario without a cycle"
+            )
         else:
             left, right = (float(a) for a in actuation_n)
             for side, value in (("left", left), ("right", right)):
@@ -487,7 +494,14 @@ class FixedStepStepper:
 
 
 def _peak_n(setup: BrakeSetup) -> float:
-    return max(setup.actuation.left.peak_n, setup.actuation.right.peak_n)
+    return setup.peak_force_n
+
+
+def _packed(setup: BrakeSetup) -> np.ndarray:
+    """The kernels' parameter vector of ``setup``: the brake, and its vehicle and cycle."""
+    p = pack(setup.params, setup.defects, setup.options)
+    pack_drive(p, setup)
+    return p
 
 
 def _check_force(what: str, value: float) -> None:

@@ -86,6 +86,12 @@ def run_reference(
             switches and the lock located as events.
         cpu_budget_s: give up (SimulationError) after this much process CPU time, s.
     """
+    if setup.driven:
+        raise ParameterError(
+            "the reference solver has no road load, drive or cycle controller: a scenario"
+            " with [vehicle] or [cycle] is allowed with a fixed-step method (rk4-located,"
+            " rk4, semi-implicit-euler)"
+        )
     if not setup.defects.is_static:
         raise ParameterError(
             f"the reference solver holds the defects fixed: the defect"
@@ -117,7 +123,7 @@ def run_reference(
     knots = sorted({float(k) for k in np.concatenate([tl, tr]) if 0.0 < k < duration_s})
     bounds = [*knots, duration_s]
     # absolute tolerances per component: angles rad, speeds rad/s, energies J
-    atol = np.array([1e-10] * 4 + [1e-8] * 4 + [1e-6] * 4) * (rtol / 1e-9)
+    atol = np.array([1e-10] * 4 + [1e-8] * 4 + [1e-6] * (L.N_STATE - 8)) * (rtol / 1e-9)
     deadline = None if cpu_budget_s is None else time.process_time() + cpu_budget_s
     modes = [L.CONTACT_OFF, L.CONTACT_OFF]
     for i, base in enumerate(SHOE_BASES):

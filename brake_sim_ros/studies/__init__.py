@@ -100,6 +100,12 @@ def _units(argv: list[str]) -> int:
     return units.main(argv)
 
 
+def _cycle(argv: list[str]) -> int:
+    from brake_sim_ros.studies import cycle_bench
+
+    return cycle_bench.main(argv)
+
+
 BENCHMARKS: dict[str, Study] = {
     s.name: s
     for s in (
@@ -152,6 +158,12 @@ BENCHMARKS: dict[str, Study] = {
             "per defect, the smallest severity the baselines detect on unseen units at a"
             " stated false-alarm rate",
             _detectability,
+        ),
+        Study(
+            "cycle",
+            "a drive cycle (urban) offline: x real time with and without the default sensors,"
+            " its energy books",
+            _cycle,
         ),
     )
 }

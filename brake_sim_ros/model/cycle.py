@@ -1,0 +1,294 @@
+"""Drive cycles: named segments of driving and braking, and their controller (compiled).
+
+A cycle (scenario table ``[cycle]``) is a list of segments run in order:
+
+* ``accelerate`` to ``kmh``: the drive torque follows the speed controller below until
+  the speed is within :data:`SPEED_TOLERANCE` of the target;
+* ``cruise`` at ``kmh`` (default: the last target) for ``duration_s``, by the drive;
+* ``brake`` at ``pressure_bar`` (or ``force_n`` per shoe) until the speed has fallen to
+  ``until_kmh``; ``until_kmh = 0`` ends when the vehicle has come to rest (the drum held
+  by static friction and the rotor's energy within what the brake holds: the stop rule of
+  :func:`brake_sim_ros.model.standstill.at_rest`);
+* ``hold`` the brake (``pressure_bar``/``force_n``, default the last brake's) for
+  ``duration_s``;
+* ``release`` the brake (force ramped to 0, no drive) for ``duration_s``;
+* ``drag`` at ``kmh`` for ``duration_s``: the brake holds the speed (no drive), as on a
+  descent; its force is a PI controller's, limited to ``max_force_n``.
+
+After the last segment the cycle has ended (phase ``end``): no drive, the brake force
+kept. The brake force ramps linearly to each segment's over ``brake_rise_s`` (a hydraulic
+rise, TESTBED: under 0.1 s for the hydraulics, 0.36 s for the whole brake response);
+pressure becomes force on the default wheel-cylinder piston of the line-pressure sensor
+(:data:`~brake_sim_ros.model.sensors.DEFAULT_PISTON_DIAMETER_M`, 19.05 mm: 46 bar is the
+published 1300 N; the scenario loader converts), the force each shoe gets before its
+actuation gain, as the ``[actuation]`` profile's.
+
+The speed controller (accelerate, cruise) asks the flywheel torque
+``I_f (w_target - w_f) / tau + T_road(w_f)`` (a first-order approach of the target with time
+constant ``tau = speed_time_constant_s``, the road load fed forward) and gets it clamped to
+``[0, max_drive_torque_n_m]``: the drive never brakes. The drag controller turns the speed
+error into brake force with a PI law tuned on the nominal brake's torque per newton
+(:data:`NOMINAL_BRAKE_GAIN_N_M_PER_N`, a tuning figure, not a model parameter).
+
+Determinism: the controller runs inside the compiled stepping
+(:func:`brake_sim_ros.model.kernel.fixed_step_advance`) at the start of every physics
+step, from the state at that instant, and holds its drive torque over the step (a
+zero-order hold at the physics step); its state (segment, segment start, brake ramp, drag
+integrator) is carried between calls in the kernel's bookkeeping arrays (layout.K_SEGMENT,
+layout.F_*), like the drum's stick state. So a run gives the same bits however it is cut
+into chunks; a different preset (another physics step) samples the controller at another
+rate.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+
+from brake_sim_ros.errors import ParameterError
+from brake_sim_ros.model import actuation, standstill, vehicle
+from brake_sim_ros.model import layout as L
+from brake_sim_ros.model.actuation import MAX_ACTUATION_FORCE_N
+
+KMH_PER_M_S = 3.6
+SPEED_TOLERANCE = 0.01  # an acceleration ends within 1 % of its target speed
+# Brake torque per newton of actuation of the nominal brake riding on the drum, N m/N: the
+# published stop (1300 N per shoe, 103.5 rad/s of 17.1 kg m^2 in about 6.4 s of full force)
+# takes about 277 N m. Only the drag controller's gains use it.
+NOMINAL_BRAKE_GAIN_N_M_PER_N = 0.21
+MAX_SPEED_KMH = 250.0
+MAX_DURATION_S = 86_400.0
+
+
+@dataclass(frozen=True)
+class Segment:
+    """One segment of a cycle (see the module doc).
+
+    Attributes:
+        kind: one of ``layout.SEGMENT_KINDS`` but ``end``.
+        speed_kmh: the target speed (accelerate, cruise, drag) or the speed a brake
+            segment brakes to (``until_kmh``), km/h.
+        force_n: brake force per shoe (brake, hold), N; 0 for the others.
+        duration_s: how long (cruise, hold, release, drag), s; 0 for the others.
+    """
+
+    kind: str
+    speed_kmh: float = 0.0
+    force_n: float = 0.0
+    duration_s: float = 0.0
+
+
+# the controller's settings: (low, high) each (the scenario's [cycle] keys)
+LIMITS: dict[str, tuple[float, float]] = {
+    "max_drive_torque_n_m": (0.0, 10_000.0),
+    "speed_time_constant_s": (0.01, 100.0),
+    "brake_rise_s": (1e-3, 10.0),
+    "max_force_n": (0.0, MAX_ACTUATION_FORCE_N),
+}
+
+
+@dataclass(frozen=True)
+class Cycle:
+    """A drive cycle: segments and the controller's settings.
+
+    Attributes:
+        segments: the segments, in order (1 to ``layout.MAX_CYCLE_SEGMENTS``).
+        max_drive_torque_n_m: largest drive torque on the flywheel, N m (this brake's
+            share of the traction: 120 N m gives the nominal 17.1 kg m^2 about 1.8 m/s^2).
+        speed_time_constant_s: the speed controllers' time constant, s.
+        brake_rise_s: time the brake force takes to reach each segment's, s.
+        max_force_n: the drag controller's brake force limit per shoe, N.
+    """
+
+    segments: tuple[Segment, ...]
+    max_drive_torque_n_m: float = 120.0
+    speed_time_constant_s: float = 1.0
+    brake_rise_s: float = 0.2
+    max_force_n: float = 3000.0
+
+    def __post_init__(self) -> None:
+        n = len(self.segments)
+        if not 1 <= n <= L.MAX_CYCLE_SEGMENTS:
+            raise ParameterError(f"cycle with {n} segments: allowed 1 to {L.MAX_CYCLE_SEGMENTS}")
+        for name, (lo, hi) in LIMITS.items():
+            value = getattr(self, name)
+            if not (math.isfinite(value) and lo <= value <= hi):
+                raise ParameterError(f"cycle {name} {value!r}: allowed {lo:g} to {hi:g}")
+        for i, s in enumerate(self.segments):
+            if s.kind not in L.SEGMENT_KINDS[:-1]:
+                raise ParameterError(
+                    f"cycle segment {i} kind {s.kind!r}: allowed one of"
+                    f" {list(L.SEGMENT_KINDS[:-1])}"
+                )
+            for name, value, hi in (
+                ("speed_kmh", s.speed_kmh, MAX_SPEED_KMH),
+                ("force_n", s.force_n, MAX_ACTUATION_FORCE_N),
+                ("duration_s", s.duration_s, MAX_DURATION_S),
+            ):
+                if not (math.isfinite(value) and 0.0 <= value <= hi):
+                    raise ParameterError(
+                        f"cycle segment {i} ({s.kind}) {name} {value!r}: allowed 0 to {hi:g}"
+                    )
+
+    @property
+    def peak_force_n(self) -> float:
+        """The largest brake force per shoe the cycle can command, N."""
+        drag = any(s.kind == "drag" for s in self.segments)
+        return max([s.force_n for s in self.segments] + [self.max_force_n if drag else 0.0])
+
+    @property
+    def kinds(self) -> tuple[str, ...]:
+        return tuple(s.kind for s in self.segments)
+
+    def phase_names(self, segment: np.ndarray) -> np.ndarray:
+        """The phase label of each value of a ``cycle_segment`` column: the segment's kind
+        and index, ``"<index>:<kind>"`` (``"<n>:end"`` after the last; ``"none"`` for -1,
+        a run without a cycle)."""
+        names = np.array(["none", *(f"{i}:{k}" for i, k in enumerate([*self.kinds, "end"]))])
+        return names[np.asarray(segment, dtype=np.int64) + 1]
+
+
+def resolved(segments: Sequence[Segment]) -> tuple[Segment, ...]:
+    """``segments`` with the defaults a segment takes from those before it: a cruise's or
+    drag's speed (0: the last target), a hold's force (0: the last brake's)."""
+    out = []
+    target = 0.0
+    force = 0.0
+    for s in segments:
+        if s.kind in ("accelerate",):
+            target = s.speed_kmh
+        elif s.kind in ("cruise", "drag"):
+            target = s.speed_kmh if s.speed_kmh > 0.0 else target
+            s = Segment(s.kind, target, s.force_n, s.duration_s)
+        elif s.kind == "brake":
+            force = s.force_n
+        elif s.kind == "hold" and s.force_n == 0.0:
+            s = Segment(s.kind, s.speed_kmh, force, s.duration_s)
+        out.append(s)
+    return tuple(out)
+
+
+def pack_cycle(p: np.ndarray, cycle: Cycle) -> None:
+    """Write ``cycle`` into the packed vector ``p`` (layout.P_CYCLE_*), its speeds as
+    flywheel speeds for the wheel radius already packed (:func:`vehicle.pack_vehicle`)."""
+    radius = p[L.P_WHEEL_RADIUS]
+    p[L.P_CYCLE_COUNT] = float(len(cycle.segments))
+    p[L.P_CYCLE_MAX_DRIVE_TORQUE] = cycle.max_drive_torque_n_m
+    p[L.P_CYCLE_TIME_CONSTANT] = cycle.speed_time_constant_s
+    p[L.P_CYCLE_RISE] = cycle.brake_rise_s
+    p[L.P_CYCLE_MAX_FORCE] = cycle.max_force_n
+    for j, s in enumerate(resolved(cycle.segments)):
+        b = L.P_CYCLE_BASE + j * L.CYCLE_STRIDE
+        p[b + L.Q_KIND] = float(L.SEGMENT_KINDS.index(s.kind))
+        p[b + L.Q_SPEED] = s.speed_kmh / KMH_PER_M_S / radius
+        p[b + L.Q_FORCE] = s.force_n
+        p[b + L.Q_DURATION] = s.duration_s
+
+
+@njit(cache=True)
+def _enter(p, seg, y, fstate, t):
+    """Start segment ``seg`` at ``t``: its brake ramp from the force now to its own."""
+    f_now = actuation.pwl(
+        t,
+        np.array([fstate[L.F_RAMP_T0], fstate[L.F_RAMP_T1]]),
+        np.array([fstate[L.F_RAMP_F0], fstate[L.F_RAMP_F1]]),
+    )
+    fstate[L.F_SEGMENT_START] = t
+    n = int(p[L.P_CYCLE_COUNT])
+    if seg >= n:  # ended: keep the force
+        target = f_now
+    else:
+        b = L.P_CYCLE_BASE + seg * L.CYCLE_STRIDE
+        target = p[b + L.Q_FORCE]
+        if int(p[b + L.Q_KIND]) == L.SEG_DRAG:
+            fstate[L.F_DRAG_FORCE] = f_now
+            target = f_now
+    fstate[L.F_RAMP_T0] = t
+    fstate[L.F_RAMP_F0] = f_now
+    fstate[L.F_RAMP_T1] = t + p[L.P_CYCLE_RISE]
+    fstate[L.F_RAMP_F1] = target
+
+
+@njit(cache=True)
+def _finished(p, seg, y, kstate, fstate, t, dt):
+    """Whether segment ``seg`` has reached its end in state ``y`` at ``t``."""
+    b = L.P_CYCLE_BASE + seg * L.CYCLE_STRIDE
+    kind = int(p[b + L.Q_KIND])
+    w = y[L.Y_FLYWHEEL_SPEED]
+    if kind == L.SEG_ACCELERATE:
+        return w >= p[b + L.Q_SPEED] * (1.0 - SPEED_TOLERANCE)
+    if kind == L.SEG_BRAKE:
+        if p[b + L.Q_SPEED] > 0.0:
+            return w <= p[b + L.Q_SPEED]
+        return kstate[L.K_STUCK] != 0 and standstill.at_rest(p, y)
+    # whole steps: the segment ends at the first step start at or past its duration
+    return t - fstate[L.F_SEGMENT_START] >= p[b + L.Q_DURATION] - 0.5 * dt
+
+
+@njit(cache=True)
+def control(p, y, kstate, fstate, t, dt):
+    """The controller at the start of a physics step at ``t`` (s, step ``dt``): advance
+    the segment while the current one has ended (each segment at most once per step), then
+    set the step's drive torque in ``p`` (the kernel's working copy, P_DRIVE_TORQUE) and
+    the brake force ramp in ``fstate`` (F_RAMP_*). ``kstate[K_SEGMENT]`` < 0 before the
+    first step: the first segment starts then."""
+    n = int(p[L.P_CYCLE_COUNT])
+    seg = kstate[L.K_SEGMENT]
+    if seg < 0:
+        seg = 0
+        _enter(p, seg, y, fstate, t)
+    while seg < n and _finished(p, seg, y, kstate, fstate, t, dt):
+        seg += 1
+        _enter(p, seg, y, fstate, t)
+    kstate[L.K_SEGMENT] = seg
+    drive = 0.0
+    if seg < n:
+        b = L.P_CYCLE_BASE + seg * L.CYCLE_STRIDE
+        kind = int(p[b + L.Q_KIND])
+        w = y[L.Y_FLYWHEEL_SPEED]
+        target = p[b + L.Q_SPEED]
+        tau = p[L.P_CYCLE_TIME_CONSTANT]
+        if kind == L.SEG_ACCELERATE or kind == L.SEG_CRUISE:
+            ask = p[L.P_FLYWHEEL_INERTIA] * (target - w) / tau + vehicle.road_load_torque(p, w)
+            drive = min(max(ask, 0.0), p[L.P_CYCLE_MAX_DRIVE_TORQUE])
+        elif kind == L.SEG_DRAG:
+            # PI on the overspeed: proportional gain for a first-order approach with the
+            # nominal brake gain, integral time 4 tau (N per rad/s, N per rad)
+            k_p = p[L.P_FLYWHEEL_INERTIA] / (NOMINAL_BRAKE_GAIN_N_M_PER_N * tau)
+            k_i = k_p / (4.0 * tau)
+            limit = p[L.P_CYCLE_MAX_FORCE]
+            error = w - target
+            held = fstate[L.F_DRAG_FORCE] + dt * k_i * error
+            held = min(max(held, 0.0), limit)
+            fstate[L.F_DRAG_FORCE] = held
+            force = min(max(held + k_p * error, 0.0), limit)
+            fstate[L.F_RAMP_T0] = t
+            fstate[L.F_RAMP_F0] = force
+            fstate[L.F_RAMP_T1] = t + 1.0
+            fstate[L.F_RAMP_F1] = force
+    p[L.P_DRIVE_TORQUE] = drive
+
+
+def pack_drive(p: np.ndarray, setup) -> None:
+    """Pack ``setup``'s vehicle and cycle (``BrakeSetup.vehicle``/``.cycle``) into ``p``
+    (a :func:`~brake_sim_ros.model.assembly.pack` of it); nothing without a vehicle, so
+    the published model's vector is unchanged.
+
+    Raises:
+        ParameterError: a driven vehicle with a rigid coupling (the road load and the
+            drive act on the flywheel, which a rigid rotor does not have on its own).
+    """
+    if setup.vehicle is None:
+        return
+    if setup.options.rigid_coupling:
+        raise ParameterError(
+            "a [vehicle] or [cycle] acts on the flywheel through the torsional coupling:"
+            " allowed only with rigid_coupling = false"
+        )
+    vehicle.pack_vehicle(p, setup.vehicle)
+    if setup.cycle is not None:
+        pack_cycle(p, setup.cycle)

@@ -1,0 +1,116 @@
+"""``brake-sim bench cycle``: a drive cycle's cost offline, and its energy books.
+
+The cycle scenario (default ``urban``) at its preset (``--preset``, default the
+scenario's: balanced) is stepped in chunks of ``--chunk-s`` simulated seconds, recording
+every sample, and its default sensor set (structure and channels, carrying their state
+from chunk to chunk as the node's measured stream does) processes every chunk; memory
+stays bounded by a chunk. Printed, best of ``--repeats`` (process CPU time, one core):
+the physics alone and physics plus sensors as multiples of real time (the issue's target:
+at least 30x with the default sensors), the stops and phases the cycle went through, and
+the energy books over the whole cycle (drive work in against the losses, road load and the
+change of stored energy; :func:`brake_sim_ros.analysis.energy.energy_balance`); and what
+the vehicle costs per sample where the shoes ride free (4 s without braking, recording every
+sample): the published model, the same with a ``[vehicle]`` (road load), and with a
+``[cycle]`` (road load and the controller).
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+
+from brake_sim_ros.analysis.energy import energy_balance
+from brake_sim_ros.model.trajectory import SampleBlock
+from brake_sim_ros.scenarios import load_scenario, parse_scenario
+from brake_sim_ros.stream.build import sensor_bank_for, stepper_for
+
+TARGET_RTF = 30.0
+# free-rolling runs for the vehicle's cost: no brake force, shoes off the drum
+_FREE = 'name = "free"\n[actuation]\npeak_force_n = 0.0\n'
+_OVERHEAD_CASES = (
+    ("published model", _FREE),
+    ("with [vehicle] (road load)", _FREE + "[vehicle]\n"),
+    (
+        "with [cycle] (road load, controller)",
+        'name = "free"\n[parameters.driveline]\ninitial_speed_rad_s = 0.0\n'
+        '[[cycle.segments]]\nkind = "accelerate"\nkmh = 100.0\n',
+    ),
+)
+
+
+def _run(scenario, chunk_samples: int, with_sensors: bool):
+    """CPU seconds of one chunked run, and the first and last sample and the segments seen."""
+    stepper = stepper_for(scenario)
+    bank = sensor_bank_for(scenario) if with_sensors else None
+    total = round(scenario.duration_s / stepper.sample_period_s)
+    first = last = None
+    segments: list[float] = []
+    start = time.process_time()
+    while stepper.sample_index < total:
+        block = stepper.advance(min(chunk_samples, total - stepper.sample_index))
+        if bank is not None:
+            bank.advance(block)
+        if first is None:
+            first = SampleBlock(block.data[:1].copy(), 0, block.sample_period_s)
+        seen = np.unique(block["cycle_segment"])
+        segments.extend(s for s in seen if s not in segments)
+        last = block
+    cpu = time.process_time() - start
+    end = SampleBlock(last.data[-1:].copy(), total - 1, last.sample_period_s)
+    return cpu, SampleBlock.concatenate([first, end]), segments
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="brake-sim bench cycle", description=__doc__)
+    parser.add_argument("--scenario", default="urban")
+    parser.add_argument("--preset", default=None, help="solver preset (default the scenario's)")
+    parser.add_argument("--chunk-s", type=float, default=0.1, help="simulated s per chunk")
+    parser.add_argument("--repeats", type=int, default=3)
+    args = parser.parse_args(argv)
+    scenario = load_scenario(args.scenario).with_solver(preset=args.preset)
+    if scenario.setup.cycle is None:
+        parser.error(f"scenario {scenario.name!r} has no [cycle]: allowed a cycle scenario")
+    stepper = stepper_for(scenario)
+    chunk = max(1, round(args.chunk_s / stepper.sample_period_s))
+    stepper.advance(10)  # compile, or load the compiled kernel from the cache
+    duration = scenario.duration_s
+    print(f"scenario {scenario.name}, preset {scenario.solver.preset}: {stepper.describe_step()}")
+    print(f"  {duration:g} s cycle in chunks of {chunk} samples, best of {args.repeats}")
+    rows = []
+    books = None
+    for label, with_sensors in (("physics", False), ("physics + default sensors", True)):
+        best = float("inf")
+        for _ in range(args.repeats):
+            cpu, ends, segments = _run(scenario, chunk, with_sensors)
+            best = min(best, cpu)
+        rows.append((label, best))
+        books = energy_balance(ends, scenario.setup.params)
+        kinds = scenario.setup.cycle.phase_names(np.array(segments))
+    for label, cpu in rows:
+        target = f" (target >= {TARGET_RTF:.0f}x)" if "sensors" in label else ""
+        print(f"  {label}: {cpu:.2f} s CPU, {duration / cpu:.1f}x real time{target}")
+    stops = sum(k.endswith(":brake") for k in kinds)
+    print(f"  phases: {len(kinds)} ({stops} brake segments): {' '.join(kinds)}")
+    drive = float(ends["drive_work_j"][-1])
+    print(
+        f"  energy books: drive work in {drive:.1f} J, friction"
+        f" {float(ends['friction_work_j'][-1]):.1f} J, road load"
+        f" {float(ends['road_load_work_j'][-1]):.1f} J, stored at the end"
+        f" {books.stored_end_j:.3f} J; residual {books.residual_j:.2e} J"
+        f" ({abs(books.residual_j) / max(books.turnover_j, 1e-300):.1e} of the energy in)"
+    )
+    print("  cost per sample with the shoes off the drum (4 s, recording every sample):")
+    for label, text in _OVERHEAD_CASES:
+        scenario = parse_scenario(text).with_solver(preset=args.preset)
+        n = round(4.0 / scenario.sample_period_s)
+        best = float("inf")
+        for _ in range(args.repeats):
+            stepper = stepper_for(scenario)
+            stepper.advance(1)
+            start = time.process_time()
+            stepper.advance(n)
+            best = min(best, time.process_time() - start)
+        print(f"    {label}: {1e9 * best / n:.0f} ns")
+    return 0
