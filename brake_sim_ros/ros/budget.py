@@ -47,7 +47,8 @@ def measure_stepping(
     Raises:
         BrakeSimError: one chunk would be more work than one executor callback may do.
     """
-    force = (force_n, force_n)
+    # a drive cycle commands the brake itself (at the substeps of its own peak force)
+    force = None if stepper.setup.cycle is not None else (force_n, force_n)
     stepper.advance(1, actuation_n=force)  # kernel loaded, substeps picked for the force
     reason = check_chunk_work(stepper.substeps, chunk_samples, stepper.physics_step_s)
     if reason:

@@ -651,6 +651,11 @@ class BrakeSimNode(Node):
         reason = check_command(
             msg.left_force_n, msg.right_force_n, float(self._param("max_actuation_force_n"))
         )
+        if reason is None and self._stepper.setup.cycle is not None:
+            reason = (
+                f"scenario '{self.scenario.name}' has a drive cycle ([cycle]), which commands"
+                " the brake: actuation commands are allowed only without one"
+            )
         if reason is not None:
             self.stats.commands_rejected += 1
             self.stats.last_command_rejection = reason

@@ -170,10 +170,11 @@ def calibrate_chunk_cost(
 
     The shoes are driven by ``force_n`` from t = 0, so the calibration steps through the
     contact code (impacts, then contact), the costlier branch of the model, at the substeps
-    that force needs. Takes about ``wall_budget_s`` of wall time (at least
-    MIN_CALIBRATION_CHUNKS chunks).
+    that force needs; a run with a drive cycle (``[cycle]``) is calibrated on its cycle.
+    Takes about ``wall_budget_s`` of wall time (at least MIN_CALIBRATION_CHUNKS chunks).
     """
-    force = (force_n, force_n)
+    # a drive cycle commands the brake itself: its own profile is calibrated instead
+    force = None if stepper.setup.cycle is not None else (force_n, force_n)
     stepper.advance(1, actuation_n=force)  # kernel loaded, substeps picked, outside the timing
     costs = measure_chunk_costs(
         stepper,

@@ -1,0 +1,63 @@
+"""A drive cycle through the ROS node, over real DDS: the node streams the urban cycle's
+first seconds as the offline stepper does, bit for bit, and refuses actuation commands
+(the cycle commands the brake) without stopping."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+pytestmark = [
+    pytest.mark.ros,
+    pytest.mark.filterwarnings("ignore:module 'sre_(parse|constants)' is deprecated"),
+]
+
+rclpy = pytest.importorskip("rclpy", reason="rclpy not installed (run scripts/setup.sh)")
+
+from rclpy.qos import QoSProfile, ReliabilityPolicy  # noqa: E402
+
+from brake_sim_ros.model.layout import COL  # noqa: E402
+from brake_sim_ros.ros.harness import NodeProcess, SimClient, domain_id_for  # noqa: E402
+from brake_sim_ros.scenarios import load_scenario  # noqa: E402
+from brake_sim_ros.stream.build import stepper_for  # noqa: E402
+
+DOMAIN = domain_id_for(23)
+RUN_S = 1.0
+LOSSLESS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
+
+
+def test_the_node_streams_a_drive_cycle_and_refuses_commands_to_its_brake(tmp_path):
+    node = NodeProcess.start(
+        ["--scenario", "urban", "--duration", str(RUN_S), "--ros-args", "-p", "paused:=true",
+         "-p", "real_time_factor:=0.0", "-p", "diagnostics_period_s:=0.2"],
+        domain_id=DOMAIN,
+        log_path=tmp_path / "node.log",
+    )  # fmt: skip
+    client = SimClient(DOMAIN, stream_qos=LOSSLESS)
+    try:
+        client.wait_for_node(60.0)
+        client.spin_for(0.2)
+        assert client.set_parameter("paused", False).successful
+        client.command(500.0, 500.0)  # a brake the cycle commands: refused, the run goes on
+        client.wait_for(
+            lambda: client.diagnostics().get("state") == "finished", 60.0, "the end of the run"
+        )
+        scenario = load_scenario("urban")
+        n = round(RUN_S * scenario.sample_rate_hz)
+        client.wait_for(lambda: client.sample_count >= n, 10.0, "every sample")
+        diag = client.next_diagnostics()
+    finally:
+        client.close()
+        assert node.stop() == 0, node.output()
+    assert int(diag["commands_rejected"]) >= 1 and int(diag["commands_accepted"]) == 0
+    assert "drive cycle" in diag["last_command_rejection"]
+    got = client.chunk_arrays()
+    offline = stepper_for(scenario).run(RUN_S).data
+    np.testing.assert_array_equal(got["index"], np.arange(len(offline)))
+    for side in ("left", "right"):
+        for axis in ("fx", "fy"):
+            np.testing.assert_array_equal(
+                got[f"{side}_{axis}_n"], offline[:, COL[f"{side}_pivot_{axis}_n"]]
+            )
+    # the vehicle drove: the drum speeds up from rest in the first second
+    assert offline[-1, COL["drum_speed_rad_s"]] > 1.0
