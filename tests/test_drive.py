@@ -268,6 +268,7 @@ def test_pressure_is_force_on_the_default_piston():
             "duration_s = 1.0",
             "rigid_coupling = false",
         ),
+        ('[cycle]\nrepeat = "yes"\n[[cycle.segments]]\nkind = "release"', "true or false"),
         (
             '[defects.left]\nactuation_delay_ms = 5.0\n[[cycle.segments]]\nkind = "release"\n'
             "duration_s = 1.0",
@@ -284,6 +285,25 @@ def test_bad_vehicle_and_cycle_tables_are_refused_in_one_line(extra, says):
         parse_scenario(f'name = "bad"\n{extra}\n', "bad.toml")
     message = str(info.value)
     assert says in message and "\n" not in message
+
+
+def test_a_repeating_cycle_starts_again_at_its_first_segment():
+    """The CHUNKED cycle (12 km/h, stop, hold, release: about 2.5 s a lap) with repeat:
+    over 8 s it runs its segments in order lap after lap, never ends, and reaches its
+    speed in every lap; without repeat it ends after one lap."""
+    text = CHUNKED.replace("duration_s = 4.0", "duration_s = 8.0")
+    once = stepper_for(parse_scenario(text)).run(8.0, record_every=DECIMATION)
+    assert [s for s, _, _ in _segments(once)] == [0, 1, 2, 3, 4]  # 4: ended
+    looped = parse_scenario(text.replace("[cycle]\n", "[cycle]\nrepeat = true\n"))
+    assert looped.setup.cycle.repeat
+    block = stepper_for(looped).run(8.0, record_every=DECIMATION)
+    order = [s for s, _, _ in _segments(block)]
+    assert 4 not in order and order[:5] == [0, 1, 2, 3, 0]
+    assert order == [k % 4 for k in range(len(order))] and len(order) >= 9  # two laps and more
+    kmh = _kmh(block, looped)
+    for seg, first, _last in _segments(block):
+        if seg == 1:  # each stop starts from the speed its lap reached
+            assert kmh[first] == pytest.approx(12.0, rel=2 * SPEED_TOLERANCE)
 
 
 def test_stepper_refuses_live_actuation_during_a_cycle():

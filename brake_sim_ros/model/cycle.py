@@ -102,6 +102,8 @@ class Cycle:
         speed_time_constant_s: the speed controllers' time constant, s.
         brake_rise_s: time the brake force takes to reach each segment's, s.
         max_force_n: the drag controller's brake force limit per shoe, N.
+        repeat: after the last segment, start again at the first (a cycle without end,
+            for a continuous run); else the cycle ends there (no drive, the brake kept).
     """
 
     segments: tuple[Segment, ...]
@@ -109,6 +111,7 @@ class Cycle:
     speed_time_constant_s: float = 1.0
     brake_rise_s: float = 0.2
     max_force_n: float = 3000.0
+    repeat: bool = False
 
     def __post_init__(self) -> None:
         n = len(self.segments)
@@ -181,6 +184,7 @@ def pack_cycle(p: np.ndarray, cycle: Cycle) -> None:
     p[L.P_CYCLE_TIME_CONSTANT] = cycle.speed_time_constant_s
     p[L.P_CYCLE_RISE] = cycle.brake_rise_s
     p[L.P_CYCLE_MAX_FORCE] = cycle.max_force_n
+    p[L.P_CYCLE_REPEAT] = 1.0 if cycle.repeat else 0.0
     for j, s in enumerate(resolved(cycle.segments)):
         b = L.P_CYCLE_BASE + j * L.CYCLE_STRIDE
         p[b + L.Q_KIND] = float(L.SEGMENT_KINDS.index(s.kind))
@@ -232,7 +236,8 @@ def _finished(p, seg, y, kstate, fstate, t, dt):
 @njit(cache=True)
 def control(p, y, kstate, fstate, t, dt):
     """The controller at the start of a physics step at ``t`` (s, step ``dt``): advance
-    the segment while the current one has ended (each segment at most once per step), then
+    the segment while the current one has ended (each segment at most once per step; a
+    repeating cycle wraps from its last segment to its first), then
     set the step's drive torque in ``p`` (the kernel's working copy, P_DRIVE_TORQUE) and
     the brake force ramp in ``fstate`` (F_RAMP_*). ``kstate[K_SEGMENT]`` < 0 before the
     first step: the first segment starts then."""
@@ -241,8 +246,12 @@ def control(p, y, kstate, fstate, t, dt):
     if seg < 0:
         seg = 0
         _enter(p, seg, y, fstate, t)
-    while seg < n and _finished(p, seg, y, kstate, fstate, t, dt):
+    advanced = 0
+    while seg < n and advanced < n and _finished(p, seg, y, kstate, fstate, t, dt):
         seg += 1
+        advanced += 1
+        if seg == n and p[L.P_CYCLE_REPEAT] > 0.0:
+            seg = 0  # again from the first segment
         _enter(p, seg, y, fstate, t)
     kstate[L.K_SEGMENT] = seg
     drive = 0.0

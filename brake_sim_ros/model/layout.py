@@ -162,7 +162,10 @@ SEG_DRAG = 5  # hold the target speed with the brake (no drive) for the duration
 SEG_END = 6  # after the last segment: no drive, the brake force kept
 SEGMENT_KINDS = ("accelerate", "cruise", "brake", "hold", "release", "drag", "end")
 
-N_PARAMS = P_CYCLE_BASE + MAX_CYCLE_SEGMENTS * CYCLE_STRIDE
+# 1.0: after the last segment the cycle starts again at its first (else it ends: SEG_END)
+P_CYCLE_REPEAT = P_CYCLE_BASE + MAX_CYCLE_SEGMENTS * CYCLE_STRIDE
+
+N_PARAMS = P_CYCLE_REPEAT + 1
 
 # --- state vector ---------------------------------------------------------------------
 Y_FLYWHEEL_ANGLE = 0

@@ -700,7 +700,7 @@ def _segment(ctx: _Ctx, data: Any, key: str) -> Segment:
 
 def _cycle(ctx: _Ctx, data: Any) -> Cycle:
     """``[cycle]``: the controller's settings and ``[[cycle.segments]]`` (model/cycle.py)."""
-    data = ctx.table(data, "cycle", {"segments", *CYCLE_LIMITS})
+    data = ctx.table(data, "cycle", {"segments", "repeat", *CYCLE_LIMITS})
     segments = data.get("segments", _MISSING)
     if not isinstance(segments, list) or not 1 <= len(segments) <= 64:
         raise ctx.fail("cycle.segments", segments, "an array of 1 to 64 segment tables")
@@ -709,9 +709,12 @@ def _cycle(ctx: _Ctx, data: Any) -> Cycle:
         for name, (lo, hi) in CYCLE_LIMITS.items()
         if name in data
     }
+    repeat = data.get("repeat", False)
+    if not isinstance(repeat, bool):
+        raise ctx.fail("cycle.repeat", repeat, "true or false")
     built = tuple(_segment(ctx, seg, f"cycle.segments[{i}]") for i, seg in enumerate(segments))
     try:
-        return Cycle(built, **settings)
+        return Cycle(built, **settings, repeat=repeat)
     except BrakeSimError as exc:
         raise ScenarioError(f"{ctx.source}: [cycle]: {exc}") from exc
 
