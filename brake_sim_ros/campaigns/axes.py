@@ -102,7 +102,7 @@ def defect_choices(
 def defects_table(defects: Defects) -> dict[str, Any]:
     """``defects`` as a scenario's ``[defects]`` table (the inverse of the scenario
     loader's reading): each shoe's fields that differ from a healthy shoe, the drum's
-    harmonics."""
+    harmonics and flat."""
     table: dict[str, Any] = {}
     healthy = ShoeDefect()
     for side in ("left", "right"):
@@ -114,13 +114,17 @@ def defects_table(defects: Defects) -> dict[str, Any]:
         }
         if changed:
             table[side] = changed
+    drum: dict[str, Any] = {}
     if defects.drum.harmonics:
-        table["drum"] = {
-            "harmonics": [
-                {"order": h.order, "amplitude_um": float(h.amplitude_um), "phase_deg": h.phase_deg}
-                for h in defects.drum.harmonics
-            ]
-        }
+        drum["harmonics"] = [
+            {"order": h.order, "amplitude_um": float(h.amplitude_um), "phase_deg": h.phase_deg}
+            for h in defects.drum.harmonics
+        ]
+    if defects.drum.flat_depth_um:
+        for name in ("flat_depth_um", "flat_centre_deg", "flat_width_deg"):
+            drum[name] = float(getattr(defects.drum, name))
+    if drum:
+        table["drum"] = drum
     return table
 
 
