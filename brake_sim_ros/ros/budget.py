@@ -11,6 +11,7 @@ included.
 from __future__ import annotations
 
 import dataclasses
+import math
 import statistics
 import time
 
@@ -31,6 +32,7 @@ from brake_sim_ros.solvers.realtime import (
 from brake_sim_ros.stream import conversion
 
 _REPEATS = 5
+_PROBE_SAMPLES = 5  # one-sample timings before any whole chunk is stepped
 _STATE_ROWS = 16
 _BUDGET_RUN_ID = "0" * 32  # the messages priced are never seen: any id of the right size
 
@@ -53,9 +55,14 @@ def measure_stepping(
     reason = check_chunk_work(stepper.substeps, chunk_samples, stepper.physics_step_s)
     if reason:
         raise BrakeSimError(reason)
-    t0 = time.perf_counter()
-    stepper.advance(1, actuation_n=force)
-    estimate = (time.perf_counter() - t0) * chunk_samples
+    # the fastest of a few one-sample timings: a single one is at the mercy of one
+    # preemption by another process (milliseconds, which times a chunk becomes seconds)
+    fastest = math.inf
+    for _ in range(_PROBE_SAMPLES):
+        t0 = time.perf_counter()
+        stepper.advance(1, actuation_n=force)
+        fastest = min(fastest, time.perf_counter() - t0)
+    estimate = fastest * chunk_samples
     if estimate > 2 * MAX_CHUNK_WALL_S:  # one sample's timing is noisy: a wide margin
         raise BrakeSimError(
             f"one chunk of {chunk_samples} samples would take about {estimate:.2g} s of wall"
