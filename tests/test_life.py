@@ -124,3 +124,33 @@ def test_a_run_file_counts_its_life_down_to_the_failure(tmp_path):
     assert rul[0] > 0.45 and rul[-1] == 0.0
     assert (meta["kind"], meta["source"], meta["service_limit"]) == (PIVOT, "run", 3.0)
     assert meta["time_s"] == fail_t
+
+
+def test_an_accelerated_life_runs_to_failure_with_its_rul_counting_down():
+    """The built-in run to failure: downhill drag with both linings wearing by their
+    friction work. The leading (left) lining, which does about twice the trailing one's
+    work, reaches its 3.4 mm service limit first, within the run; the RUL counts down to
+    that sample and is 0 from it on."""
+    sc = load_scenario("downhill_wear")
+    run = stepper_for(sc).run(sc.duration_s, record_every=256)
+    table = parquet.history_table(
+        run,
+        None,
+        sc.setup.defects,
+        {"scenario": sc.name},
+        unit_id=sc.unit_id,
+        unit_values=sc.unit_values(),
+        conditions=sc.conditions_record(),
+    )
+    t = table["time_s"].to_numpy()
+    left = table["defect:lining_wear:left [mm]"].to_numpy()
+    right = table["defect:lining_wear:right [mm]"].to_numpy()
+    assert np.all(np.diff(left) >= 0.0) and np.all(np.diff(right) >= 0.0)  # wear only grows
+    meta = json.loads(table.schema.metadata[parquet.METADATA_KEY])["life"]
+    assert (meta["kind"], meta["location"], meta["source"]) == ("lining_wear", "left", "run")
+    failed = int(np.argmax(left >= 3.4))
+    assert meta["time_s"] == t[failed] and 0.0 < t[failed] < sc.duration_s
+    assert right[failed] < 3.4  # the trailing lining is far from its limit then
+    assert right[failed] / left[failed] == pytest.approx(0.5, abs=0.1)  # about half the work
+    rul = table[life.RUL_COLUMN].to_numpy()
+    np.testing.assert_array_equal(rul, np.maximum(0.0, t[failed] - t))
