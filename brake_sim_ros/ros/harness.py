@@ -175,9 +175,12 @@ class SimClient:
             self.rx.contact_events.append,
             qos.for_topic(stream.CONTACT_EVENTS),
         )
-        n.create_subscription(
-            DefectState, f"{node}/defects", self.rx.defects.append, qos.for_topic(stream.DEFECTS)
-        )
+        # latched as the node offers it, but deep: a run whose defects grow publishes several
+        # states within one chunk, and a depth of 1 keeps only the newest a busy client
+        # has not taken yet
+        every_state = qos.for_topic(stream.DEFECTS)
+        every_state.depth = 100
+        n.create_subscription(DefectState, f"{node}/defects", self.rx.defects.append, every_state)
         n.create_subscription(Clock, "/clock", self.rx.clocks.append, qos.for_topic(stream.CLOCK))
         n.create_subscription(
             DiagnosticArray,
