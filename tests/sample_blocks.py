@@ -16,3 +16,19 @@ def cut(block: SampleBlock, sizes: list[int]) -> list[SampleBlock]:
         )
         start, k = start + n, k + 1
     return out
+
+
+def scenario_table(scenario, run: SampleBlock):
+    """The Parquet table of ``run`` (samples of ``scenario``), without sensors, with the
+    scenario's defects, unit and conditions as ground truth."""
+    from brake_sim_ros.datasets import parquet
+
+    return parquet.history_table(
+        run,
+        None,
+        scenario.setup.defects,
+        {"scenario": scenario.name},
+        unit_id=scenario.unit_id,
+        unit_values=scenario.unit_values(),
+        conditions=scenario.conditions_record(),
+    )

@@ -25,6 +25,7 @@ from brake_sim_ros.solvers.contact_regime import run_contact_regime
 from brake_sim_ros.solvers.reference import run_reference
 from brake_sim_ros.stream.build import stepper_for
 from brake_sim_ros.stream.ground_truth import PUBLISH_FRACTION, PUBLISH_PERIOD_S, TruthUpdates
+from tests.sample_blocks import scenario_table
 
 PIVOT_COLUMN = "defect:pivot_radius_change:left [%]"
 
@@ -312,15 +313,7 @@ def test_the_ground_truth_lists_a_defect_from_its_onset_with_its_severity_then()
 def test_parquet_label_columns_carry_the_severity_at_each_sample(tmp_path):
     sc = load_scenario("symmetric").with_defects(_growing_pivot())
     run = stepper_for(sc).run(2.5, record_every=64)
-    table = parquet.history_table(
-        run,
-        None,
-        sc.setup.defects,
-        {"scenario": sc.name},
-        unit_id=sc.unit_id,
-        unit_values=sc.unit_values(),
-        conditions=sc.conditions_record(),
-    )
+    table = scenario_table(sc, run)
     path = tmp_path / "run.parquet"
     parquet.write_history(path, table)
     back = pq.read_table(path)

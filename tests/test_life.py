@@ -15,6 +15,7 @@ from brake_sim_ros.model.catalogue import Growth
 from brake_sim_ros.model.defects import Defects, ShoeDefect
 from brake_sim_ros.scenarios import load_scenario
 from brake_sim_ros.stream.build import stepper_for
+from tests.sample_blocks import scenario_table
 
 TIMES = np.arange(0, 3001) * 1e-3  # 0 .. 3 s in ms
 PIVOT = "pivot_radius_change"  # service limit 3 %
@@ -104,15 +105,7 @@ def test_a_run_file_counts_its_life_down_to_the_failure(tmp_path):
     d = _pivot(4.0, Growth(0.2, "linear", rate_per_s=10.0))  # 3 % at 0.5 s
     sc = load_scenario("symmetric").with_defects(d)
     run = stepper_for(sc).run(0.8, record_every=64)
-    table = parquet.history_table(
-        run,
-        None,
-        sc.setup.defects,
-        {"scenario": sc.name},
-        unit_id=sc.unit_id,
-        unit_values=sc.unit_values(),
-        conditions=sc.conditions_record(),
-    )
+    table = scenario_table(sc, run)
     path = tmp_path / "run.parquet"
     parquet.write_history(path, table)
     back = pq.read_table(path)
@@ -133,15 +126,7 @@ def test_an_accelerated_life_runs_to_failure_with_its_rul_counting_down():
     that sample and is 0 from it on."""
     sc = load_scenario("downhill_wear")
     run = stepper_for(sc).run(sc.duration_s, record_every=256)
-    table = parquet.history_table(
-        run,
-        None,
-        sc.setup.defects,
-        {"scenario": sc.name},
-        unit_id=sc.unit_id,
-        unit_values=sc.unit_values(),
-        conditions=sc.conditions_record(),
-    )
+    table = scenario_table(sc, run)
     t = table["time_s"].to_numpy()
     left = table["defect:lining_wear:left [mm]"].to_numpy()
     right = table["defect:lining_wear:right [mm]"].to_numpy()

@@ -69,34 +69,32 @@ def failure(defects: Defects, times_s: np.ndarray, labels: Mapping[str, np.ndarr
     its per-sample severity ``labels`` (label column name -> values, the kind's unit), else
     from the growth laws (module doc)."""
     times = np.asarray(times_s, dtype=np.float64)
-    found: list[tuple[float, int, Failure]] = []
-    for rank, active in enumerate(defects.active()):
+    first = Failure(math.nan)
+    for active in defects.active():  # catalogue order: a tie goes to the earlier kind
         kind = KIND_BY_NAME[active.kind]
         limit = kind.service_limit
         if limit == 0.0:
             continue
         common = dict(kind=kind.name, location=active.location, service_limit=limit, unit=kind.unit)
-        column = labels.get(label_column(kind, active.location))
-        if column is not None and len(column) == len(times):
-            hit = np.flatnonzero(_reaches(np.asarray(column, dtype=np.float64), limit))
-            if hit.size:
-                found.append(
-                    (
-                        float(times[hit[0]]),
-                        rank,
-                        Failure(float(times[hit[0]]), **common, source="run"),
-                    )
-                )
-                continue
         growth = defects.growth_of(active.kind, active.location)
+        column = labels.get(label_column(kind, active.location))
+        hit = np.flatnonzero(
+            _reaches(np.asarray(column, dtype=np.float64), limit)
+            if column is not None and len(column) == len(times)
+            else np.zeros(0, dtype=bool)
+        )
+        if hit.size:
+            found = Failure(float(times[hit[0]]), **common, source="run")
         # active() without a time: each defect's final severity; a law that follows time
         # alone (not friction work) knows its future
-        if growth.follows_time and bool(_reaches(np.array([active.severity]), limit)[0]):
+        elif growth.follows_time and bool(_reaches(np.array([active.severity]), limit)[0]):
             t = max(growth.onset_s, growth.reached_s(limit))
-            found.append((t, rank, Failure(t, **common, source="law")))
-    if not found:
-        return Failure(math.nan)
-    return min(found, key=lambda f: (f[0], f[1]))[2]
+            found = Failure(t, **common, source="law")
+        else:
+            continue
+        if math.isnan(first.time_s) or found.time_s < first.time_s:
+            first = found
+    return first
 
 
 def rul_series(times_s: np.ndarray, fail: Failure) -> np.ndarray:

@@ -28,6 +28,7 @@ from brake_sim_ros.solvers.realtime import (
     PipelineCosts,
     calibrate_chunk_cost,
     check_chunk_work,
+    probe_forces,
 )
 from brake_sim_ros.stream import conversion
 
@@ -49,8 +50,7 @@ def measure_stepping(
     Raises:
         BrakeSimError: one chunk would be more work than one executor callback may do.
     """
-    # a drive cycle commands the brake itself (at the substeps of its own peak force)
-    force = None if stepper.setup.cycle is not None else (force_n, force_n)
+    force = probe_forces(stepper, force_n)
     stepper.advance(1, actuation_n=force)  # kernel loaded, substeps picked for the force
     reason = check_chunk_work(stepper.substeps, chunk_samples, stepper.physics_step_s)
     if reason:

@@ -184,6 +184,7 @@ class BrakeSimNode(Node):
             }
         )
         self._exit_at_end = bool(self._param("exit_at_end"))
+        self._continuous = bool(self._param("continuous"))
         try:
             policy = self._policy_from_params()
         except ValueError as exc:  # a bad --ros-args override
@@ -498,7 +499,7 @@ class BrakeSimNode(Node):
 
     def _end_step(self) -> int:
         """The sample index at which the free run ends (never, while ``continuous``)."""
-        if self._param("continuous"):
+        if self._continuous:
             return sys.maxsize
         return round(self._duration_s() / self._stepper.sample_period_s)
 
@@ -640,7 +641,9 @@ class BrakeSimNode(Node):
             ):
                 self._finished = False
                 self._pacer.restart(now, step)
-        if changes.get("continuous") and self._finished:
+        if "continuous" in changes:
+            self._continuous = bool(changes["continuous"])
+        if self._continuous and self._finished:
             self._finished = False
             self._pacer.restart(now, step)
         if changes.keys() & {"real_time_factor", "paused", "chunk_rate_hz"}:

@@ -158,6 +158,13 @@ def measure_chunk_costs(
     return np.asarray(costs)
 
 
+def probe_forces(stepper: FixedStepStepper, force_n: float) -> tuple[float, float] | None:
+    """The actuation a cost probe steps ``stepper`` with: ``force_n`` on both shoes, or
+    None (its own history) for a run with a drive cycle, which commands the brake itself
+    and refuses other forces."""
+    return None if stepper.setup.cycle is not None else (force_n, force_n)
+
+
 def calibrate_chunk_cost(
     stepper: FixedStepStepper,
     chunk_samples: int,
@@ -173,8 +180,7 @@ def calibrate_chunk_cost(
     that force needs; a run with a drive cycle (``[cycle]``) is calibrated on its cycle.
     Takes about ``wall_budget_s`` of wall time (at least MIN_CALIBRATION_CHUNKS chunks).
     """
-    # a drive cycle commands the brake itself: its own profile is calibrated instead
-    force = None if stepper.setup.cycle is not None else (force_n, force_n)
+    force = probe_forces(stepper, force_n)
     stepper.advance(1, actuation_n=force)  # kernel loaded, substeps picked, outside the timing
     costs = measure_chunk_costs(
         stepper,
