@@ -13,6 +13,7 @@ from brake_sim_ros.datasets.parquet import history_table, write_history
 from brake_sim_ros.errors import BrakeSimError
 from brake_sim_ros.model import layout as L
 from brake_sim_ros.model.cycle import KMH_PER_M_S, SPEED_TOLERANCE
+from brake_sim_ros.model.fidelity import DRIVEN_COLUMNS, plan
 from brake_sim_ros.model.vehicle import GRAVITY_M_S2, Vehicle, road_load_torque
 from brake_sim_ros.scenarios import load_scenario, parse_scenario
 from brake_sim_ros.scenarios.loader import force_from_pressure_n
@@ -311,3 +312,14 @@ def test_stepper_refuses_live_actuation_during_a_cycle():
     with pytest.raises(BrakeSimError, match="drive cycle commands the brake"):
         stepper.advance(10, actuation_n=(100.0, 100.0))
     assert isinstance(stepper, FixedStepStepper)
+
+
+def test_a_driven_run_keeps_the_vehicles_columns_whatever_its_needs_ask():
+    """[needs] asking only the stop time still records the vehicle's speed, drive, road load,
+    their work (the energy books) and the cycle's segment (the phase label)."""
+    scenario = parse_scenario(
+        'name = "few"\n[needs]\noutputs = ["stop_time"]\n[vehicle]\ngrade_pct = 2.0\n'
+    )
+    chosen = plan(scenario.needs, model_shoes=scenario.setup.options.shoes)
+    assert set(DRIVEN_COLUMNS) <= set(chosen.columns)
+    assert "brake_temperature_c" not in chosen.columns  # no thermal state asked

@@ -9,7 +9,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from brake_sim_ros.errors import ParameterError
-from brake_sim_ros.model import growth, kernel
+from brake_sim_ros.model import growth, kernel, thermal
 from brake_sim_ros.model import layout as L
 from brake_sim_ros.model.actuation import RESIDUAL_FORCE_N, RETURN_SPRING_PRELOAD_N
 from brake_sim_ros.model.catalogue import DRUM_KIND, FLAT_KIND, WEAR_KIND
@@ -213,6 +213,7 @@ def pack(
         _check_shoe(params, side, defect, s, p, b)
     _pack_drum(params, defects, p)
     _pack_growth(params, defects, p)
+    thermal.pack_fade(p)
     return p
 
 
@@ -450,11 +451,17 @@ def indentation_at(
     return float(out[2])
 
 
-def initial_state(params: BrakeParameters, defects: Defects) -> np.ndarray:
+def initial_state(
+    params: BrakeParameters, defects: Defects, temperature_c: float | None = None
+) -> np.ndarray:
     """State at t = 0: flywheel and drum at the initial speed, shoes at rest; with the
     linings' wear states (layout ``N_STATE_WEAR``, from 0) when a lining wears with its
-    friction work."""
-    y = np.zeros(L.N_STATE_WEAR if defects.wearing_with_work else L.N_STATE)
+    friction work; with the brake's temperature ``temperature_c`` (deg C, layout
+    ``N_STATE_THERMAL``) when the run has a thermal state (model/thermal.py)."""
+    size = L.N_STATE_WEAR if defects.wearing_with_work else L.N_STATE
+    y = np.zeros(L.N_STATE_THERMAL if temperature_c is not None else size)
+    if temperature_c is not None:
+        y[L.Y_BRAKE_TEMPERATURE] = temperature_c
     y[L.Y_FLYWHEEL_SPEED] = params.driveline.initial_speed_rad_s
     y[L.Y_DRUM_SPEED] = params.driveline.initial_speed_rad_s
     y[L.Y_LEFT_ANGLE] = math.radians(defects.left.initial_angle_deg)

@@ -16,21 +16,20 @@ scenario's value. What each one sets:
   transfer to the front axle in a stop is not modelled.
 * ``peak_force_n``: the actuation profile's peak, N: both shoes' profiles scaled by one
   factor so that their largest force is this (the ramp's timing kept).
-* ``brake_temperature_c``: the linings' and drum's temperature during the run, deg C. The
-  model has no thermal state, so it is held over the run (a stop heats a passenger drum
-  by some 25 K: 92 kJ into 8 kg of cast iron), and it acts through the fade law
-  :data:`FADE` on both linings' friction coefficient.
+* ``brake_temperature_c``: the linings' and drum's temperature, deg C. Without a thermal
+  state (no ``[thermal]`` table) it is held over the run (a stop heats a passenger drum
+  by some 25 K: 92 kJ into 8 kg of cast iron) and acts through the fade law
+  :data:`~brake_sim_ros.model.thermal.FADE` on both linings' friction coefficient; with
+  one it is the state's temperature at the start, and the state moves it.
 * ``ambient_temperature_c``: the air's, deg C; a run that draws no brake temperature has
-  its brake at the ambient (a cold brake). Below the fade law's onset a temperature leaves
-  the friction as it is, so the ambient alone changes no physics: it is ground truth for
-  a detector's features (and sets a cold brake's temperature).
+  its brake at the ambient (a cold brake). With a thermal state it is the air the brake
+  cools to. Below the fade law's onset a temperature leaves the friction as it is, so the
+  ambient alone changes no physics of a held brake: it is ground truth for a detector's
+  features (and sets a cold brake's temperature).
 
-Fade and contamination can halve a lining's friction (``TESTBED.md``). A real lining's
-curve is its own (the SAE J866 edge code rates its "hot" friction over 204-343 deg C,
-400-650 deg F); :data:`FADE` is a generic organic lining's, stated as an assumption: the
-friction as it is up to 250 deg C, falling linearly to half at 350 deg C (organic binders
-start to decompose near 290-340 deg C, 550-650 deg F, in fleet brake-temperature guides),
-half above. A lining whose curve is known is better given as a ``friction_change`` defect.
+Fade and contamination can halve a lining's friction (``TESTBED.md``); the fade law and
+its assumption are in model/thermal.py. A lining whose curve is known is better given as
+a ``friction_change`` defect.
 
 Pure: no numerics beyond the draw.
 """
@@ -44,6 +43,7 @@ from dataclasses import dataclass
 
 from brake_sim_ros.errors import ParameterError
 from brake_sim_ros.model.actuation import MAX_ACTUATION_FORCE_N, Actuation, ForceProfile
+from brake_sim_ros.model.thermal import FADE
 from brake_sim_ros.model.trajectory import BrakeSetup
 from brake_sim_ros.model.units import keyed_uniform
 
@@ -108,28 +108,6 @@ CONDITIONS: tuple[Condition, ...] = (
 CONDITION_BY_NAME: dict[str, Condition] = {c.name: c for c in CONDITIONS}
 
 
-@dataclass(frozen=True)
-class FadeLaw:
-    """A lining's friction against its temperature, as a ratio to its friction when cool:
-    1 up to ``onset_c``, linear to ``full_ratio`` at ``full_c``, held above (deg C)."""
-
-    onset_c: float
-    full_c: float
-    full_ratio: float
-
-    def ratio(self, temperature_c: float) -> float:
-        """Friction at ``temperature_c`` (deg C) over the friction when cool."""
-        if temperature_c <= self.onset_c:
-            return 1.0
-        if temperature_c >= self.full_c:
-            return self.full_ratio
-        w = (temperature_c - self.onset_c) / (self.full_c - self.onset_c)
-        return 1.0 - w * (1.0 - self.full_ratio)
-
-
-FADE = FadeLaw(onset_c=250.0, full_c=350.0, full_ratio=0.5)  # the module doc's assumption
-
-
 def check_range(name: str, low: float, high: float) -> None:
     """Raise ParameterError unless ``[low, high]`` is a range of condition ``name``."""
     c = CONDITION_BY_NAME.get(name)
@@ -175,7 +153,13 @@ def apply(setup: BrakeSetup, drawn: Mapping[str, float]) -> BrakeSetup:
         changes["flywheel_inertia_kg_m2"] = driveline.flywheel_inertia_kg_m2 * drawn["load_factor"]
     params = dataclasses.replace(setup.params, driveline=dataclasses.replace(driveline, **changes))
     temperature = drawn.get("brake_temperature_c", drawn.get("ambient_temperature_c"))
-    if temperature is not None and FADE.ratio(temperature) != 1.0:
+    held = setup.held_temperature_c if temperature is None else temperature
+    thermal = setup.thermal
+    if thermal is not None:  # the state starts at the brake's temperature, in the air's
+        air = drawn.get("ambient_temperature_c", thermal.ambient_c)
+        start = drawn.get("brake_temperature_c", thermal.initial_c)
+        thermal = dataclasses.replace(thermal, ambient_c=air, initial_c=start)
+    elif temperature is not None and FADE.ratio(temperature) != 1.0:
         friction = params.friction
         params = dataclasses.replace(
             params,
@@ -193,4 +177,6 @@ def apply(setup: BrakeSetup, drawn: Mapping[str, float]) -> BrakeSetup:
             )
         factor = drawn["peak_force_n"] / peak
         actuation = Actuation(_scaled(actuation.left, factor), _scaled(actuation.right, factor))
-    return dataclasses.replace(setup, params=params, actuation=actuation)
+    return dataclasses.replace(
+        setup, params=params, actuation=actuation, thermal=thermal, held_temperature_c=held
+    )

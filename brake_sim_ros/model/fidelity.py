@@ -203,6 +203,8 @@ class Needs:
             of :data:`GROWTH_LEVELS`.
         driven: the scenario has a vehicle (road load, a drive cycle): the level must be
             one of :data:`DRIVEN_LEVELS` (the scenario loader sets it).
+        thermal: the scenario has a thermal state ([thermal], model/thermal.py): the level
+            must be one of :data:`DRIVEN_LEVELS` too (the full model's stepping carries it).
     """
 
     outputs: tuple[str, ...]
@@ -212,6 +214,7 @@ class Needs:
     defects: tuple[str, ...] = ()
     growing: tuple[str, ...] = ()
     driven: bool = False
+    thermal: bool = False
 
     def __post_init__(self) -> None:
         unknown = [o for o in self.outputs if o not in OUTPUTS]
@@ -417,6 +420,11 @@ def plan(needs: Needs | None, *, model_shoes: tuple[str, ...] = SIDES) -> Plan:
                 " changing during the run (an onset after 0 s or a growth law): allowed"
                 f" levels for it: {sorted(GROWTH_LEVELS, key=list(LEVEL_BY_NAME).index)}"
             )
+        if needs.thermal and level.name not in DRIVEN_LEVELS:
+            raise FidelityError(
+                f"needs level {level.name!r} cannot carry the brake's thermal state"
+                f" ([thermal]): allowed levels for it: {sorted(DRIVEN_LEVELS)}"
+            )
         if needs.driven and level.name not in DRIVEN_LEVELS:
             raise FidelityError(
                 f"needs level {level.name!r} cannot represent the vehicle's road load and"
@@ -428,7 +436,8 @@ def plan(needs: Needs | None, *, model_shoes: tuple[str, ...] = SIDES) -> Plan:
         level = next(
             lv
             for lv in LEVELS
-            if asked <= lv.outputs and _represents(lv, needs.defects, needs.growing, needs.driven)
+            if asked <= lv.outputs
+            and _represents(lv, needs.defects, needs.growing, needs.driven or needs.thermal)
         )
         cheaper = [lv for lv in LEVELS if lv.dof < level.dof]
         if cheaper:
@@ -439,6 +448,8 @@ def plan(needs: Needs | None, *, model_shoes: tuple[str, ...] = SIDES) -> Plan:
                 defect = next((d for d in needs.defects if lv.name not in DEFECT_LEVELS[d]), None)
                 if needs.driven and lv.name not in DRIVEN_LEVELS:
                     return f"{lv.name} cannot represent the vehicle ([vehicle], [cycle])"
+                if needs.thermal and lv.name not in DRIVEN_LEVELS:
+                    return f"{lv.name} cannot carry the brake's thermal state ([thermal])"
                 if defect is None:
                     return f"{lv.name} cannot represent {needs.growing[0]} changing in time"
                 return f"{lv.name} cannot represent {defect}"
@@ -464,9 +475,10 @@ def plan(needs: Needs | None, *, model_shoes: tuple[str, ...] = SIDES) -> Plan:
     columns = columns_for(needs.outputs, needs.shoes)
     if needs.driven:
         columns = (*columns, *(c for c in DRIVEN_COLUMNS if c not in columns))
+    if needs.thermal and "brake_temperature_c" not in columns:
+        columns = (*columns, "brake_temperature_c")
     if not sensors:
         reason += "; no sensors ([needs] do not ask measured_signals): no structure"
-    columns = columns_for(needs.outputs, needs.shoes)
     if WEAR_KIND in needs.growing:
         columns = (*columns, *WEAR_COLUMNS)
     return Plan(

@@ -184,6 +184,7 @@ def apply(p, pw, t, y):
         elif kind == L.GK_FRICTION:
             base = L.P_SHOE_BASE + shoe * L.SHOE_STRIDE
             pw[base + L.S_FRICTION_COEFFICIENT] = lining_friction(p[L.P_FRICTION_COEFFICIENT], s)
+            pw[L.P_COOL_FRICTION + shoe] = pw[base + L.S_FRICTION_COEFFICIENT]  # model/thermal.py
         elif kind == L.GK_PULSATION:
             pw[L.P_SHOE_BASE + shoe * L.SHOE_STRIDE + L.S_PULSATION_AMPLITUDE] = s / 100.0
         elif kind == L.GK_DRUM:

@@ -15,7 +15,7 @@ import math
 import numpy as np
 from numba import njit
 
-from brake_sim_ros.model import actuation, contact, cycle, growth, standstill, vehicle
+from brake_sim_ros.model import actuation, contact, cycle, growth, standstill, thermal, vehicle
 from brake_sim_ros.model import layout as L
 
 _pwl = actuation.pwl
@@ -108,6 +108,10 @@ def evaluate(y, p, fe_left, fe_right, stuck, mode_left, mode_right, dydt, out, r
     dydt[L.Y_ACTUATION_WORK] = sl[contact.E_ACTUATION_POWER] + sr[contact.E_ACTUATION_POWER]
     if y.shape[0] > L.Y_LEFT_WEAR:  # a lining wears with its friction work (layout.Y_*_WEAR)
         _wear_rates(p, sl[contact.E_FRICTION_POWER], sr[contact.E_FRICTION_POWER], dydt)
+    if y.shape[0] > L.Y_BRAKE_TEMPERATURE:  # the brake's thermal state (model/thermal.py)
+        dydt[L.Y_BRAKE_TEMPERATURE] = thermal.heating_rate(
+            p, dydt[L.Y_FRICTION_WORK], wd, y[L.Y_BRAKE_TEMPERATURE]
+        )
     drum_torque = sl[contact.E_DRUM_TORQUE] + sr[contact.E_DRUM_TORQUE]
     dydt[L.Y_DRIVE_WORK] = 0.0
     dydt[L.Y_ROAD_LOAD_WORK] = 0.0
@@ -185,6 +189,9 @@ def evaluate(y, p, fe_left, fe_right, stuck, mode_left, mode_right, dydt, out, r
     o[L.C_DRIVE_WORK] = y[L.Y_DRIVE_WORK]
     o[L.C_ROAD_LOAD_WORK] = y[L.Y_ROAD_LOAD_WORK]
     o[L.C_PHASE] = -1.0  # no cycle; fixed_step_advance writes a cycle's segment
+    o[L.C_BRAKE_TEMPERATURE] = (
+        y[L.Y_BRAKE_TEMPERATURE] if y.shape[0] > L.Y_BRAKE_TEMPERATURE else p[L.P_HELD_TEMPERATURE]
+    )
 
 
 @njit(cache=True)
@@ -557,7 +564,9 @@ def fixed_step_advance(
     growing = p[L.P_GROWTH_COUNT] > 0.0
     # a vehicle's controller writes the step's drive torque into the working copy
     cycling = p[L.P_CYCLE_COUNT] > 0.0
-    pw = growth.working_copy(p) if growing or cycling else p
+    # the brake's temperature sets the linings' friction (model/thermal.py)
+    heating = n > L.Y_BRAKE_TEMPERATURE
+    pw = growth.working_copy(p) if growing or cycling or heating else p
     ramp_t = np.zeros(2)
     ramp_f = np.zeros(2)
     if cycling:  # the cycle commands both shoes' brake force (model/cycle.py)
@@ -588,6 +597,8 @@ def fixed_step_advance(
             if located and moved:  # the contact modes of the step follow the geometry now
                 h_end[0], h_end[1] = _shoe_switch(pw, 0, y)
                 h_end[2], h_end[3] = _shoe_switch(pw, 1, y)
+        if heating:
+            thermal.fade_linings(p, pw, y[L.Y_BRAKE_TEMPERATURE])
         if cycling:
             cycle.control(pw, y, kstate, fstate, t, dt)
             ramp_t[0] = fstate[L.F_RAMP_T0]
@@ -693,7 +704,10 @@ def fixed_step_advance(
             )
             if fstate[L.F_WHEEL_LOCK_TIME] < 0.0:
                 fstate[L.F_WHEEL_LOCK_TIME] = t_stick
-            fstate[L.F_LOCK_LOSS] += standstill.stick(pw, y)
+            loss = standstill.stick(pw, y)
+            fstate[L.F_LOCK_LOSS] += loss
+            if heating:  # the kinetic energy the lock removes heats the brake
+                y[L.Y_BRAKE_TEMPERATURE] += loss / p[L.P_HEAT_CAPACITY]
             kstate[L.K_STUCK] = 1
             if fstate[L.F_STOP_TIME] < 0.0 and standstill.at_rest(pw, y):
                 fstate[L.F_STOP_TIME] = t_stick

@@ -165,7 +165,24 @@ SEGMENT_KINDS = ("accelerate", "cruise", "brake", "hold", "release", "drag", "en
 # 1.0: after the last segment the cycle starts again at its first (else it ends: SEG_END)
 P_CYCLE_REPEAT = P_CYCLE_BASE + MAX_CYCLE_SEGMENTS * CYCLE_STRIDE
 
-N_PARAMS = P_CYCLE_REPEAT + 1
+# the brake's temperature (model/thermal.py): P_THERMAL 1.0 when the run carries its thermal
+# state (Y_BRAKE_TEMPERATURE); the temperature a run without one is recorded at, deg C; the
+# fade law (thermal.fade_ratio's arguments); the linings' friction coefficients when cool,
+# left then right (a growing friction change updates them); the thermal state's heat
+# capacity J/K, its conductance to the air at rest W/K and per rad/s of the drum W s/K
+# (per m/s of the vehicle times the wheel radius), and the air's temperature, deg C
+P_THERMAL = P_CYCLE_REPEAT + 1
+P_HELD_TEMPERATURE = P_THERMAL + 1
+P_FADE_ONSET = P_THERMAL + 2
+P_FADE_FULL = P_THERMAL + 3
+P_FADE_FULL_RATIO = P_THERMAL + 4
+P_COOL_FRICTION = P_THERMAL + 5  # left; the right shoe's at + 1
+P_HEAT_CAPACITY = P_THERMAL + 7
+P_COOLING = P_THERMAL + 8
+P_COOLING_PER_SPEED = P_THERMAL + 9
+P_AMBIENT = P_THERMAL + 10
+
+N_PARAMS = P_AMBIENT + 1
 
 # --- state vector ---------------------------------------------------------------------
 Y_FLYWHEEL_ANGLE = 0
@@ -190,6 +207,10 @@ N_STATE = 14
 Y_LEFT_WEAR = 14
 Y_RIGHT_WEAR = 15
 N_STATE_WEAR = 16
+# the brake's temperature, deg C (model/thermal.py): only a run with a [thermal] table
+# carries it, after the two wear states (which stay 0 unless a lining wears with work)
+Y_BRAKE_TEMPERATURE = 16
+N_STATE_THERMAL = 17
 
 # --- recorded sample columns -------------------------------------------------------------
 COLUMNS: tuple[str, ...] = (
@@ -238,6 +259,7 @@ COLUMNS: tuple[str, ...] = (
     "drive_work_j",
     "road_load_work_j",
     "cycle_segment",  # the drive cycle's segment index (its kind: P_CYCLE_*); -1: no cycle
+    "brake_temperature_c",  # the thermal state's, or the temperature the run is held at
 )
 COL = {name: i for i, name in enumerate(COLUMNS)}
 N_COLUMNS = len(COLUMNS)
@@ -268,6 +290,7 @@ C_ROAD_LOAD_TORQUE = COL["road_load_torque_n_m"]
 C_DRIVE_WORK = COL["drive_work_j"]
 C_ROAD_LOAD_WORK = COL["road_load_work_j"]
 C_PHASE = COL["cycle_segment"]
+C_BRAKE_TEMPERATURE = COL["brake_temperature_c"]
 RIGHT_OF_SCALAR = 1  # right-shoe column = left-shoe column + 1 for scalar per-shoe pairs
 RIGHT_OF_VECTOR = 2  # right-shoe (x, y) columns = left-shoe ones + 2
 

@@ -272,6 +272,7 @@ def _record(o, t, y, p, fel, fer, stuck, cache, fstate):
         o[L.C_REGIME] = L.REGIME_FREE
     o[L.C_DRUM_STICKING] = 1.0 if stuck else 0.0
     o[L.C_PHASE] = -1.0  # no drive cycle at these levels (model/fidelity.py)
+    o[L.C_BRAKE_TEMPERATURE] = p[L.P_HELD_TEMPERATURE]  # no thermal state either
     o[COL_BRAKING_TORQUE] = -torque
 
 

@@ -12,6 +12,7 @@ from brake_sim_ros.model.assembly import ModelOptions
 from brake_sim_ros.model.cycle import Cycle
 from brake_sim_ros.model.defects import Defects
 from brake_sim_ros.model.parameters import BrakeParameters
+from brake_sim_ros.model.thermal import DEFAULT_TEMPERATURE_C, Thermal
 from brake_sim_ros.model.vehicle import Vehicle
 
 
@@ -22,7 +23,10 @@ class BrakeSetup:
     ``vehicle``: road load and grade on the flywheel (model/vehicle.py); None: the
     published model, no external torque. ``cycle``: a drive cycle (model/cycle.py) that
     commands the drive torque and the brake force instead of ``actuation``; it needs a
-    vehicle.
+    vehicle. ``thermal``: the brake's temperature as a state, heated by friction and acting
+    on it through the fade law (model/thermal.py); None: the brake is held at
+    ``held_temperature_c`` (deg C; the run's conditions set it, and with it the friction,
+    model/conditions.py), which is recorded.
     """
 
     params: BrakeParameters = field(default_factory=BrakeParameters)
@@ -31,11 +35,18 @@ class BrakeSetup:
     options: ModelOptions = field(default_factory=ModelOptions)
     vehicle: Vehicle | None = None
     cycle: Cycle | None = None
+    thermal: Thermal | None = None
+    held_temperature_c: float = DEFAULT_TEMPERATURE_C
 
     @property
     def driven(self) -> bool:
         """Whether a vehicle's road load (and a cycle's drive) act on the flywheel."""
         return self.vehicle is not None
+
+    @property
+    def start_temperature_c(self) -> float | None:
+        """The thermal state's temperature at the start, deg C (None: no thermal state)."""
+        return None if self.thermal is None else self.thermal.start_c
 
     @property
     def peak_force_n(self) -> float:

@@ -66,6 +66,8 @@ from brake_sim_ros.model.sensors import (
     SensorSet,
     default_sensor_set,
 )
+from brake_sim_ros.model.thermal import LIMITS as THERMAL_LIMITS
+from brake_sim_ros.model.thermal import Thermal
 from brake_sim_ros.model.trajectory import BrakeSetup
 from brake_sim_ros.model.units import (
     NOMINAL_UNIT,
@@ -651,6 +653,19 @@ def _vehicle(ctx: _Ctx, data: Any) -> Vehicle:
     return Vehicle(**values)
 
 
+def _thermal(ctx: _Ctx, data: Any) -> Thermal:
+    """``[thermal]``: the brake's temperature as a state (model/thermal.py), every key
+    optional (the defaults there)."""
+    data = ctx.table(data, "thermal", {name for name, _lo, _hi in THERMAL_LIMITS})
+    values = {}
+    for name, lo, hi in THERMAL_LIMITS:
+        if name in data:
+            values[name] = ctx.number(
+                data[name], f"thermal.{name}", lo, hi, lo_open=name == "heat_capacity_j_k"
+            )
+    return Thermal(**values)
+
+
 # per segment kind: the keys it takes (besides "kind"), and those it needs
 _SEGMENT_KEYS: dict[str, tuple[set[str], set[str]]] = {
     "accelerate": ({"kmh"}, {"kmh"}),
@@ -969,6 +984,7 @@ def _parse(data: dict[str, Any], text: str, source: str) -> Scenario:
             "conditions",
             "vehicle",
             "cycle",
+            "thermal",
         },
     )
     if "name" not in top:
@@ -993,13 +1009,18 @@ def _parse(data: dict[str, Any], text: str, source: str) -> Scenario:
         options=_options(ctx, top.get("model", {})),
         vehicle=vehicle,
         cycle=cycle,
+        thermal=_thermal(ctx, top["thermal"]) if "thermal" in top else None,
     )
     if cycle is not None:
         _check_cycle_setup(ctx, top, setup)
     needs = _needs(ctx, top["needs"], setup.options.shoes) if "needs" in top else None
     if needs is not None:  # the level must represent the scenario's defects and vehicle
         needs = dataclasses.replace(
-            needs, defects=defects.kinds, growing=defects.growing_kinds, driven=setup.driven
+            needs,
+            defects=defects.kinds,
+            growing=defects.growing_kinds,
+            driven=setup.driven,
+            thermal=setup.thermal is not None,
         )
     try:
         pack_drive(pack(setup.params, setup.defects, setup.options), setup)

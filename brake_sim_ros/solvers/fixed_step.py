@@ -42,6 +42,7 @@ from brake_sim_ros.model import layout as L
 from brake_sim_ros.model.actuation import MAX_ACTUATION_FORCE_N
 from brake_sim_ros.model.assembly import initial_state, pack
 from brake_sim_ros.model.cycle import pack_drive
+from brake_sim_ros.model.thermal import pack_thermal
 from brake_sim_ros.model.trajectory import BrakeSetup, SampleBlock
 from brake_sim_ros.solvers.stability import StepLimit, step_limit
 
@@ -208,7 +209,9 @@ class FixedStepStepper:
                 self.setup, self._base_force_n, packed=self._p, scheme=self.scheme
             )
         self.substeps = self._substeps_for(self.limit, "these parameters")
-        self._y = initial_state(self.setup.params, self.setup.defects)
+        self._y = initial_state(
+            self.setup.params, self.setup.defects, self.setup.start_temperature_c
+        )
         self._histories: list[CommandHistory | None] = [None, None]
         self._live_n: tuple[float, float] | None = None  # the live forces in force, N
         self._sample = 0
@@ -290,7 +293,7 @@ class FixedStepStepper:
     def set_state(self, y: np.ndarray) -> None:
         """Replace the state vector (layout.Y_*), e.g. to start from a twisted coupling."""
         y = np.asarray(y, dtype=float)
-        size = self._y.shape[0]  # N_STATE, or N_STATE_WEAR with a lining wearing with work
+        size = self._y.shape[0]  # N_STATE, N_STATE_WEAR (wear with work), N_STATE_THERMAL
         if y.shape != (size,) or not np.all(np.isfinite(y)):
             raise ParameterError(f"state of shape {y.shape}: allowed {size} finite values")
         self._y = y.copy()
@@ -344,6 +347,14 @@ class FixedStepStepper:
         if setup.defects.wearing_with_work and self._y.shape[0] < L.N_STATE_WEAR:
             # a lining starts wearing with its friction work: its wear state starts at 0
             self._y = np.concatenate([self._y, np.zeros(L.N_STATE_WEAR - self._y.shape[0])])
+        start = setup.start_temperature_c
+        if start is None:  # the brake no longer carries a thermal state
+            self._y = self._y[: min(self._y.shape[0], L.N_STATE_THERMAL - 1)].copy()
+        elif self._y.shape[0] < L.N_STATE_THERMAL:  # it starts to, at its start temperature
+            grown = np.zeros(L.N_STATE_THERMAL)
+            grown[: self._y.shape[0]] = self._y
+            grown[L.Y_BRAKE_TEMPERATURE] = start
+            self._y = grown
 
     def _raise_limit_force(self, force_n: float) -> None:
         """Recompute the step limit for a larger actuation force and re-pick the substeps."""
@@ -498,9 +509,11 @@ def _peak_n(setup: BrakeSetup) -> float:
 
 
 def _packed(setup: BrakeSetup) -> np.ndarray:
-    """The kernels' parameter vector of ``setup``: the brake, and its vehicle and cycle."""
+    """The kernels' parameter vector of ``setup``: the brake, its vehicle and cycle, and its
+    temperature."""
     p = pack(setup.params, setup.defects, setup.options)
     pack_drive(p, setup)
+    pack_thermal(p, setup)
     return p
 
 

@@ -23,6 +23,7 @@ from brake_sim_ros.model import kernel, standstill
 from brake_sim_ros.model import layout as L
 from brake_sim_ros.model.assembly import indentation_at, initial_state, pack
 from brake_sim_ros.model.layout import SIDES
+from brake_sim_ros.model.thermal import pack_thermal
 from brake_sim_ros.model.trajectory import BrakeSetup, SampleBlock
 
 SHOE_BASES = (L.P_SHOE_BASE, L.P_SHOE_BASE + L.SHOE_STRIDE)
@@ -92,6 +93,11 @@ def run_reference(
             " with [vehicle] or [cycle] is allowed with a fixed-step method (rk4-located,"
             " rk4, semi-implicit-euler)"
         )
+    if setup.thermal is not None:
+        raise ParameterError(
+            "the reference solver has no thermal state: a scenario with [thermal] is allowed"
+            " with a fixed-step method (rk4-located, rk4, semi-implicit-euler)"
+        )
     if not setup.defects.is_static:
         raise ParameterError(
             f"the reference solver holds the defects fixed: the defect"
@@ -113,6 +119,7 @@ def run_reference(
             " method (rk4-located, rk4, semi-implicit-euler)"
         )
     p = pack(setup.params, setup.defects, setup.options)
+    pack_thermal(p, setup)  # the temperature the run is held at, recorded
     y = initial_state(setup.params, setup.defects)
     tl, fl, tr, fr = setup.actuation.as_arrays()
     gains = (p[SHOE_BASES[0] + L.S_ACTUATION_GAIN], p[SHOE_BASES[1] + L.S_ACTUATION_GAIN])

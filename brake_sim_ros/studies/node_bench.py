@@ -37,6 +37,7 @@ import argparse
 import contextlib
 import math
 import os
+import signal
 import statistics
 import sys
 import tempfile
@@ -337,6 +338,9 @@ def main(argv: list[str] | None = None) -> int:
         help="with --long-run: wall seconds between reports (default 60)",
     )
     args = parser.parse_args(argv)
+    # a benchmark stopped by SIGTERM (kill, a timeout) unwinds like Ctrl-C, so the node it
+    # started (a continuous one runs without end) is stopped too
+    signal.signal(signal.SIGTERM, lambda _signum, _frame: sys.exit(143))
     if not 0.0 <= args.long_run <= 86_400.0:
         parser.error(f"--long-run {args.long_run:g}: allowed > 0 to 86400 s")
     if not 1.0 <= args.report_every <= 3600.0:
