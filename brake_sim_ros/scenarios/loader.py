@@ -636,34 +636,35 @@ def _defects(ctx: _Ctx, data: Any) -> Defects:
         raise ScenarioError(f"{ctx.source}: [defects]: {exc}") from exc
 
 
+def _number_table(
+    ctx: _Ctx,
+    data: Any,
+    table: str,
+    limits: tuple[tuple[str, float, float], ...],
+    open_low: set[str],
+) -> dict[str, float]:
+    """A table of optional numbers, each within its (name, low, high) limits (``open_low``:
+    the names whose low limit is excluded); only the keys given."""
+    data = ctx.table(data, table, {name for name, _lo, _hi in limits})
+    return {
+        name: ctx.number(data[name], f"{table}.{name}", lo, hi, lo_open=name in open_low)
+        for name, lo, hi in limits
+        if name in data
+    }
+
+
 def _vehicle(ctx: _Ctx, data: Any) -> Vehicle:
     """``[vehicle]``: road load and grade on the flywheel (model/vehicle.py), every key
     optional (the defaults there)."""
-    data = ctx.table(data, "vehicle", {name for name, _lo, _hi in VEHICLE_LIMITS})
-    values = {}
-    for name, lo, hi in VEHICLE_LIMITS:
-        if name in data:
-            values[name] = ctx.number(
-                data[name],
-                f"vehicle.{name}",
-                lo,
-                hi,
-                lo_open=name in ("wheel_radius_m", "mass_share"),
-            )
-    return Vehicle(**values)
+    return Vehicle(
+        **_number_table(ctx, data, "vehicle", VEHICLE_LIMITS, {"wheel_radius_m", "mass_share"})
+    )
 
 
 def _thermal(ctx: _Ctx, data: Any) -> Thermal:
     """``[thermal]``: the brake's temperature as a state (model/thermal.py), every key
     optional (the defaults there)."""
-    data = ctx.table(data, "thermal", {name for name, _lo, _hi in THERMAL_LIMITS})
-    values = {}
-    for name, lo, hi in THERMAL_LIMITS:
-        if name in data:
-            values[name] = ctx.number(
-                data[name], f"thermal.{name}", lo, hi, lo_open=name == "heat_capacity_j_k"
-            )
-    return Thermal(**values)
+    return Thermal(**_number_table(ctx, data, "thermal", THERMAL_LIMITS, {"heat_capacity_j_k"}))
 
 
 # per segment kind: the keys it takes (besides "kind"), and those it needs
