@@ -165,7 +165,13 @@ SEGMENT_KINDS = ("accelerate", "cruise", "brake", "hold", "release", "drag", "en
 # 1.0: after the last segment the cycle starts again at its first (else it ends: SEG_END)
 P_CYCLE_REPEAT = P_CYCLE_BASE + MAX_CYCLE_SEGMENTS * CYCLE_STRIDE
 
-N_PARAMS = P_CYCLE_REPEAT + 1
+# a live drive command of a run with a vehicle and no cycle (model/cycle.py LiveDrive):
+# 1.0 while the speed controller drives toward P_LIVE_TARGET_SPEED (flywheel rad/s; its
+# limits P_CYCLE_MAX_DRIVE_TORQUE and P_CYCLE_TIME_CONSTANT); else P_DRIVE_TORQUE holds
+P_LIVE_SPEED_CONTROL = P_CYCLE_REPEAT + 1
+P_LIVE_TARGET_SPEED = P_CYCLE_REPEAT + 2
+
+N_PARAMS = P_LIVE_TARGET_SPEED + 1
 
 # --- state vector ---------------------------------------------------------------------
 Y_FLYWHEEL_ANGLE = 0
