@@ -6,7 +6,8 @@ The drum speed follows (reaches the target within the speed controller's toleran
 stops under the brake), and every published sample equals the offline stepper's given
 the same commands at the same samples, bit for bit. Hostile drive commands, and drive
 commands to runs that take none (a drive cycle, no vehicle), are rejected, counted and
-named in /diagnostics, and the node runs on.
+named in /diagnostics, and the node runs on. A recording holds the accepted commands at
+the samples they took effect.
 """
 
 from __future__ import annotations
@@ -26,11 +27,14 @@ rclpy = pytest.importorskip("rclpy", reason="rclpy not installed (run scripts/se
 from brake_sim_msgs.msg import DriveCommand  # noqa: E402
 from rclpy.qos import QoSProfile, ReliabilityPolicy  # noqa: E402
 
+from brake_sim_ros import stream  # noqa: E402
 from brake_sim_ros.model.cycle import SPEED_TOLERANCE, LiveDrive  # noqa: E402
 from brake_sim_ros.model.layout import COL  # noqa: E402
 from brake_sim_ros.ros.harness import NodeProcess, SimClient, domain_id_for  # noqa: E402
 from brake_sim_ros.scenarios import load_scenario  # noqa: E402
+from brake_sim_ros.stream import conversion  # noqa: E402
 from brake_sim_ros.stream.build import stepper_for  # noqa: E402
+from tests.bag_helpers import rosbags_timed  # noqa: E402
 
 DOMAIN = domain_id_for(41)
 RATE = 2560  # samples per second of the rig
@@ -193,3 +197,37 @@ def test_runs_that_take_no_drive_reject_it(rig, scenario, says):
         assert client.step(steps=64).success
     finally:
         assert client.reset(scenario=str(path)).success
+
+
+def test_accepted_drive_commands_are_recorded_at_their_sample(tmp_path):
+    """A node recording (--record) holds each accepted drive command, stamped with the
+    sample it took effect at, as rosbags reads it back; a rejected one is not there."""
+    scenario_path = tmp_path / "rig.toml"
+    scenario_path.write_text(RIG)
+    bag = tmp_path / "run.mcap"
+    domain = domain_id_for(42)
+    node = NodeProcess.start(
+        ["--scenario", str(scenario_path), "--record", str(bag), "--ros-args",
+         "-p", "paused:=true", "-p", "diagnostics_period_s:=0.1"],
+        domain_id=domain,
+        log_path=tmp_path / "node.log",
+    )  # fmt: skip
+    client = SimClient(domain)
+    try:
+        client.wait_for_node(60.0)
+        client.drive(DriveCommand.MODE_TARGET_SPEED, speed_m_s=5.0)
+        _counted(client, "drive_commands_accepted", 1)
+        assert client.step(steps=256).success
+        client.drive(DriveCommand.MODE_TORQUE, torque_n_m=math.nan)
+        _counted(client, "drive_commands_rejected", 1)
+        client.drive(DriveCommand.MODE_TORQUE, torque_n_m=30.0)
+        _counted(client, "drive_commands_accepted", 2)
+    finally:
+        client.close()
+        assert node.stop() == 0, node.output()
+    recorded = rosbags_timed(bag)[stream.DRIVE.name]
+    period = 1.0 / RATE
+    assert [(ns, m.mode, m.drive_torque_n_m, m.target_speed_m_s) for ns, m in recorded] == [
+        (0, DriveCommand.MODE_TARGET_SPEED, 0.0, 5.0),
+        (conversion.stamp_ns(256, period), DriveCommand.MODE_TORQUE, 30.0, 0.0),
+    ]
