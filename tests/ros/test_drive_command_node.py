@@ -35,19 +35,9 @@ from brake_sim_ros.scenarios import load_scenario  # noqa: E402
 from brake_sim_ros.stream import conversion  # noqa: E402
 from brake_sim_ros.stream.build import stepper_for  # noqa: E402
 from tests.bag_helpers import rosbags_timed  # noqa: E402
+from tests.test_drive_command import RATE, RIG  # noqa: E402  (the rig and its sample rate)
 
 DOMAIN = domain_id_for(41)
-RATE = 2560  # samples per second of the rig
-RIG = """
-name = "rig"
-duration_s = 60.0
-sample_rate_hz = 2560.0
-[parameters.driveline]
-initial_speed_rad_s = 0.0
-[vehicle]
-[actuation]
-peak_force_n = 0.0
-"""
 BRAKE_N = 1500.0
 LOSSLESS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
 
