@@ -28,7 +28,7 @@ from brake_sim_msgs.msg import DriveCommand  # noqa: E402
 from rclpy.qos import QoSProfile, ReliabilityPolicy  # noqa: E402
 
 from brake_sim_ros import stream  # noqa: E402
-from brake_sim_ros.model.cycle import SPEED_TOLERANCE, LiveDrive  # noqa: E402
+from brake_sim_ros.model.cycle import DRIVE_MODES, SPEED_TOLERANCE, LiveDrive  # noqa: E402
 from brake_sim_ros.model.layout import COL  # noqa: E402
 from brake_sim_ros.ros.harness import NodeProcess, SimClient, domain_id_for  # noqa: E402
 from brake_sim_ros.scenarios import load_scenario  # noqa: E402
@@ -221,3 +221,9 @@ def test_accepted_drive_commands_are_recorded_at_their_sample(tmp_path):
         (0, DriveCommand.MODE_TARGET_SPEED, 0.0, 5.0),
         (conversion.stamp_ns(256, period), DriveCommand.MODE_TORQUE, 30.0, 0.0),
     ]
+
+
+def test_the_message_modes_are_the_cores_in_order():
+    """DriveCommand's MODE_* numbers index the core's modes (ros.commands.drive_command)."""
+    numbers = [getattr(DriveCommand, f"MODE_{mode.upper()}") for mode in DRIVE_MODES]
+    assert numbers == list(range(len(DRIVE_MODES)))
