@@ -30,6 +30,15 @@ constant ``tau = speed_time_constant_s``, the road load fed forward) and gets it
 error into brake force with a PI law tuned on the nominal brake's torque per newton
 (:data:`NOMINAL_BRAKE_GAIN_N_M_PER_N`, a tuning figure, not a model parameter).
 
+Live drive (:class:`LiveDrive`, the node's ``~/drive``): a run with a vehicle and no
+cycle takes drive commands that hold until the next one: coast (no drive torque), a
+constant drive torque, or a target speed held by the same speed controller as an
+accelerate or cruise segment (:func:`speed_control_torque`), with the default settings
+of a cycle's controller (:data:`DEFAULT_MAX_DRIVE_TORQUE_N_M`,
+:data:`DEFAULT_SPEED_TIME_CONSTANT_S`: a run without a cycle has no table to set them).
+A run with a cycle takes none: its cycle drives. The brake stays the actuation
+history's (live actuation commands), so a rig drives stops with both.
+
 Determinism: the controller runs inside the compiled stepping
 (:func:`brake_sim_ros.model.kernel.fixed_step_advance`) at the start of every physics
 step, from the state at that instant, and holds its drive torque over the step (a
@@ -62,6 +71,14 @@ SPEED_TOLERANCE = 0.01  # an acceleration ends within 1 % of its target speed
 NOMINAL_BRAKE_GAIN_N_M_PER_N = 0.21
 MAX_SPEED_KMH = 250.0
 MAX_DURATION_S = 86_400.0
+MAX_SPEED_M_S = MAX_SPEED_KMH / KMH_PER_M_S
+# The speed controller's settings of a [cycle] by default, and of a live drive: this
+# brake's share of the traction (120 N m gives the nominal 17.1 kg m^2 about 1.8 m/s^2)
+# and the time constant of its approach to a target speed.
+DEFAULT_MAX_DRIVE_TORQUE_N_M = 120.0
+DEFAULT_SPEED_TIME_CONSTANT_S = 1.0
+# A live drive command's modes, in the order of DriveCommand's MODE_* (msg_defs/)
+DRIVE_MODES = ("coast", "torque", "target_speed")
 
 
 @dataclass(frozen=True)
@@ -107,8 +124,8 @@ class Cycle:
     """
 
     segments: tuple[Segment, ...]
-    max_drive_torque_n_m: float = 120.0
-    speed_time_constant_s: float = 1.0
+    max_drive_torque_n_m: float = DEFAULT_MAX_DRIVE_TORQUE_N_M
+    speed_time_constant_s: float = DEFAULT_SPEED_TIME_CONSTANT_S
     brake_rise_s: float = 0.2
     max_force_n: float = 3000.0
     repeat: bool = False
@@ -155,6 +172,62 @@ class Cycle:
         return names[np.asarray(segment, dtype=np.int64) + 1]
 
 
+@dataclass(frozen=True)
+class LiveDrive:
+    """A live drive command (see the module doc), held from the sample it reaches the
+    stepper until the next one.
+
+    Attributes:
+        mode: one of :data:`DRIVE_MODES`: ``coast`` (no drive torque), ``torque``
+            (``drive_torque_n_m``, constant) or ``target_speed`` (the speed controller
+            toward ``target_speed_m_s``).
+        drive_torque_n_m: drive torque on the flywheel, N m, forward; 0 to
+            :data:`DEFAULT_MAX_DRIVE_TORQUE_N_M` (the drive never brakes). Mode torque only.
+        target_speed_m_s: vehicle speed (flywheel speed x rolling radius), m/s, forward;
+            0 to :data:`MAX_SPEED_M_S`. Mode target_speed only.
+
+    Raises:
+        ParameterError: an unknown mode, or a non-finite or out-of-range value of the
+            field the mode uses (the other is not read).
+    """
+
+    mode: str = "coast"
+    drive_torque_n_m: float = 0.0
+    target_speed_m_s: float = 0.0
+
+    def __post_init__(self) -> None:
+        if self.mode not in DRIVE_MODES:
+            raise ParameterError(f"drive mode {self.mode!r}: allowed one of {list(DRIVE_MODES)}")
+        if self.mode == "torque":
+            name, value, hi, unit = (
+                "drive_torque_n_m",
+                self.drive_torque_n_m,
+                DEFAULT_MAX_DRIVE_TORQUE_N_M,
+                "N m (the drive never brakes)",
+            )
+        elif self.mode == "target_speed":
+            name, value, hi, unit = "target_speed_m_s", self.target_speed_m_s, MAX_SPEED_M_S, "m/s"
+        else:
+            return
+        if not (isinstance(value, float | int) and math.isfinite(value) and 0.0 <= value <= hi):
+            raise ParameterError(
+                f"{name}={value!r}: allowed a finite value from 0 to {hi:.4g} {unit}"
+            )
+
+
+def pack_live_drive(p: np.ndarray, drive: LiveDrive) -> None:
+    """Write ``drive`` into the packed vector ``p`` of a run with a vehicle and no cycle
+    (P_DRIVE_TORQUE, P_LIVE_*; the speed controller's limits in P_CYCLE_MAX_DRIVE_TORQUE
+    and P_CYCLE_TIME_CONSTANT), its target speed as a flywheel speed for the wheel radius
+    packed (:func:`vehicle.pack_vehicle`)."""
+    speed = drive.mode == "target_speed"
+    p[L.P_CYCLE_MAX_DRIVE_TORQUE] = DEFAULT_MAX_DRIVE_TORQUE_N_M
+    p[L.P_CYCLE_TIME_CONSTANT] = DEFAULT_SPEED_TIME_CONSTANT_S
+    p[L.P_LIVE_SPEED_CONTROL] = 1.0 if speed else 0.0
+    p[L.P_LIVE_TARGET_SPEED] = drive.target_speed_m_s / p[L.P_WHEEL_RADIUS] if speed else 0.0
+    p[L.P_DRIVE_TORQUE] = drive.drive_torque_n_m if drive.mode == "torque" else 0.0
+
+
 def resolved(segments: Sequence[Segment]) -> tuple[Segment, ...]:
     """``segments`` with the defaults a segment takes from those before it: a cruise's or
     drag's speed (0: the last target), a hold's force (0: the last brake's)."""
@@ -191,6 +264,25 @@ def pack_cycle(p: np.ndarray, cycle: Cycle) -> None:
         p[b + L.Q_SPEED] = s.speed_kmh / KMH_PER_M_S / radius
         p[b + L.Q_FORCE] = s.force_n
         p[b + L.Q_DURATION] = s.duration_s
+
+
+@njit(cache=True, inline="always")
+def speed_control_torque(p, flywheel_speed, target):
+    """The speed controller's drive torque (accelerate, cruise, a live target speed), N m:
+    ``I_f (target - w_f) / tau + T_road(w_f)`` clamped to ``[0, max drive torque]``
+    (module doc), for the flywheel speed and target in rad/s; the rule, written once."""
+    ask = p[L.P_FLYWHEEL_INERTIA] * (target - flywheel_speed) / p[
+        L.P_CYCLE_TIME_CONSTANT
+    ] + vehicle.road_load_torque(p, flywheel_speed)
+    return min(max(ask, 0.0), p[L.P_CYCLE_MAX_DRIVE_TORQUE])
+
+
+@njit(cache=True)
+def live_control(p, y):
+    """A live target speed's drive torque at the start of a physics step, from the state
+    ``y`` then, into ``p`` (the kernel's working copy, P_DRIVE_TORQUE; held over the step
+    as a cycle's)."""
+    p[L.P_DRIVE_TORQUE] = speed_control_torque(p, y[L.Y_FLYWHEEL_SPEED], p[L.P_LIVE_TARGET_SPEED])
 
 
 @njit(cache=True)
@@ -262,8 +354,7 @@ def control(p, y, kstate, fstate, t, dt):
         target = p[b + L.Q_SPEED]
         tau = p[L.P_CYCLE_TIME_CONSTANT]
         if kind == L.SEG_ACCELERATE or kind == L.SEG_CRUISE:
-            ask = p[L.P_FLYWHEEL_INERTIA] * (target - w) / tau + vehicle.road_load_torque(p, w)
-            drive = min(max(ask, 0.0), p[L.P_CYCLE_MAX_DRIVE_TORQUE])
+            drive = speed_control_torque(p, w, target)
         elif kind == L.SEG_DRAG:
             # PI on the overspeed: proportional gain for a first-order approach with the
             # nominal brake gain, integral time 4 tau (N per rad/s, N per rad)

@@ -546,6 +546,8 @@ def fixed_step_advance(
     A drive cycle (``p``'s P_CYCLE_COUNT > 0, :mod:`.cycle`) replaces the actuation knots
     by its brake force ramp and sets the drive torque: its controller runs at the start of
     every step, from the state then, in the working copy (its state in kstate/fstate).
+    Without a cycle, a live target speed (P_LIVE_SPEED_CONTROL) sets the drive torque so,
+    by the same speed controller (:func:`.cycle.live_control`).
 
     Returns the number of rows written. Stops early (status in kstate) on a non-finite state.
     """
@@ -564,9 +566,10 @@ def fixed_step_advance(
     growing = p[L.P_GROWTH_COUNT] > 0.0
     # a vehicle's controller writes the step's drive torque into the working copy
     cycling = p[L.P_CYCLE_COUNT] > 0.0
+    speed_held = p[L.P_LIVE_SPEED_CONTROL] > 0.0  # a live target speed (cycle.LiveDrive)
     # the brake's temperature sets the linings' friction (model/thermal.py)
     heating = n > L.Y_BRAKE_TEMPERATURE
-    pw = growth.working_copy(p) if growing or cycling or heating else p
+    pw = growth.working_copy(p) if growing or cycling or speed_held or heating else p
     ramp_t = np.zeros(2)
     ramp_f = np.zeros(2)
     if cycling:  # the cycle commands both shoes' brake force (model/cycle.py)
@@ -605,6 +608,8 @@ def fixed_step_advance(
             ramp_t[1] = fstate[L.F_RAMP_T1]
             ramp_f[0] = fstate[L.F_RAMP_F0]
             ramp_f[1] = fstate[L.F_RAMP_F1]
+        elif speed_held:
+            cycle.live_control(pw, y)
         stuck = kstate[L.K_STUCK]
         fel = _force(pw, L.P_SHOE_BASE, t, tl, fl, gl)
         fer = _force(pw, L.P_SHOE_BASE + L.SHOE_STRIDE, t, tr, fr, gr)

@@ -165,13 +165,20 @@ SEGMENT_KINDS = ("accelerate", "cruise", "brake", "hold", "release", "drag", "en
 # 1.0: after the last segment the cycle starts again at its first (else it ends: SEG_END)
 P_CYCLE_REPEAT = P_CYCLE_BASE + MAX_CYCLE_SEGMENTS * CYCLE_STRIDE
 
+# a live drive command of a run with a vehicle and no cycle (model/cycle.py LiveDrive):
+# 1.0 while the speed controller drives toward P_LIVE_TARGET_SPEED (flywheel rad/s; its
+# limits P_CYCLE_MAX_DRIVE_TORQUE and P_CYCLE_TIME_CONSTANT); else P_DRIVE_TORQUE holds
+P_LIVE_SPEED_CONTROL = P_CYCLE_REPEAT + 1
+P_LIVE_TARGET_SPEED = P_CYCLE_REPEAT + 2
+
+
 # the brake's temperature (model/thermal.py): P_THERMAL 1.0 when the run carries its thermal
 # state (Y_BRAKE_TEMPERATURE); the temperature a run without one is recorded at, deg C; the
 # fade law (thermal.fade_ratio's arguments); the linings' friction coefficients when cool,
 # left then right (a growing friction change updates them); the thermal state's heat
 # capacity J/K, its conductance to the air at rest W/K and per rad/s of the drum W s/K
 # (per m/s of the vehicle times the wheel radius), and the air's temperature, deg C
-P_THERMAL = P_CYCLE_REPEAT + 1
+P_THERMAL = P_LIVE_TARGET_SPEED + 1
 P_HELD_TEMPERATURE = P_THERMAL + 1
 P_FADE_ONSET = P_THERMAL + 2
 P_FADE_FULL = P_THERMAL + 3

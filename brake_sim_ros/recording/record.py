@@ -125,7 +125,7 @@ def record_offline(
             measured_rate_hz=settings.measured_rate_hz,
         ),
     }
-    live_only = (stream.DIAGNOSTICS, stream.ACTUATION)
+    live_only = (stream.DIAGNOSTICS, stream.ACTUATION, stream.DRIVE)
     off = () if settings.publish_measured else (stream.MEASURED,)
     topics = [t for t in stream.TOPICS if t not in live_only + off]
     cpu0, wall0 = time.process_time(), time.perf_counter()

@@ -30,6 +30,11 @@ Semantics (the node's ``~/actuation`` subscription):
 
 * An invalid command (NaN, +-inf, negative, above the maximum) is rejected as a whole:
   it changes nothing, not even the timeout window.
+
+Drive commands (``~/drive``, :func:`drive_command`) have no timeout: a valid one holds
+from the next sample until the next one or a reset (which returns to coasting); the
+stepper runs it (:class:`brake_sim_ros.model.cycle.LiveDrive`). An invalid one (unknown
+mode, a non-finite or out-of-range value of the field its mode uses) changes nothing.
 """
 
 from __future__ import annotations
@@ -37,6 +42,9 @@ from __future__ import annotations
 import enum
 import math
 from dataclasses import dataclass
+
+from brake_sim_ros.errors import ParameterError
+from brake_sim_ros.model.cycle import DRIVE_MODES, LiveDrive
 
 Forces = tuple[float, float]
 """(left, right) actuation forces, N."""
@@ -69,6 +77,32 @@ def check_command(left_n: float, right_n: float, max_force_n: float) -> str | No
         if value > max_force_n:
             return f"{side}_force_n={value:g} N exceeds max_actuation_force_n = {max_force_n:g} N"
     return None
+
+
+def drive_command(
+    mode: int, drive_torque_n_m: float, target_speed_m_s: float
+) -> tuple[LiveDrive | None, str | None]:
+    """A DriveCommand's fields as the core's command, or None and why it must be rejected.
+
+    ``mode`` is the message's MODE_* number, the index of :data:`DRIVE_MODES`.
+    """
+    if not 0 <= mode < len(DRIVE_MODES):
+        allowed = ", ".join(f"{i} ({name.upper()})" for i, name in enumerate(DRIVE_MODES))
+        return None, f"mode={mode!r} is unknown: allowed {allowed}"
+    try:
+        return LiveDrive(DRIVE_MODES[mode], float(drive_torque_n_m), float(target_speed_m_s)), None
+    except ParameterError as exc:
+        return None, str(exc)
+
+
+def describe_drive(drive: LiveDrive) -> str:
+    """The drive in force in a few words: ``coast``, ``torque 60 N m``, ``target_speed 5
+    m/s``."""
+    if drive.mode == "torque":
+        return f"torque {drive.drive_torque_n_m:g} N m"
+    if drive.mode == "target_speed":
+        return f"target_speed {drive.target_speed_m_s:g} m/s"
+    return drive.mode
 
 
 @dataclass(frozen=True)

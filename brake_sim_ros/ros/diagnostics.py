@@ -13,6 +13,9 @@ Counters (cumulative since the node started; a reset does not clear them):
     slips / slipped_s: times the node fell more than ``max_lag_s`` behind and dropped the
         backlog, and the simulated time skipped that way (pacing re-anchored; the sample
         stream itself has no gap).
+    drive_commands_accepted / drive_commands_rejected / drive_commands_dropped: the same
+        for ~/drive commands (rejected: an unknown mode, a bad value, or a run that takes
+        none: one with a drive cycle or without a vehicle).
     commands_accepted: valid commands. commands_rejected: invalid ones (NaN, inf,
         negative, above max_actuation_force_n). commands_dropped: accepted commands that
         never reached the physics (replaced by a newer one before the next sample, arrived
@@ -60,6 +63,10 @@ class RunStats:
     parameter_changes_accepted: int = 0
     parameter_changes_refused: int = 0
     last_command_rejection: str = ""
+    drive_commands_accepted: int = 0
+    drive_commands_rejected: int = 0
+    drive_commands_dropped: int = 0
+    last_drive_rejection: str = ""
     last_parameter_refusal: str = ""
     sink_failures: int = 0  # recorders/viewers that failed and were dropped
     publish_failures: int = 0  # messages not published: the publisher raised
@@ -96,6 +103,8 @@ class RunView:
     max_actuation_force_n: float
     seed: int
     run_id: str  # of the run in progress (changes at each ~/reset unless fixed)
+    # the live drive in force (commands.describe_drive); "none": a run that takes none
+    drive: str = "none"
 
 
 def _level(view: RunView, stats: RunStats, new_misses: int) -> tuple[bytes, str]:
@@ -143,6 +152,11 @@ def diagnostic_array(
         "commands_rejected": str(stats.commands_rejected),
         "commands_dropped": str(stats.commands_dropped),
         "last_command_rejection": stats.last_command_rejection,
+        "drive_commands_accepted": str(stats.drive_commands_accepted),
+        "drive_commands_rejected": str(stats.drive_commands_rejected),
+        "drive_commands_dropped": str(stats.drive_commands_dropped),
+        "last_drive_rejection": stats.last_drive_rejection,
+        "drive": view.drive,
         "parameter_changes_accepted": str(stats.parameter_changes_accepted),
         "parameter_changes_refused": str(stats.parameter_changes_refused),
         "last_parameter_refusal": stats.last_parameter_refusal,

@@ -25,6 +25,7 @@ from brake_sim_msgs.msg import (
     BrakeState,
     ContactEvent,
     DefectState,
+    DriveCommand,
     MeasuredChunk,
     PivotForceChunk,
 )
@@ -191,6 +192,9 @@ class SimClient:
         self.actuation = n.create_publisher(
             ActuationCommand, f"{node}/actuation", qos.profile(STREAM_QOS)
         )
+        self.drive_commands = n.create_publisher(
+            DriveCommand, f"{node}/drive", qos.profile(STREAM_QOS)
+        )
         self._step = n.create_client(StepSimulation, f"{node}/step")
         self._reset = n.create_client(ResetSimulation, f"{node}/reset")
         self._set = n.create_client(SetParameters, f"{node}/set_parameters")
@@ -286,6 +290,17 @@ class SimClient:
     def command(self, left_n: float, right_n: float) -> None:
         self.actuation.publish(
             ActuationCommand(left_force_n=float(left_n), right_force_n=float(right_n))
+        )
+
+    def drive(self, mode: int, *, torque_n_m: float = 0.0, speed_m_s: float = 0.0) -> None:
+        """Publish a DriveCommand: ``mode`` one of DriveCommand.MODE_* (any number: the
+        node checks it)."""
+        self.drive_commands.publish(
+            DriveCommand(
+                mode=int(mode),
+                drive_torque_n_m=float(torque_n_m),
+                target_speed_m_s=float(speed_m_s),
+            )
         )
 
     def _call(self, client, request, timeout_s: float):

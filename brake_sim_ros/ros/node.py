@@ -19,6 +19,11 @@ Topics (node name ``brake_sim``; ``~`` = ``/brake_sim``; QoS in :mod:`.qos`):
     /clock           rosgraph_msgs/Clock              simulated time (publish_clock)
     /diagnostics     diagnostic_msgs/DiagnosticArray  every diagnostics_period_s (wall)
     ~/actuation      brake_sim_msgs/ActuationCommand  (subscribed) overrides the profile
+    ~/drive          brake_sim_msgs/DriveCommand      (subscribed) drives the vehicle: coast,
+                                                      a torque or a target speed, held until
+                                                      the next (a scenario with a [vehicle]
+                                                      and no [cycle]; coasting at start and
+                                                      after a reset)
 Services:
     ~/step   brake_sim_msgs/StepSimulation   advance N samples or a duration while paused
     ~/reset  brake_sim_msgs/ResetSimulation  back to t = 0, optionally a new scenario/seed
@@ -47,6 +52,7 @@ from collections.abc import Callable, Iterable
 
 from brake_sim_msgs.msg import (
     ActuationCommand,
+    DriveCommand,
 )
 from brake_sim_msgs.srv import ResetSimulation, StepSimulation
 from rcl_interfaces.msg import SetParametersResult
@@ -69,6 +75,8 @@ from brake_sim_ros.ros.commands import (
     CommandPolicy,
     TimeoutBehaviour,
     check_command,
+    describe_drive,
+    drive_command,
 )
 from brake_sim_ros.ros.descriptors import descriptor
 from brake_sim_ros.ros.diagnostics import RunStats, RunView, diagnostic_array, summary
@@ -224,6 +232,10 @@ class BrakeSimNode(Node):
             qos.for_topic(stream.ACTUATION),
         )
         self._actuation_topic = dataclasses.replace(stream.ACTUATION, name=sub.topic_name)
+        sub = self.create_subscription(
+            DriveCommand, stream.DRIVE.relative, self._on_drive, qos.for_topic(stream.DRIVE)
+        )
+        self._drive_topic = dataclasses.replace(stream.DRIVE, name=sub.topic_name)
         self.create_service(StepSimulation, "~/step", self._on_step)
         self.create_service(ResetSimulation, "~/reset", self._on_reset)
         self._tick_timer = self.create_timer(
@@ -679,6 +691,31 @@ class BrakeSimNode(Node):
         if self._planner.command(forces, self._stepper.sample_index):
             self.stats.commands_dropped += 1
 
+    def _on_drive(self, msg: DriveCommand) -> None:
+        """A drive command: from the next sample on, until the next one or a reset."""
+        drive, reason = drive_command(msg.mode, msg.drive_torque_n_m, msg.target_speed_m_s)
+        if reason is None:
+            refusal = self._stepper.drive_refusal()
+            if refusal is not None:
+                reason = f"scenario '{self.scenario.name}': {refusal}"
+        if reason is not None:
+            self.stats.drive_commands_rejected += 1
+            self.stats.last_drive_rejection = reason
+            self.get_logger().warning(
+                f"drive command rejected: {reason}", throttle_duration_sec=1.0
+            )
+            return
+        self.stats.drive_commands_accepted += 1
+        self._to_sinks(
+            self._drive_topic,
+            msg,
+            conversion.stamp_ns(self._stepper.sample_index, self._stepper.sample_period_s),
+        )
+        if self._failure or (self._finished and not self._pacer.paused):
+            self.stats.drive_commands_dropped += 1  # no physics will run to use it
+            return
+        self._stepper.drive(drive)
+
     # -- stepping and publishing --------------------------------------------------------------
     def _on_tick(self) -> None:
         if self._failure or self._finished:
@@ -1051,6 +1088,7 @@ class BrakeSimNode(Node):
             target_real_time_factor=self._pacer.real_time_factor,
             measured_real_time_factor=self._measured_rtf,
             actuation_source=self._planner.source(step),
+            drive="none" if stepper.drive_refusal() else describe_drive(stepper.live_drive),
             stop_time_s=stepper.stop_time_s,
             physics_step_s=stepper.physics_step_s,
             substeps=stepper.substeps,

@@ -26,7 +26,8 @@ The stepper owns the state between calls, so a caller (the ROS node, the offline
 simulator) advances it in chunks and may change the actuation between any two calls.
 Live actuation commands reach a shoe whose actuation is delayed or lagging (an actuation
 defect) through the same shaping as the scenario's history: the stepper keeps the shoe's
-commanded history (:class:`CommandHistory`).
+commanded history (:class:`CommandHistory`). A run with a vehicle and no drive cycle
+also takes live drive commands (:meth:`FixedStepStepper.drive`), held until the next.
 """
 
 from __future__ import annotations
@@ -41,7 +42,7 @@ from brake_sim_ros.model import kernel
 from brake_sim_ros.model import layout as L
 from brake_sim_ros.model.actuation import MAX_ACTUATION_FORCE_N
 from brake_sim_ros.model.assembly import initial_state, pack
-from brake_sim_ros.model.cycle import pack_drive
+from brake_sim_ros.model.cycle import LiveDrive, pack_drive, pack_live_drive
 from brake_sim_ros.model.thermal import pack_thermal
 from brake_sim_ros.model.trajectory import BrakeSetup, SampleBlock
 from brake_sim_ros.solvers.stability import StepLimit, step_limit
@@ -220,6 +221,8 @@ class FixedStepStepper:
         self._fstate[L.F_STOP_TIME] = -1.0  # the vehicle has not stopped yet
         self._fstate[L.F_WHEEL_LOCK_TIME] = -1.0  # the drum has not stuck yet
         self._kstate[L.K_SEGMENT] = -1  # a drive cycle starts its first segment at once
+        self._drive = LiveDrive()  # coasting until a live drive command
+        self._pack_live_drive()
         self.status = StepperStatus.RUNNING
 
     def fresh(self) -> FixedStepStepper:
@@ -343,6 +346,7 @@ class FixedStepStepper:
         self.setup, self._p, self.limit, self.limit_force_n = setup, p, limit, force
         self._base_force_n = max(self._base_force_n, _peak_n(setup))
         self._profile = setup.actuation.as_arrays()
+        self._pack_live_drive()  # the command in force holds on the new parameters
         self._use_substeps(substeps)
         if setup.defects.wearing_with_work and self._y.shape[0] < L.N_STATE_WEAR:
             # a lining starts wearing with its friction work: its wear state starts at 0
@@ -355,6 +359,43 @@ class FixedStepStepper:
             grown[: self._y.shape[0]] = self._y
             grown[L.Y_BRAKE_TEMPERATURE] = start
             self._y = grown
+
+    def drive_refusal(self) -> str | None:
+        """Why this run takes no live drive commands, or None when it does."""
+        if self.setup.cycle is not None:
+            return (
+                "this run's drive cycle drives the vehicle ([cycle]): allowed only for a"
+                " scenario without a cycle"
+            )
+        if self.setup.vehicle is None:
+            return (
+                "this run has no vehicle for the drive to act on: allowed only for a scenario"
+                " with a [vehicle] table"
+            )
+        return None
+
+    @property
+    def live_drive(self) -> LiveDrive:
+        """The live drive command in force (coast at reset)."""
+        return self._drive
+
+    def drive(self, command: LiveDrive) -> None:
+        """Drive by ``command`` from the next sample (:attr:`sample_index`) on, until the
+        next command or a reset (model/cycle.py: coast, a torque, or a target speed by the
+        cycle's speed controller, run at every physics step in the compiled stepping).
+
+        Raises:
+            ParameterError: a run that takes none (:meth:`drive_refusal`); nothing changes.
+        """
+        refusal = self.drive_refusal()
+        if refusal is not None:
+            raise ParameterError(f"drive commands: {refusal}")
+        self._drive = command
+        self._pack_live_drive()
+
+    def _pack_live_drive(self) -> None:
+        if self.drive_refusal() is None:
+            pack_live_drive(self._p, self._drive)
 
     def _raise_limit_force(self, force_n: float) -> None:
         """Recompute the step limit for a larger actuation force and re-pick the substeps."""

@@ -29,10 +29,12 @@ simulated brake is such a driver, so:
   time matters, and no slow clock subscriber can hold the simulation back.
 * ``/diagnostics`` (:data:`DIAGNOSTICS_QOS`): reliable, volatile, keep last 10, as
   diagnostic_updater does.
-* ``actuation``, subscribed (:data:`COMMANDS_QOS`): best effort, keep last 10. A
-  best-effort subscription matches every publisher (reliable ones included, e.g. ``ros2
-  topic pub``); only the newest command matters, so a lost one is replaced by the next.
-  It is recorded with that QoS too, so a replay offers commands as the node takes them.
+* ``actuation`` and ``drive``, subscribed (:data:`COMMANDS_QOS`): best effort, keep
+  last 10. A best-effort subscription matches every publisher (reliable ones included,
+  e.g. ``ros2 topic pub``); only the newest command matters, so a lost one is replaced by
+  the next (a drive command holds until the next: a rig that must not lose one publishes
+  it reliably or again). They are recorded with that QoS too, so a replay offers commands
+  as the node takes them.
 
 Topic names are the resolved ones of a node named ``brake_sim`` (the node itself uses
 ``~/...`` names, so a renamed node publishes under its own name; sinks attached to a node
@@ -172,6 +174,14 @@ ACTUATION = Topic(
     "~/actuation",
     published=False,
 )
+DRIVE = Topic(
+    "/brake_sim/drive",
+    "brake_sim_msgs/msg/DriveCommand",
+    COMMANDS_QOS,
+    "as commanded (subscribed)",
+    "~/drive",
+    published=False,
+)
 
 TOPICS = (
     PIVOT_FORCES,
@@ -181,6 +191,7 @@ TOPICS = (
     CLOCK,
     DIAGNOSTICS,
     ACTUATION,
+    DRIVE,
     CONTACT_EVENTS,
     MEASURED,
 )
