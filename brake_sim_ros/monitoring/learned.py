@@ -52,6 +52,7 @@ from sklearn.pipeline import Pipeline
 
 from brake_sim_ros.monitoring.detector import Assessment, Diagnosis, TrainingWindow
 from brake_sim_ros.monitoring.features import CHANNELS, window_features
+from brake_sim_ros.monitoring.forest import ForestArrays
 from brake_sim_ros.monitoring.history import HistoryDetector
 
 HEALTHY = "healthy"
@@ -130,12 +131,13 @@ class LearnedClassifier(HistoryDetector):
         self.name = "learned"
         self.channels = tuple(channels)  # the features of a channel it does not read are 0
         self.window_s, self.history_s = float(window_s), float(history_s)
-        self.model: Pipeline | None = None
+        # the fitted pipeline, or its trees as arrays when loaded from a file (:mod:`.saved`)
+        self.model: Pipeline | ForestArrays | None = None
         self.classes: tuple[str, ...] = ()
         self.threshold: float | None = None
         self.healthy_index: np.ndarray = np.zeros(0)  # healthy training windows, out of fold
         # "kind:location" -> a fitted regressor of its severity (module docstring)
-        self.severity_models: dict[str, Pipeline] = {}
+        self.severity_models: dict[str, Pipeline | ForestArrays] = {}
 
     def fit(self, windows: Iterable[TrainingWindow]) -> None:
         """Features of every training history, the forest, and the out-of-fold threshold
