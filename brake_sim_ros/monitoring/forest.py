@@ -21,6 +21,7 @@ real dataset (``tests/test_saved.py``).
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -103,6 +104,18 @@ class ForestArrays:
             return "leaf_values: allowed finite numbers"
         return None
 
+    @functools.cached_property
+    def _walk(self) -> tuple[np.ndarray, ...]:
+        """Each tree's root, the children as indices into all nodes (-1 at a leaf), the
+        split features (0 at a leaf), each node's leaf row: computed once, not per call."""
+        starts = np.cumsum(self.node_counts) - self.node_counts
+        offset = np.repeat(starts, self.node_counts)
+        leaf = self.left == LEAF
+        left = np.where(leaf, -1, self.left + offset)
+        right = np.where(leaf, -1, self.right + offset)
+        feature = np.where(leaf, 0, self.feature)
+        return starts, left, right, feature, np.cumsum(leaf) - 1
+
     def _leaves(self, X: np.ndarray) -> np.ndarray:
         """The leaf row (into :attr:`leaf_values`) each row of ``X`` reaches in each tree,
         shape (n_rows, n_trees)."""
@@ -112,12 +125,7 @@ class ForestArrays:
         X = np.where(np.isnan(X), 0.0, X).astype(np.float32)  # the imputer, then the trees
         if not np.all(np.isfinite(X)):
             raise ValueError("features: an infinite value, or one too large for float32")
-        starts = np.cumsum(self.node_counts) - self.node_counts
-        offset = np.repeat(starts, self.node_counts)
-        leaf = self.left == LEAF
-        left = np.where(leaf, -1, self.left + offset)
-        right = np.where(leaf, -1, self.right + offset)
-        feature = np.where(leaf, 0, self.feature)
+        starts, left, right, feature, leaf_row = self._walk
         rows = np.arange(X.shape[0])[:, None]
         node = np.broadcast_to(starts, (X.shape[0], starts.size)).copy()
         for _ in range(int(self.node_counts.max())):  # each step goes deeper: it ends
@@ -126,7 +134,7 @@ class ForestArrays:
                 break
             go_left = X[rows, feature[node]].astype(np.float64) <= self.threshold[node]
             node = np.where(at_split, np.where(go_left, left[node], right[node]), node)
-        return (np.cumsum(leaf) - 1)[node]
+        return leaf_row[node]
 
     def _mean(self, X: np.ndarray) -> np.ndarray:
         """The trees' leaf values summed one tree at a time in order, over the tree count
