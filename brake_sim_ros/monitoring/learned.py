@@ -65,7 +65,11 @@ SEVERITY_TREES = 30  # per defective class: the estimate settles well before 100
 MIN_SEVERITY_WINDOWS = 2 * MIN_LEAF
 
 
-def _pipeline() -> Pipeline:
+def _pipeline(
+    forest: type[RandomForestClassifier] | type[RandomForestRegressor] = RandomForestClassifier,
+    trees: int = N_TREES,
+) -> Pipeline:
+    """The constant imputer and a forest (the classifier, or a severity regressor)."""
     return Pipeline(
         [
             (
@@ -74,32 +78,7 @@ def _pipeline() -> Pipeline:
             ),
             (
                 "forest",
-                RandomForestClassifier(
-                    n_estimators=N_TREES,
-                    min_samples_leaf=MIN_LEAF,
-                    random_state=SEED,
-                    n_jobs=1,
-                ),
-            ),
-        ]
-    )
-
-
-def _severity_pipeline() -> Pipeline:
-    return Pipeline(
-        [
-            (
-                "impute",
-                SimpleImputer(strategy="constant", fill_value=0.0, keep_empty_features=True),
-            ),
-            (
-                "forest",
-                RandomForestRegressor(
-                    n_estimators=SEVERITY_TREES,
-                    min_samples_leaf=MIN_LEAF,
-                    random_state=SEED,
-                    n_jobs=1,
-                ),
+                forest(n_estimators=trees, min_samples_leaf=MIN_LEAF, random_state=SEED, n_jobs=1),
             ),
         ]
     )
@@ -182,7 +161,9 @@ class LearnedClassifier(HistoryDetector):
         for c in self.classes:
             rows = (labels == c) & np.isfinite(target)
             if c != HEALTHY and rows.sum() >= MIN_SEVERITY_WINDOWS:
-                self.severity_models[c] = _severity_pipeline().fit(features[rows], target[rows])
+                self.severity_models[c] = _pipeline(RandomForestRegressor, SEVERITY_TREES).fit(
+                    features[rows], target[rows]
+                )
 
     def judge(
         self, history: Mapping[str, np.ndarray], last_sample_index: int, sample_rate_hz: float

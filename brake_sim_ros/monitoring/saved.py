@@ -172,6 +172,14 @@ class _Checker:
             raise self.fail(key, "a NaN or infinite value; allowed finite numbers")
         return out
 
+    def history(self, p: dict[str, Any]) -> tuple[float, float]:
+        """``(window_s, history_s)`` of a history detector's parameters."""
+        window_s = self.positive(p["window_s"], "parameters.window_s", MAX_WINDOW_S)
+        history_s = self.positive(p["history_s"], "parameters.history_s", MAX_WINDOW_S)
+        if history_s < window_s:
+            raise self.fail("parameters.history_s", "allowed at least parameters.window_s")
+        return window_s, history_s
+
     def forest(self, value: object, key: str, outputs: int) -> ForestArrays:
         f = self.obj(
             value,
@@ -267,10 +275,7 @@ def _dump_orders(d: OrderAnalysis) -> tuple[dict, dict]:
 def _load_orders(name: str, p: dict, s: dict, c: _Checker) -> Detector:
     p = c.obj(p, "parameters", ("history_s", "window_s", "quantile", "gate_channel"))
     s = c.obj(s, "state", ("gate", "mean", "std", "threshold", "healthy_index"))
-    window_s = c.positive(p["window_s"], "parameters.window_s", MAX_WINDOW_S)
-    history_s = c.positive(p["history_s"], "parameters.history_s", MAX_WINDOW_S)
-    if history_s < window_s:
-        raise c.fail("parameters.history_s", "allowed at least parameters.window_s")
+    window_s, history_s = c.history(p)
     gate = p["gate_channel"]
     d = OrderAnalysis(
         history_s=history_s,
@@ -310,10 +315,7 @@ def _dump_learned(d: LearnedClassifier) -> tuple[dict, dict]:
 def _load_learned(name: str, p: dict, s: dict, c: _Checker) -> Detector:
     p = c.obj(p, "parameters", ("history_s", "window_s", "channels"))
     s = c.obj(s, "state", ("classes", "threshold", "healthy_index", "forest", "severity"))
-    window_s = c.positive(p["window_s"], "parameters.window_s", MAX_WINDOW_S)
-    history_s = c.positive(p["history_s"], "parameters.history_s", MAX_WINDOW_S)
-    if history_s < window_s:
-        raise c.fail("parameters.history_s", "allowed at least parameters.window_s")
+    window_s, history_s = c.history(p)
     channels = p["channels"]
     if not (isinstance(channels, list) and 1 <= len(channels) <= 64):
         raise c.fail("parameters.channels", "allowed a list of 1 to 64 channel names")
