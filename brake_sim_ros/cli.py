@@ -588,6 +588,8 @@ def cmd_score(args: argparse.Namespace) -> int:
         raise BrakeSimError("--out with several --detector: allowed one detector (or --report)")
     if args.model and len(names) > 1:
         raise BrakeSimError("--model with several --detector: allowed one detector")
+    if args.model and args.fit_split is not None:
+        raise BrakeSimError("--fit-split with --model: the saved detector is fitted already")
     inputs = [args.model] if args.model else []
     if args.out:
         check_output(args.out, inputs=inputs, overwrite=True, option="--out")  # before the work
@@ -601,8 +603,9 @@ def cmd_score(args: argparse.Namespace) -> int:
                 fitted = f"loaded from {args.model}"
             else:
                 detector = make_detector(name)
-                windows = evaluate.fit(detector, dataset, args.fit_split)
-                fitted = f"fitted on {args.fit_split} ({windows} windows)"
+                fit_split = args.fit_split or "train"
+                windows = evaluate.fit(detector, dataset, fit_split)
+                fitted = f"fitted on {fit_split} ({windows} windows)"
             score = evaluate.score(detector, dataset, args.split, hold_s=args.hold_s)
         except (ValueError, RuntimeError) as exc:  # the detector's, or the dataset's, one line
             raise BrakeSimError(" ".join(str(exc).split())) from None
@@ -1075,7 +1078,7 @@ def build_parser() -> argparse.ArgumentParser:
         " to score several",
     )
     p.add_argument("--split", default="test", help="split to score (default test)")
-    p.add_argument("--fit-split", default="train", help="split to fit on (default train)")
+    p.add_argument("--fit-split", help="split to fit on (default train; not with --model)")
     p.add_argument(
         "--hold", dest="hold_s", type=float, default=0.2, help="alarm hold, s (default 0.2)"
     )

@@ -137,6 +137,8 @@ def test_fit_then_score_with_the_model_scores_as_fitting(dataset_dir, dataset, t
     captured = capsys.readouterr()
     assert captured.out == "" and captured.err.count("\n") == 1
     assert "detector: the file holds a fitted learned" in captured.err
+    assert main([*args, "--fit-split", "train"]) == 2  # a saved detector is fitted already
+    assert "--fit-split with --model" in capsys.readouterr().err
 
 
 def test_learned_severity_per_class_on_the_test_split(dataset):
