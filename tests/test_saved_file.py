@@ -215,6 +215,11 @@ def test_a_threshold_detector_round_trips_and_checks_its_parameters(tmp_path):
     )
     doc["parameters"]["window_s"] = -1.0
     assert "parameters.window_s" in _refused(_write(tmp_path, doc), "kurtosis")
+    doc["parameters"]["window_s"] = 0.1
+    for huge in ("1" + "0" * 400, "1e400"):  # Python reads 1e400 as infinity
+        path = tmp_path / "huge.json"
+        path.write_text(json.dumps(doc).replace('"threshold": 4.25', f'"threshold": {huge}'))
+        assert "state.threshold" in _refused(path, "kurtosis")
 
 
 def test_a_save_that_fails_leaves_no_file(tmp_path, monkeypatch):

@@ -124,7 +124,10 @@ class _Checker:
             raise self.fail(key, f"{_type_name(value)}; allowed a number {low:g} to {high:g}")
         if not low <= value <= high:
             raise self.fail(key, f"out of range; allowed {low:g} to {high:g}")
-        return float(value)
+        try:
+            return float(value)
+        except OverflowError:  # an integer of hundreds of digits
+            raise self.fail(key, f"too large; allowed {low:g} to {high:g}") from None
 
     def positive(self, value: object, key: str, high: float = math.inf) -> float:
         x = self.number(value, key, 0.0, high)
