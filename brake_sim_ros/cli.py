@@ -583,7 +583,8 @@ def cmd_score(args: argparse.Namespace) -> int:
     dataset = open_dataset(args.directory)
     if not (args.hold_s >= 0.0 and args.hold_s <= 3600.0):
         raise BrakeSimError(f"--hold {args.hold_s!r}: allowed 0 to 3600 s")
-    names = args.detector or ["rms"]
+    # without --detector: the saved detector the file holds, or rms
+    names: list[str | None] = args.detector or ([None] if args.model else ["rms"])
     if args.out and len(names) > 1:
         raise BrakeSimError("--out with several --detector: allowed one detector (or --report)")
     if args.model and len(names) > 1:
@@ -602,7 +603,7 @@ def cmd_score(args: argparse.Namespace) -> int:
                 detector = saved.load(args.model, name)
                 fitted = f"loaded from {args.model}"
             else:
-                detector = make_detector(name)
+                detector = make_detector(name or "rms")
                 fit_split = args.fit_split or "train"
                 windows = evaluate.fit(detector, dataset, fit_split)
                 fitted = f"fitted on {fit_split} ({windows} windows)"
@@ -1087,7 +1088,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--model",
         metavar="MODEL.json",
         help="load the fitted detector from this file (brake-sim fit) instead of fitting it;"
-        " one --detector, the file's",
+        " --detector, if given, must name the file's",
     )
     p.add_argument(
         "--report",

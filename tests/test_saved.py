@@ -131,6 +131,10 @@ def test_fit_then_score_with_the_model_scores_as_fitting(dataset_dir, dataset, t
     assert main([*args, "--out", str(out)]) == 0
     expected = evaluate.score(_fitted("learned", dataset), dataset, "test")
     assert json.loads(out.read_text()) == json.loads(json.dumps(expected))
+    # without --detector: the detector the file holds
+    out.unlink()
+    assert main(["score", str(dataset_dir), "--model", str(model), "--out", str(out)]) == 0
+    assert json.loads(out.read_text())["detector"] == "learned"
     # a file of another detector is refused in one line, before any scoring
     capsys.readouterr()
     assert main([*args[:3], "orders", *args[4:]]) == 2
