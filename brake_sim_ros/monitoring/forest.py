@@ -1,13 +1,15 @@
 """A fitted scikit-learn random forest as plain arrays, and its prediction from them.
 
 Why arrays and not pickle: a saved detector (:mod:`.saved`) must never execute a file, and
-unpickling runs whatever the file names. Why not a refit from stored features: the file
-would hold every training window's features (about 14 000 x 370 numbers for the reference
-campaign, more than the trees) and the forest would depend on the loading machine's
-scikit-learn drawing the same bootstrap samples. The trees' own arrays (scikit-learn's
-``tree_`` attributes: children, split feature, threshold, and the leaves' values) are
-exact, smaller, and a hostile file can do no more than give wrong numbers: every index is
-checked (:meth:`ForestArrays.check`) before use, and numpy indexing is bounds-checked.
+unpickling runs whatever the file names. Why not a refit from stored training features
+(14 040 windows x 80 features for the reference campaign: about 12 MB against the trees'
+61 MB): the refitted forest equals the saved one only if the loading machine's
+scikit-learn builds the same trees from the same seed (another version may not), and
+every load would pay the refit (seconds to minutes) that saving is meant to spare. The
+trees' own arrays (scikit-learn's ``tree_`` attributes: children, split feature,
+threshold, and the leaves' values) are exact by construction and load at once, and a
+hostile file can do no more than give wrong numbers: every index is checked
+(:meth:`ForestArrays.check`) before use, and numpy indexing is bounds-checked.
 
 Prediction repeats scikit-learn's (1.x, ``sklearn/tree/_tree.pyx`` and
 ``sklearn/ensemble/_forest.py``) operation for operation, so it is bit for bit the same:
