@@ -540,13 +540,20 @@ def _figure(value: float | None) -> str:
     return "undefined" if value is None else f"{value:.3f}"
 
 
+def _model_where(path: str) -> str:
+    """How a --model file is named in messages."""
+    from brake_sim_ros.recording.records import describe_path
+
+    return f"--model {describe_path(path)}"
+
+
 def cmd_fit(args: argparse.Namespace) -> int:
     """``brake-sim fit DIR --detector NAME --out MODEL.json``: fit a detector on one split
     and save it (``monitoring.saved``), for ``score --model`` and ``monitor --model``."""
     from brake_sim_ros.datasets.reader import open_dataset
     from brake_sim_ros.monitoring import evaluate, saved
     from brake_sim_ros.monitoring.baselines import make_detector
-    from brake_sim_ros.recording.output import probe_output
+    from brake_sim_ros.recording.output import atomic_output, probe_output
 
     dataset = open_dataset(args.directory)
     root = Path(args.directory)
@@ -563,7 +570,9 @@ def cmd_fit(args: argparse.Namespace) -> int:
     except (ValueError, RuntimeError) as exc:
         raise BrakeSimError(" ".join(str(exc).split())) from None
     fitted_on = {"dataset": str(args.directory), "split": args.fit_split, "windows": windows}
-    saved.save(detector, args.out, fitted_on=fitted_on, inputs=inputs, overwrite=args.overwrite)
+    text = saved.dumps(detector, fitted_on=fitted_on)
+    with atomic_output(args.out, inputs=inputs, overwrite=args.overwrite, option="--out") as tmp:
+        tmp.write_text(text, encoding="utf-8")
     print(f"detector {detector.name} fitted on {args.fit_split} ({windows} windows): {args.out}")
     return 0
 
@@ -600,7 +609,7 @@ def cmd_score(args: argparse.Namespace) -> int:
     for name in names:
         try:
             if args.model:
-                detector = saved.load(args.model, name)
+                detector = saved.load(args.model, name, where=_model_where(args.model))
                 fitted = f"loaded from {args.model}"
             else:
                 detector = make_detector(name or "rms")
@@ -876,7 +885,7 @@ def _monitor_detector(parser: argparse.ArgumentParser, args: argparse.Namespace)
         from brake_sim_ros.monitoring import saved
 
         try:
-            detector = saved.load(args.model, args.detector)
+            detector = saved.load(args.model, args.detector, where=_model_where(args.model))
         except saved.ModelFileError as exc:
             parser.error(str(exc))
         print(f"brake-sim monitor: {detector.name} loaded from {args.model}")

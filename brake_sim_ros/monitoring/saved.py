@@ -7,7 +7,9 @@ must be a regular file of at most :data:`MAX_MODEL_BYTES`, strict JSON (no NaN, 
 duplicate keys), and every key is checked for type, range and shape before anything is
 built; a refusal is one line (:class:`ModelFileError`) naming the key and what is allowed,
 and never shows the file's contents. The random forests of ``learned`` are stored as their
-trees' arrays (:mod:`.forest` says why, and checks every index).
+trees' arrays (:mod:`.forest` says why, and checks every index). :func:`dumps` gives a
+file's text; the CLI writes it (whole, never through a link or over an input:
+:mod:`brake_sim_ros.recording.output`, an adapter this layer does not import).
 
 The file (:data:`SCHEMA_VERSION` 1), one JSON object::
 
@@ -50,7 +52,6 @@ import os
 import re
 import stat
 from collections.abc import Callable, Mapping, Sequence
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -64,8 +65,6 @@ from brake_sim_ros.monitoring.features import ORDERS, feature_names
 from brake_sim_ros.monitoring.forest import ForestArrays
 from brake_sim_ros.monitoring.learned import HEALTHY, LearnedClassifier
 from brake_sim_ros.monitoring.order_analysis import OrderAnalysis
-from brake_sim_ros.recording.output import atomic_output
-from brake_sim_ros.recording.records import describe_path
 
 FORMAT = "brake-sim detector"
 SCHEMA_VERSION = 1
@@ -396,26 +395,15 @@ def document(detector: Detector, *, fitted_on: Mapping[str, Any]) -> dict[str, A
     }
 
 
-def save(
-    detector: Detector,
-    path: str | os.PathLike[str],
-    *,
-    fitted_on: Mapping[str, Any],
-    inputs: Sequence[str | os.PathLike[str]] = (),
-    overwrite: bool = False,
-    option: str = "--out",
-) -> Path:
-    """Write a fitted detector to ``path``: whole or not at all, never through a link, over
-    no input (:mod:`brake_sim_ros.recording.output`).
+def dumps(detector: Detector, *, fitted_on: Mapping[str, Any]) -> str:
+    """The file's text for a fitted detector (:func:`document` as strict JSON). Writing it
+    is the caller's (the CLI writes it whole, never through a link:
+    :mod:`brake_sim_ros.recording.output`).
 
     Raises:
         ModelFileError: nothing to save (:func:`document`).
-        OutputError: the path's rules refuse it, or it cannot be written.
     """
-    text = json.dumps(document(detector, fitted_on=fitted_on), allow_nan=False, indent=1)
-    with atomic_output(path, inputs=inputs, overwrite=overwrite, option=option) as tmp:
-        tmp.write_text(text + "\n", encoding="utf-8")
-    return Path(path)
+    return json.dumps(document(detector, fitted_on=fitted_on), allow_nan=False, indent=1) + "\n"
 
 
 def _refuse_constant(name: str) -> None:
@@ -429,14 +417,15 @@ def _unique_keys(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
     return out
 
 
-def read_document(path: str | os.PathLike[str], *, option: str = "--model") -> dict[str, Any]:
+def read_document(path: str | os.PathLike[str], *, where: str = "saved detector") -> dict[str, Any]:
     """The parsed JSON of a saved detector file, after the file's checks (a regular file of
     at most :data:`MAX_MODEL_BYTES`, UTF-8, strict JSON, no duplicate keys).
+
+    ``where`` names the file in messages (the CLI: the option and the path).
 
     Raises:
         ModelFileError: one line naming what is wrong.
     """
-    where = f"{option} {describe_path(path)}"
     try:
         # O_NONBLOCK: a FIFO must be refused, not waited on
         fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
@@ -475,15 +464,17 @@ def read_document(path: str | os.PathLike[str], *, option: str = "--model") -> d
     return doc
 
 
-def load(path: str | os.PathLike[str], name: str | None = None, *, option: str = "--model"):
+def load(
+    path: str | os.PathLike[str], name: str | None = None, *, where: str = "saved detector"
+) -> Detector:
     """The fitted detector saved in ``path``, ready to feed; with ``name``, only if the
-    file holds that detector.
+    file holds that detector. ``where`` names the file in messages.
 
     Raises:
         ModelFileError: one line naming the key and what is allowed (module docstring).
     """
-    doc = read_document(path, option=option)
-    c = _Checker(f"{option} {describe_path(path)}")
+    doc = read_document(path, where=where)
+    c = _Checker(where)
     doc = c.obj(doc, "the file", TOP_KEYS)
     if doc["format"] != FORMAT:
         raise c.fail("format", f"not a saved detector; allowed {FORMAT!r}")

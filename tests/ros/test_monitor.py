@@ -349,10 +349,9 @@ def test_the_monitor_runs_a_saved_detector_as_offline(recording, threshold, tmp_
     _path, measured, _run = recording
     detector = VibrationThreshold("rms", window_s=0.07)
     detector.threshold = threshold
-    model = saved.save(
-        detector,
-        tmp_path / "rms.json",
-        fitted_on={"dataset": "test", "split": "train", "windows": 0},
+    model = tmp_path / "rms.json"
+    model.write_text(
+        saved.dumps(detector, fitted_on={"dataset": "test", "split": "train", "windows": 0})
     )
     expected = _expected(_offline(measured[:6], threshold))
     assert any(e[3] for e in expected) and not all(e[3] for e in expected)
