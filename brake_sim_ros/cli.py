@@ -27,6 +27,7 @@ from brake_sim_ros.studies import BENCHMARKS
 
 if TYPE_CHECKING:  # the CLI imports the numerics only when a command needs them
     from brake_sim_ros.analysis.impacts import ShoeMetrics
+    from brake_sim_ros.monitoring.detector import Detector
     from brake_sim_ros.scenarios.loader import Scenario
     from brake_sim_ros.stream.run import RunResult
     from brake_sim_ros.viz.targets import RerunTarget
@@ -539,32 +540,82 @@ def _figure(value: float | None) -> str:
     return "undefined" if value is None else f"{value:.3f}"
 
 
+def _model_where(path: str) -> str:
+    """How a --model file is named in messages."""
+    from brake_sim_ros.recording.records import describe_path
+
+    return f"--model {describe_path(path)}"
+
+
+def cmd_fit(args: argparse.Namespace) -> int:
+    """``brake-sim fit DIR --detector NAME --out MODEL.json``: fit a detector on one split
+    and save it (``monitoring.saved``), for ``score --model`` and ``monitor --model``."""
+    from brake_sim_ros.datasets.reader import open_dataset
+    from brake_sim_ros.monitoring import evaluate, saved
+    from brake_sim_ros.monitoring.baselines import make_detector
+    from brake_sim_ros.recording.output import atomic_output, probe_output
+
+    dataset = open_dataset(args.directory)
+    root = Path(args.directory)
+    inputs = [root / "manifest.parquet", root / "campaign.lock"]
+    samples = os.path.realpath(root / "samples")
+    if os.path.commonpath([samples, os.path.realpath(Path(args.out).parent)]) == samples:
+        # a file there would be read as one of the dataset's samples
+        raise BrakeSimError(f"--out {args.out}: inside the dataset's samples; allowed elsewhere")
+    probe_output(args.out, inputs=inputs, overwrite=args.overwrite, option="--out")
+    try:
+        detector = make_detector(args.detector)
+        saved.check_savable(detector)  # before the work
+        windows = evaluate.fit(detector, dataset, args.fit_split)
+    except (ValueError, RuntimeError) as exc:
+        raise BrakeSimError(" ".join(str(exc).split())) from None
+    fitted_on = {"dataset": str(args.directory), "split": args.fit_split, "windows": windows}
+    text = saved.dumps(detector, fitted_on=fitted_on)
+    with atomic_output(args.out, inputs=inputs, overwrite=args.overwrite, option="--out") as tmp:
+        tmp.write_text(text, encoding="utf-8")
+    print(f"detector {detector.name} fitted on {args.fit_split} ({windows} windows): {args.out}")
+    return 0
+
+
 def cmd_score(args: argparse.Namespace) -> int:
     """``brake-sim score DIR --detector NAME [--detector NAME ...]``: fit each detector on
-    one split, score it on another, print the headline figures and write the JSON
-    (``monitoring.evaluate``) and, with ``--report``, the report (``monitoring.report``)."""
+    one split (or load it: ``--model``), score it on another, print the headline figures
+    and write the JSON (``monitoring.evaluate``) and, with ``--report``, the report
+    (``monitoring.report``)."""
     import json
 
     from brake_sim_ros.datasets.reader import open_dataset
-    from brake_sim_ros.monitoring import evaluate
+    from brake_sim_ros.monitoring import evaluate, saved
     from brake_sim_ros.monitoring.baselines import make_detector
     from brake_sim_ros.recording.output import check_output, replace_output
 
     dataset = open_dataset(args.directory)
     if not (args.hold_s >= 0.0 and args.hold_s <= 3600.0):
         raise BrakeSimError(f"--hold {args.hold_s!r}: allowed 0 to 3600 s")
-    names = args.detector or ["rms"]
+    # without --detector: the saved detector the file holds, or rms
+    names: list[str | None] = args.detector or ([None] if args.model else ["rms"])
     if args.out and len(names) > 1:
         raise BrakeSimError("--out with several --detector: allowed one detector (or --report)")
+    if args.model and len(names) > 1:
+        raise BrakeSimError("--model with several --detector: allowed one detector")
+    if args.model and args.fit_split is not None:
+        raise BrakeSimError("--fit-split with --model: the saved detector is fitted already")
+    inputs = [args.model] if args.model else []
     if args.out:
-        check_output(args.out, overwrite=True, option="--out")  # before the work
+        check_output(args.out, inputs=inputs, overwrite=True, option="--out")  # before the work
     if args.report:
         _check_report_directory(args.report)
     scores = []
     for name in names:
         try:
-            detector = make_detector(name)
-            windows = evaluate.fit(detector, dataset, args.fit_split)
+            if args.model:
+                detector = saved.load(args.model, name, where=_model_where(args.model))
+                fitted = f"loaded from {args.model}"
+            else:
+                detector = make_detector(name or "rms")
+                fit_split = args.fit_split or "train"
+                windows = evaluate.fit(detector, dataset, fit_split)
+                fitted = f"fitted on {fit_split} ({windows} windows)"
             score = evaluate.score(detector, dataset, args.split, hold_s=args.hold_s)
         except (ValueError, RuntimeError) as exc:  # the detector's, or the dataset's, one line
             raise BrakeSimError(" ".join(str(exc).split())) from None
@@ -572,13 +623,21 @@ def cmd_score(args: argparse.Namespace) -> int:
         d, fa, hi = score["detection"], score["false_alarms"], score["health_index"]
         median = d["median_delay_s"]
         delay = "" if median is None else f" (median delay {median:.3f} s)"
+        sev = score["severity"]
+        severity = "" if sev is None else f"; severity rmse {sev['rmse']:.4g} (mixed units)"
         print(
-            f"detector {score['detector']} fitted on {args.fit_split} ({windows} windows),"
+            f"detector {score['detector']} {fitted},"
             f" scored on {args.split}: {score['runs']} runs; detected {d['detected']} of"
             f" {d['defective_runs']} defective runs{delay};"
             f" {fa['count']} false alarms in {fa['healthy_hours'] * 3600:.1f} s of healthy"
-            f" operation; AUROC {_figure(hi['auroc'])}, AUPRC {_figure(hi['auprc'])}"
+            f" operation; AUROC {_figure(hi['auroc'])}, AUPRC {_figure(hi['auprc'])}{severity}"
         )
+        for label, figures in ({} if sev is None else sev["per_class"]).items():
+            print(
+                f"  severity {label}: rmse {figures['rmse']:.4g} {figures['unit']}"
+                f" ({100 * figures['rmse_of_service_limit']:.0f} % of the service limit),"
+                f" mean error {figures['mean_error']:+.4g} over {figures['windows']} windows"
+            )
     if args.out:
         text = json.dumps(scores[0], indent=1, sort_keys=True)
         replace_output(args.out, lambda tmp: tmp.write_text(text + "\n"))
@@ -588,7 +647,7 @@ def cmd_score(args: argparse.Namespace) -> int:
 
         files = report_files(scores)
         for name in files:  # every file's rules before the first is written
-            check_output(Path(args.report) / name, overwrite=True, option="--report")
+            check_output(Path(args.report) / name, inputs=inputs, overwrite=True, option="--report")
         for name, content in files.items():
             replace_output(
                 Path(args.report) / name,
@@ -770,6 +829,11 @@ def _monitor_parser() -> argparse.ArgumentParser:
         help="fit the detector on a sweep's dataset first (brake-sim sweep ... --out DIR)",
     )
     p.add_argument("--fit-split", default="train", help="split to fit on (default train)")
+    p.add_argument(
+        "--model",
+        metavar="MODEL.json",
+        help="load the fitted detector from this file (brake-sim fit) instead of --fit",
+    )
     return p
 
 
@@ -792,8 +856,7 @@ def run_monitor(argv: list[str]) -> int:
     parameters too), a detector that cannot be made or fitted: one line, exit 2."""
     from rclpy.utilities import remove_ros_args
 
-    from brake_sim_ros.monitoring.baselines import BUILTIN, make_detector
-    from brake_sim_ros.monitoring.detector import Detector, chunk_from_measured
+    from brake_sim_ros.monitoring.detector import chunk_from_measured
 
     parser = _monitor_parser()
     args = parser.parse_args(remove_ros_args(["brake-sim monitor", *argv])[1:])
@@ -805,6 +868,28 @@ def run_monitor(argv: list[str]) -> int:
         overrides.append(("measured_topic", topic))
     if args.unit_id is not None:
         overrides.append(("unit_id", args.unit_id))
+    detector = _monitor_detector(parser, args)
+    from brake_sim_ros.app.monitor import run
+
+    return run(["brake-sim monitor", *argv], detector, chunk_from_measured, overrides=overrides)
+
+
+def _monitor_detector(parser: argparse.ArgumentParser, args: argparse.Namespace) -> Detector:
+    """The monitor's detector: loaded (``--model``), or made and fitted (``--fit``)."""
+    from brake_sim_ros.monitoring.baselines import BUILTIN, make_detector
+    from brake_sim_ros.monitoring.detector import Detector
+
+    if args.model is not None:
+        if args.fit is not None:
+            parser.error("--model and --fit: allowed one (a saved detector, or a dataset)")
+        from brake_sim_ros.monitoring import saved
+
+        try:
+            detector = saved.load(args.model, args.detector, where=_model_where(args.model))
+        except saved.ModelFileError as exc:
+            parser.error(str(exc))
+        print(f"brake-sim monitor: {detector.name} loaded from {args.model}")
+        return detector
     try:
         detector = make_detector(args.detector)
     except ValueError as exc:
@@ -814,7 +899,7 @@ def run_monitor(argv: list[str]) -> int:
     if learns and args.fit is None and args.detector in BUILTIN:
         parser.error(
             f"detector {detector.name} learns from data: give --fit DIR, a sweep's dataset"
-            " (brake-sim sweep) to fit it on"
+            " (brake-sim sweep) to fit it on, or --model MODEL.json (brake-sim fit)"
         )
     if args.fit is not None:
         from brake_sim_ros.datasets.reader import open_dataset
@@ -825,9 +910,7 @@ def run_monitor(argv: list[str]) -> int:
         except (BrakeSimError, ValueError, RuntimeError) as exc:
             parser.error(f"--fit {args.fit}: {exc}")
         print(f"brake-sim monitor: {detector.name} fitted on {windows} windows of {args.fit_split}")
-    from brake_sim_ros.app.monitor import run
-
-    return run(["brake-sim monitor", *argv], detector, chunk_from_measured, overrides=overrides)
+    return detector
 
 
 class _Parser(argparse.ArgumentParser):
@@ -1005,17 +1088,38 @@ def build_parser() -> argparse.ArgumentParser:
         " to score several",
     )
     p.add_argument("--split", default="test", help="split to score (default test)")
-    p.add_argument("--fit-split", default="train", help="split to fit on (default train)")
+    p.add_argument("--fit-split", help="split to fit on (default train; not with --model)")
     p.add_argument(
         "--hold", dest="hold_s", type=float, default=0.2, help="alarm hold, s (default 0.2)"
     )
     p.add_argument("--out", help="write the score as JSON here (one detector)")
+    p.add_argument(
+        "--model",
+        metavar="MODEL.json",
+        help="load the fitted detector from this file (brake-sim fit) instead of fitting it;"
+        " --detector, if given, must name the file's",
+    )
     p.add_argument(
         "--report",
         metavar="DIR",
         help="write each detector's JSON and the figures (ROC, delays, isolation) here",
     )
     p.set_defaults(func=cmd_score)
+
+    p = sub.add_parser(
+        "fit",
+        help="fit a detector on a dataset's train split and save it as JSON",
+        description="Fit a detector on one split of a sweep's dataset and save it, fitted,"
+        " as a JSON file (brake_sim_ros.monitoring.saved documents it) that score --model"
+        " and monitor --model load instead of refitting. Saved forms: rms, kurtosis, crest,"
+        " orders, learned.",
+    )
+    p.add_argument("directory", help="a sweep's output directory")
+    p.add_argument("--detector", required=True, help="rms, kurtosis, crest, orders or learned")
+    p.add_argument("--fit-split", default="train", help="split to fit on (default train)")
+    p.add_argument("--out", required=True, metavar="MODEL.json", help="the file to write")
+    p.add_argument("--overwrite", action="store_true", help="replace an existing --out")
+    p.set_defaults(func=cmd_fit)
 
     p = sub.add_parser(
         "bench",
@@ -1041,7 +1145,7 @@ def build_parser() -> argparse.ArgumentParser:
         "monitor",
         help="run a detector as a ROS 2 node on the measured channels and publish its health"
         " index, diagnoses and /diagnostics: brake-sim monitor --detector NAME"
-        " [--simulator /brake_sim] [--fit DIR] [--ros-args ...]",
+        " [--simulator /brake_sim] [--fit DIR | --model MODEL.json] [--ros-args ...]",
     )
     sub.add_parser(
         "replay",

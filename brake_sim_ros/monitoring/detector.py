@@ -158,14 +158,17 @@ class Assessment:
 class TrainingWindow:
     """One window for :meth:`Detector.fit`: channel values, shape (n,) each, and the truth
     at its last sample (the active defect kinds with their locations; empty: healthy).
-    ``run_id`` and ``last_sample_index`` (the run's index of its last sample; -1: not
-    known) let a detector that judges a longer history join consecutive windows."""
+    ``severities`` are those defects' severities there, in each kind's unit, in the order
+    of ``defects`` (empty: not known). ``run_id`` and ``last_sample_index`` (the run's
+    index of its last sample; -1: not known) let a detector that judges a longer history
+    join consecutive windows."""
 
     channels: Mapping[str, np.ndarray]
     sample_rate_hz: float
     defects: tuple[tuple[str, str], ...] = field(default=())
     run_id: str = ""
     last_sample_index: int = -1
+    severities: tuple[float, ...] = field(default=())
 
     @property
     def healthy(self) -> bool:

@@ -23,7 +23,15 @@ The score (:func:`score`, written as JSON by ``brake-sim score``; :data:`SCHEMA_
 ``isolation``: ``classes`` and ``matrix`` (rows true, columns diagnosed; ``none``: no
     diagnosis) over the windows of defective runs after onset, when the detector diagnoses;
     null otherwise
-``severity``: ``rmse`` of the diagnosed severity against the true one, when given
+``severity``: when the detector estimates severities, over the windows of defective runs
+    after onset whose diagnosis names a defect active there (a wrong diagnosis is the
+    isolation matrix's error, not a severity error): ``windows`` and ``rmse`` over all of
+    them (in mixed units: each estimate in its kind's unit); ``per_class``: per diagnosed
+    ``kind:location``, ``unit``, ``windows``, ``rmse`` and ``mean_error`` (estimate minus
+    true, the kind's unit) and ``rmse_of_service_limit`` (the rmse over the size of the
+    kind's service limit, ``brake-sim defects``: comparable across kinds); null when the
+    detector gives no finite severity (new in version 3: ``windows`` and ``per_class``;
+    version 2 compared a wrong diagnosis's severity against 0)
 ``per_run``: one object per run: ``run_id``, ``unit_id``, ``defects`` (kind:location
     labels active at the end), ``onset_s``, ``delay_s``, ``false_alarms``
 """
@@ -37,11 +45,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from brake_sim_ros.datasets.reader import SweepDataset
-from brake_sim_ros.model.catalogue import KINDS, label_column
+from brake_sim_ros.model.catalogue import KIND_BY_NAME, KINDS, label_column
 from brake_sim_ros.monitoring import metrics
 from brake_sim_ros.monitoring.detector import Assessment, Detector, SampleChunk, TrainingWindow
 
-SCHEMA_VERSION = 2
+SCHEMA_VERSION = 3
 HEALTHY = "healthy"  # the class of a healthy window or run in the per-class figures
 MEASURED_PREFIX = "measured:"
 # label column -> "kind:location", the catalogue's (``brake-sim defects``)
@@ -67,6 +75,10 @@ class RunSamples:
             for name, v in zip(self.label_names, self.labels[row], strict=True)
             if v != 0.0
         )
+
+    def severities(self, row: int) -> tuple[float, ...]:
+        """The severities at sample ``row`` of the defects :meth:`active` lists, in order."""
+        return tuple(float(v) for v in self.labels[row] if v != 0.0)
 
     @property
     def onset_index(self) -> int | None:
@@ -108,6 +120,28 @@ def read_run(dataset: SweepDataset, run_id: str) -> RunSamples:
     )
 
 
+def _severity_figures(severities: dict[str, list[tuple[float, float]]]) -> dict:
+    """The score's ``severity`` object (module docstring) from (estimate, true) per class."""
+    every = np.array([pair for pairs in severities.values() for pair in pairs])
+    per_class = {}
+    for label, pairs in sorted(severities.items()):
+        kind = KIND_BY_NAME[label.split(":", 1)[0]]
+        est, true = np.array(pairs).T
+        rmse = metrics.rmse(est, true)
+        per_class[label] = {
+            "unit": kind.unit,
+            "windows": len(pairs),
+            "rmse": rmse,
+            "mean_error": float(np.mean(est - true)),
+            "rmse_of_service_limit": rmse / abs(kind.service_limit),
+        }
+    return {
+        "windows": int(every.shape[0]),
+        "rmse": metrics.rmse(every[:, 0], every[:, 1]),
+        "per_class": per_class,
+    }
+
+
 def _median(values: list[float]) -> float | None:
     return float(np.median(values)) if values else None
 
@@ -138,6 +172,7 @@ def fit(detector: Detector, dataset: SweepDataset, split: str = "train") -> int:
                     run.active(start + n - 1),
                     run_id=run.run_id,
                     last_sample_index=start + n - 1,
+                    severities=run.severities(start + n - 1),
                 )
             )
     detector.fit(windows)
@@ -160,7 +195,8 @@ def score(
     """Run ``detector`` (fitted) over ``split`` and score it (module docstring)."""
     per_run, delays, missed = [], [], 0
     fa_count, fa_hours = 0, 0.0
-    truth, index, true_class, diagnosed, sev_est, sev_true = [], [], [], [], [], []
+    truth, index, true_class, diagnosed = [], [], [], []
+    severities: dict[str, list[tuple[float, float]]] = {}  # class -> (estimate, true)
     window_class: list[str] = []
     run_class: dict[str, list[float | None]] = {}
     for run_id in dataset.runs(split):
@@ -200,9 +236,9 @@ def score(
                 d = a.diagnosis
                 label = "none" if d is None else f"{d.kind}:{d.location}"
                 diagnosed.append(label)
-                if label in run.label_names and math.isfinite(d.severity):
-                    sev_est.append(d.severity)
-                    sev_true.append(float(run.labels[row, run.label_names.index(label)]))
+                if d is not None and math.isfinite(d.severity) and label in map(":".join, active):
+                    true = float(run.labels[row, run.label_names.index(label)])
+                    severities.setdefault(label, []).append((d.severity, true))
         per_run.append(
             {
                 "run_id": run.run_id,
@@ -269,6 +305,6 @@ def score(
             if diagnoses
             else None
         ),
-        "severity": {"rmse": metrics.rmse(sev_est, sev_true)} if sev_est else None,
+        "severity": _severity_figures(severities) if severities else None,
         "per_run": per_run,
     }

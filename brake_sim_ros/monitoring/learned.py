@@ -26,21 +26,33 @@ on healthy training windows the forest did not see: the windows of each training
 scored by a forest trained on the other runs' (:data:`FOLDS` folds grouped by run, so no
 window is scored by trees that saw its run), and the threshold is their
 ``1 - FALSE_ALARM_FRACTION`` quantile (at least 0.5). Diagnosis on alarm: the most
-probable defective class, its probability as confidence (no severity estimate).
+probable defective class, its probability as confidence, and its severity estimate.
+
+Severity: per defective class, a ``RandomForestRegressor`` (:data:`SEVERITY_TREES` trees,
+leaves of at least :data:`MIN_LEAF` windows, the same imputer and seed) on the same
+features of that class's training windows, whose target is the class's defect severity at
+the window's last sample (its label column, in the kind's unit, signed: what the scorer's
+severity error compares against). A class with fewer than :data:`MIN_SEVERITY_WINDOWS`
+training windows with a known severity gets none (severity NaN). A regressor per class,
+not one for all: the kinds' units differ, and the diagnosis has already chosen the class.
+Its estimate is an average of training severities, so it never leaves the range seen in
+training (a larger defect than any trained on reads as the largest trained).
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable, Mapping
 
 import numpy as np
-from sklearn.ensemble import RandomForestClassifier
+from sklearn.ensemble import RandomForestClassifier, RandomForestRegressor
 from sklearn.impute import SimpleImputer
 from sklearn.model_selection import GroupKFold
 from sklearn.pipeline import Pipeline
 
 from brake_sim_ros.monitoring.detector import Assessment, Diagnosis, TrainingWindow
 from brake_sim_ros.monitoring.features import CHANNELS, window_features
+from brake_sim_ros.monitoring.forest import ForestArrays
 from brake_sim_ros.monitoring.history import HistoryDetector
 
 HEALTHY = "healthy"
@@ -49,9 +61,15 @@ MIN_LEAF = 2
 FOLDS = 3
 FALSE_ALARM_FRACTION = 0.01  # of healthy training windows over the threshold, out of fold
 SEED = 0
+SEVERITY_TREES = 30  # per defective class: the estimate settles well before 100 trees
+MIN_SEVERITY_WINDOWS = 2 * MIN_LEAF
 
 
-def _pipeline() -> Pipeline:
+def _pipeline(
+    forest: type[RandomForestClassifier] | type[RandomForestRegressor] = RandomForestClassifier,
+    trees: int = N_TREES,
+) -> Pipeline:
+    """The constant imputer and a forest (the classifier, or a severity regressor)."""
     return Pipeline(
         [
             (
@@ -60,12 +78,7 @@ def _pipeline() -> Pipeline:
             ),
             (
                 "forest",
-                RandomForestClassifier(
-                    n_estimators=N_TREES,
-                    min_samples_leaf=MIN_LEAF,
-                    random_state=SEED,
-                    n_jobs=1,
-                ),
+                forest(n_estimators=trees, min_samples_leaf=MIN_LEAF, random_state=SEED, n_jobs=1),
             ),
         ]
     )
@@ -97,20 +110,24 @@ class LearnedClassifier(HistoryDetector):
         self.name = "learned"
         self.channels = tuple(channels)  # the features of a channel it does not read are 0
         self.window_s, self.history_s = float(window_s), float(history_s)
-        self.model: Pipeline | None = None
+        # the fitted pipeline, or its trees as arrays when loaded from a file (:mod:`.saved`)
+        self.model: Pipeline | ForestArrays | None = None
         self.classes: tuple[str, ...] = ()
         self.threshold: float | None = None
         self.healthy_index: np.ndarray = np.zeros(0)  # healthy training windows, out of fold
+        # "kind:location" -> a fitted regressor of its severity (module docstring)
+        self.severity_models: dict[str, Pipeline | ForestArrays] = {}
 
     def fit(self, windows: Iterable[TrainingWindow]) -> None:
         """Features of every training history, the forest, and the out-of-fold threshold
         (module docstring)."""
-        X, y, groups = [], [], []
+        X, y, groups, severity = [], [], [], []
         for history, w in self.histories(windows):
             mine = {c: history[c] for c in self.channels if c in history}  # as assessed
             X.append(window_features(mine, w.sample_rate_hz))
             y.append(HEALTHY if w.healthy else ":".join(w.defects[0]))
             groups.append(w.run_id)
+            severity.append(w.severities[0] if w.severities and not w.healthy else np.nan)
         labels = np.array(y)
         if HEALTHY not in y or len(set(y)) < 2:
             raise ValueError(
@@ -139,6 +156,14 @@ class LearnedClassifier(HistoryDetector):
         self.healthy_index = scored / self.threshold
         self.model = _pipeline().fit(features, labels, forest__sample_weight=_weights(labels))
         self.classes = tuple(str(c) for c in self.model.classes_)
+        self.severity_models = {}
+        target = np.array(severity, dtype=np.float64)
+        for c in self.classes:
+            rows = (labels == c) & np.isfinite(target)
+            if c != HEALTHY and rows.sum() >= MIN_SEVERITY_WINDOWS:
+                self.severity_models[c] = _pipeline(RandomForestRegressor, SEVERITY_TREES).fit(
+                    features[rows], target[rows]
+                )
 
     def judge(
         self, history: Mapping[str, np.ndarray], last_sample_index: int, sample_rate_hz: float
@@ -155,7 +180,9 @@ class LearnedClassifier(HistoryDetector):
             proba[healthy] = -1.0
             j = int(np.argmax(proba))
             kind, location = self.classes[j].split(":", 1)
-            diagnosis = Diagnosis(kind, location, confidence=float(proba[j]))
+            regressor = self.severity_models.get(self.classes[j])
+            severity = math.nan if regressor is None else float(regressor.predict(x)[0])
+            diagnosis = Diagnosis(kind, location, severity, confidence=float(proba[j]))
         return Assessment(
             last_sample_index, last_sample_index / sample_rate_hz, index, alarm, diagnosis
         )

@@ -37,6 +37,7 @@ from rclpy.serialization import deserialize_message
 from brake_sim_ros import stream
 from brake_sim_ros.datasets.parquet import run_table, write_history
 from brake_sim_ros.model.catalogue import KIND_BY_NAME
+from brake_sim_ros.monitoring import saved
 from brake_sim_ros.monitoring.baselines import VibrationThreshold
 from brake_sim_ros.monitoring.detector import Diagnosis as DetectorDiagnosis
 from brake_sim_ros.monitoring.detector import chunk_from_measured
@@ -141,11 +142,14 @@ def _expected(offline: list) -> list[tuple[int, int, float, bool]]:
 
 
 @contextlib.contextmanager
-def _monitoring(offset: int, threshold: float, log: Path) -> Iterator[Listener]:
-    """``brake-sim monitor`` in its own process on a private domain, and a listener."""
+def _monitoring(
+    offset: int, threshold: float, log: Path, detector: list[str] | None = None
+) -> Iterator[Listener]:
+    """``brake-sim monitor`` in its own process on a private domain, and a listener;
+    ``detector``: the monitor's detector options (default ``--detector`` DETECTOR)."""
     domain = domain_id_for(offset)
     listener = Listener(domain)
-    monitor = _start_monitor(domain, threshold, log)
+    monitor = _start_monitor(domain, threshold, log, detector or ["--detector", DETECTOR])
     listener.monitor = monitor
     try:
         _wait_for_monitor(listener, monitor, log)
@@ -194,7 +198,9 @@ class Listener:
         rclpy.try_shutdown(context=self.context)
 
 
-def _start_monitor(domain: int, threshold: float, log: Path) -> subprocess.Popen:
+def _start_monitor(
+    domain: int, threshold: float, log: Path, detector: list[str]
+) -> subprocess.Popen:
     env = ros_environment(domain)
     env[THRESHOLD_ENV] = repr(threshold)
     env["PYTHONPATH"] = os.pathsep.join(
@@ -202,7 +208,7 @@ def _start_monitor(domain: int, threshold: float, log: Path) -> subprocess.Popen
     ).rstrip(os.pathsep)
     with log.open("w") as out:
         return subprocess.Popen(
-            [*CLI, "monitor", "--detector", DETECTOR],
+            [*CLI, "monitor", *detector],
             env=env,
             stdout=out,
             stderr=subprocess.STDOUT,
@@ -334,6 +340,32 @@ def test_monitor_survives_malformed_and_out_of_order_messages(recording, thresho
     assert len([w for w in warnings if "out of order" in w]) == 1, output
     assert len([w for w in warnings if "no channel 'backing_plate_accel_y'" in w]) == 1, output
     assert "Traceback" not in output
+
+
+def test_the_monitor_runs_a_saved_detector_as_offline(recording, threshold, tmp_path):
+    """``brake-sim monitor --model``: a saved rms detector (the threshold and 0.07 s
+    windows of OffsetRms) gives, live, the health index and alarms of the same detector
+    run offline, bit for bit."""
+    _path, measured, _run = recording
+    detector = VibrationThreshold("rms", window_s=0.07)
+    detector.threshold = threshold
+    model = tmp_path / "rms.json"
+    model.write_text(
+        saved.dumps(detector, fitted_on={"dataset": "test", "split": "train", "windows": 0})
+    )
+    expected = _expected(_offline(measured[:6], threshold))
+    assert any(e[3] for e in expected) and not all(e[3] for e in expected)
+    log = tmp_path / "monitor.log"
+    with _monitoring(13, threshold, log, ["--detector", "rms", "--model", str(model)]) as ears:
+        for msg in measured[:6]:
+            ears.measured.publish(msg)
+            ears.spin_until(lambda: False, 0.05)
+        ears.spin_until(lambda: len(ears.health) >= len(expected), 10.0)
+    output = log.read_text()
+    assert ears.exit_code == 0, output
+    assert f"rms loaded from {model}" in output
+    assert _verdicts(ears.health) == expected
+    assert {h.detector for h in ears.health} == {"rms"} and not ears.diagnoses
 
 
 def _value(status: DiagnosticStatus, key: str) -> str | None:
