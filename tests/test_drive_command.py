@@ -198,3 +198,14 @@ def test_bad_drive_commands_are_refused_in_one_line(kwargs, says):
 def test_a_field_the_mode_does_not_use_is_not_read():
     assert LiveDrive("coast", drive_torque_n_m=math.nan, target_speed_m_s=-5.0).mode == "coast"
     assert LiveDrive("torque", drive_torque_n_m=120.0, target_speed_m_s=math.inf)
+
+
+def test_the_built_in_rig_is_a_vehicle_at_rest_that_takes_drive_commands():
+    scenario = load_scenario("rig")
+    assert scenario.setup.vehicle is not None and scenario.setup.cycle is None
+    assert scenario.setup.peak_force_n == 0.0
+    stepper = stepper_for(scenario)
+    assert stepper.drive_refusal() is None
+    stepper.drive(LiveDrive("target_speed", target_speed_m_s=2.0))
+    block = stepper.advance(25600)
+    assert block["drive_torque_n_m"][-1] > 0.0 and block["flywheel_speed_rad_s"][-1] > 0.0
