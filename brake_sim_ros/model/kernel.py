@@ -57,12 +57,14 @@ def _driven_flywheel(p, flywheel_speed, coupling, dydt):
     """The flywheel's acceleration and the drive and road-load powers of a vehicle
     (layout.P_DRIVEN): the step's drive torque minus the road load
     (:func:`.vehicle.road_load_torque`) act on it besides the coupling. A call, not inlined:
-    the published model's path stays as it was."""
+    the published model's path stays as it was. Returns the road load, N m (a recorded
+    sample reports it without computing it again)."""
     drive = p[L.P_DRIVE_TORQUE]
     road = vehicle.road_load_torque(p, flywheel_speed)
     dydt[L.Y_FLYWHEEL_SPEED] = (drive - road - coupling) / p[L.P_FLYWHEEL_INERTIA]
     dydt[L.Y_DRIVE_WORK] = drive * flywheel_speed
     dydt[L.Y_ROAD_LOAD_WORK] = road * flywheel_speed
+    return road
 
 
 @njit(cache=True)
@@ -115,6 +117,7 @@ def evaluate(y, p, fe_left, fe_right, stuck, mode_left, mode_right, dydt, out, r
     drum_torque = sl[contact.E_DRUM_TORQUE] + sr[contact.E_DRUM_TORQUE]
     dydt[L.Y_DRIVE_WORK] = 0.0
     dydt[L.Y_ROAD_LOAD_WORK] = 0.0
+    road = 0.0  # N m, the road load of a driven flywheel
     rigid = p[L.P_RIGID_COUPLING] > 0.0
     if rigid:
         # one rotor body: held as a whole while stuck (its friction share is then 0)
@@ -128,7 +131,7 @@ def evaluate(y, p, fe_left, fe_right, stuck, mode_left, mode_right, dydt, out, r
         slip = y[L.Y_FLYWHEEL_SPEED] - wd
         dydt[L.Y_FLYWHEEL_ANGLE] = y[L.Y_FLYWHEEL_SPEED]
         if p[L.P_DRIVEN] > 0.0:
-            _driven_flywheel(p, y[L.Y_FLYWHEEL_SPEED], coupling, dydt)
+            road = _driven_flywheel(p, y[L.Y_FLYWHEEL_SPEED], coupling, dydt)
         else:
             dydt[L.Y_FLYWHEEL_SPEED] = -coupling / p[L.P_FLYWHEEL_INERTIA]
         dydt[L.Y_DRUM_ANGLE] = wd
@@ -183,9 +186,7 @@ def evaluate(y, p, fe_left, fe_right, stuck, mode_left, mode_right, dydt, out, r
         ]
 
     o[L.C_DRIVE_TORQUE] = p[L.P_DRIVE_TORQUE]
-    o[L.C_ROAD_LOAD_TORQUE] = (
-        vehicle.road_load_torque(p, y[L.Y_FLYWHEEL_SPEED]) if p[L.P_DRIVEN] > 0.0 else 0.0
-    )
+    o[L.C_ROAD_LOAD_TORQUE] = road
     o[L.C_DRIVE_WORK] = y[L.Y_DRIVE_WORK]
     o[L.C_ROAD_LOAD_WORK] = y[L.Y_ROAD_LOAD_WORK]
     o[L.C_PHASE] = -1.0  # no cycle; fixed_step_advance writes a cycle's segment

@@ -21,10 +21,10 @@ Treating noise samples as a straight-line input would not: interpolation smooths
 samples and removes a quarter of the noise of a sensor whose bandwidth is near the
 Nyquist frequency.
 
-The recursion (:func:`lti_advance`) is a compiled loop over samples that skips exact
-zeros; the state and the last input are carried in :class:`LtiState`, so a stream
-processed in blocks gives the same bits as one long block (the same operations in the
-same order for every sample).
+The recursion (:func:`lti_advance`) is a compiled loop over samples that sums each row's
+products in column order; the state and the last input are carried in :class:`LtiState`,
+so a stream processed in blocks gives the same bits as one long block (the same operations
+in the same order for every sample).
 """
 
 from __future__ import annotations
@@ -245,38 +245,20 @@ def _innovations(
     return None
 
 
-def _rows(*matrices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Row pointers and column indices of the entries where any of ``matrices`` (same
-    shape) is non-zero: the terms a row's sum cannot skip."""
-    nonzero = np.zeros(matrices[0].shape, dtype=bool)
-    for m in matrices:
-        nonzero |= m != 0.0
-    counts = nonzero.sum(axis=1)
-    pointers = np.concatenate(([0], np.cumsum(counts))).astype(np.int64)
-    return pointers, np.nonzero(nonzero)[1].astype(np.int64)
-
-
 class LtiState:
     """The state of one sampled system in a stream: ``x`` at the last sample and that
     sample's input. Before the first sample the system rests at the equilibrium of the
     first input (a brake that starts loaded starts with its structure deflected).
 
-    The recursion skips the terms whose coefficient is exactly zero (a modal structure's
-    ``phi`` is block-diagonal, its outputs read few modes), so its cost follows the
-    system's non-zero entries; the sums keep their order, so the results are those of the
-    full products."""
+    The recursion reads the matrices transposed (:func:`transposed`), so that it adds one
+    column's products to every row at once (:func:`lti_advance`)."""
 
     def __init__(self, system: SampledLti) -> None:
         self.system = system
         self.x = np.zeros(system.a.shape[0])
         self.u_prev = np.zeros(system.n_inputs)
         self.started = False
-        self.pattern = (
-            *_rows(system.phi),
-            *_rows(system.g_prev, system.g_next),
-            *_rows(system.c),
-            *_rows(system.d),
-        )
+        self.transposed = transposed(system.phi, system.g_prev, system.g_next, system.c, system.d)
 
     def advance(self, u: np.ndarray, y: np.ndarray | None = None) -> np.ndarray:
         """Outputs for the input samples ``u`` (shape (k, m)), in place into ``y`` (k, p)
@@ -294,45 +276,59 @@ class LtiState:
             self.started = True
             y[0] = s.c @ self.x + s.d @ u[0]
             start = 1
-        lti_advance(
-            s.phi, s.g_prev, s.g_next, s.c, s.d, *self.pattern, self.x, self.u_prev, u[start:],
-            y[start:],
-        )  # fmt: skip
+        lti_advance(*self.transposed, self.x, self.u_prev, u[start:], y[start:])
         return y
 
 
+def transposed(*matrices: np.ndarray) -> tuple[np.ndarray, ...]:
+    """Each matrix transposed on its last two axes, C-contiguous: the layout
+    :func:`lti_advance` and :func:`brake_sim_ros.model.sensor_paths.analog_advance` read."""
+    return tuple(np.ascontiguousarray(np.swapaxes(m, -1, -2)) for m in matrices)
+
+
 @njit(cache=True)
-def lti_advance(  # pragma: no cover - compiled
-    phi, g_prev, g_next, c, d, phi_p, phi_i, g_p, g_i, c_p, c_i, d_p, d_i, x, u_prev, u, y
-):
+def lti_advance(phi_t, g_prev_t, g_next_t, c_t, d_t, x, u_prev, u, y):  # pragma: no cover
     """Advance ``x`` over the input rows ``u`` (k, m), writing outputs into ``y`` (k, p);
-    ``x`` and ``u_prev`` are updated in place to the last sample. ``*_p``, ``*_i``: row
-    pointers and column indices of the non-zero terms of ``phi``, of ``g_prev`` and
-    ``g_next`` together, of ``c`` and of ``d`` (:func:`_rows`)."""
+    ``x`` and ``u_prev`` are updated in place to the last sample. The matrices come
+    transposed (:func:`transposed`): ``phi_t`` (n, n), ``g_prev_t``, ``g_next_t`` (m, n),
+    ``c_t`` (n, p), ``d_t`` (m, p).
+
+    Every row's sum is ``0 + phi[i, 0] x[0] + ... + (g_prev[i, 0] u_prev[0] + g_next[i, 0]
+    u[0]) + ...`` in column order, the order of the plain row-by-row product, so the bits
+    are those of the full products. The loops run column by column, each adding one
+    column's products to all rows: the inner loop has no dependence between its
+    iterations and runs in vector registers (twice as fast for the modal structure as a
+    row-by-row loop that skipped the zeros, with the same bits)."""
     n_x = x.shape[0]
     n_u = u.shape[1]
-    n_y = c.shape[0]
+    n_y = c_t.shape[1]
     x_new = np.empty(n_x)
+    out = np.empty(n_y)
     for k in range(u.shape[0]):
         for i in range(n_x):
-            acc = 0.0
-            for q in range(phi_p[i], phi_p[i + 1]):
-                j = phi_i[q]
-                acc += phi[i, j] * x[j]
-            for q in range(g_p[i], g_p[i + 1]):
-                j = g_i[q]
-                acc += g_prev[i, j] * u_prev[j] + g_next[i, j] * u[k, j]
-            x_new[i] = acc
+            x_new[i] = 0.0
+        for j in range(n_x):
+            xj = x[j]
+            for i in range(n_x):
+                x_new[i] += phi_t[j, i] * xj
+        for j in range(n_u):
+            before = u_prev[j]
+            now = u[k, j]
+            for i in range(n_x):
+                x_new[i] += g_prev_t[j, i] * before + g_next_t[j, i] * now
         for i in range(n_x):
             x[i] = x_new[i]
         for j in range(n_u):
             u_prev[j] = u[k, j]
         for i in range(n_y):
-            acc = 0.0
-            for q in range(c_p[i], c_p[i + 1]):
-                j = c_i[q]
-                acc += c[i, j] * x[j]
-            for q in range(d_p[i], d_p[i + 1]):
-                j = d_i[q]
-                acc += d[i, j] * u[k, j]
-            y[k, i] = acc
+            out[i] = 0.0
+        for j in range(n_x):
+            xj = x[j]
+            for i in range(n_y):
+                out[i] += c_t[j, i] * xj
+        for j in range(n_u):
+            now = u[k, j]
+            for i in range(n_y):
+                out[i] += d_t[j, i] * now
+        for i in range(n_y):
+            y[k, i] = out[i]

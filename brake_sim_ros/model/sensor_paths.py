@@ -22,7 +22,7 @@ import numpy as np
 from numba import njit
 
 from brake_sim_ros.model import sensor_faults as sf
-from brake_sim_ros.model.lti import SampledLti
+from brake_sim_ros.model.lti import SampledLti, transposed
 
 KIND_CODE: dict[str, int] = {kind: i for i, kind in enumerate(sf.FAULT_KINDS)}
 BIAS_DRIFT, GAIN_ERROR, DROPOUT, STUCK, SATURATION, LOOSE_MOUNT = (
@@ -58,12 +58,13 @@ class PathState:
 
 
 def stack_systems(systems: list[SampledLti]) -> tuple[np.ndarray, ...]:
-    """``(phi, g_prev, g_next, c, d)`` of same-shaped systems stacked on a first axis (the
-    nominal mounting first, then a loose mount's)."""
-    return tuple(
-        np.ascontiguousarray(np.stack([getattr(s, a) for s in systems]))
-        for a in ("phi", "g_prev", "g_next", "c", "d")
+    """``(phi_t, g_prev_t, g_next_t, c, d)`` of same-shaped systems stacked on a first axis
+    (the nominal mounting first, then a loose mount's); the recursion's matrices
+    transposed (:func:`.lti.transposed`), as :func:`analog_advance` reads them."""
+    phi, g_prev, g_next, c, d = (
+        np.stack([getattr(s, a) for s in systems]) for a in ("phi", "g_prev", "g_next", "c", "d")
     )
+    return (*transposed(phi, g_prev, g_next), np.ascontiguousarray(c), np.ascontiguousarray(d))
 
 
 def unit_equilibria(systems: list[SampledLti]) -> np.ndarray:
@@ -162,13 +163,19 @@ def analog_advance(  # pragma: no cover - compiled
     (k,) uint8.
 
     ``phi ... d`` hold the path's sampled systems (index 1: loose mount), of zero size for
-    a path without dynamics; ``x_unit`` their equilibrium states under a unit input;
+    a path without dynamics, ``phi``, ``g_prev`` and ``g_next`` transposed
+    (:func:`stack_systems`); ``x_unit`` their equilibrium states under a unit input;
     ``x`` and ``u_prev`` (the last sample's inputs: scaled true value, then its noise
     draw) their carried state. On the ``first`` block sample 0 starts at rest under its
     input (``x = v x_unit``), output, not advanced to. ``draws`` (k, m): the block's unit
     normal draws (m = 0 without noise), the systems' last inputs (``lti.with_input_noise``);
     ``white_gain`` their scale without dynamics. ``adc_step`` 0: no ADC.
-    ``hold`` is updated in place."""
+    ``hold`` is updated in place.
+
+    The state's rows are summed in column order, one column added to every row at once
+    (as :func:`.lti.lti_advance`); the output's sum skips the terms whose coefficient is
+    exactly 0 (it reads one state of eight): an exact zero product changes no sum that
+    starts at +0.0, so the bits are those of the full products."""
     n_x = phi.shape[1]
     n_draw = draws.shape[1]
     n_u = 1 + n_draw if n_x > 0 else 1
@@ -190,21 +197,27 @@ def analog_advance(  # pragma: no cover - compiled
                     x[i] = v * x_unit[s, i]
             else:
                 for i in range(n_x):
-                    acc = 0.0
-                    for j in range(n_x):
-                        acc += phi[s, i, j] * x[j]
-                    for j in range(n_u):
-                        acc += g_prev[s, i, j] * u_prev[j] + g_next[s, i, j] * u[j]
-                    x_new[i] = acc
+                    x_new[i] = 0.0
+                for j in range(n_x):
+                    xj = x[j]
+                    for i in range(n_x):
+                        x_new[i] += phi[s, j, i] * xj
+                for j in range(n_u):
+                    before = u_prev[j]
+                    now = u[j]
+                    for i in range(n_x):
+                        x_new[i] += g_prev[s, j, i] * before + g_next[s, j, i] * now
                 for i in range(n_x):
                     x[i] = x_new[i]
             for j in range(n_u):
                 u_prev[j] = u[j]
             acc = 0.0
             for j in range(n_x):
-                acc += c[s, 0, j] * x[j]
+                if c[s, 0, j] != 0.0:
+                    acc += c[s, 0, j] * x[j]
             for j in range(n_u):
-                acc += d[s, 0, j] * u[j]
+                if d[s, 0, j] != 0.0:
+                    acc += d[s, 0, j] * u[j]
             v = acc
         elif n_draw > 0:
             v = v + white_gain * draws[k, 0]
