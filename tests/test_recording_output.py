@@ -8,6 +8,7 @@ not at all (a failure or Ctrl-C while writing leaves nothing).
 from __future__ import annotations
 
 import os
+import sys
 from pathlib import Path
 
 import pytest
@@ -164,3 +165,36 @@ def _umask() -> int:
     mask = os.umask(0)
     os.umask(mask)
     return mask
+
+
+def _made_meanwhile(monkeypatch):
+    """Another process makes the missing parent directories after the writer found them
+    missing and before it makes them (the race of a sweep's two workers writing their
+    first runs into one new folder)."""
+    from brake_sim_ros.recording import output
+
+    real = output._missing_parents
+
+    def missing_then_made(directory):
+        missing = real(directory)
+        if sys._getframe(1).f_code.co_name == "atomic_output":  # the writer's own look
+            for d in missing:
+                d.mkdir()
+        return missing
+
+    monkeypatch.setattr(output, "_missing_parents", missing_then_made)
+
+
+def test_a_parent_directory_made_meanwhile_by_another_writer_is_used_not_removed(
+    tmp_path, monkeypatch
+):
+    _made_meanwhile(monkeypatch)
+    target = tmp_path / "samples" / "run=1" / "part-0.parquet"
+    with atomic_output(target, make_parents=True) as tmp:
+        tmp.write_bytes(b"x")
+    assert target.read_bytes() == b"x"
+    # a failing write removes only the directories it made itself, not the other's
+    other = tmp_path / "other" / "run=2" / "part-0.parquet"
+    with pytest.raises(RuntimeError), atomic_output(other, make_parents=True):
+        raise RuntimeError("the writer failed")
+    assert other.parent.is_dir()

@@ -59,6 +59,18 @@ def _missing_parents(directory: Path) -> list[Path]:
     return missing[::-1]
 
 
+def _make_directory(directory: Path, made: list[Path]) -> None:
+    """Make ``directory``, one of ``made``. Another process (a sweep's other worker) may make
+    it between the check and here: a directory made so is used, and dropped from ``made``
+    (not ours to remove); anything else in its place is refused."""
+    try:
+        directory.mkdir()
+    except FileExistsError:
+        if not directory.is_dir():
+            raise
+        made.remove(directory)
+
+
 def same_file(a: str | os.PathLike[str], b: str | os.PathLike[str]) -> bool:
     """Whether two output paths name one file (the same directory and name, or the same
     existing file through another path)."""
@@ -162,8 +174,8 @@ def atomic_output(
     tmp: Path | None = None
     try:
         try:
-            for directory in made:
-                directory.mkdir()
+            for directory in list(made):
+                _make_directory(directory, made)
             tmp = _create_temporary(out)
         except OSError as exc:
             raise OutputError(
