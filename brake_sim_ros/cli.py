@@ -1084,8 +1084,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--detector",
         action="append",
-        help="rms, kurtosis, crest, orders, learned, or module:Class (default rms); repeat it"
-        " to score several",
+        help="rms, kurtosis, crest, orders, impact, learned, or module:Class (default rms);"
+        " repeat it to score several",
     )
     p.add_argument("--split", default="test", help="split to score (default test)")
     p.add_argument("--fit-split", help="split to fit on (default train; not with --model)")
@@ -1112,10 +1112,12 @@ def build_parser() -> argparse.ArgumentParser:
         description="Fit a detector on one split of a sweep's dataset and save it, fitted,"
         " as a JSON file (brake_sim_ros.monitoring.saved documents it) that score --model"
         " and monitor --model load instead of refitting. Saved forms: rms, kurtosis, crest,"
-        " orders, learned.",
+        " orders, impact, learned.",
     )
     p.add_argument("directory", help="a sweep's output directory")
-    p.add_argument("--detector", required=True, help="rms, kurtosis, crest, orders or learned")
+    p.add_argument(
+        "--detector", required=True, help="rms, kurtosis, crest, orders, impact or learned"
+    )
     p.add_argument("--fit-split", default="train", help="split to fit on (default train)")
     p.add_argument("--out", required=True, metavar="MODEL.json", help="the file to write")
     p.add_argument("--overwrite", action="store_true", help="replace an existing --out")

@@ -7,6 +7,8 @@
   threshold, so 1 is the alarm. It detects, it does not isolate: no diagnosis.
 * ``orders``: order analysis of the tone ring (:mod:`.order_analysis`), for a drum that
   is out of round.
+* ``impact``: each stop judged by the shoes' first impacts after the brake is applied
+  (:mod:`.impact`), which detects and isolates the defects of shoe geometry and actuation.
 * ``learned``: a random forest on the shared window features (:mod:`.learned`), which
   detects and isolates.
 
@@ -81,6 +83,12 @@ def _orders() -> Detector:
     return OrderAnalysis()
 
 
+def _impact() -> Detector:
+    from brake_sim_ros.monitoring.impact import ImpactDetector
+
+    return ImpactDetector()
+
+
 def _learned() -> Detector:
     from brake_sim_ros.monitoring.learned import LearnedClassifier
 
@@ -90,6 +98,7 @@ def _learned() -> Detector:
 BUILTIN: dict[str, Callable[[], Detector]] = {
     **{name: (lambda name=name: VibrationThreshold(name)) for name in STATISTICS},
     "orders": _orders,
+    "impact": _impact,
     "learned": _learned,
 }
 __all__ = ["BUILTIN", "STATISTICS", "VibrationThreshold", "crest_factor", "kurtosis", "rms"]

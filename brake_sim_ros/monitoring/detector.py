@@ -161,7 +161,8 @@ class TrainingWindow:
     ``severities`` are those defects' severities there, in each kind's unit, in the order
     of ``defects`` (empty: not known). ``run_id`` and ``last_sample_index`` (the run's
     index of its last sample; -1: not known) let a detector that judges a longer history
-    join consecutive windows."""
+    join consecutive windows; ``unit_id`` (empty: not known) names the brake, so that a
+    detector can judge its healthy scatter on brakes it did not fit."""
 
     channels: Mapping[str, np.ndarray]
     sample_rate_hz: float
@@ -169,6 +170,7 @@ class TrainingWindow:
     run_id: str = ""
     last_sample_index: int = -1
     severities: tuple[float, ...] = field(default=())
+    unit_id: str = ""
 
     @property
     def healthy(self) -> bool:

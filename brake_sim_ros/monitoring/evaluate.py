@@ -173,6 +173,7 @@ def fit(detector: Detector, dataset: SweepDataset, split: str = "train") -> int:
                     run_id=run.run_id,
                     last_sample_index=start + n - 1,
                     severities=run.severities(start + n - 1),
+                    unit_id=run.unit_id,
                 )
             )
     detector.fit(windows)

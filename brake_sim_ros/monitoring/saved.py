@@ -15,7 +15,7 @@ The file (:data:`SCHEMA_VERSION` 1), one JSON object::
 
     format          "brake-sim detector"
     schema_version  1
-    detector        the detector's name: rms, kurtosis, crest, orders, learned
+    detector        the detector's name: rms, kurtosis, crest, orders, impact, learned
     software        brake_sim_ros version that wrote it (informative)
     fitted_on       {"dataset": path, "split": name, "windows": count} (informative)
     parameters      the constructor's arguments (below)
@@ -40,6 +40,13 @@ little-endian bytes, base64-encoded, so numbers come back bit for bit.
   value: the severity in the kind's unit). A forest is ``{"n_features": count,
   "node_counts", "left", "right", "feature": int64 arrays, "threshold": float64 array,
   "leaf_values": float64 array (leaves, outputs)}`` (:class:`~.forest.ForestArrays`).
+* ``impact`` (:class:`~.impact.ImpactDetector`): parameters ``window_s`` (s); state
+  ``sample_rate_hz`` (the rate it was fitted at, Hz), ``coef`` (2, F) (each feature's
+  healthy value at rise rate 0 and its slope per bar/s), ``scale`` (F, > 0), ``location``
+  (F), ``precision`` (F, F), ``rate_mean`` (bar/s), ``threshold`` (> 0),
+  ``healthy_index`` (1-D), ``classes`` (sorted catalogue ``kind:location`` names, may be
+  empty), ``centroids`` (classes, F), ``severity_slope`` (classes; null entries are no
+  estimate), F = :data:`~.impact.N_FEATURES`.
 """
 
 from __future__ import annotations
@@ -63,6 +70,7 @@ from brake_sim_ros.monitoring.baselines import STATISTICS, VibrationThreshold
 from brake_sim_ros.monitoring.detector import Detector
 from brake_sim_ros.monitoring.features import ORDERS, feature_names
 from brake_sim_ros.monitoring.forest import ForestArrays
+from brake_sim_ros.monitoring.impact import N_FEATURES, ImpactDetector
 from brake_sim_ros.monitoring.learned import HEALTHY, LearnedClassifier
 from brake_sim_ros.monitoring.order_analysis import OrderAnalysis
 
@@ -72,7 +80,7 @@ SCHEMA_VERSION = 1
 # (100 trees on 14 040 windows, 18 severity forests) takes 61 MB: a campaign four times
 # its size fits; a larger file is refused before it is read.
 MAX_MODEL_BYTES = 256 * 1024**2
-SAVED = (*STATISTICS, "orders", "learned")  # the detectors that have a saved form
+SAVED = (*STATISTICS, "orders", "impact", "learned")  # the detectors that have a saved form
 TOP_KEYS = (
     "format",
     "schema_version",
@@ -349,15 +357,83 @@ def _load_learned(name: str, p: dict, s: dict, c: _Checker) -> Detector:
     return d
 
 
+def _dump_impact(d: ImpactDetector) -> tuple[dict, dict]:
+    assert d.threshold is not None and d.sample_rate_hz is not None
+    return (
+        {"window_s": d.window_s},
+        {
+            "sample_rate_hz": d.sample_rate_hz,
+            "coef": _array(d.coef, "float64"),
+            "scale": _array(d.scale, "float64"),
+            "location": _array(d.location, "float64"),
+            "precision": _array(d.precision, "float64"),
+            "rate_mean": d.rate_mean,
+            "threshold": d.threshold,
+            "healthy_index": _array(d.healthy_index, "float64"),
+            "classes": list(d.classes),
+            "centroids": _array(d.centroids, "float64"),
+            "severity_slope": [x if math.isfinite(x) else None for x in d.severity_slope],
+        },
+    )
+
+
+def _load_impact(name: str, p: dict, s: dict, c: _Checker) -> Detector:
+    p = c.obj(p, "parameters", ("window_s",))
+    keys = (
+        "sample_rate_hz", "coef", "scale", "location", "precision", "rate_mean", "threshold",
+        "healthy_index", "classes", "centroids", "severity_slope",
+    )  # fmt: skip
+    s = c.obj(s, "state", keys)
+    d = ImpactDetector(window_s=c.positive(p["window_s"], "parameters.window_s", MAX_WINDOW_S))
+    d.sample_rate_hz = c.positive(s["sample_rate_hz"], "state.sample_rate_hz", 1e7)
+    f = N_FEATURES
+    shapes = {"coef": (2, f), "scale": (f,), "location": (f,), "precision": (f, f)}
+    for key, shape in shapes.items():
+        a = c.array(s[key], f"state.{key}", "float64", len(shape))
+        if a.shape != shape:
+            raise c.fail(f"state.{key}", f"allowed shape {list(shape)}")
+        setattr(d, key, a)
+    if not np.all(d.scale > 0.0):
+        raise c.fail("state.scale", "allowed values > 0")
+    d.rate_mean = c.number(s["rate_mean"], "state.rate_mean", -1e9, 1e9)
+    d.threshold = c.positive(s["threshold"], "state.threshold")
+    d.healthy_index = c.array(s["healthy_index"], "state.healthy_index", "float64", 1)
+    classes = s["classes"]
+    if not (isinstance(classes, list) and len(classes) <= len(CLASSES)):
+        raise c.fail("state.classes", f"allowed a list of up to {len(CLASSES)} class names")
+    for x in classes:
+        if c.string(x, "state.classes") not in CLASSES - {HEALTHY}:
+            raise c.fail("state.classes", "an unknown class; allowed catalogue kind:location")
+    if classes != sorted(set(classes)):
+        raise c.fail("state.classes", "allowed distinct names, sorted")
+    d.classes = tuple(classes)
+    centroids = c.array(s["centroids"], "state.centroids", "float64", 2)
+    if centroids.shape != (len(classes), f):
+        raise c.fail("state.centroids", f"allowed shape [{len(classes)}, {f}]")
+    d.centroids = centroids
+    slopes = s["severity_slope"]
+    if not (isinstance(slopes, list) and len(slopes) == len(classes)):
+        raise c.fail("state.severity_slope", "allowed a list of one number or null per class")
+    d.severity_slope = np.array(
+        [
+            math.nan if x is None else c.number(x, "state.severity_slope", -1e12, 1e12)
+            for x in slopes
+        ]
+    )
+    return d
+
+
 _Loader = Callable[[str, dict, dict, _Checker], Detector]
 _CODECS: dict[type, tuple[Callable[[Any], tuple[dict, dict]], _Loader]] = {
     VibrationThreshold: (_dump_threshold, _load_threshold),
     OrderAnalysis: (_dump_orders, _load_orders),
     LearnedClassifier: (_dump_learned, _load_learned),
+    ImpactDetector: (_dump_impact, _load_impact),
 }
 _LOADERS: dict[str, _Loader] = {
     **dict.fromkeys(STATISTICS, _load_threshold),
     "orders": _load_orders,
+    "impact": _load_impact,
     "learned": _load_learned,
 }
 
