@@ -141,6 +141,25 @@ def test_applications_are_found_once_per_stop_after_a_release():
     )
 
 
+def test_fit_refuses_healthy_stops_of_one_unit_in_one_line():
+    """Its threshold judges each unit's healthy stops by a model of the others."""
+    p = np.concatenate([np.zeros(512), np.full(1024, 30.0)])
+    windows = [
+        TrainingWindow(
+            {c: v[s : s + 512] for c, v in _stream(p).items()},
+            RATE,
+            run_id=f"r{k}",
+            last_sample_index=s + 511,
+            unit_id="u0",
+        )
+        for k in range(4)
+        for s in range(0, p.size, 512)
+    ]
+    with pytest.raises(ValueError, match=r"stops of 1 unit\(s\); it needs stops of 3 or more") as e:
+        ImpactDetector().fit(windows)
+    assert "\n" not in str(e.value)
+
+
 def test_fit_refuses_too_few_healthy_stops_in_one_line():
     d = ImpactDetector()
     p = np.concatenate([np.zeros(512), np.full(1024, 30.0)])

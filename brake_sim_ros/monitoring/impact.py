@@ -272,7 +272,7 @@ class ImpactDetector(Detector):
         held_out = []
         for g in sorted(set(groups)):
             rest = groups != g
-            if rest.sum() < MIN_HEALTHY_STOPS:
+            if rest.sum() < 2:
                 continue
             self.coef, self.scale, self.location, self.precision = self._healthy_model(
                 F[rest], rates[rest]
@@ -280,8 +280,8 @@ class ImpactDetector(Detector):
             held_out += [self._distance(f, r) for f, r in zip(F[~rest], rates[~rest], strict=True)]
         if len(held_out) < 2:
             raise ValueError(
-                f"detector {self.name}: healthy training stops of {len(set(groups))} units;"
-                " it needs stops of 2 or more units (or runs) to judge one it did not see"
+                f"detector {self.name}: healthy training stops of {len(set(groups))} unit(s);"
+                " it needs stops of 3 or more units (or runs), each judged by a model of others"
             )
         self.coef, self.scale, self.location, self.precision = self._healthy_model(F, rates)
         self.threshold = float(max(held_out))

@@ -40,7 +40,8 @@ from brake_sim_ros.model.catalogue import KIND_BY_NAME
 from brake_sim_ros.monitoring import saved
 from brake_sim_ros.monitoring.baselines import VibrationThreshold
 from brake_sim_ros.monitoring.detector import Diagnosis as DetectorDiagnosis
-from brake_sim_ros.monitoring.detector import chunk_from_measured
+from brake_sim_ros.monitoring.detector import TrainingWindow, chunk_from_measured
+from brake_sim_ros.monitoring.impact import ImpactDetector
 from brake_sim_ros.recording.reader import open_recording
 from brake_sim_ros.recording.record import record_offline
 from brake_sim_ros.ros.harness import domain_id_for, ros_environment
@@ -366,6 +367,61 @@ def test_the_monitor_runs_a_saved_detector_as_offline(recording, threshold, tmp_
     assert f"rms loaded from {model}" in output
     assert _verdicts(ears.health) == expected
     assert {h.detector for h in ears.health} == {"rms"} and not ears.diagnoses
+
+
+def _impact_fitted_on(measured: list[MeasuredChunk]) -> ImpactDetector:
+    """The impact baseline fitted on three made-up healthy "units": the recording's stop
+    with its accelerations scaled by 0.5, 0.6 and 0.7 (so the recording itself, at 1, is
+    far from them and alarms), windows of 0.1 s as ``brake-sim score`` cuts them."""
+    chunks = [chunk_from_measured(m) for m in measured]
+    channels = {
+        c: np.concatenate([k.channels[c] for k in chunks]) for c in ImpactDetector().channels
+    }
+    windows = []
+    for u, gain in enumerate((0.5, 0.6, 0.7)):
+        scaled = {c: v * gain if c.startswith("backing_plate") else v for c, v in channels.items()}
+        for s in range(0, len(channels["line_pressure"]) - 511, 512):
+            windows.append(
+                TrainingWindow(
+                    {c: v[s : s + 512] for c, v in scaled.items()},
+                    5120.0,
+                    run_id=f"r{u}",
+                    last_sample_index=s + 511,
+                    unit_id=f"u{u}",
+                )
+            )
+    detector = ImpactDetector()
+    detector.fit(windows)
+    return detector
+
+
+def test_the_monitor_runs_the_impact_baseline_as_offline(recording, threshold, tmp_path):
+    """A detector that carries state from message to message (it finds the application in
+    one message and judges it in a later one, then holds the verdict): a saved impact
+    detector gives, live, the health index and alarms of the same detector run offline
+    over the recording's messages, bit for bit."""
+    _path, measured, _run = recording
+    detector = _impact_fitted_on(measured)
+    model = tmp_path / "impact.json"
+    model.write_text(
+        saved.dumps(detector, fitted_on={"dataset": "test", "split": "train", "windows": 0})
+    )
+    offline = [a for m in measured for a in detector.feed(chunk_from_measured(m))]
+    window = detector.window_samples(5120.0)
+    expected = [
+        (a.sample_index - window + 1, a.sample_index, a.health_index, a.alarm) for a in offline
+    ]
+    assert expected[0][2] == 0.0 and expected[-1][3]  # no verdict, then the stop's alarm
+    log = tmp_path / "monitor.log"
+    with _monitoring(14, threshold, log, ["--detector", "impact", "--model", str(model)]) as ears:
+        for msg in measured:
+            ears.measured.publish(msg)
+            ears.spin_until(lambda: False, 0.05)
+        ears.spin_until(lambda: len(ears.health) >= len(expected), 10.0)
+    output = log.read_text()
+    assert ears.exit_code == 0, output
+    assert _verdicts(ears.health) == expected
+    assert {h.detector for h in ears.health} == {"impact"}
 
 
 def _value(status: DiagnosticStatus, key: str) -> str | None:
