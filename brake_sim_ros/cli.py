@@ -638,6 +638,13 @@ def cmd_score(args: argparse.Namespace) -> int:
                 f" ({100 * figures['rmse_of_service_limit']:.0f} % of the service limit),"
                 f" mean error {figures['mean_error']:+.4g} over {figures['windows']} windows"
             )
+        forecast = score["forecast"]
+        if forecast is not None:
+            print(
+                f"  remaining useful life: rmse {forecast['rmse_s']:.4g} s, mean error"
+                f" {forecast['mean_error_s']:+.4g} s, asymmetric score"
+                f" {forecast['rul_score']:.4g} over {forecast['windows']} windows"
+            )
     if args.out:
         text = json.dumps(scores[0], indent=1, sort_keys=True)
         replace_output(args.out, lambda tmp: tmp.write_text(text + "\n"))

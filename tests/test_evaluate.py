@@ -170,3 +170,65 @@ def test_the_baselines_report_is_written_whole_and_the_same_twice(dataset, tmp_p
     assert cli.main(["score", str(dataset.root), "--detector", "orders"]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "healthy training histories" in err
+
+
+# A pivot radius growing linearly from 0 at t = 0 at 1.5 %/s toward 4 %: it reaches the 3 %
+# service limit at 2 s, after the runs' 0.5 s, so each run's ``rul [s]`` label is 2 - t
+# (its growth law's time, datasets/life.py).
+GROWING = """
+name = "growing"
+duration_s = 0.5
+sample_rate_hz = 2560.0
+[defects.left]
+pivot_radius_change_pct = {value = 4.0, growth = "linear", rate_per_s = 1.5}
+"""
+FORECAST_CAMPAIGN = """
+name = "forecast"
+base = "growing.toml"
+seed = 9
+units = 3
+[[axes]]
+name = "peak_force_n"
+key = "actuation.peak_force_n"
+values = [1000.0, 1300.0]
+"""
+LATE_S = 0.25
+
+
+class LateForecast(Detector):
+    """Forecasts the remaining life LATE_S too late at every other window (and gives no
+    forecast at the others): every scored forecast is off by +LATE_S."""
+
+    name = "late"
+    channels = ("backing_plate_accel_y",)
+    window_s = 0.05
+
+    def assess(
+        self, window: Mapping[str, np.ndarray], last_sample_index: int, sample_rate_hz: float
+    ) -> Assessment:
+        t = last_sample_index / sample_rate_hz
+        n = round(self.window_s * sample_rate_hz)
+        rul = 2.0 - t + LATE_S if (last_sample_index // n) % 2 else float("nan")
+        return Assessment(last_sample_index, t, 0.0, False, rul_s=rul)
+
+
+def test_forecasts_are_scored_against_the_rul_label(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("forecast")
+    (folder / "growing.toml").write_text(GROWING)
+    (folder / "forecast.toml").write_text(FORECAST_CAMPAIGN)
+    sweep(load_campaign(folder / "forecast.toml"), folder / "out", workers=2, quiet=True)
+    data = open_dataset(folder / "out")
+    run = evaluate.read_run(data, data.runs("test")[0])
+    assert run.rul_s is not None
+    np.testing.assert_allclose(run.rul_s, 2.0 - run.time_s, atol=1e-9)
+    score = evaluate.score(LateForecast(), data, "test")
+    runs = score["runs"]
+    assert runs == 2  # one test unit, two forces
+    windows = runs * 10 // 2  # 10 windows of 0.05 s per run, every other one forecast
+    f = score["forecast"]
+    assert f["windows"] == windows
+    assert f["rmse_s"] == pytest.approx(LATE_S, abs=1e-9)
+    assert f["mean_error_s"] == pytest.approx(LATE_S, abs=1e-9)
+    assert f["rul_score"] == pytest.approx(windows * np.expm1(LATE_S / 10.0), rel=1e-9)
+    # a detector that never forecasts has no forecast figures
+    assert evaluate.score(AlwaysAlarm(), data, "test")["forecast"] is None

@@ -145,13 +145,18 @@ class Diagnosis:
 
 @dataclass(frozen=True)
 class Assessment:
-    """A detector's verdict on the window ending at ``sample_index`` (time ``time_s``)."""
+    """A detector's verdict on the window ending at ``sample_index`` (time ``time_s``).
+    ``rul_s``: its forecast of the brake's remaining useful life there, s of operation
+    until the first defect reaches its kind's service limit (``brake-sim defects``), >= 0;
+    NaN when it gives none (the scorer's ``forecast`` figures compare it with the run's
+    ``rul [s]`` label)."""
 
     sample_index: int
     time_s: float
     health_index: float
     alarm: bool
     diagnosis: Diagnosis | None = None
+    rul_s: float = math.nan
 
 
 @dataclass(frozen=True)

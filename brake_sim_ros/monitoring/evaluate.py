@@ -32,6 +32,13 @@ The score (:func:`score`, written as JSON by ``brake-sim score``; :data:`SCHEMA_
     kind's service limit, ``brake-sim defects``: comparable across kinds); null when the
     detector gives no finite severity (new in version 3: ``windows`` and ``per_class``;
     version 2 compared a wrong diagnosis's severity against 0)
+``forecast``: when the detector forecasts the remaining useful life (``Assessment.rul_s``),
+    over the windows of runs with a ``rul [s]`` label where both the forecast and the label
+    are finite (a censored run's windows are not scored): ``windows``, ``rmse_s``,
+    ``mean_error_s`` (forecast minus true: negative is early) and ``rul_score`` (the
+    asymmetric C-MAPSS score, :func:`~.metrics.rul_score`, with its scales read in s: a late
+    forecast costs more than an early one by as much); null when it gives no finite
+    forecast there (new in version 4)
 ``per_run``: one object per run: ``run_id``, ``unit_id``, ``defects`` (kind:location
     labels active at the end), ``onset_s``, ``delay_s``, ``false_alarms``
 """
@@ -44,12 +51,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from brake_sim_ros.datasets.life import RUL_COLUMN
 from brake_sim_ros.datasets.reader import SweepDataset
 from brake_sim_ros.model.catalogue import KIND_BY_NAME, KINDS, label_column
 from brake_sim_ros.monitoring import metrics
 from brake_sim_ros.monitoring.detector import Assessment, Detector, SampleChunk, TrainingWindow
 
-SCHEMA_VERSION = 3
+SCHEMA_VERSION = 4
 HEALTHY = "healthy"  # the class of a healthy window or run in the per-class figures
 MEASURED_PREFIX = "measured:"
 # label column -> "kind:location", the catalogue's (``brake-sim defects``)
@@ -67,6 +75,7 @@ class RunSamples:
     channels: dict[str, np.ndarray]
     label_names: tuple[str, ...]  # "kind:location"
     labels: np.ndarray  # (n, len(label_names)) severities, 0 where absent
+    rul_s: np.ndarray | None = None  # (n,) the ``rul [s]`` label (NaN: censored); None: none
 
     def active(self, row: int) -> tuple[tuple[str, str], ...]:
         """``(kind, location)`` of the defects active at sample ``row``."""
@@ -109,6 +118,7 @@ def read_run(dataset: SweepDataset, run_id: str) -> RunSamples:
         else np.zeros((time_s.size, 0))
     )
     unit = dataset.manifest.filter(dataset.manifest["run_id"].to_numpy() == run_id)
+    rul = table[RUL_COLUMN].to_numpy().astype(np.float64) if RUL_COLUMN in names else None
     return RunSamples(
         run_id=run_id,
         unit_id=str(unit["unit_id"][0]) if unit.num_rows else "",
@@ -117,6 +127,7 @@ def read_run(dataset: SweepDataset, run_id: str) -> RunSamples:
         channels=channels,
         label_names=tuple(LABELS[c] for c in label_cols),
         labels=labels,
+        rul_s=rul,
     )
 
 
@@ -139,6 +150,17 @@ def _severity_figures(severities: dict[str, list[tuple[float, float]]]) -> dict:
         "windows": int(every.shape[0]),
         "rmse": metrics.rmse(every[:, 0], every[:, 1]),
         "per_class": per_class,
+    }
+
+
+def _forecast_figures(pairs: list[tuple[float, float]]) -> dict:
+    """The score's ``forecast`` object (module docstring) from (forecast, true) RUL, s."""
+    est, true = np.array(pairs).T
+    return {
+        "windows": len(pairs),
+        "rmse_s": metrics.rmse(est, true),
+        "mean_error_s": float(np.mean(est - true)),
+        "rul_score": metrics.rul_score(est, true),
     }
 
 
@@ -198,6 +220,7 @@ def score(
     fa_count, fa_hours = 0, 0.0
     truth, index, true_class, diagnosed = [], [], [], []
     severities: dict[str, list[tuple[float, float]]] = {}  # class -> (estimate, true)
+    forecasts: list[tuple[float, float]] = []  # (forecast, true) RUL, s
     window_class: list[str] = []
     run_class: dict[str, list[float | None]] = {}
     for run_id in dataset.runs(split):
@@ -213,6 +236,10 @@ def score(
             ":".join(run.active(int(row))[0]) if bad else HEALTHY
             for row, bad in zip(rows, defective, strict=True)
         )
+        if run.rul_s is not None:
+            for a, row in zip(found, rows, strict=True):
+                if math.isfinite(a.rul_s) and math.isfinite(run.rul_s[row]):
+                    forecasts.append((float(a.rul_s), float(run.rul_s[row])))
         onset = run.onset_index
         onset_s = None if onset is None else float(run.time_s[onset])
         delay = None
@@ -307,5 +334,6 @@ def score(
             else None
         ),
         "severity": _severity_figures(severities) if severities else None,
+        "forecast": _forecast_figures(forecasts) if forecasts else None,
         "per_run": per_run,
     }

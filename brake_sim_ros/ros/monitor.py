@@ -385,6 +385,7 @@ class MonitorNode(Node):
             health_index=float(a.health_index),
             alarm=bool(a.alarm),
             has_diagnosis=diagnosis is not None,
+            rul_s=float(getattr(a, "rul_s", math.nan)),
         )
         self._health.publish(health)
         if diagnosis is not None:
@@ -412,6 +413,7 @@ class MonitorNode(Node):
             "last_sample_index": "" if last is None else str(last.last_sample_index),
             "last_health_index": "" if last is None else f"{last.health_index:.6g}",
             "last_alarm": "" if last is None else str(last.alarm).lower(),
+            "last_rul_s": "" if last is None else f"{last.rul_s:.6g}",
             "warn_level": f"{self.warn_level:g}",
             **{k: str(v) for k, v in vars(self.stats).items()},
         }

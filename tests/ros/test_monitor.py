@@ -16,6 +16,7 @@ windows alarm and the comparison is not all-False.
 from __future__ import annotations
 
 import contextlib
+import math
 import os
 import subprocess
 import sys
@@ -422,6 +423,7 @@ def test_the_monitor_runs_the_impact_baseline_as_offline(recording, threshold, t
     assert ears.exit_code == 0, output
     assert _verdicts(ears.health) == expected
     assert {h.detector for h in ears.health} == {"impact"}
+    assert all(math.isnan(h.rul_s) for h in ears.health)  # it forecasts nothing
 
 
 def _value(status: DiagnosticStatus, key: str) -> str | None:
@@ -466,6 +468,7 @@ def test_message_fields():
         "health_index": "double",
         "alarm": "boolean",
         "has_diagnosis": "boolean",
+        "rul_s": "double",
     }
     assert Diagnosis.get_fields_and_field_types() == {
         "header": "std_msgs/Header",
