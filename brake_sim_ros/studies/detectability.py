@@ -12,11 +12,12 @@ brakes they were not trained on, at a stated false-alarm rate.
    ``--duration`` s runs (default 2: the order detector judges the quiet sliding after
    the impacts, from about 1.2 s) at 5120 Hz keeping the measured channels and the
    labels only.
-2. Each detector (default ``orders`` and ``learned``) is fitted on the train units.
-   Its alarm threshold is then set on healthy training data at the stated false-alarm
-   rate: the ``1 - F`` quantile (default F = 0.01) of the health index over healthy
-   training windows (the detector's own ``healthy_index`` where it keeps one: the learned
-   baseline's is out of fold; else its assessments of the healthy training runs).
+2. Each detector (default ``orders``, ``impact`` and ``learned``) is fitted on the train
+   units. Its alarm threshold is then set on healthy training data at the stated
+   false-alarm rate: the ``1 - F`` quantile (default F = 0.01) of the health index over
+   healthy training windows (the detector's own ``healthy_index`` where it keeps one: the
+   learned baseline's is out of fold, the impact baseline's is its healthy training stops
+   judged out of unit; else its assessments of the healthy training runs).
 3. On the test units, a defective run is detected when an alarm is held 0.2 s at or
    after its onset (:mod:`brake_sim_ros.monitoring.metrics`). The table gives, per kind
    (its locations together) and detector, the detected share at each fraction, and the
@@ -198,7 +199,7 @@ def main(argv: list[str]) -> int:
     parser.add_argument("--out", required=True, help="the study's dataset directory")
     parser.add_argument("--units", type=int, default=6, help="units (default 6: 4 train, 2 test)")
     parser.add_argument("--duration", type=float, default=2.0, help="run length, s (default 2)")
-    parser.add_argument("--detectors", default="orders,learned", help="comma-separated")
+    parser.add_argument("--detectors", default="orders,impact,learned", help="comma-separated")
     parser.add_argument(
         "--false-alarm",
         type=float,
