@@ -284,6 +284,11 @@ class ImpactDetector(Detector):
                 " it needs stops of 3 or more units (or runs), each judged by a model of others"
             )
         self.coef, self.scale, self.location, self.precision = self._healthy_model(F, rates)
+        if not max(held_out) > 0.0:
+            raise ValueError(
+                f"detector {self.name}: the healthy training stops do not differ; it needs"
+                " their scatter to set a threshold"
+            )
         self.threshold = float(max(held_out))
         self.healthy_index = np.array(held_out) / self.threshold
         by_class: dict[str, list[tuple[np.ndarray, float]]] = {}
