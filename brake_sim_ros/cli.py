@@ -33,6 +33,7 @@ if TYPE_CHECKING:  # the CLI imports the numerics only when a command needs them
     from brake_sim_ros.viz.targets import RerunTarget
 
 EXIT_ERROR = 2
+EXIT_BROKEN_PIPE = 141  # 128 + SIGPIPE, what a shell reports for a pipe its reader closed
 
 
 def _progress(label: str):
@@ -1169,6 +1170,18 @@ PHYSICS_COMMANDS = ("node", "live", "simulate", "validate", "bench", "severity",
 
 
 def main(argv: list[str] | None = None) -> int:
+    """``brake-sim ...``: the exit status (0, or a one-line error's)."""
+    try:
+        return _main(argv)
+    except BrokenPipeError:
+        # the reader of stdout went away (`brake-sim defects | head`): no traceback, and no
+        # second error when Python flushes stdout at exit
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        return EXIT_BROKEN_PIPE
+
+
+def _main(argv: list[str] | None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     if argv[:1] and argv[0] in PHYSICS_COMMANDS and not {"-h", "--help"} & set(argv):
         from brake_sim_ros.solvers.warmup import ensure_compiled

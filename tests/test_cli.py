@@ -412,3 +412,20 @@ def test_two_edges_in_one_sample_interval_are_refused():
     )
     with pytest.raises(ValueError, match="more than one edge"):
         edges_on_rows(t, np.array([0.21, 0.29]))
+
+
+def test_a_reader_that_closes_the_pipe_gets_no_traceback():
+    """``brake-sim defects | head -1``: the reader has closed the pipe (here before the
+    CLI writes anything, so the write fails whatever the timing); the CLI stops quietly
+    with 141 (128 + SIGPIPE), as a shell tool does, not with a traceback."""
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "brake_sim_ros.cli", "defects"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        bufsize=0,
+    )
+    assert proc.stdout is not None and proc.stderr is not None
+    proc.stdout.close()  # the reader goes away before the listing is written
+    err = proc.stderr.read().decode()
+    assert proc.wait(timeout=60) == 141, err
+    assert "Traceback" not in err and "BrokenPipe" not in err
