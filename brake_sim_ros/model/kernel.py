@@ -608,7 +608,8 @@ def fixed_step_advance(
     # geometry in between (held: a step without a located switch, no lock). Not with
     # growing defects (they move the geometry each step) or a shoe removed (its switching
     # function is not its kinematics'); the kinematics read the drum speed, which the
-    # evaluation takes as 0 while the drum sticks, only on an out-of-round drum.
+    # evaluation takes as 0 while the drum sticks, only on an out-of-round drum. The
+    # other schemes take the contact flags from the first evaluation's kinematics.
     bl = L.P_SHOE_BASE
     br = L.P_SHOE_BASE + L.SHOE_STRIDE
     can_hold = located and not growing and p[bl + L.S_ENABLED] > 0.0 and p[br + L.S_ENABLED] > 0.0
@@ -641,20 +642,24 @@ def fixed_step_advance(
         fel = _force(pw, L.P_SHOE_BASE, t, tl, fl, gl)
         fer = _force(pw, L.P_SHOE_BASE + L.SHOE_STRIDE, t, tr, fr, gr)
         record = i % record_every == 0
-        row = rows if record else -1
-        if held and (round_drum or not stuck):
-            _evaluate_from(y, pw, fel, fer, stuck, auto, auto, kin_l, kin_r, k1, out, row, t)
-        else:
-            evaluate(y, pw, fel, fer, stuck, auto, auto, k1, out, row, t)
+        if not (held and (round_drum or not stuck)):
+            wa = y[L.Y_DRUM_ANGLE]
+            wd = 0.0 if stuck else y[L.Y_DRUM_SPEED]
+            kin_l = contact.kinematics(pw, bl, y[L.Y_LEFT_ANGLE], y[L.Y_LEFT_SPEED], wa, wd)
+            kin_r = contact.kinematics(pw, br, y[L.Y_RIGHT_ANGLE], y[L.Y_RIGHT_SPEED], wa, wd)
         held = False
+        row = rows if record else -1
+        _evaluate_from(y, pw, fel, fer, stuck, auto, auto, kin_l, kin_r, k1, out, row, t)
         if located:
             touching_l = 1 if h_end[0] > 0.0 else 0
             touching_r = 1 if h_end[2] > 0.0 else 0
             h_start[0] = h_end[1]
             h_start[1] = h_end[3]
         else:
-            touching_l = 1 if _shoe_switch(pw, 0, y)[0] > 0.0 else 0
-            touching_r = 1 if _shoe_switch(pw, 1, y)[0] > 0.0 else 0
+            # the indentation of the evaluation's kinematics: the switching function's
+            # (it does not read the drum speed), of a shoe in the model
+            touching_l = 1 if pw[bl + L.S_ENABLED] > 0.0 and kin_l[0] > 0.0 else 0
+            touching_r = 1 if pw[br + L.S_ENABLED] > 0.0 and kin_r[0] > 0.0 else 0
         _update_regime(
             kstate,
             L.K_LEFT_REGIME,
