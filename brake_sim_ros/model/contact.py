@@ -230,9 +230,15 @@ def switching_function(p, base, theta, omega, drum_angle, drum_speed):
     """
     if p[base + L.S_ENABLED] <= 0.0:
         return -1.0, -1.0
-    k = kinematics(p, base, theta, omega, drum_angle, drum_speed)
-    eps = k[0]
-    g = eps + p[L.P_CONTACT_DAMPING] / p[L.P_CONTACT_STIFFNESS] * k[1]
+    return switching_of(p, kinematics(p, base, theta, omega, drum_angle, drum_speed))
+
+
+@njit(cache=True, inline="always")
+def switching_of(p, kin):
+    """:func:`switching_function` (``eps`` and ``h``, m) of a shoe in the model from its
+    contact kinematics ``kin`` (:func:`kinematics`)."""
+    eps = kin[0]
+    g = eps + p[L.P_CONTACT_DAMPING] / p[L.P_CONTACT_STIFFNESS] * kin[1]
     return eps, min(eps, g)
 
 

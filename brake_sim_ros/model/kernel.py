@@ -77,11 +77,23 @@ def evaluate(y, p, fe_left, fe_right, stuck, mode_left, mode_right, dydt, out, r
     at rest, the shoes' friction carries the coupling torque, and the flywheel moves on.
     """
     wd = 0.0 if stuck else y[L.Y_DRUM_SPEED]
+    wa = y[L.Y_DRUM_ANGLE]
+    kl = contact.kinematics(p, L.P_SHOE_BASE, y[L.Y_LEFT_ANGLE], y[L.Y_LEFT_SPEED], wa, wd)
+    kr = contact.kinematics(
+        p, L.P_SHOE_BASE + L.SHOE_STRIDE, y[L.Y_RIGHT_ANGLE], y[L.Y_RIGHT_SPEED], wa, wd
+    )
+    _evaluate_from(y, p, fe_left, fe_right, stuck, mode_left, mode_right, kl, kr, dydt, out, row, t)
+
+
+@njit(cache=True, inline="always")
+def _evaluate_from(
+    y, p, fe_left, fe_right, stuck, mode_left, mode_right, kl, kr, dydt, out, row, t
+):
+    """:func:`evaluate` given the shoes' contact kinematics ``kl`` and ``kr``
+    (:func:`.contact.kinematics` of ``y``, at the drum speed :func:`evaluate` uses)."""
+    wd = 0.0 if stuck else y[L.Y_DRUM_SPEED]
     bl = L.P_SHOE_BASE
     br = L.P_SHOE_BASE + L.SHOE_STRIDE
-    wa = y[L.Y_DRUM_ANGLE]
-    kl = contact.kinematics(p, bl, y[L.Y_LEFT_ANGLE], y[L.Y_LEFT_SPEED], wa, wd)
-    kr = contact.kinematics(p, br, y[L.Y_RIGHT_ANGLE], y[L.Y_RIGHT_SPEED], wa, wd)
     fnl = contact.normal_force(p, bl, kl[0], kl[1], mode_left)
     fnr = contact.normal_force(p, br, kr[0], kr[1], mode_right)
     vl = contact.sliding_speed(kl, wd)
@@ -590,6 +602,21 @@ def fixed_step_advance(
     if located:
         h_end[0], h_end[1] = _shoe_switch(pw, 0, y)
         h_end[2], h_end[3] = _shoe_switch(pw, 1, y)
+    # The located scheme tests the contact switches on the state that ends a step; the
+    # next step's first evaluation needs the same contact kinematics of the same state, so
+    # it takes them (kin_l, kin_r; same bits) while nothing changed the state or the
+    # geometry in between (held: a step without a located switch, no lock). Not with
+    # growing defects (they move the geometry each step) or a shoe removed (its switching
+    # function is not its kinematics'); the kinematics read the drum speed, which the
+    # evaluation takes as 0 while the drum sticks, only on an out-of-round drum. The
+    # other schemes take the contact flags from the first evaluation's kinematics.
+    bl = L.P_SHOE_BASE
+    br = L.P_SHOE_BASE + L.SHOE_STRIDE
+    can_hold = located and not growing and p[bl + L.S_ENABLED] > 0.0 and p[br + L.S_ENABLED] > 0.0
+    round_drum = p[L.P_DRUM_WAVE_COUNT] <= 0.0 and p[L.P_FLAT_DEPTH] <= 0.0
+    held = False
+    kin_l = contact.kinematics(pw, bl, 0.0, 0.0, 0.0, 0.0)
+    kin_r = kin_l
     for i in range(n_steps):
         step = step0 + i
         t = step * dt
@@ -615,15 +642,24 @@ def fixed_step_advance(
         fel = _force(pw, L.P_SHOE_BASE, t, tl, fl, gl)
         fer = _force(pw, L.P_SHOE_BASE + L.SHOE_STRIDE, t, tr, fr, gr)
         record = i % record_every == 0
-        evaluate(y, pw, fel, fer, stuck, auto, auto, k1, out, rows if record else -1, t)
+        if not (held and (round_drum or not stuck)):
+            wa = y[L.Y_DRUM_ANGLE]
+            wd = 0.0 if stuck else y[L.Y_DRUM_SPEED]
+            kin_l = contact.kinematics(pw, bl, y[L.Y_LEFT_ANGLE], y[L.Y_LEFT_SPEED], wa, wd)
+            kin_r = contact.kinematics(pw, br, y[L.Y_RIGHT_ANGLE], y[L.Y_RIGHT_SPEED], wa, wd)
+        held = False
+        row = rows if record else -1
+        _evaluate_from(y, pw, fel, fer, stuck, auto, auto, kin_l, kin_r, k1, out, row, t)
         if located:
             touching_l = 1 if h_end[0] > 0.0 else 0
             touching_r = 1 if h_end[2] > 0.0 else 0
             h_start[0] = h_end[1]
             h_start[1] = h_end[3]
         else:
-            touching_l = 1 if _shoe_switch(pw, 0, y)[0] > 0.0 else 0
-            touching_r = 1 if _shoe_switch(pw, 1, y)[0] > 0.0 else 0
+            # the indentation of the evaluation's kinematics: the switching function's
+            # (it does not read the drum speed), of a shoe in the model
+            touching_l = 1 if pw[bl + L.S_ENABLED] > 0.0 and kin_l[0] > 0.0 else 0
+            touching_r = 1 if pw[br + L.S_ENABLED] > 0.0 and kin_r[0] > 0.0 else 0
         _update_regime(
             kstate,
             L.K_LEFT_REGIME,
@@ -680,8 +716,20 @@ def fixed_step_advance(
             )
             accept = True
             if located:
-                el, hl = _shoe_switch(pw, 0, y_new)
-                er, hr = _shoe_switch(pw, 1, y_new)
+                if can_hold:
+                    wa = y_new[L.Y_DRUM_ANGLE]
+                    wn = y_new[L.Y_DRUM_SPEED]
+                    kin_l = contact.kinematics(
+                        pw, bl, y_new[L.Y_LEFT_ANGLE], y_new[L.Y_LEFT_SPEED], wa, wn
+                    )
+                    kin_r = contact.kinematics(
+                        pw, br, y_new[L.Y_RIGHT_ANGLE], y_new[L.Y_RIGHT_SPEED], wa, wn
+                    )
+                    el, hl = contact.switching_of(pw, kin_l)
+                    er, hr = contact.switching_of(pw, kin_r)
+                else:
+                    el, hl = _shoe_switch(pw, 0, y_new)
+                    er, hr = _shoe_switch(pw, 1, y_new)
                 if (hl > 0.0) != (h_start[0] > 0.0) or (hr > 0.0) != (h_start[1] > 0.0):
                     # a contact switches inside this step: redo it split at the switches
                     fstate[L.F_SWITCHES] += _located_step(
@@ -693,6 +741,7 @@ def fixed_step_advance(
                     h_end[1] = hl
                     h_end[2] = er
                     h_end[3] = hr
+                    held = can_hold
             if accept:
                 for j in range(n):
                     y[j] = y_new[j]
@@ -711,6 +760,7 @@ def fixed_step_advance(
             if fstate[L.F_WHEEL_LOCK_TIME] < 0.0:
                 fstate[L.F_WHEEL_LOCK_TIME] = t_stick
             loss = standstill.stick(pw, y)
+            held = False
             fstate[L.F_LOCK_LOSS] += loss
             if heating:  # the kinetic energy the lock removes heats the brake
                 y[L.Y_BRAKE_TEMPERATURE] += loss / p[L.P_HEAT_CAPACITY]

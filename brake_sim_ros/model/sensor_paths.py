@@ -280,3 +280,16 @@ def tone_ring_advance(  # pragma: no cover - compiled
         pulse[k] = _hold(p, stuck, dropped, pulse_hold)
         index[k] = _hold(q, stuck, dropped, index_hold)
     return n_edges
+
+
+@njit(cache=True)
+def gather_columns(data, by_row, by_row_out, by_column, by_column_out):  # pragma: no cover
+    """Copy the columns ``by_row`` (int64 indices) of ``data`` (n, c) into ``by_row_out``
+    (n, len(by_row)) and the columns ``by_column`` into the rows of ``by_column_out``
+    (len(by_column), n), in one pass over ``data``'s rows: what a sensor bank reads of a
+    sample block, each channel's input then contiguous, for one read of the block."""
+    for k in range(data.shape[0]):
+        for j in range(by_row.shape[0]):
+            by_row_out[k, j] = data[k, by_row[j]]
+        for j in range(by_column.shape[0]):
+            by_column_out[j, k] = data[k, by_column[j]]

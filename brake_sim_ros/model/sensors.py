@@ -94,12 +94,13 @@ from brake_sim_ros.model.sensor_paths import (
     PathState,
     analog_advance,
     fault_table,
+    gather_columns,
     no_systems,
     stack_systems,
     tone_ring_advance,
     unit_equilibria,
 )
-from brake_sim_ros.model.structure import AXES, Structure, StructureParameters
+from brake_sim_ros.model.structure import AXES, FORCE_COLUMNS, Structure, StructureParameters
 from brake_sim_ros.model.trajectory import SampleBlock
 
 STANDARD_GRAVITY_M_S2 = 9.80665
@@ -636,23 +637,68 @@ class SensorBank:
             for c in sensors.channels
             if c.kind == "accelerometer" and self.structure is not None
         }
+        # the block's columns the channels read, gathered once per block (time first)
+        read = ["time_s"]
+        for c in sensors.channels:
+            read.extend(n for n in self._inputs_of(c) if n not in read)
+        self._read_columns = tuple(read)
+        self._gather_plans: dict[tuple[str, ...], tuple[np.ndarray, np.ndarray]] = {}
+
+    @staticmethod
+    def _inputs_of(channel: SensorChannel) -> tuple[str, ...]:
+        """The sample-block columns :meth:`true_value` reads for ``channel`` (none for an
+        accelerometer: it reads the structure)."""
+        if channel.kind == "wheel_speed":
+            return ("drum_angle_rad",)
+        if channel.kind == "load_pin":
+            return (f"{channel.location}_pivot_f{channel.axis}_n",)
+        if channel.kind == "line_pressure":
+            return ("left_actuation_force_n", "right_actuation_force_n")
+        return ()
+
+    def _gather(self, block: SampleBlock) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+        """The structure's pivot forces (n, 4), N (n, 0 without a structure), and each
+        column the channels read as a contiguous array, by name, from one pass over the
+        block."""
+        plan = self._gather_plans.get(block.columns)
+        if plan is None:
+            forces = FORCE_COLUMNS if self.structure is not None else ()
+            plan = self._gather_plans[block.columns] = (
+                np.array([block.index_of(n) for n in forces], dtype=np.int64),
+                np.array([block.index_of(n) for n in self._read_columns], dtype=np.int64),
+            )
+        by_row, by_column = plan
+        n = len(block)
+        forces_n = np.empty((n, by_row.shape[0]))
+        rows = np.empty((by_column.shape[0], n))
+        gather_columns(block.data, by_row, forces_n, by_column, rows)
+        return forces_n, dict(zip(self._read_columns, rows, strict=True))
 
     def true_value(
         self, channel: SensorChannel, block: SampleBlock, structure: np.ndarray
     ) -> np.ndarray:
         """What the channel measures, before its signal path, channel unit."""
+        columns = {name: block[name] for name in self._inputs_of(channel)}
+        return self._true_value(channel, columns, structure)
+
+    def _true_value(
+        self, channel: SensorChannel, columns: dict[str, np.ndarray], structure: np.ndarray
+    ) -> np.ndarray:
+        """:meth:`true_value` from the block's columns it reads (:meth:`_inputs_of`), by
+        name."""
         if channel.kind == "accelerometer":
             return structure[:, self._structure_column[channel.name]]
         if channel.kind == "load_pin":  # the force on the plate: opposite of the pin's
-            return -block[f"{channel.location}_pivot_f{channel.axis}_n"]
+            return -columns[f"{channel.location}_pivot_f{channel.axis}_n"]
         area_m2 = math.pi * channel.piston_diameter_m**2 / 4.0
-        mean_force = 0.5 * (block["left_actuation_force_n"] + block["right_actuation_force_n"])
+        mean_force = 0.5 * (columns["left_actuation_force_n"] + columns["right_actuation_force_n"])
         return mean_force / area_m2 / PA_PER_BAR
 
     def advance(self, block: SampleBlock) -> SensorFrame:
-        time_s = np.ascontiguousarray(block.time_s)
+        forces_n, columns = self._gather(block)
+        time_s = columns["time_s"]
         if self.structure is not None:
-            structure = self.structure.advance(block)
+            structure = self.structure.advance_forces(forces_n)
             names = self.structure.names
         else:
             structure, names = np.empty((len(block), 0)), ()
@@ -662,10 +708,10 @@ class SensorBank:
         for c in self.sensors.channels:
             path = self.paths[c.name]
             if isinstance(path, ToneRing):
-                pulse, idx, edges[c.name], label = path.measure(time_s, block["drum_angle_rad"])
+                pulse, idx, edges[c.name], label = path.measure(time_s, columns["drum_angle_rad"])
                 outputs: tuple[np.ndarray, ...] = (pulse, idx)
             else:
-                values, label = path.measure(time_s, self.true_value(c, block, structure))
+                values, label = path.measure(time_s, self._true_value(c, columns, structure))
                 outputs = (values,)
             step = self.decimation[c.name]
             if step == 1:
