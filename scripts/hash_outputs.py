@@ -1,0 +1,152 @@
+"""Hash a run's outputs, to show that a change keeps the numbers bit for bit.
+
+Run it before and after the change (same machine, same Python and numba) and compare the
+lines: ``PYTHONPATH=. .venv/bin/python scripts/hash_outputs.py > hashes.txt``.
+
+Each line is one run, stepped in chunks as the node and ``bench cycle`` step it: the
+SHA-256 (first 24 hex digits) of every sample column of every row, and with sensors of
+every output series (times, values, fault labels), the tone ring's edges and the
+structure's outputs. The runs: ``urban`` and ``symmetric`` with their default sensors;
+``symmetric`` with a faulted sensor set (every fault kind, a decimated IMU, a load pin) in
+chunks of 77 samples; the published cases, the downhill runs (thermal, wear), every
+fixed-step scheme, one shoe removed, an oval drum and the urban cycle on a drum with a
+flat (physics only). ``--quick``: the first three runs only.
+
+Without the ROS message package: the stepper and the sensor bank are built as
+:mod:`brake_sim_ros.stream.build` builds them.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import hashlib
+from pathlib import Path
+
+import numpy as np
+
+from brake_sim_ros.model.assembly import ModelOptions
+from brake_sim_ros.model.sensor_faults import SensorFault
+from brake_sim_ros.model.sensors import (
+    TRANSDUCER_PRESETS,
+    SensorBank,
+    SensorChannel,
+    SensorSet,
+    accelerometer,
+    default_channels,
+)
+from brake_sim_ros.scenarios import Scenario, load_scenario, parse_scenario
+from brake_sim_ros.solvers.fixed_step import FixedStepStepper
+
+BUILTIN = Path(__file__).resolve().parents[1] / "brake_sim_ros" / "scenarios" / "builtin"
+OVAL = (
+    'name = "oval"\nduration_s = 7.5\n[[defects.drum.harmonics]]\norder = 2\n'
+    "amplitude_um = 50.0\nphase_deg = 0.0\n"
+)
+FLAT = (
+    "\n[defects.drum]\nflat_depth_um = 40.0\nflat_width_deg = 20.0\n"
+    "[[defects.drum.harmonics]]\norder = 3\namplitude_um = 20.0\nphase_deg = 10.0\n"
+)
+
+
+def faulted_set() -> SensorSet:
+    """tests/test_sensors.py's faulted set: every fault kind, an IMU at 3.2 kHz, a load pin."""
+    channels = default_channels()
+    return SensorSet(
+        channels=(
+            channels[0].with_faults(SensorFault("loose_mount", 0.5, 0.3)),
+            channels[1].with_faults(SensorFault("stuck", 0.3, duration_s=0.2)),
+            channels[2].with_faults(SensorFault("dropout", 0.4, duration_s=0.1)),
+            channels[3].with_faults(SensorFault("bias_drift", 0.25, 2.0)),
+            accelerometer("imu_y", "knuckle", "y", "consumer_imu_class", rate_hz=3200.0),
+            SensorChannel(
+                "pin_left_x",
+                "load_pin",
+                "left",
+                "x",
+                TRANSDUCER_PRESETS["load_pin"]["strain_gauge_pin"],
+                faults=(SensorFault("saturation", 0.21, 500.0),),
+            ),
+        )
+    )
+
+
+def run_hash(
+    label: str,
+    scenario: Scenario,
+    chunk: int,
+    *,
+    sensors: SensorSet | None = None,
+    scheme: str | None = None,
+    options: ModelOptions | None = None,
+    duration_s: float | None = None,
+) -> str:
+    """One line: ``label``, rows, columns and the hashes of the samples (and sensors)."""
+    setup = scenario.setup
+    if options is not None:
+        setup = dataclasses.replace(setup, options=options)
+    stepper = FixedStepStepper(
+        setup,
+        scenario.sample_period_s,
+        scheme=scheme or scenario.solver.fixed_step_scheme,
+        max_step_s=scenario.solver.max_step_s,
+    )
+    bank = None if sensors is None else SensorBank(sensors, scenario.sample_rate_hz, scenario.seed)
+    duration = scenario.duration_s if duration_s is None else duration_s
+    total = round(duration / stepper.sample_period_s)
+    samples, measured = hashlib.sha256(), hashlib.sha256()
+    columns = 0
+    while stepper.sample_index < total:
+        block = stepper.advance(min(chunk, total - stepper.sample_index))
+        samples.update(np.ascontiguousarray(block.data).tobytes())
+        columns = block.data.shape[1]
+        if bank is None:
+            continue
+        frame = bank.advance(block)
+        for name, series in frame.series.items():
+            measured.update(name.encode())
+            for values in (series.time_s, series.values, series.fault_label):
+                measured.update(np.ascontiguousarray(values).tobytes())
+        for name, edges in frame.edges_s.items():
+            measured.update(name.encode() + edges.tobytes())
+        measured.update(np.ascontiguousarray(frame.structure).tobytes())
+    line = f"{label} ({stepper.scheme}, chunk {chunk}): {total} rows x {columns}"
+    line += f" samples {samples.hexdigest()[:24]}"
+    if bank is not None:
+        line += f" sensors {measured.hexdigest()[:24]}"
+    return line
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="the sensor runs only")
+    args = parser.parse_args()
+    urban, symmetric = load_scenario("urban"), load_scenario("symmetric")
+    print(run_hash("urban + default sensors", urban, 2560, sensors=urban.sensors), flush=True)
+    print(run_hash("symmetric + default sensors", symmetric, 2560, sensors=symmetric.sensors))
+    print(run_hash("symmetric + faulted sensors", symmetric, 77, sensors=faulted_set()))
+    if args.quick:
+        return
+    for name in (
+        "case1_left_pivot_out",
+        "case5_left_tilted",
+        "case7_left_actuation",
+        "downhill",
+        "downhill_fade",
+        "downhill_wear",
+    ):
+        print(run_hash(name, load_scenario(name), 1000), flush=True)
+    for name, scenario in (("symmetric", symmetric), ("urban 20 s", urban)):
+        for scheme in ("rk4", "rk4-located", "semi-implicit-euler"):
+            print(run_hash(name, scenario, 1000, scheme=scheme, duration_s=20.0), flush=True)
+        for shoe in ("left", "right"):
+            one = ModelOptions(shoes=(shoe,))
+            label = f"{name}, {shoe} shoe only"
+            print(run_hash(label, scenario, 1000, options=one, duration_s=20.0), flush=True)
+    print(run_hash("oval drum", parse_scenario(OVAL), 1000), flush=True)
+    urban_text = (BUILTIN / "urban.toml").read_text()
+    print(run_hash("urban, drum with a flat", parse_scenario(urban_text + FLAT), 1000))
+
+
+if __name__ == "__main__":
+    main()
