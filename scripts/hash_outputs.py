@@ -26,17 +26,10 @@ from pathlib import Path
 import numpy as np
 
 from brake_sim_ros.model.assembly import ModelOptions
-from brake_sim_ros.model.sensor_faults import SensorFault
-from brake_sim_ros.model.sensors import (
-    TRANSDUCER_PRESETS,
-    SensorBank,
-    SensorChannel,
-    SensorSet,
-    accelerometer,
-    default_channels,
-)
+from brake_sim_ros.model.sensors import SensorBank, SensorSet
 from brake_sim_ros.scenarios import Scenario, load_scenario, parse_scenario
 from brake_sim_ros.solvers.fixed_step import FixedStepStepper
+from tests.sample_blocks import faulted_set  # the sensor set tests/test_sensors.py runs
 
 BUILTIN = Path(__file__).resolve().parents[1] / "brake_sim_ros" / "scenarios" / "builtin"
 OVAL = (
@@ -47,28 +40,6 @@ FLAT = (
     "\n[defects.drum]\nflat_depth_um = 40.0\nflat_width_deg = 20.0\n"
     "[[defects.drum.harmonics]]\norder = 3\namplitude_um = 20.0\nphase_deg = 10.0\n"
 )
-
-
-def faulted_set() -> SensorSet:
-    """tests/test_sensors.py's faulted set: every fault kind, an IMU at 3.2 kHz, a load pin."""
-    channels = default_channels()
-    return SensorSet(
-        channels=(
-            channels[0].with_faults(SensorFault("loose_mount", 0.5, 0.3)),
-            channels[1].with_faults(SensorFault("stuck", 0.3, duration_s=0.2)),
-            channels[2].with_faults(SensorFault("dropout", 0.4, duration_s=0.1)),
-            channels[3].with_faults(SensorFault("bias_drift", 0.25, 2.0)),
-            accelerometer("imu_y", "knuckle", "y", "consumer_imu_class", rate_hz=3200.0),
-            SensorChannel(
-                "pin_left_x",
-                "load_pin",
-                "left",
-                "x",
-                TRANSDUCER_PRESETS["load_pin"]["strain_gauge_pin"],
-                faults=(SensorFault("saturation", 0.21, 500.0),),
-            ),
-        )
-    )
 
 
 def run_hash(

@@ -48,11 +48,16 @@ class AlwaysAlarm(Detector):
 
 @pytest.fixture(scope="module")
 def dataset(tmp_path_factory):
-    path = tmp_path_factory.mktemp("campaign") / "scored.toml"
-    path.write_text(CAMPAIGN)
-    out = tmp_path_factory.mktemp("sweep") / "out"
-    sweep(load_campaign(path), out, workers=2, quiet=True)
-    return open_dataset(out)
+    return _swept(tmp_path_factory.mktemp("scored"), "scored.toml", {"scored.toml": CAMPAIGN})
+
+
+def _swept(folder, campaign: str, files: dict[str, str]):
+    """The dataset of ``campaign`` swept into ``folder``, its ``files`` (name -> text:
+    the campaign and any scenario it names) written there first."""
+    for name, text in files.items():
+        (folder / name).write_text(text)
+    sweep(load_campaign(folder / campaign), folder / "out", workers=2, quiet=True)
+    return open_dataset(folder / "out")
 
 
 def test_scores_of_a_detector_that_always_alarms(dataset):
@@ -213,11 +218,8 @@ class LateForecast(Detector):
 
 
 def test_forecasts_are_scored_against_the_rul_label(tmp_path_factory):
-    folder = tmp_path_factory.mktemp("forecast")
-    (folder / "growing.toml").write_text(GROWING)
-    (folder / "forecast.toml").write_text(FORECAST_CAMPAIGN)
-    sweep(load_campaign(folder / "forecast.toml"), folder / "out", workers=2, quiet=True)
-    data = open_dataset(folder / "out")
+    files = {"growing.toml": GROWING, "forecast.toml": FORECAST_CAMPAIGN}
+    data = _swept(tmp_path_factory.mktemp("forecast"), "forecast.toml", files)
     run = evaluate.read_run(data, data.runs("test")[0])
     assert run.rul_s is not None
     np.testing.assert_allclose(run.rul_s, 2.0 - run.time_s, atol=1e-9)

@@ -17,7 +17,7 @@ from brake_sim_ros.datasets import open as open_dataset
 from brake_sim_ros.datasets.sweep import sweep
 from brake_sim_ros.monitoring import evaluate, metrics, saved
 from brake_sim_ros.monitoring.baselines import make_detector
-from brake_sim_ros.monitoring.detector import Assessment, SampleChunk, TrainingWindow
+from brake_sim_ros.monitoring.detector import Assessment, SampleChunk
 from brake_sim_ros.monitoring.impact import (
     APPLY_BAR,
     N_BINS,
@@ -27,6 +27,7 @@ from brake_sim_ros.monitoring.impact import (
     ImpactDetector,
     event_features,
 )
+from tests.sample_blocks import training_windows
 
 RATE = 5120.0
 CAMPAIGN = """
@@ -96,16 +97,7 @@ def _fitted_on_noise() -> ImpactDetector:
                 "backing_plate_accel_y": rng.normal(size=p.size),
                 "line_pressure": p,
             }
-            for s in range(0, p.size, 512):
-                windows.append(
-                    TrainingWindow(
-                        {c: v[s : s + 512] for c, v in channels.items()},
-                        RATE,
-                        run_id=f"u{u}k{k}",
-                        last_sample_index=s + 511,
-                        unit_id=f"u{u}",
-                    )
-                )
+            windows += training_windows(channels, RATE, run_id=f"u{u}k{k}", unit_id=f"u{u}")
     d = ImpactDetector()
     d.fit(windows)
     return d
@@ -145,15 +137,9 @@ def test_fit_refuses_healthy_stops_of_one_unit_in_one_line():
     """Its threshold judges each unit's healthy stops by a model of the others."""
     p = np.concatenate([np.zeros(512), np.full(1024, 30.0)])
     windows = [
-        TrainingWindow(
-            {c: v[s : s + 512] for c, v in _stream(p).items()},
-            RATE,
-            run_id=f"r{k}",
-            last_sample_index=s + 511,
-            unit_id="u0",
-        )
+        w
         for k in range(4)
-        for s in range(0, p.size, 512)
+        for w in training_windows(_stream(p), RATE, run_id=f"r{k}", unit_id="u0")
     ]
     with pytest.raises(ValueError, match=r"stops of 1 unit\(s\); it needs stops of 3 or more") as e:
         ImpactDetector().fit(windows)
@@ -163,15 +149,7 @@ def test_fit_refuses_healthy_stops_of_one_unit_in_one_line():
 def test_fit_refuses_too_few_healthy_stops_in_one_line():
     d = ImpactDetector()
     p = np.concatenate([np.zeros(512), np.full(1024, 30.0)])
-    windows = [
-        TrainingWindow(
-            {c: v[s : s + 512] for c, v in _stream(p).items()},
-            RATE,
-            run_id="r",
-            last_sample_index=s + 511,
-        )
-        for s in range(0, p.size, 512)
-    ]
+    windows = training_windows(_stream(p), RATE, run_id="r")
     with pytest.raises(ValueError, match=r"1 healthy training stops .* needs 3 or more") as e:
         d.fit(windows)
     assert "\n" not in str(e.value)
@@ -217,9 +195,7 @@ def test_shoe_defects_at_their_limits_are_detected_on_unseen_units(fitted, datas
     diagnoses name the kind. (Six training units
     at three forces, as the reference campaign's train split: with fewer, the threshold,
     the largest healthy distance judged out of unit, rests on too few stops.)"""
-    train_units = {
-        r.unit_id for r in map(lambda i: evaluate.read_run(dataset, i), dataset.runs("train"))
-    }
+    train_units = {r["unit_id"] for r in dataset.manifest.to_pylist() if r["split"] == "train"}
     healthy_final = []
     for r in _runs(dataset, "healthy"):
         assert r.unit_id not in train_units

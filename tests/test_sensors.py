@@ -28,6 +28,7 @@ from brake_sim_ros.model.structure import Mode
 from brake_sim_ros.model.trajectory import SampleBlock
 from brake_sim_ros.scenarios import load_scenario, parse_scenario
 from tests.conftest import IMPACTING_S
+from tests.sample_blocks import faulted_set
 
 FS = 25_600.0
 G0 = 9.80665
@@ -141,28 +142,7 @@ def test_one_seed_gives_the_same_bits_two_seeds_independent_noise(stop):
     assert abs(np.corrcoef(x, y)[0, 1]) < 0.06
 
 
-def _faulted_set() -> SensorSet:
-    channels = default_channels()
-    return SensorSet(
-        channels=(
-            channels[0].with_faults(SensorFault("loose_mount", 0.5, 0.3)),
-            channels[1].with_faults(SensorFault("stuck", 0.3, duration_s=0.2)),
-            channels[2].with_faults(SensorFault("dropout", 0.4, duration_s=0.1)),
-            channels[3].with_faults(SensorFault("bias_drift", 0.25, 2.0)),
-            accelerometer("imu_y", "knuckle", "y", "consumer_imu_class", rate_hz=3200.0),
-            SensorChannel(
-                "pin_left_x",
-                "load_pin",
-                "left",
-                "x",
-                TRANSDUCER_PRESETS["load_pin"]["strain_gauge_pin"],
-                faults=(SensorFault("saturation", 0.21, 500.0),),
-            ),
-        )
-    )
-
-
-@pytest.mark.parametrize("sensors", [SensorSet(), _faulted_set()], ids=["default", "faulted"])
+@pytest.mark.parametrize("sensors", [SensorSet(), faulted_set()], ids=["default", "faulted"])
 def test_a_stream_in_blocks_equals_one_block_bit_for_bit(stop, sensors):
     whole = SensorBank(sensors, FS, seed=3).advance(stop)
     streamed = _in_blocks(SensorBank(sensors, FS, seed=3), stop, (256, 1, 77, 1000, 5))
@@ -208,7 +188,7 @@ def test_measured_stream_publishes_due_chunks_and_the_rest_at_flush(stop):
 
 
 def test_decimated_channel_keeps_every_nth_sample_and_refuses_other_rates(stop):
-    frame = SensorBank(_faulted_set(), FS, seed=0).advance(stop)
+    frame = SensorBank(faulted_set(), FS, seed=0).advance(stop)
     imu = frame["imu_y"]
     assert np.allclose(np.diff(imu.time_s), 1 / 3200.0)
     with pytest.raises(ParameterError, match="rate_hz"):
@@ -318,7 +298,7 @@ def test_loose_mount_moves_the_resonance_down_and_raises_the_response_there():
 
 
 def test_faults_are_labelled_per_sample_on_their_channel_only(stop):
-    sensors = _faulted_set()
+    sensors = faulted_set()
     frame = SensorBank(sensors, FS, seed=0).advance(stop)
     for channel in sensors.channels:
         expected = np.zeros(frame[channel.name].time_s.shape, dtype=np.uint8)
@@ -452,7 +432,7 @@ def test_bad_sensor_tables_are_refused_with_the_table_and_key(change, message):
 
 
 def test_an_empty_block_changes_nothing(stop):
-    sensors = _faulted_set()
+    sensors = faulted_set()
     whole = SensorBank(sensors, FS, seed=4).advance(stop)
     bank = SensorBank(sensors, FS, seed=4)
     n = len(stop) // 2

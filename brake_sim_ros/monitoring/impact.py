@@ -115,6 +115,19 @@ def event_features(
     return np.concatenate(out), float(rate)
 
 
+def _residuals(model: tuple[np.ndarray, ...], features: np.ndarray, rate: float) -> np.ndarray:
+    """A stop's scaled residuals from a healthy model ``(coef, scale, location, ...)``,
+    centred on its healthy mean (a bin without samples: 0, no evidence)."""
+    coef, scale, location = model[:3]
+    z = (features - (coef[0] + coef[1] * rate)) / scale - location
+    return np.where(np.isfinite(z), z, 0.0)
+
+
+def _mahalanobis(z: np.ndarray, precision: np.ndarray) -> float:
+    """The Mahalanobis length of residuals ``z`` under ``precision``."""
+    return math.sqrt(max(float(z @ precision @ z), 0.0))
+
+
 class _StopFinder:
     """Finds applications in a stream of windows and returns each event's samples once
     they are all there (module docstring). Consecutive windows only: a gap restarts it."""
@@ -274,10 +287,11 @@ class ImpactDetector(Detector):
             rest = groups != g
             if rest.sum() < 2:
                 continue
-            self.coef, self.scale, self.location, self.precision = self._healthy_model(
-                F[rest], rates[rest]
-            )
-            held_out += [self._distance(f, r) for f, r in zip(F[~rest], rates[~rest], strict=True)]
+            fold = self._healthy_model(F[rest], rates[rest])
+            held_out += [
+                _mahalanobis(_residuals(fold, f, r), fold[3])
+                for f, r in zip(F[~rest], rates[~rest], strict=True)
+            ]
         if len(held_out) < 2:
             raise ValueError(
                 f"detector {self.name}: healthy training stops of {len(set(groups))} unit(s);"
@@ -315,15 +329,10 @@ class ImpactDetector(Detector):
 
     # -- judging ------------------------------------------------------------------------
     def _scaled(self, features: np.ndarray, rate: float) -> np.ndarray:
-        """The stop's scaled residuals from the healthy model, centred on the healthy mean
-        (a bin without samples: 0, no evidence)."""
+        """The stop's :func:`_residuals` from the fitted healthy model (a stop without a
+        rise rate: the healthy mean rate's)."""
         r = rate if math.isfinite(rate) else self.rate_mean
-        z = (features - (self.coef[0] + self.coef[1] * r)) / self.scale - self.location
-        return np.where(np.isfinite(z), z, 0.0)
-
-    def _distance(self, features: np.ndarray, rate: float) -> float:
-        z = self._scaled(features, rate)
-        return float(math.sqrt(max(float(z @ self.precision @ z), 0.0)))
+        return _residuals((self.coef, self.scale, self.location), features, r)
 
     def _projection(self, z: np.ndarray, centroid: np.ndarray) -> float:
         """z along the class's direction, in units of the class's mean (1: the mean)."""
@@ -333,7 +342,7 @@ class ImpactDetector(Detector):
     def _judge(self, features: np.ndarray, rate: float) -> tuple[float, bool, Diagnosis | None]:
         assert self.threshold is not None
         z = self._scaled(features, rate)
-        index = math.sqrt(max(float(z @ self.precision @ z), 0.0)) / self.threshold
+        index = _mahalanobis(z, self.precision) / self.threshold
         alarm = index >= 1.0
         if not (alarm and self.classes):
             return index, alarm, None

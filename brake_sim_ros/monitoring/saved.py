@@ -91,7 +91,8 @@ TOP_KEYS = (
     "state",
 )
 DTYPES = {"float64": "<f8", "int64": "<i8"}
-CLASSES = {HEALTHY} | {f"{k.name}:{loc}" for k in KINDS for loc in k.locations}
+DEFECTIVE_CLASSES = frozenset(f"{k.name}:{loc}" for k in KINDS for loc in k.locations)
+CLASSES = DEFECTIVE_CLASSES | {HEALTHY}
 _NAME = re.compile(r"[a-z][a-z0-9_]{0,63}")  # a measured channel's name
 MAX_WINDOW_S = 60.0  # longest window or history a saved detector may ask for, s
 
@@ -181,6 +182,20 @@ class _Checker:
         if dtype == "float64" and not np.all(np.isfinite(out)):
             raise self.fail(key, "a NaN or infinite value; allowed finite numbers")
         return out
+
+    def class_names(
+        self, value: object, key: str, allowed: frozenset[str], low: int
+    ) -> tuple[str, ...]:
+        """A sorted list of ``low`` or more distinct class names out of ``allowed``."""
+        if not (isinstance(value, list) and low <= len(value) <= len(allowed)):
+            raise self.fail(key, f"allowed a list of {low} to {len(allowed)} class names")
+        for x in value:
+            if self.string(x, key) not in allowed:
+                names = "healthy or kind:location" if HEALTHY in allowed else "kind:location"
+                raise self.fail(key, f"an unknown class; allowed {names}")
+        if value != sorted(set(value)):
+            raise self.fail(key, "allowed distinct names, sorted")
+        return tuple(value)
 
     def history(self, p: dict[str, Any]) -> tuple[float, float]:
         """``(window_s, history_s)`` of a history detector's parameters."""
@@ -332,22 +347,16 @@ def _load_learned(name: str, p: dict, s: dict, c: _Checker) -> Detector:
     names = tuple(c.channel(x, "parameters.channels") for x in channels)
     if len(set(names)) != len(names):
         raise c.fail("parameters.channels", "a name twice; allowed distinct names")
-    classes = s["classes"]
-    if not (isinstance(classes, list) and 2 <= len(classes) <= len(CLASSES)):
-        raise c.fail("state.classes", f"allowed a list of 2 to {len(CLASSES)} class names")
-    for x in classes:
-        c.string(x, "state.classes")
-        if x not in CLASSES:
-            raise c.fail("state.classes", "an unknown class; allowed healthy or kind:location")
-    if classes != sorted(set(classes)) or HEALTHY not in classes:
-        raise c.fail("state.classes", "allowed distinct names, sorted, healthy among them")
+    classes = c.class_names(s["classes"], "state.classes", CLASSES, 2)
+    if HEALTHY not in classes:
+        raise c.fail("state.classes", "allowed healthy among the classes")
     severity = s["severity"]
     if not isinstance(severity, dict):
         raise c.fail("state.severity", f"{_type_name(severity)}; allowed an object")
     if not set(severity) <= set(classes) - {HEALTHY}:
         raise c.fail("state.severity", "a key that is not a defective class of state.classes")
     d = LearnedClassifier(history_s=history_s, window_s=window_s, channels=names)
-    d.classes = tuple(classes)
+    d.classes = classes
     d.threshold = c.number(s["threshold"], "state.threshold", 0.5, 1.0)
     d.healthy_index = c.array(s["healthy_index"], "state.healthy_index", "float64", 1)
     d.model = c.forest(s["forest"], "state.forest", len(classes))
@@ -398,15 +407,8 @@ def _load_impact(name: str, p: dict, s: dict, c: _Checker) -> Detector:
     d.rate_mean = c.number(s["rate_mean"], "state.rate_mean", -1e9, 1e9)
     d.threshold = c.positive(s["threshold"], "state.threshold")
     d.healthy_index = c.array(s["healthy_index"], "state.healthy_index", "float64", 1)
-    classes = s["classes"]
-    if not (isinstance(classes, list) and len(classes) <= len(CLASSES)):
-        raise c.fail("state.classes", f"allowed a list of up to {len(CLASSES)} class names")
-    for x in classes:
-        if c.string(x, "state.classes") not in CLASSES - {HEALTHY}:
-            raise c.fail("state.classes", "an unknown class; allowed catalogue kind:location")
-    if classes != sorted(set(classes)):
-        raise c.fail("state.classes", "allowed distinct names, sorted")
-    d.classes = tuple(classes)
+    classes = c.class_names(s["classes"], "state.classes", DEFECTIVE_CLASSES, 0)
+    d.classes = classes
     centroids = c.array(s["centroids"], "state.centroids", "float64", 2)
     if centroids.shape != (len(classes), f):
         raise c.fail("state.centroids", f"allowed shape [{len(classes)}, {f}]")

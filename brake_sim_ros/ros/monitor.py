@@ -385,7 +385,7 @@ class MonitorNode(Node):
             health_index=float(a.health_index),
             alarm=bool(a.alarm),
             has_diagnosis=diagnosis is not None,
-            rul_s=float(getattr(a, "rul_s", math.nan)),
+            rul_s=float(a.rul_s),
         )
         self._health.publish(health)
         if diagnosis is not None:

@@ -41,7 +41,7 @@ from brake_sim_ros.model.catalogue import KIND_BY_NAME
 from brake_sim_ros.monitoring import saved
 from brake_sim_ros.monitoring.baselines import VibrationThreshold
 from brake_sim_ros.monitoring.detector import Diagnosis as DetectorDiagnosis
-from brake_sim_ros.monitoring.detector import TrainingWindow, chunk_from_measured
+from brake_sim_ros.monitoring.detector import chunk_from_measured
 from brake_sim_ros.monitoring.impact import ImpactDetector
 from brake_sim_ros.recording.reader import open_recording
 from brake_sim_ros.recording.record import record_offline
@@ -51,6 +51,7 @@ from brake_sim_ros.scenarios import load_scenario
 from brake_sim_ros.stream import conversion
 from brake_sim_ros.stream.offline import StreamSettings
 from brake_sim_ros.stream.run import run_scenario
+from tests.sample_blocks import training_windows
 
 pytestmark = [
     pytest.mark.ros,
@@ -381,16 +382,7 @@ def _impact_fitted_on(measured: list[MeasuredChunk]) -> ImpactDetector:
     windows = []
     for u, gain in enumerate((0.5, 0.6, 0.7)):
         scaled = {c: v * gain if c.startswith("backing_plate") else v for c, v in channels.items()}
-        for s in range(0, len(channels["line_pressure"]) - 511, 512):
-            windows.append(
-                TrainingWindow(
-                    {c: v[s : s + 512] for c, v in scaled.items()},
-                    5120.0,
-                    run_id=f"r{u}",
-                    last_sample_index=s + 511,
-                    unit_id=f"u{u}",
-                )
-            )
+        windows += training_windows(scaled, 5120.0, run_id=f"r{u}", unit_id=f"u{u}")
     detector = ImpactDetector()
     detector.fit(windows)
     return detector
