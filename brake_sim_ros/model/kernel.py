@@ -113,42 +113,21 @@ def _evaluate_from(
         ffr = contact.sliding_friction(p, br, fnr, vr)
     sl = contact.shoe_forces(p, bl, y[L.Y_LEFT_SPEED], fe_left, kl, fnl, ffl, vl)
     sr = contact.shoe_forces(p, br, y[L.Y_RIGHT_SPEED], fe_right, kr, fnr, ffr, vr)
-    dydt[L.Y_LEFT_ANGLE] = y[L.Y_LEFT_SPEED]
-    dydt[L.Y_RIGHT_ANGLE] = y[L.Y_RIGHT_SPEED]
-    dydt[L.Y_LEFT_SPEED] = sl[contact.E_THETA_DDOT]
-    dydt[L.Y_RIGHT_SPEED] = sr[contact.E_THETA_DDOT]
-    dydt[L.Y_FRICTION_WORK] = sl[contact.E_FRICTION_POWER] + sr[contact.E_FRICTION_POWER]
-    dydt[L.Y_CONTACT_LOSS] = sl[contact.E_CONTACT_POWER] + sr[contact.E_CONTACT_POWER]
-    dydt[L.Y_ACTUATION_WORK] = sl[contact.E_ACTUATION_POWER] + sr[contact.E_ACTUATION_POWER]
-    if y.shape[0] > L.Y_LEFT_WEAR:  # a lining wears with its friction work (layout.Y_*_WEAR)
-        _wear_rates(p, sl[contact.E_FRICTION_POWER], sr[contact.E_FRICTION_POWER], dydt)
-    if y.shape[0] > L.Y_BRAKE_TEMPERATURE:  # the brake's thermal state (model/thermal.py)
-        dydt[L.Y_BRAKE_TEMPERATURE] = thermal.heating_rate(
-            p, dydt[L.Y_FRICTION_WORK], wd, y[L.Y_BRAKE_TEMPERATURE]
-        )
-    drum_torque = sl[contact.E_DRUM_TORQUE] + sr[contact.E_DRUM_TORQUE]
-    dydt[L.Y_DRIVE_WORK] = 0.0
-    dydt[L.Y_ROAD_LOAD_WORK] = 0.0
-    road = 0.0  # N m, the road load of a driven flywheel
-    rigid = p[L.P_RIGID_COUPLING] > 0.0
-    if rigid:
-        # one rotor body: held as a whole while stuck (its friction share is then 0)
-        acc = 0.0 if stuck else drum_torque / (p[L.P_FLYWHEEL_INERTIA] + p[L.P_DRUM_INERTIA])
-        dydt[L.Y_FLYWHEEL_ANGLE] = wd
-        dydt[L.Y_DRUM_ANGLE] = wd
-        dydt[L.Y_FLYWHEEL_SPEED] = acc
-        dydt[L.Y_DRUM_SPEED] = acc
-        dydt[L.Y_COUPLING_DAMPER_LOSS] = 0.0
-    else:
-        slip = y[L.Y_FLYWHEEL_SPEED] - wd
-        dydt[L.Y_FLYWHEEL_ANGLE] = y[L.Y_FLYWHEEL_SPEED]
-        if p[L.P_DRIVEN] > 0.0:
-            road = _driven_flywheel(p, y[L.Y_FLYWHEEL_SPEED], coupling, dydt)
-        else:
-            dydt[L.Y_FLYWHEEL_SPEED] = -coupling / p[L.P_FLYWHEEL_INERTIA]
-        dydt[L.Y_DRUM_ANGLE] = wd
-        dydt[L.Y_DRUM_SPEED] = 0.0 if stuck else (coupling + drum_torque) / p[L.P_DRUM_INERTIA]
-        dydt[L.Y_COUPLING_DAMPER_LOSS] = p[L.P_COUPLING_DAMPING] * slip * slip
+    road = _derivatives(
+        y,
+        p,
+        wd,
+        stuck,
+        coupling,
+        sl[contact.E_THETA_DDOT],
+        sr[contact.E_THETA_DDOT],
+        sl[contact.E_FRICTION_POWER],
+        sr[contact.E_FRICTION_POWER],
+        sl[contact.E_CONTACT_POWER] + sr[contact.E_CONTACT_POWER],
+        sl[contact.E_ACTUATION_POWER] + sr[contact.E_ACTUATION_POWER],
+        sl[contact.E_DRUM_TORQUE] + sr[contact.E_DRUM_TORQUE],
+        dydt,
+    )
     if row < 0:
         return
     o = out[row]
@@ -205,6 +184,108 @@ def _evaluate_from(
     o[L.C_BRAKE_TEMPERATURE] = (
         y[L.Y_BRAKE_TEMPERATURE] if y.shape[0] > L.Y_BRAKE_TEMPERATURE else p[L.P_HELD_TEMPERATURE]
     )
+
+
+@njit(cache=True, inline="always")
+def _derivatives(
+    y,
+    p,
+    wd,
+    stuck,
+    coupling,
+    accel_left,
+    accel_right,
+    friction_left,
+    friction_right,
+    contact_power,
+    actuation_power,
+    drum_torque,
+    dydt,
+):
+    """Write ``dydt`` from the shoes' results: their angular accelerations (rad/s^2), each
+    one's friction power and their summed contact and actuation powers (W), their summed
+    torque on the drum and the coupling's (N m), for the drum speed ``wd`` the evaluation
+    uses (0 while it sticks). Returns the road load of a driven flywheel, N m (0 else)."""
+    dydt[L.Y_LEFT_ANGLE] = y[L.Y_LEFT_SPEED]
+    dydt[L.Y_RIGHT_ANGLE] = y[L.Y_RIGHT_SPEED]
+    dydt[L.Y_LEFT_SPEED] = accel_left
+    dydt[L.Y_RIGHT_SPEED] = accel_right
+    dydt[L.Y_FRICTION_WORK] = friction_left + friction_right
+    dydt[L.Y_CONTACT_LOSS] = contact_power
+    dydt[L.Y_ACTUATION_WORK] = actuation_power
+    if y.shape[0] > L.Y_LEFT_WEAR:  # a lining wears with its friction work (layout.Y_*_WEAR)
+        _wear_rates(p, friction_left, friction_right, dydt)
+    if y.shape[0] > L.Y_BRAKE_TEMPERATURE:  # the brake's thermal state (model/thermal.py)
+        dydt[L.Y_BRAKE_TEMPERATURE] = thermal.heating_rate(
+            p, dydt[L.Y_FRICTION_WORK], wd, y[L.Y_BRAKE_TEMPERATURE]
+        )
+    dydt[L.Y_DRIVE_WORK] = 0.0
+    dydt[L.Y_ROAD_LOAD_WORK] = 0.0
+    road = 0.0  # N m, the road load of a driven flywheel
+    rigid = p[L.P_RIGID_COUPLING] > 0.0
+    if rigid:
+        # one rotor body: held as a whole while stuck (its friction share is then 0)
+        acc = 0.0 if stuck else drum_torque / (p[L.P_FLYWHEEL_INERTIA] + p[L.P_DRUM_INERTIA])
+        dydt[L.Y_FLYWHEEL_ANGLE] = wd
+        dydt[L.Y_DRUM_ANGLE] = wd
+        dydt[L.Y_FLYWHEEL_SPEED] = acc
+        dydt[L.Y_DRUM_SPEED] = acc
+        dydt[L.Y_COUPLING_DAMPER_LOSS] = 0.0
+    else:
+        slip = y[L.Y_FLYWHEEL_SPEED] - wd
+        dydt[L.Y_FLYWHEEL_ANGLE] = y[L.Y_FLYWHEEL_SPEED]
+        if p[L.P_DRIVEN] > 0.0:
+            road = _driven_flywheel(p, y[L.Y_FLYWHEEL_SPEED], coupling, dydt)
+        else:
+            dydt[L.Y_FLYWHEEL_SPEED] = -coupling / p[L.P_FLYWHEEL_INERTIA]
+        dydt[L.Y_DRUM_ANGLE] = wd
+        dydt[L.Y_DRUM_SPEED] = 0.0 if stuck else (coupling + drum_torque) / p[L.P_DRUM_INERTIA]
+        dydt[L.Y_COUPLING_DAMPER_LOSS] = p[L.P_COUPLING_DAMPING] * slip * slip
+    return road
+
+
+@njit(cache=True, inline="always")
+def _free_evaluate(y, p, dydt):
+    """:func:`evaluate`'s derivative for a state whose shoes exert nothing: the drum
+    slides, no actuation force, and neither shoe presses (its indentation is not positive
+    and its contact is not forced on). Every shoe force is then an exact zero, so the
+    shoes' accelerations, powers and drum torque are zeros (of either sign: they add to
+    the state as +0.0 does) and the rest is the rotors' (same bits as :func:`evaluate`,
+    without the contact geometry; :func:`_rides_free` decides when it applies)."""
+    wd = y[L.Y_DRUM_SPEED]
+    coupling = standstill.coupling_torque(
+        p, y[L.Y_FLYWHEEL_ANGLE], y[L.Y_DRUM_ANGLE], y[L.Y_FLYWHEEL_SPEED], wd
+    )
+    _derivatives(y, p, wd, 0, coupling, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, dydt)
+
+
+# a free-ride bound that never holds (:func:`_rides_free`): every stage evaluates in full
+NOT_FREE = np.ones(4)
+
+
+@njit(cache=True, inline="always")
+def _lining_reach(p, base):
+    """Largest distance of the shoe's lining from its pivot, m: at most that of the
+    lining's arc centre plus the arc's radius."""
+    dx = p[base + L.S_LINING_CENTRE_X] - p[base + L.S_PIVOT_X]
+    dy = p[base + L.S_LINING_CENTRE_Y] - p[base + L.S_PIVOT_Y]
+    return math.sqrt(dx * dx + dy * dy) + p[base + L.S_LINING_RADIUS]
+
+
+@njit(cache=True, inline="always")
+def _rides_free(y, y0, free_bound, stuck, ml, mr, fel, fer):
+    """Whether an RK4 stage at ``y`` of a step from ``y0`` may take :func:`_free_evaluate`:
+    the drum slides, no force on either shoe's tip, neither contact forced on, and each
+    shoe's indentation provably negative. ``free_bound`` (4,): the indentation at ``y0``
+    (m) and the bound of its rate per radian of shoe angle (m/rad) for the left shoe, then
+    the right; a positive indentation there disables the test. The lining point farthest
+    from the drum centre moves away from it by at most its distance from the pivot per
+    radian the shoe turns, so ``eps <= eps0 + bound |theta - theta0|`` on a round drum."""
+    if stuck or fel != 0.0 or fer != 0.0 or ml == L.CONTACT_ON or mr == L.CONTACT_ON:
+        return False
+    dl = abs(y[L.Y_LEFT_ANGLE] - y0[L.Y_LEFT_ANGLE])
+    dr = abs(y[L.Y_RIGHT_ANGLE] - y0[L.Y_RIGHT_ANGLE])
+    return free_bound[0] + free_bound[1] * dl < 0.0 and free_bound[2] + free_bound[3] * dr < 0.0
 
 
 @njit(cache=True)
@@ -298,25 +379,38 @@ def _shoe_switch(p, shoe, y):
 
 
 @njit(cache=True, inline="always")
-def rk4_step(y, k1, t0, h, p, gl, tl, fl, gr, tr, fr, stuck, ml, mr, k2, k3, k4, tmp, out, y_out):
+def rk4_step(
+    y, k1, t0, h, p, gl, tl, fl, gr, tr, fr, stuck, ml, mr, k2, k3, k4, tmp, out, y_out, free
+):
     """One classical RK4 step of ``h`` s from ``y`` at ``t0`` (``k1 = f(t0, y)`` given) with
-    the contact modes ``ml``/``mr`` into ``y_out`` (may be ``y`` itself)."""
+    the contact modes ``ml``/``mr`` into ``y_out`` (may be ``y`` itself). A stage where
+    the shoes provably exert nothing (``free``: :func:`_rides_free`'s bound, or
+    :data:`NOT_FREE`) skips their contact geometry (:func:`_free_evaluate`, same bits)."""
     n = y.shape[0]
     th = t0 + 0.5 * h
     fel = _force(p, L.P_SHOE_BASE, th, tl, fl, gl)
     fer = _force(p, L.P_SHOE_BASE + L.SHOE_STRIDE, th, tr, fr, gr)
     for j in range(n):
         tmp[j] = y[j] + 0.5 * h * k1[j]
-    evaluate(tmp, p, fel, fer, stuck, ml, mr, k2, out, -1, t0)
+    if _rides_free(tmp, y, free, stuck, ml, mr, fel, fer):
+        _free_evaluate(tmp, p, k2)
+    else:
+        evaluate(tmp, p, fel, fer, stuck, ml, mr, k2, out, -1, t0)
     for j in range(n):
         tmp[j] = y[j] + 0.5 * h * k2[j]
-    evaluate(tmp, p, fel, fer, stuck, ml, mr, k3, out, -1, t0)
+    if _rides_free(tmp, y, free, stuck, ml, mr, fel, fer):
+        _free_evaluate(tmp, p, k3)
+    else:
+        evaluate(tmp, p, fel, fer, stuck, ml, mr, k3, out, -1, t0)
     t1 = t0 + h
     fel = _force(p, L.P_SHOE_BASE, t1, tl, fl, gl)
     fer = _force(p, L.P_SHOE_BASE + L.SHOE_STRIDE, t1, tr, fr, gr)
     for j in range(n):
         tmp[j] = y[j] + h * k3[j]
-    evaluate(tmp, p, fel, fer, stuck, ml, mr, k4, out, -1, t0)
+    if _rides_free(tmp, y, free, stuck, ml, mr, fel, fer):
+        _free_evaluate(tmp, p, k4)
+    else:
+        evaluate(tmp, p, fel, fer, stuck, ml, mr, k4, out, -1, t0)
     for j in range(n):
         y_out[j] = y[j] + h / 6.0 * (k1[j] + 2.0 * k2[j] + 2.0 * k3[j] + k4[j])
 
@@ -352,7 +446,29 @@ def _locate_switch(
             s = b - fb * (b - a) / (fb - fa)
             if not (a < s < b):
                 s = 0.5 * (a + b)
-        rk4_step(ya, ka, t0, s, p, gl, tl, fl, gr, tr, fr, stuck, ml, mr, k2, k3, k4, tmp, out, yb)
+        rk4_step(
+            ya,
+            ka,
+            t0,
+            s,
+            p,
+            gl,
+            tl,
+            fl,
+            gr,
+            tr,
+            fr,
+            stuck,
+            ml,
+            mr,
+            k2,
+            k3,
+            k4,
+            tmp,
+            out,
+            yb,
+            NOT_FREE,
+        )
         fs = sign * _shoe_switch(p, shoe, yb)[1]
         if fs > 0.0:
             a = s
@@ -423,6 +539,7 @@ def _located_step(y, k1, t, dt, p, gl, tl, fl, gr, tr, fr, stuck, h_start, work,
             tmp,
             out,
             yb,
+            NOT_FREE,
         )
         el, hl = _shoe_switch(p, 0, yb)
         er, hr = _shoe_switch(p, 1, yb)
@@ -485,7 +602,27 @@ def _located_step(y, k1, t, dt, p, gl, tl, fl, gr, tr, fr, stuck, h_start, work,
         flip_l = bad_l and s_l <= s + 2.0 * tol
         flip_r = bad_r and s_r <= s + 2.0 * tol
         rk4_step(
-            ya, ka, t + tau, s, p, gl, tl, fl, gr, tr, fr, stuck, ml, mr, k2, k3, k4, tmp, out, ya
+            ya,
+            ka,
+            t + tau,
+            s,
+            p,
+            gl,
+            tl,
+            fl,
+            gr,
+            tr,
+            fr,
+            stuck,
+            ml,
+            mr,
+            k2,
+            k3,
+            k4,
+            tmp,
+            out,
+            ya,
+            NOT_FREE,
         )
         tau += s
         if flip_l:
@@ -617,6 +754,12 @@ def fixed_step_advance(
     held = False
     kin_l = contact.kinematics(pw, bl, 0.0, 0.0, 0.0, 0.0)
     kin_r = kin_l
+    # RK4 stages skip the contact geometry where the shoes provably exert nothing
+    # (_rides_free): on a round drum with a fixed geometry, each shoe's indentation at the
+    # step's start and twice the largest distance of its lining from its pivot
+    free = NOT_FREE.copy()
+    free[1] = 2.0 * _lining_reach(pw, bl)
+    free[3] = 2.0 * _lining_reach(pw, br)
     for i in range(n_steps):
         step = step0 + i
         t = step * dt
@@ -711,8 +854,31 @@ def fixed_step_advance(
                 # modes frozen for the step; k1 (auto) equals k1 with these modes
                 ml = L.CONTACT_ON if h_start[0] > 0.0 else L.CONTACT_OFF
                 mr = L.CONTACT_ON if h_start[1] > 0.0 else L.CONTACT_OFF
+            if round_drum and not growing:
+                free[0] = kin_l[0]
+                free[2] = kin_r[0]
             rk4_step(
-                y, k1, t, dt, pw, gl, tl, fl, gr, tr, fr, stuck, ml, mr, k2, k3, k4, tmp, out, y_new
+                y,
+                k1,
+                t,
+                dt,
+                pw,
+                gl,
+                tl,
+                fl,
+                gr,
+                tr,
+                fr,
+                stuck,
+                ml,
+                mr,
+                k2,
+                k3,
+                k4,
+                tmp,
+                out,
+                y_new,
+                free,
             )
             accept = True
             if located:
