@@ -46,6 +46,7 @@ from brake_sim_ros.model.actuation import MAX_ACTUATION_FORCE_N, Actuation, Forc
 from brake_sim_ros.model.thermal import FADE
 from brake_sim_ros.model.trajectory import BrakeSetup
 from brake_sim_ros.model.units import keyed_uniform
+from brake_sim_ros.model.vehicle import LOAD_FACTOR_RANGE
 
 DOMAIN = "brake_sim_ros operating conditions"
 
@@ -79,8 +80,7 @@ CONDITIONS: tuple[Condition, ...] = (
     Condition(
         "load_factor",
         "1",
-        0.5,
-        3.0,
+        *LOAD_FACTOR_RANGE,
         "vehicle mass over the scenario's; the flywheel inertia scales with it",
     ),
     Condition(
