@@ -63,9 +63,8 @@ step, from the state at that instant, and holds its drive torque over the step (
 zero-order hold at the physics step); its state (segment, segment start, brake ramp, drag
 integrator, load factor and draw count) is carried between calls in the kernel's
 bookkeeping arrays (layout.K_SEGMENT, K_LOAD_DRAWS, layout.F_*), like the drum's stick
-state. So a run gives the same bits however it is cut
-into chunks; a different preset (another physics step) samples the controller at another
-rate.
+state. So a run gives the same bits however it is cut into chunks; a different preset
+(another physics step) samples the controller at another rate.
 """
 
 from __future__ import annotations
@@ -335,7 +334,6 @@ def pack_cycle(p: np.ndarray, cycle: Cycle) -> None:
 
 
 LOAD_DOMAIN = "brake_sim_ros cycle load"
-_MASK64 = (1 << 64) - 1
 
 
 def load_key(seed: int) -> int:
@@ -397,7 +395,7 @@ def _enter(p, base, seg, y, kstate, fstate, t):
             fstate[L.F_DRAG_FORCE] = f_now
             target = f_now
         high = p[b + L.Q_LOAD_HIGH]
-        if high > 0.0:  # a standing hold that changes the load (the loader checks where)
+        if high > 0.0:  # a standing hold that changes the load (Cycle checks where)
             low = p[b + L.Q_LOAD_LOW]
             factor = low + load_draw(p, kstate[L.K_LOAD_DRAWS]) * (high - low)
             kstate[L.K_LOAD_DRAWS] += 1

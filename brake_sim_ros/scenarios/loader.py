@@ -728,12 +728,7 @@ def _load_factor(ctx: _Ctx, value: Any, key: str) -> tuple[float, float]:
     lo, hi = LOAD_FACTOR_RANGE
     allowed = f"a number or an array [low, high] with {lo:g} <= low <= high <= {hi:g}"
     if isinstance(value, list):
-        if len(value) != 2:
-            raise ctx.fail(key, value, allowed)
-        low, high = (ctx.number(v, f"{key}[{i}]", lo, hi) for i, v in enumerate(value))
-        if low > high:
-            raise ctx.fail(key, value, allowed)
-        return low, high
+        return _range(ctx, value, key, (lo, hi), allowed)
     if isinstance(value, bool) or not isinstance(value, int | float):
         raise ctx.fail(key, value, allowed)
     factor = ctx.number(value, key, lo, hi)
@@ -785,13 +780,21 @@ def _conditions(ctx: _Ctx, data: Any) -> tuple[tuple[str, float, float], ...]:
         key, value = f"conditions.{c.name}", data[c.name]
         unit = "(dimensionless)" if c.unit == "1" else c.unit
         allowed = f"an array [low, high] with {c.low:g} <= low <= high <= {c.high:g} {unit}"
-        if not isinstance(value, list) or len(value) != 2:
-            raise ctx.fail(key, value, allowed)
-        low, high = (ctx.number(v, f"{key}[{i}]", c.low, c.high) for i, v in enumerate(value))
-        if low > high:
-            raise ctx.fail(key, value, allowed)
-        out.append((c.name, low, high))
+        out.append((c.name, *_range(ctx, value, key, (c.low, c.high), allowed)))
     return tuple(out)
+
+
+def _range(
+    ctx: _Ctx, value: Any, key: str, limits: tuple[float, float], allowed: str
+) -> tuple[float, float]:
+    """``[low, high]``, two numbers within ``limits`` with low <= high (``allowed``: what
+    the one-line error says is allowed)."""
+    if not isinstance(value, list) or len(value) != 2:
+        raise ctx.fail(key, value, allowed)
+    low, high = (ctx.number(v, f"{key}[{i}]", *limits) for i, v in enumerate(value))
+    if low > high:
+        raise ctx.fail(key, value, allowed)
+    return low, high
 
 
 def _options(ctx: _Ctx, data: Any) -> ModelOptions:
