@@ -13,7 +13,8 @@ scenario's value. What each one sets:
   for (dimensionless; the published 17.1 kg m^2 is a 1000 kg car). The flywheel carries
   the brake's share of the vehicle's inertia, which grows with its mass at the same rolling
   radius: ``I_f = load_factor x I_f(scenario)``. The share per brake is kept: the load
-  transfer to the front axle in a stop is not modelled.
+  transfer to the front axle in a stop is not modelled. A drive cycle may instead change
+  it per stop, at its standing holds (model/cycle.py); not both.
 * ``peak_force_n``: the actuation profile's peak, N: both shoes' profiles scaled by one
   factor so that their largest force is this (the ramp's timing kept).
 * ``brake_temperature_c``: the linings' and drum's temperature, deg C. Without a thermal

@@ -1084,8 +1084,9 @@ def _parse(data: dict[str, Any], text: str, source: str) -> Scenario:
 
 def _check_cycle_setup(ctx: _Ctx, top: dict[str, Any], setup: BrakeSetup) -> None:
     """Refuse what a drive cycle cannot carry: a shaped actuation (its history is the
-    cycle's ramp, which the delay and lag formulas would read as the whole history) and a
-    drawn peak force (the cycle's segments give the forces)."""
+    cycle's ramp, which the delay and lag formulas would read as the whole history), a
+    drawn peak force (the cycle's segments give the forces) and a drawn load with holds
+    that set it per stop (which would the factor be over?)."""
     for side in SIDES:
         defect = getattr(setup.defects, side)
         if defect.actuation_shaped or defect.return_spring_weakening_pct:
