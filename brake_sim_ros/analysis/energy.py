@@ -11,6 +11,9 @@ where ``stored`` is the kinetic energy of flywheel, drum and shoes (about their 
 plus the elastic energy of the coupling spring and of the contacts (``k_c eps^2 / 2``
 while the lining penetrates). The residual of that identity is the integration error of
 the whole event; it can fail, since the quadratures and the motion are independent sums.
+A run whose drive cycle changes the vehicle's load (model/cycle.py) stores the flywheel's
+kinetic energy with the inertia in force at each sample (``flywheel_inertia_kg_m2``) and
+is supplied the kinetic energy its load changes brought (``load_change_work_j``).
 """
 
 from __future__ import annotations
@@ -24,6 +27,9 @@ from brake_sim_ros.model.trajectory import SampleBlock
 _LOSSES = ("friction_work_j", "coupling_damper_loss_j", "contact_loss_j", "lock_loss_j")
 # a vehicle's (model/vehicle.py): the drive's work in, the road load's out; read when kept
 _VEHICLE_WORK = ("drive_work_j", "road_load_work_j")
+# the flywheel inertia in force and the load changes' work; read when kept (else the
+# parameters' inertia, which is the column's value for a run whose load never changes)
+_LOAD_COLUMNS = ("flywheel_inertia_kg_m2", "load_change_work_j")
 # every column the books read (a run restricted to some outputs may not keep them all)
 ENERGY_COLUMNS: tuple[str, ...] = (
     "flywheel_angle_rad",
@@ -76,8 +82,9 @@ def stored_energy_j(block: SampleBlock, params: BrakeParameters, row: int) -> fl
     def at(name: str) -> float:  # a numpy float64, as the arithmetic below expects
         return block[name][row]
 
+    i_f = at("flywheel_inertia_kg_m2") if block.has(*_LOAD_COLUMNS) else d.flywheel_inertia_kg_m2
     kinetic = (
-        0.5 * d.flywheel_inertia_kg_m2 * at("flywheel_speed_rad_s") ** 2
+        0.5 * i_f * at("flywheel_speed_rad_s") ** 2
         + 0.5 * d.drum_inertia_kg_m2 * at("drum_speed_rad_s") ** 2
         + 0.5 * i_s * (at("left_speed_rad_s") ** 2 + at("right_speed_rad_s") ** 2)
     )
@@ -108,6 +115,9 @@ def energy_balance(block: SampleBlock, params: BrakeParameters) -> EnergyBalance
         drive, road = (block[name][-1] - block[name][0] for name in _VEHICLE_WORK)
         supplied = float(supplied + drive)
         spent = float(spent + road)
+    if block.has(*_LOAD_COLUMNS):  # a cycle's load changes at standstill (model/cycle.py)
+        load = block["load_change_work_j"]
+        supplied = float(supplied + (load[-1] - load[0]))
     return EnergyBalance(
         stored_start_j=start,
         stored_end_j=end,

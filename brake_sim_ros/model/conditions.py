@@ -13,7 +13,8 @@ scenario's value. What each one sets:
   for (dimensionless; the published 17.1 kg m^2 is a 1000 kg car). The flywheel carries
   the brake's share of the vehicle's inertia, which grows with its mass at the same rolling
   radius: ``I_f = load_factor x I_f(scenario)``. The share per brake is kept: the load
-  transfer to the front axle in a stop is not modelled.
+  transfer to the front axle in a stop is not modelled. A drive cycle may instead change
+  it per stop, at its standing holds (model/cycle.py); not both.
 * ``peak_force_n``: the actuation profile's peak, N: both shoes' profiles scaled by one
   factor so that their largest force is this (the ramp's timing kept).
 * ``brake_temperature_c``: the linings' and drum's temperature, deg C. Without a thermal
@@ -46,6 +47,7 @@ from brake_sim_ros.model.actuation import MAX_ACTUATION_FORCE_N, Actuation, Forc
 from brake_sim_ros.model.thermal import FADE
 from brake_sim_ros.model.trajectory import BrakeSetup
 from brake_sim_ros.model.units import keyed_uniform
+from brake_sim_ros.model.vehicle import LOAD_FACTOR_RANGE
 
 DOMAIN = "brake_sim_ros operating conditions"
 
@@ -79,8 +81,7 @@ CONDITIONS: tuple[Condition, ...] = (
     Condition(
         "load_factor",
         "1",
-        0.5,
-        3.0,
+        *LOAD_FACTOR_RANGE,
         "vehicle mass over the scenario's; the flywheel inertia scales with it",
     ),
     Condition(

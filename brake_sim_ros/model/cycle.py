@@ -10,7 +10,8 @@ A cycle (scenario table ``[cycle]``) is a list of segments run in order:
   by static friction and the rotor's energy within what the brake holds: the stop rule of
   :func:`brake_sim_ros.model.standstill.at_rest`);
 * ``hold`` the brake (``pressure_bar``/``force_n``, default the last brake's) for
-  ``duration_s``;
+  ``duration_s``; a hold where the vehicle stands may change its load (``load_factor``,
+  below);
 * ``release`` the brake (force ramped to 0, no drive) for ``duration_s``;
 * ``drag`` at ``kmh`` for ``duration_s``: the brake holds the speed (no drive), as on a
   descent; its force is a PI controller's, limited to ``max_force_n``.
@@ -30,6 +31,23 @@ constant ``tau = speed_time_constant_s``, the road load fed forward) and gets it
 error into brake force with a PI law tuned on the nominal brake's torque per newton
 (:data:`NOMINAL_BRAKE_GAIN_N_M_PER_N`, a tuning figure, not a model parameter).
 
+Vehicle load per stop: a hold that follows a brake to a stop (``until_kmh = 0``), or
+follows such a hold, may set the vehicle's load factor (passengers or cargo in or out
+while it stands): a number, or a range ``[low, high]`` drawn anew at each such hold as it
+starts, within :data:`~brake_sim_ros.model.vehicle.LOAD_FACTOR_RANGE`. The factor is the
+vehicle's mass over the mass the run's flywheel inertia stands for (its load at the
+start: 1); it scales the flywheel inertia and the mass's road load
+(:func:`.vehicle.scale_load`) from that hold on, across laps of a repeating cycle, until
+another hold changes it. The draw is counter-based: the ``k``-th draw of the run (``k``
+counted in the kernel's bookkeeping, over laps) is a hash (splitmix64) of the run's key
+(:func:`load_key` of its seed) and ``k``, so it depends on the seed and the stop's number
+only, never on how the run is cut into chunks. A change at speed would ask where the mass
+comes from and how it gets the vehicle's speed (a coupling, a drop of cargo): not modelled,
+so the key is refused on any other segment. The vehicle's speed is kept as the load
+changes (it stands: only the coupling's residual oscillation moves the flywheel); the
+kinetic energy the change brings, ``(I_new - I_old) w_f^2 / 2``, is booked
+(``load_change_work_j``) so that the energy books close.
+
 Live drive (:class:`LiveDrive`, the node's ``~/drive``): a run with a vehicle and no
 cycle takes drive commands that hold until the next one: coast (no drive torque), a
 constant drive torque, or a target speed held by the same speed controller as an
@@ -43,14 +61,15 @@ Determinism: the controller runs inside the compiled stepping
 (:func:`brake_sim_ros.model.kernel.fixed_step_advance`) at the start of every physics
 step, from the state at that instant, and holds its drive torque over the step (a
 zero-order hold at the physics step); its state (segment, segment start, brake ramp, drag
-integrator) is carried between calls in the kernel's bookkeeping arrays (layout.K_SEGMENT,
-layout.F_*), like the drum's stick state. So a run gives the same bits however it is cut
-into chunks; a different preset (another physics step) samples the controller at another
-rate.
+integrator, load factor and draw count) is carried between calls in the kernel's
+bookkeeping arrays (layout.K_SEGMENT, K_LOAD_DRAWS, layout.F_*), like the drum's stick
+state. So a run gives the same bits however it is cut into chunks; a different preset
+(another physics step) samples the controller at another rate.
 """
 
 from __future__ import annotations
 
+import hashlib
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -91,12 +110,16 @@ class Segment:
             segment brakes to (``until_kmh``), km/h.
         force_n: brake force per shoe (brake, hold), N; 0 for the others.
         duration_s: how long (cruise, hold, release, drag), s; 0 for the others.
+        load_factor: the vehicle load factor ``(low, high)`` a standing hold draws from
+            at each stop (``low == high``: that factor), dimensionless; None: the load is
+            kept (see the module doc).
     """
 
     kind: str
     speed_kmh: float = 0.0
     force_n: float = 0.0
     duration_s: float = 0.0
+    load_factor: tuple[float, float] | None = None
 
 
 # the controller's settings: (low, high) each (the scenario's [cycle] keys)
@@ -121,6 +144,8 @@ class Cycle:
         max_force_n: the drag controller's brake force limit per shoe, N.
         repeat: after the last segment, start again at the first (a cycle without end,
             for a continuous run); else the cycle ends there (no drive, the brake kept).
+        seed: the run's seed, which keys the per-stop load draws (the scenario loader
+            sets it, 0 to 2^63 - 1).
     """
 
     segments: tuple[Segment, ...]
@@ -129,6 +154,7 @@ class Cycle:
     brake_rise_s: float = 0.2
     max_force_n: float = 3000.0
     repeat: bool = False
+    seed: int = 0
 
     def __post_init__(self) -> None:
         n = len(self.segments)
@@ -153,6 +179,43 @@ class Cycle:
                     raise ParameterError(
                         f"cycle segment {i} ({s.kind}) {name} {value!r}: allowed 0 to {hi:g}"
                     )
+            if s.load_factor is not None:
+                self._check_load(i, s)
+        if isinstance(self.seed, bool) or not isinstance(self.seed, int):
+            raise ParameterError(f"cycle seed {self.seed!r}: allowed an integer")
+        if not 0 <= self.seed < 2**63:
+            raise ParameterError(f"cycle seed {self.seed!r}: allowed 0 to 2^63 - 1")
+
+    def _check_load(self, i: int, s: Segment) -> None:
+        """Refuse segment ``i``'s load factor unless it is a range of the model's on a hold
+        where the vehicle stands (see the module doc)."""
+        lo, hi = vehicle.LOAD_FACTOR_RANGE
+        low, high = s.load_factor
+        if not (math.isfinite(low) and math.isfinite(high) and lo <= low <= high <= hi):
+            raise ParameterError(
+                f"cycle segment {i} ({s.kind}) load_factor [{low!r}, {high!r}]: allowed"
+                f" low <= high within [{lo:g}, {hi:g}]"
+            )
+        if not (s.kind == "hold" and self.standing(i)):
+            raise ParameterError(
+                f"cycle segment {i} ({s.kind}) load_factor: allowed only on a hold where the"
+                " vehicle stands (right after a brake with until_kmh = 0, or after such a hold)"
+            )
+
+    def standing(self, i: int) -> bool:
+        """Whether the vehicle stands when segment ``i`` starts: segment ``i - 1`` is a
+        brake to a stop, or a hold that starts standing (the first segment: never)."""
+        for before in reversed(self.segments[:i]):
+            if before.kind == "brake":
+                return before.speed_kmh == 0.0
+            if before.kind != "hold":
+                return False
+        return False
+
+    @property
+    def loads(self) -> bool:
+        """Whether a segment changes the vehicle's load."""
+        return any(s.load_factor is not None for s in self.segments)
 
     @property
     def peak_force_n(self) -> float:
@@ -243,7 +306,7 @@ def resolved(segments: Sequence[Segment]) -> tuple[Segment, ...]:
         elif s.kind == "brake":
             force = s.force_n
         elif s.kind == "hold" and s.force_n == 0.0:
-            s = Segment(s.kind, s.speed_kmh, force, s.duration_s)
+            s = Segment(s.kind, s.speed_kmh, force, s.duration_s, s.load_factor)
         out.append(s)
     return tuple(out)
 
@@ -258,12 +321,39 @@ def pack_cycle(p: np.ndarray, cycle: Cycle) -> None:
     p[L.P_CYCLE_RISE] = cycle.brake_rise_s
     p[L.P_CYCLE_MAX_FORCE] = cycle.max_force_n
     p[L.P_CYCLE_REPEAT] = 1.0 if cycle.repeat else 0.0
+    key = load_key(cycle.seed)
+    p[L.P_CYCLE_LOAD_KEY] = float(key >> 32)
+    p[L.P_CYCLE_LOAD_KEY + 1] = float(key & 0xFFFF_FFFF)
     for j, s in enumerate(resolved(cycle.segments)):
         b = L.P_CYCLE_BASE + j * L.CYCLE_STRIDE
         p[b + L.Q_KIND] = float(L.SEGMENT_KINDS.index(s.kind))
         p[b + L.Q_SPEED] = s.speed_kmh / KMH_PER_M_S / radius
         p[b + L.Q_FORCE] = s.force_n
         p[b + L.Q_DURATION] = s.duration_s
+        p[b + L.Q_LOAD_LOW], p[b + L.Q_LOAD_HIGH] = s.load_factor or (0.0, 0.0)
+
+
+LOAD_DOMAIN = "brake_sim_ros cycle load"
+
+
+def load_key(seed: int) -> int:
+    """The 64-bit key of a run's per-stop load draws: the first 8 bytes (big-endian) of
+    SHA-256 of :data:`LOAD_DOMAIN` and ``seed``."""
+    digest = hashlib.sha256(f"{LOAD_DOMAIN} {int(seed)}".encode()).digest()
+    return int.from_bytes(digest[:8], "big")
+
+
+@njit(cache=True)
+def load_draw(p, number):
+    """The ``number``-th per-stop load draw (0, 1, ...) of the run whose key ``p`` packs
+    (P_CYCLE_LOAD_KEY): uniform in [0, 1), the top 53 bits of splitmix64's output for
+    ``key + (number + 1) * golden`` (counter-based: no state but the count)."""
+    key = (np.uint64(p[L.P_CYCLE_LOAD_KEY]) << np.uint64(32)) | np.uint64(p[L.P_CYCLE_LOAD_KEY + 1])
+    z = key + np.uint64(number + 1) * np.uint64(0x9E3779B97F4A7C15)
+    z = (z ^ (z >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
+    z = (z ^ (z >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
+    z = z ^ (z >> np.uint64(31))
+    return float(z >> np.uint64(11)) * (1.0 / 9007199254740992.0)
 
 
 @njit(cache=True, inline="always")
@@ -286,8 +376,9 @@ def live_control(p, y):
 
 
 @njit(cache=True)
-def _enter(p, seg, y, fstate, t):
-    """Start segment ``seg`` at ``t``: its brake ramp from the force now to its own."""
+def _enter(p, base, seg, y, kstate, fstate, t):
+    """Start segment ``seg`` at ``t``: its brake ramp from the force now to its own; a
+    hold with a load draws its factor (``base``: the packed vector the factor scales)."""
     f_now = actuation.pwl(
         t,
         np.array([fstate[L.F_RAMP_T0], fstate[L.F_RAMP_T1]]),
@@ -303,6 +394,15 @@ def _enter(p, seg, y, fstate, t):
         if int(p[b + L.Q_KIND]) == L.SEG_DRAG:
             fstate[L.F_DRAG_FORCE] = f_now
             target = f_now
+        high = p[b + L.Q_LOAD_HIGH]
+        if high > 0.0:  # a standing hold that changes the load (Cycle checks where)
+            low = p[b + L.Q_LOAD_LOW]
+            factor = low + load_draw(p, kstate[L.K_LOAD_DRAWS]) * (high - low)
+            kstate[L.K_LOAD_DRAWS] += 1
+            inertia = base[L.P_FLYWHEEL_INERTIA]
+            change = inertia * factor - inertia * fstate[L.F_LOAD_FACTOR]
+            fstate[L.F_LOAD_CHANGE_WORK] += 0.5 * change * y[L.Y_FLYWHEEL_SPEED] ** 2
+            fstate[L.F_LOAD_FACTOR] = factor
     fstate[L.F_RAMP_T0] = t
     fstate[L.F_RAMP_F0] = f_now
     fstate[L.F_RAMP_T1] = t + p[L.P_CYCLE_RISE]
@@ -326,26 +426,29 @@ def _finished(p, seg, y, kstate, fstate, t, dt):
 
 
 @njit(cache=True)
-def control(p, y, kstate, fstate, t, dt):
+def control(p, base, y, kstate, fstate, t, dt):
     """The controller at the start of a physics step at ``t`` (s, step ``dt``): advance
     the segment while the current one has ended (each segment at most once per step; a
-    repeating cycle wraps from its last segment to its first), then
+    repeating cycle wraps from its last segment to its first), set the load in force
+    (:func:`.vehicle.scale_load` of ``base``, the packed vector, into ``p``), then
     set the step's drive torque in ``p`` (the kernel's working copy, P_DRIVE_TORQUE) and
     the brake force ramp in ``fstate`` (F_RAMP_*). ``kstate[K_SEGMENT]`` < 0 before the
-    first step: the first segment starts then."""
+    first step: the first segment starts then, at the packed load."""
     n = int(p[L.P_CYCLE_COUNT])
     seg = kstate[L.K_SEGMENT]
     if seg < 0:
         seg = 0
-        _enter(p, seg, y, fstate, t)
+        fstate[L.F_LOAD_FACTOR] = 1.0
+        _enter(p, base, seg, y, kstate, fstate, t)
     advanced = 0
     while seg < n and advanced < n and _finished(p, seg, y, kstate, fstate, t, dt):
         seg += 1
         advanced += 1
         if seg == n and p[L.P_CYCLE_REPEAT] > 0.0:
             seg = 0  # again from the first segment
-        _enter(p, seg, y, fstate, t)
+        _enter(p, base, seg, y, kstate, fstate, t)
     kstate[L.K_SEGMENT] = seg
+    vehicle.scale_load(base, p, fstate[L.F_LOAD_FACTOR])
     drive = 0.0
     if seg < n:
         b = L.P_CYCLE_BASE + seg * L.CYCLE_STRIDE

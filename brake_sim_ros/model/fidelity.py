@@ -270,7 +270,8 @@ class Plan:
 
 
 # what a driven run keeps whatever its outputs: the vehicle's speed, its drive and road
-# load, their work (the energy books) and the cycle's segment (the phase label)
+# load, their work (the energy books), the cycle's segment (the phase label) and the
+# vehicle's load in force with its changes' work (the books and the load label)
 DRIVEN_COLUMNS: tuple[str, ...] = (
     "flywheel_speed_rad_s",
     "drive_torque_n_m",
@@ -278,6 +279,8 @@ DRIVEN_COLUMNS: tuple[str, ...] = (
     "drive_work_j",
     "road_load_work_j",
     "cycle_segment",
+    "flywheel_inertia_kg_m2",
+    "load_change_work_j",
 )
 # columns computed from the recorded ones, appended after layout.COLUMNS
 DERIVED_COLUMNS: tuple[str, ...] = ("braking_torque_n_m",)

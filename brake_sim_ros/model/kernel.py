@@ -184,6 +184,8 @@ def _evaluate_from(
     o[L.C_BRAKE_TEMPERATURE] = (
         y[L.Y_BRAKE_TEMPERATURE] if y.shape[0] > L.Y_BRAKE_TEMPERATURE else p[L.P_HELD_TEMPERATURE]
     )
+    o[L.C_FLYWHEEL_INERTIA] = p[L.P_FLYWHEEL_INERTIA]
+    o[L.C_LOAD_CHANGE_WORK] = 0.0  # no load change; fixed_step_advance writes a cycle's
 
 
 @njit(cache=True, inline="always")
@@ -694,8 +696,9 @@ def fixed_step_advance(
     gains with them); without entries ``p`` is used as it is.
 
     A drive cycle (``p``'s P_CYCLE_COUNT > 0, :mod:`.cycle`) replaces the actuation knots
-    by its brake force ramp and sets the drive torque: its controller runs at the start of
-    every step, from the state then, in the working copy (its state in kstate/fstate).
+    by its brake force ramp and sets the drive torque and the vehicle's load: its
+    controller runs at the start of every step, from the state then, in the working copy
+    (its state in kstate/fstate).
     Without a cycle, a live target speed (P_LIVE_SPEED_CONTROL) sets the drive torque so,
     by the same speed controller (:func:`.cycle.live_control`).
 
@@ -774,7 +777,7 @@ def fixed_step_advance(
         if heating:
             thermal.fade_linings(p, pw, y[L.Y_BRAKE_TEMPERATURE])
         if cycling:
-            cycle.control(pw, y, kstate, fstate, t, dt)
+            cycle.control(pw, p, y, kstate, fstate, t, dt)
             ramp_t[0] = fstate[L.F_RAMP_T0]
             ramp_t[1] = fstate[L.F_RAMP_T1]
             ramp_f[0] = fstate[L.F_RAMP_F0]
@@ -838,6 +841,7 @@ def fixed_step_advance(
             o[L.C_LOCK_LOSS] = fstate[L.F_LOCK_LOSS]
             if cycling:
                 o[L.C_PHASE] = kstate[L.K_SEGMENT]
+                o[L.C_LOAD_CHANGE_WORK] = fstate[L.F_LOAD_CHANGE_WORK]
             rows += 1
         surface_before = abs(y[L.Y_DRUM_SPEED]) * radius
         if scheme == L.SCHEME_SEMI_IMPLICIT_EULER:

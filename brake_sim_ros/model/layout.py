@@ -140,18 +140,21 @@ P_ROLLING_SMOOTHING_SPEED = P_DRIVEN + 5  # width of the rolling resistance's si
 P_DRIVE_TORQUE = P_DRIVEN + 6  # in the kernel's working copy: the step's drive torque, N m
 # the cycle: its segment count (0: no cycle, the actuation history commands the brake),
 # the speed controller's limits, then per segment (kind, target speed rad/s, brake force
-# N per shoe, duration s)
+# N per shoe, duration s, the vehicle load factor range a hold sets, low and high; 0: the
+# segment leaves the load as it is)
 P_CYCLE_COUNT = P_DRIVEN + 7
 P_CYCLE_MAX_DRIVE_TORQUE = P_DRIVEN + 8  # N m at the flywheel
 P_CYCLE_TIME_CONSTANT = P_DRIVEN + 9  # speed controller's time constant, s
 P_CYCLE_RISE = P_DRIVEN + 10  # brake force ramp on apply and release, s
 P_CYCLE_MAX_FORCE = P_DRIVEN + 11  # drag segments' brake force limit, N per shoe
 P_CYCLE_BASE = P_DRIVEN + 12
-CYCLE_STRIDE = 4
+CYCLE_STRIDE = 6
 Q_KIND = 0  # a SEG_* id
 Q_SPEED = 1
 Q_FORCE = 2
 Q_DURATION = 3
+Q_LOAD_LOW = 4  # the load factor a hold draws per stop within [low, high] (cycle.load_draw)
+Q_LOAD_HIGH = 5
 MAX_CYCLE_SEGMENTS = 64
 SEG_ACCELERATE = 0  # drive to the target speed (speed controller, torque up to the max)
 SEG_CRUISE = 1  # hold the target speed with the drive for the duration
@@ -170,6 +173,9 @@ P_CYCLE_REPEAT = P_CYCLE_BASE + MAX_CYCLE_SEGMENTS * CYCLE_STRIDE
 # limits P_CYCLE_MAX_DRIVE_TORQUE and P_CYCLE_TIME_CONSTANT); else P_DRIVE_TORQUE holds
 P_LIVE_SPEED_CONTROL = P_CYCLE_REPEAT + 1
 P_LIVE_TARGET_SPEED = P_CYCLE_REPEAT + 2
+# the key of the cycle's per-stop load draws (cycle.load_key of the run's seed): two 32-bit
+# halves, high then low, each exact in a float64
+P_CYCLE_LOAD_KEY = P_LIVE_TARGET_SPEED + 1
 
 
 # the brake's temperature (model/thermal.py): P_THERMAL 1.0 when the run carries its thermal
@@ -178,7 +184,7 @@ P_LIVE_TARGET_SPEED = P_CYCLE_REPEAT + 2
 # left then right (a growing friction change updates them); the thermal state's heat
 # capacity J/K, its conductance to the air at rest W/K and per rad/s of the drum W s/K
 # (per m/s of the vehicle times the wheel radius), and the air's temperature, deg C
-P_THERMAL = P_LIVE_TARGET_SPEED + 1
+P_THERMAL = P_CYCLE_LOAD_KEY + 2
 P_HELD_TEMPERATURE = P_THERMAL + 1
 P_FADE_ONSET = P_THERMAL + 2
 P_FADE_FULL = P_THERMAL + 3
@@ -267,6 +273,8 @@ COLUMNS: tuple[str, ...] = (
     "road_load_work_j",
     "cycle_segment",  # the drive cycle's segment index (its kind: P_CYCLE_*); -1: no cycle
     "brake_temperature_c",  # the thermal state's, or the temperature the run is held at
+    "flywheel_inertia_kg_m2",  # in force: a cycle's hold may change the load (model/cycle.py)
+    "load_change_work_j",  # kinetic energy the load changes brought, 0.5 dI w_f^2 summed
 )
 COL = {name: i for i, name in enumerate(COLUMNS)}
 N_COLUMNS = len(COLUMNS)
@@ -298,6 +306,8 @@ C_DRIVE_WORK = COL["drive_work_j"]
 C_ROAD_LOAD_WORK = COL["road_load_work_j"]
 C_PHASE = COL["cycle_segment"]
 C_BRAKE_TEMPERATURE = COL["brake_temperature_c"]
+C_FLYWHEEL_INERTIA = COL["flywheel_inertia_kg_m2"]
+C_LOAD_CHANGE_WORK = COL["load_change_work_j"]
 RIGHT_OF_SCALAR = 1  # right-shoe column = left-shoe column + 1 for scalar per-shoe pairs
 RIGHT_OF_VECTOR = 2  # right-shoe (x, y) columns = left-shoe ones + 2
 
@@ -319,7 +329,8 @@ K_RIGHT_LAST_CHANGE_STEP = 6
 K_STATUS = 7  # 0 running, 1 non-finite state
 K_BREAKAWAYS = 8  # stick -> slip transitions so far
 K_SEGMENT = 9  # the drive cycle's current segment (model/cycle.py); P_CYCLE_COUNT: ended
-N_KSTATE = 10
+K_LOAD_DRAWS = 10  # the cycle's per-stop load draws so far: the next draw's number
+N_KSTATE = 11
 
 # float bookkeeping carried between calls (fstate)
 F_STOP_TIME = 0  # instant the vehicle came to rest (standstill.at_rest), s; < 0 until then
@@ -335,7 +346,11 @@ F_RAMP_F0 = 6
 F_RAMP_T1 = 7
 F_RAMP_F1 = 8
 F_DRAG_FORCE = 9
-N_FSTATE = 10
+# the cycle's vehicle load factor in force (over the packed flywheel inertia's; set to 1
+# when the cycle starts) and the kinetic energy its changes brought, J (model/cycle.py)
+F_LOAD_FACTOR = 10
+F_LOAD_CHANGE_WORK = 11
+N_FSTATE = 12
 
 # contact modes of the right-hand side (the adaptive reference forces them per segment)
 CONTACT_AUTO = -1

@@ -273,6 +273,8 @@ def _record(o, t, y, p, fel, fer, stuck, cache, fstate):
     o[L.C_DRUM_STICKING] = 1.0 if stuck else 0.0
     o[L.C_PHASE] = -1.0  # no drive cycle at these levels (model/fidelity.py)
     o[L.C_BRAKE_TEMPERATURE] = p[L.P_HELD_TEMPERATURE]  # no thermal state either
+    o[L.C_FLYWHEEL_INERTIA] = p[L.P_FLYWHEEL_INERTIA]
+    o[L.C_LOAD_CHANGE_WORK] = 0.0
     o[COL_BRAKING_TORQUE] = -torque
 
 

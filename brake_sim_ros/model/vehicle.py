@@ -20,6 +20,11 @@ and the road load on the flywheel is the torque (N m, opposing forward motion)::
   ``dT/dw = I_f g c_rr cos(a) / v_r`` (167 N m s for the defaults) gives the flywheel a time
   constant of 0.1 s, far above any physics step.
 
+A drive cycle's hold may change the vehicle's load while it stands (model/cycle.py): a load
+factor ``f`` (the vehicle's mass over the mass the packed flywheel inertia stands for)
+scales the flywheel inertia and the road-load forces that scale with mass, rolling
+resistance and grade (:func:`scale_load`); the aerodynamic drag does not.
+
 No tyre slip, no load transfer between axles. Pure: no files, no transport.
 """
 
@@ -42,6 +47,9 @@ ROLLING_SMOOTHING_SPEED_M_S = 0.01
 # 27.78 m/s / 103.5 rad/s = 0.268 m (a 195/65 R15 tyre rolls at about 0.30 m; the spec's
 # pair is kept, so that km/h and rad/s agree with MODEL.md).
 DEFAULT_WHEEL_RADIUS_M = (100.0 / 3.6) / 103.5
+# The vehicle load factor's range (a half-empty to a three-times-laden vehicle): the limits
+# of a drawn condition (model/conditions.py) and of a cycle's per-stop load (model/cycle.py).
+LOAD_FACTOR_RANGE = (0.5, 3.0)
 
 
 @dataclass(frozen=True)
@@ -125,3 +133,14 @@ def road_load_torque(p, flywheel_speed):
     v = flywheel_speed * r
     rolling = p[L.P_ROLLING_FORCE] * math.tanh(v / p[L.P_ROLLING_SMOOTHING_SPEED])
     return r * (rolling + p[L.P_GRADE_FORCE] + p[L.P_DRAG_FACTOR] * v * abs(v))
+
+
+@njit(cache=True, inline="always")
+def scale_load(p, pw, factor):
+    """Set in ``pw`` (the kernel's working copy of ``p``) the flywheel inertia and the
+    road-load forces that scale with the vehicle's mass (rolling resistance, grade) for the
+    load ``factor`` (dimensionless, over ``p``'s); the aerodynamic drag is kept. The rule,
+    written once."""
+    pw[L.P_FLYWHEEL_INERTIA] = p[L.P_FLYWHEEL_INERTIA] * factor
+    pw[L.P_ROLLING_FORCE] = p[L.P_ROLLING_FORCE] * factor
+    pw[L.P_GRADE_FORCE] = p[L.P_GRADE_FORCE] * factor

@@ -77,7 +77,7 @@ from brake_sim_ros.model.units import (
     unit_values,
 )
 from brake_sim_ros.model.vehicle import LIMITS as VEHICLE_LIMITS
-from brake_sim_ros.model.vehicle import Vehicle
+from brake_sim_ros.model.vehicle import LOAD_FACTOR_RANGE, Vehicle
 from brake_sim_ros.scenarios.sensors import parse_sensors
 from brake_sim_ros.solvers.fixed_step import MIN_PHYSICS_STEP_S
 from brake_sim_ros.solvers.methods import FIXED_STEP_METHODS, SOLVER_METHODS
@@ -276,6 +276,10 @@ class Scenario:
             setup = dataclasses.replace(
                 setup, params=unit_parameters(setup.params, unit_id, fleet_seed)
             )
+            if setup.cycle is not None:  # the seed keys its per-stop load draws
+                setup = dataclasses.replace(
+                    setup, cycle=dataclasses.replace(setup.cycle, seed=seed)
+                )
             drawn_sensors = unit_sensors(sensors, unit_id, fleet_seed)
             pack_drive(pack(setup.params, setup.defects, setup.options), setup)
         except BrakeSimError as exc:
@@ -672,7 +676,7 @@ _SEGMENT_KEYS: dict[str, tuple[set[str], set[str]]] = {
     "accelerate": ({"kmh"}, {"kmh"}),
     "cruise": ({"kmh", "duration_s"}, {"duration_s"}),
     "brake": ({"pressure_bar", "force_n", "until_kmh"}, set()),
-    "hold": ({"pressure_bar", "force_n", "duration_s"}, {"duration_s"}),
+    "hold": ({"pressure_bar", "force_n", "duration_s", "load_factor"}, {"duration_s"}),
     "release": ({"duration_s"}, {"duration_s"}),
     "drag": ({"kmh", "duration_s"}, {"duration_s"}),
 }
@@ -711,7 +715,24 @@ def _segment(ctx: _Ctx, data: Any, key: str) -> Segment:
     duration = 0.0
     if "duration_s" in data:
         duration = ctx.number(data["duration_s"], f"{key}.duration_s", 0.0, 86_400.0)
-    return Segment(kind, speed, force, duration)
+    load = (
+        _load_factor(ctx, data["load_factor"], f"{key}.load_factor")
+        if "load_factor" in data
+        else None
+    )
+    return Segment(kind, speed, force, duration, load)
+
+
+def _load_factor(ctx: _Ctx, value: Any, key: str) -> tuple[float, float]:
+    """A hold's ``load_factor``: a number, or ``[low, high]`` drawn per stop."""
+    lo, hi = LOAD_FACTOR_RANGE
+    allowed = f"a number or an array [low, high] with {lo:g} <= low <= high <= {hi:g}"
+    if isinstance(value, list):
+        return _range(ctx, value, key, (lo, hi), allowed)
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise ctx.fail(key, value, allowed)
+    factor = ctx.number(value, key, lo, hi)
+    return factor, factor
 
 
 def _cycle(ctx: _Ctx, data: Any) -> Cycle:
@@ -759,13 +780,21 @@ def _conditions(ctx: _Ctx, data: Any) -> tuple[tuple[str, float, float], ...]:
         key, value = f"conditions.{c.name}", data[c.name]
         unit = "(dimensionless)" if c.unit == "1" else c.unit
         allowed = f"an array [low, high] with {c.low:g} <= low <= high <= {c.high:g} {unit}"
-        if not isinstance(value, list) or len(value) != 2:
-            raise ctx.fail(key, value, allowed)
-        low, high = (ctx.number(v, f"{key}[{i}]", c.low, c.high) for i, v in enumerate(value))
-        if low > high:
-            raise ctx.fail(key, value, allowed)
-        out.append((c.name, low, high))
+        out.append((c.name, *_range(ctx, value, key, (c.low, c.high), allowed)))
     return tuple(out)
+
+
+def _range(
+    ctx: _Ctx, value: Any, key: str, limits: tuple[float, float], allowed: str
+) -> tuple[float, float]:
+    """``[low, high]``, two numbers within ``limits`` with low <= high (``allowed``: what
+    the one-line error says is allowed)."""
+    if not isinstance(value, list) or len(value) != 2:
+        raise ctx.fail(key, value, allowed)
+    low, high = (ctx.number(v, f"{key}[{i}]", *limits) for i, v in enumerate(value))
+    if low > high:
+        raise ctx.fail(key, value, allowed)
+    return low, high
 
 
 def _options(ctx: _Ctx, data: Any) -> ModelOptions:
@@ -1055,8 +1084,9 @@ def _parse(data: dict[str, Any], text: str, source: str) -> Scenario:
 
 def _check_cycle_setup(ctx: _Ctx, top: dict[str, Any], setup: BrakeSetup) -> None:
     """Refuse what a drive cycle cannot carry: a shaped actuation (its history is the
-    cycle's ramp, which the delay and lag formulas would read as the whole history) and a
-    drawn peak force (the cycle's segments give the forces)."""
+    cycle's ramp, which the delay and lag formulas would read as the whole history), a
+    drawn peak force (the cycle's segments give the forces) and a drawn load with holds
+    that set it per stop (which would the factor be over?)."""
     for side in SIDES:
         defect = getattr(setup.defects, side)
         if defect.actuation_shaped or defect.return_spring_weakening_pct:
@@ -1070,6 +1100,13 @@ def _check_cycle_setup(ctx: _Ctx, top: dict[str, Any], setup: BrakeSetup) -> Non
             "conditions.peak_force_n",
             top["conditions"]["peak_force_n"],
             "no drawn peak force with a [cycle] (its segments give the brake forces)",
+        )
+    if setup.cycle.loads and "load_factor" in top.get("conditions", {}):
+        raise ctx.fail(
+            "conditions.load_factor",
+            top["conditions"]["load_factor"],
+            "no drawn load per run with a [cycle] whose holds set the load_factor per stop"
+            " (one or the other)",
         )
 
 

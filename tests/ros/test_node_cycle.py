@@ -18,8 +18,9 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy  # noqa: E402
 
 from brake_sim_ros.model.layout import COL  # noqa: E402
 from brake_sim_ros.ros.harness import NodeProcess, SimClient, domain_id_for  # noqa: E402
-from brake_sim_ros.scenarios import load_scenario  # noqa: E402
+from brake_sim_ros.scenarios import load_scenario, parse_scenario  # noqa: E402
 from brake_sim_ros.stream.build import stepper_for  # noqa: E402
+from tests.test_cycle_load import LAPS  # noqa: E402
 
 DOMAIN = domain_id_for(23)
 RUN_S = 1.0
@@ -61,3 +62,44 @@ def test_the_node_streams_a_drive_cycle_and_refuses_commands_to_its_brake(tmp_pa
             )
     # the vehicle drove: the drum speeds up from rest in the first second
     assert offline[-1, COL["drum_speed_rad_s"]] > 1.0
+
+
+def test_the_node_carries_the_load_a_hold_draws_across_its_chunks(tmp_path):
+    """A repeating cycle whose standing holds change the vehicle's load (tests/
+    test_cycle_load.py), streamed by the node over 6 s: the second lap drives and brakes
+    with the drawn load, and the published pivot forces equal the offline run's bit for
+    bit (the node's own chunking carries the load and the draw count)."""
+    path = tmp_path / "laden.toml"
+    path.write_text(LAPS.format(seed=5))
+    run_s = 6.0
+    node = NodeProcess.start(
+        ["--scenario", str(path), "--duration", str(run_s), "--ros-args", "-p", "paused:=true",
+         "-p", "real_time_factor:=0.0", "-p", f"scenario_dirs:={tmp_path}"],
+        domain_id=DOMAIN,
+        log_path=tmp_path / "node.log",
+    )  # fmt: skip
+    client = SimClient(DOMAIN, stream_qos=LOSSLESS)
+    scenario = parse_scenario(path.read_text(), str(path))
+    n = round(run_s * scenario.sample_rate_hz)
+    try:
+        client.wait_for_node(60.0)
+        client.spin_for(0.2)
+        assert client.set_parameter("paused", False).successful
+        client.wait_for(
+            lambda: client.diagnostics().get("state") == "finished", 120.0, "the end of the run"
+        )
+        client.wait_for(lambda: client.sample_count >= n, 10.0, "every sample")
+    finally:
+        client.close()
+        assert node.stop() == 0, node.output()
+    offline = stepper_for(scenario).run(run_s)
+    inertia, segment = offline["flywheel_inertia_kg_m2"], offline["cycle_segment"]
+    changed = np.flatnonzero(inertia != inertia[0])[0]  # the first load change
+    assert np.any(segment[changed:] == 0.0) and np.any(segment[changed:] == 1.0)  # lap 2
+    got = client.chunk_arrays()
+    np.testing.assert_array_equal(got["index"], np.arange(len(offline)))
+    for side in ("left", "right"):
+        for axis in ("fx", "fy"):
+            np.testing.assert_array_equal(
+                got[f"{side}_{axis}_n"], offline[f"{side}_pivot_{axis}_n"]
+            )
