@@ -16,11 +16,16 @@ Metadata records (MCAP ``Metadata``; every value a string):
     ``software_version``, ``sample_rate_hz`` and ``sample_period_s`` (the
     scenario's), the stepper at the start of the recording (``scheme``, ``preset``,
     ``physics_step_s``, ``substeps_per_sample``, ``step_limit_s``; a live run may re-pick
-    the substeps later, which its /diagnostics and log say), ``mode`` (``live`` or
-    ``offline``), ``duration_s``, the stream settings (``chunk_rate_hz``,
+    the substeps later, which its /diagnostics and log say), ``mode`` (``live``,
+    ``offline``, or ``resim``: re-simulated from a recording by ``brake-sim resim``,
+    which adds ``resimulated_from`` and ``recorded_mode``), ``duration_s``, the stream
+    settings (``chunk_rate_hz``,
     ``state_rate_hz``, ``publish_clock``, ``publish_measured``, ``measured_rate_hz``),
     ``time_base`` and
-    ``model_note``; a live run adds its node name and ``real_time_factor``; values are
+    ``model_note``; a run that takes live drive commands (a ``[vehicle]`` and no
+    ``[cycle]``) adds the drive's settings in force, ``max_drive_torque_n_m`` and
+    ``speed_time_constant_s`` (the scenario's, or the node's parameters); a live run
+    adds its node name and ``real_time_factor``; values are
     ``repr()`` of the Python value except strings, which are given as they are.
 ``brake_sim_unit``
     which brake unit was run (:mod:`brake_sim_ros.model.units`): ``unit_id`` and
@@ -147,8 +152,8 @@ def run_record(
     extra: Mapping[str, Any] | None = None,
 ) -> dict[str, str]:
     """The ``brake_sim_run`` record (see the module doc); ``stepper`` as it is now."""
-    if mode not in ("live", "offline"):
-        raise ValueError(f"mode={mode!r}: allowed 'live' or 'offline'")
+    if mode not in ("live", "offline", "resim"):
+        raise ValueError(f"mode={mode!r}: allowed 'live', 'offline' or 'resim'")
     values: dict[str, Any] = {
         "mode": mode,
         "run_id": run_id,
@@ -174,6 +179,9 @@ def run_record(
         ),
         **(extra or {}),
     }
+    if stepper.drive_refusal() is None:  # a live drive's settings, as the stepper has them
+        for name in ros_params.DRIVE_LIMIT_NAMES:
+            values[name] = float(getattr(stepper.setup.vehicle, name))
     return {k: v if isinstance(v, str) else repr(v) for k, v in values.items()}
 
 
