@@ -1,0 +1,175 @@
+"""``brake-sim resim``: a recording re-simulated offline from its own metadata, as a user
+runs it (real processes, real files, read back by the independent ``mcap`` reader), and
+the hostile inputs it refuses in one line without writing anything.
+
+The live recording with commands, re-simulated bit for bit, is in
+tests/ros/test_resim_node.py (a real node over DDS).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from mcap.reader import make_reader
+from mcap.writer import Writer
+from mcap_ros2.decoder import DecoderFactory
+
+from brake_sim_ros import stream
+from brake_sim_ros.recording.record import record_offline
+from brake_sim_ros.scenarios import load_scenario, parse_scenario
+from brake_sim_ros.stream import conversion
+from tests.test_drive_command import RIG
+
+SECONDS = 0.25
+
+
+def _cli(*args):
+    return subprocess.run(
+        [sys.executable, "-m", "brake_sim_ros.cli", *map(str, args)],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+
+
+def pivot_arrays(path: Path) -> dict[str, np.ndarray]:
+    """Every recorded pivot-force sample by column, and the sample index, read by ``mcap``
+    with the decoder built from the file's own schemas."""
+    chunks = []
+    with path.open("rb") as f:
+        reader = make_reader(f, decoder_factories=[DecoderFactory()])
+        for _s, _c, _m, msg in reader.iter_decoded_messages(topics=[stream.PIVOT_FORCES.name]):
+            chunks.append(msg)
+    out = {
+        name: np.concatenate([np.asarray(getattr(c, name), dtype=float) for c in chunks])
+        for name in conversion.PIVOT_CHUNK_ARRAYS
+    }
+    out["index"] = np.concatenate(
+        [c.first_sample_index + np.arange(len(c.left_fx_n)) for c in chunks]
+    )
+    return out
+
+
+def run_record(path: Path) -> dict[str, str]:
+    with path.open("rb") as f:
+        return {m.name: m.metadata for m in make_reader(f).iter_metadata()}["brake_sim_run"]
+
+
+@pytest.fixture(scope="module")
+def recorded(tmp_path_factory) -> Path:
+    """An offline recording of the published stop's first quarter second (impacts)."""
+    path = tmp_path_factory.mktemp("resim") / "stop.mcap"
+    record_offline(load_scenario("symmetric"), path, duration_s=SECONDS)
+    return path
+
+
+def test_an_offline_recording_resimulates_to_the_same_bits(recorded, tmp_path):
+    out = tmp_path / "again.mcap"
+    r = _cli("resim", recorded, "--out", out)
+    assert r.returncode == 0, r.stderr
+    n = round(SECONDS * 25_600)
+    assert f"{n} samples equal to the recording's, bit for bit" in r.stdout
+    a, b = pivot_arrays(recorded), pivot_arrays(out)
+    np.testing.assert_array_equal(a["index"], np.arange(n))
+    assert np.abs(a["left_fx_n"]).max() > 100.0  # the shoes are on the drum
+    for name, values in a.items():
+        assert values.tobytes() == b[name].tobytes(), name
+    run = run_record(out)
+    assert run["mode"] == "resim" and run["recorded_mode"] == "offline"
+    assert run["run_id"] == run_record(recorded)["run_id"]
+
+
+def test_a_recording_holds_the_live_drives_settings(tmp_path):
+    """A run that takes live drive commands records the settings in force (brake_sim_run)
+    and its re-simulation keeps them."""
+    text = RIG.replace("[vehicle]\n", "[vehicle]\nmax_drive_torque_n_m = 90.0\n")
+    path = tmp_path / "rig.mcap"
+    record_offline(parse_scenario(text, "rig.toml"), path, duration_s=0.1)
+    run = run_record(path)
+    assert (run["max_drive_torque_n_m"], run["speed_time_constant_s"]) == ("90.0", "1.0")
+    out = tmp_path / "again.mcap"
+    r = _cli("resim", path, "--out", out)
+    assert r.returncode == 0, r.stderr
+    assert run_record(out)["max_drive_torque_n_m"] == "90.0"
+    assert "max_drive_torque_n_m" not in run_record(recorded_symmetric(tmp_path))
+
+
+def recorded_symmetric(folder: Path) -> Path:
+    path = folder / "symmetric.mcap"
+    record_offline(load_scenario("symmetric"), path, duration_s=0.01)
+    return path
+
+
+def test_another_preset_resimulates_and_says_the_samples_differ(recorded, tmp_path):
+    """The same recording under another preset (another physics step): written, and the
+    comparison names the first sample that differs instead of claiming equality."""
+    out = tmp_path / "fine.mcap"
+    r = _cli("resim", recorded, "--out", out, "--preset", "accurate")
+    assert r.returncode == 0, r.stderr
+    assert "samples differ from the recording's from sample" in r.stdout
+    assert run_record(recorded)["preset"] != "accurate" == run_record(out)["preset"]
+
+
+def _refused(r, out: Path, says: str) -> None:
+    assert r.returncode != 0
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and says in lines[0], r.stderr
+    assert "Traceback" not in r.stderr
+    assert not out.exists() and not out.is_symlink()
+    assert not [p for p in out.parent.iterdir() if ".partial" in p.name]
+
+
+def test_a_missing_file_is_refused_in_one_line(tmp_path):
+    out = tmp_path / "out.mcap"
+    _refused(_cli("resim", tmp_path / "missing.mcap", "--out", out), out, "missing.mcap")
+
+
+def test_a_file_that_is_not_mcap_is_refused_in_one_line(tmp_path):
+    notes = tmp_path / "notes.mcap"
+    notes.write_text("not a recording\n")
+    out = tmp_path / "out.mcap"
+    _refused(_cli("resim", notes, "--out", out), out, "notes.mcap is not an MCAP file")
+
+
+def test_an_mcap_without_the_simulators_metadata_is_refused_in_one_line(tmp_path):
+    foreign = tmp_path / "foreign.mcap"
+    with foreign.open("wb") as f:
+        writer = Writer(f)
+        writer.start(profile="ros2", library="someone else")
+        writer.add_metadata("notes", {"what": "a foreign file"})
+        writer.finish()
+    out = tmp_path / "out.mcap"
+    _refused(_cli("resim", foreign, "--out", out), out, "no brake_sim_scenario, brake_sim_unit,")
+
+
+def test_the_input_as_output_is_refused_and_left_as_it_was(recorded):
+    before = hashlib.sha256(recorded.read_bytes()).hexdigest()
+    for extra in ((), ("--overwrite",)):
+        r = _cli("resim", recorded, "--out", recorded, *extra)
+        assert r.returncode != 0 and len(r.stderr.strip().splitlines()) == 1
+        assert "is the input" in r.stderr, r.stderr
+    assert hashlib.sha256(recorded.read_bytes()).hexdigest() == before
+
+
+def test_an_output_through_a_symlink_is_refused(recorded, tmp_path):
+    target = tmp_path / "elsewhere.mcap"
+    link = tmp_path / "link.mcap"
+    link.symlink_to(target)
+    r = _cli("resim", recorded, "--out", link, "--overwrite")
+    assert r.returncode != 0 and "symbolic link" in r.stderr
+    assert len(r.stderr.strip().splitlines()) == 1
+    assert not target.exists() and os.readlink(link) == str(target)
+
+
+def test_an_existing_output_needs_overwrite(recorded, tmp_path):
+    out = tmp_path / "taken.mcap"
+    out.write_bytes(b"mine")
+    r = _cli("resim", recorded, "--out", out)
+    assert r.returncode != 0 and "pass --overwrite" in r.stderr
+    assert out.read_bytes() == b"mine"
