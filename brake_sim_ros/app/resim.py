@@ -293,9 +293,11 @@ class Comparison:
         for column in conversion.PIVOT_CHUNK_ARRAYS:
             a = np.asarray(getattr(recorded, column), dtype=float)
             b = np.asarray(getattr(ours, column), dtype=float)
-            differ = np.flatnonzero(a.view(np.int64) != b.view(np.int64))
+            n = min(len(a), len(b))
+            # bits, not values: -0.0 against 0.0, or one NaN against another, is a difference
+            differ = np.flatnonzero(a[:n].view(np.int64) != b[:n].view(np.int64))
             if len(a) != len(b) or len(differ):
-                at = int(differ[0]) if len(differ) else min(len(a), len(b))
+                at = int(differ[0]) if len(differ) else n
                 self.first_difference = block.first_index + at
                 self.column = column
                 return
