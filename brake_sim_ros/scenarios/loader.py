@@ -1005,13 +1005,13 @@ def _parse(data: dict[str, Any], text: str, source: str) -> Scenario:
         )
     vehicle = _vehicle(ctx, top.get("vehicle", {})) if "vehicle" in top or cycle else None
     if cycle is not None:  # the cycle's controller has its own settings
-        for name, _lo, _hi in VEHICLE_DRIVE_LIMITS:
-            if name in top.get("vehicle", {}):
+        for key, _lo, _hi in VEHICLE_DRIVE_LIMITS:
+            if key in top.get("vehicle", {}):
                 raise ctx.fail(
-                    f"vehicle.{name}",
-                    top["vehicle"][name],
-                    f"no [vehicle] {name} with a [cycle] (a live drive's setting; the"
-                    f" cycle's controller takes [cycle] {name})",
+                    f"vehicle.{key}",
+                    top["vehicle"][key],
+                    f"no [vehicle] {key} with a [cycle] (a live drive's setting; the"
+                    f" cycle's controller takes [cycle] {key})",
                 )
     setup = BrakeSetup(
         params=params,
