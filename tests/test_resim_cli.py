@@ -22,8 +22,10 @@ from mcap_ros2.decoder import DecoderFactory
 
 from brake_sim_ros import stream
 from brake_sim_ros.recording.record import record_offline
+from brake_sim_ros.recording.writer import McapRecorder
 from brake_sim_ros.scenarios import load_scenario, parse_scenario
 from brake_sim_ros.stream import conversion
+from brake_sim_ros.stream.offline import offline_messages
 from tests.test_drive_command import RIG
 
 SECONDS = 0.25
@@ -114,6 +116,40 @@ def test_another_preset_resimulates_and_says_the_samples_differ(recorded, tmp_pa
     assert r.returncode == 0, r.stderr
     assert "samples differ from the recording's from sample" in r.stdout
     assert run_record(recorded)["preset"] != "accurate" == run_record(out)["preset"]
+
+
+def test_sensors_added_later_measure_the_same_samples(recorded, tmp_path):
+    """--measured: the recording had no ~/measured; the re-simulation runs the scenario's
+    sensors on the same samples (the pivot forces still equal, bit for bit)."""
+    out = tmp_path / "measured.mcap"
+    r = _cli("resim", recorded, "--out", out, "--measured")
+    assert r.returncode == 0, r.stderr
+    assert "bit for bit" in r.stdout
+    with out.open("rb") as f:
+        topics = {c.topic for _s, c, _m in make_reader(f).iter_messages()}
+    with recorded.open("rb") as f:
+        before = {c.topic for _s, c, _m in make_reader(f).iter_messages()}
+    assert stream.MEASURED.name in topics - before
+    assert run_record(out)["publish_measured"] == "True"
+
+
+def test_a_recording_of_two_runs_is_refused(tmp_path):
+    """Two runs in one file (as a ~/reset leaves it: sample indices and times start again
+    under a new run id): refused in one line, nothing written."""
+    scenario = load_scenario("symmetric")
+    first = tmp_path / "first.mcap"
+    record_offline(scenario, first, duration_s=0.01, run_id="first")
+    with first.open("rb") as f:
+        records = {m.name: m.metadata for m in make_reader(f).iter_metadata()}
+    del records["rosbag2"]
+    both = tmp_path / "both.mcap"
+    recorder = McapRecorder(both, records=records)
+    for run_id in ("first", "second"):
+        for topic, msg, ns in offline_messages(scenario, duration_s=0.01, run_id=run_id):
+            recorder.write(topic, msg, ns)
+    recorder.close()
+    out = tmp_path / "out.mcap"
+    _refused(_cli("resim", both, "--out", out), out, "(a ~/reset")
 
 
 def _refused(r, out: Path, says: str) -> None:
