@@ -79,6 +79,15 @@ class RecordedCommand:
     log_time_ns: int
 
 
+@dataclass(frozen=True)
+class RecordedChange:
+    """Parameters the node accepted while it ran: from ``sample`` on, ``values`` (new
+    values by parameter name)."""
+
+    sample: int
+    values: dict[str, Any]
+
+
 @dataclass
 class RecordedRun:
     """A recorded run, rebuilt from its recording (:func:`read_run`).
@@ -92,6 +101,7 @@ class RecordedRun:
         chunks: ``(first sample, samples)`` of every recorded PivotForceChunk, in order,
             contiguous from sample 0.
         commands: the recorded commands in log-time order (file order within a time).
+        changes: the parameter changes recorded (``brake_sim_parameter_change``), in order.
         pivot_topic: the recorded PivotForceChunk topic (its name as recorded).
     """
 
@@ -103,6 +113,7 @@ class RecordedRun:
     policy: CommandPolicy
     chunks: list[tuple[int, int]] = field(default_factory=list)
     commands: list[RecordedCommand] = field(default_factory=list)
+    changes: list[RecordedChange] = field(default_factory=list)
     pivot_topic: str = stream.PIVOT_FORCES.name
     name: str = "recording"
 
@@ -264,6 +275,15 @@ def read_run(recording: Recording) -> RecordedRun:
             out.commands.append(RecordedCommand(sample, message.topic, msg, message.log_time_ns))
     if not out.chunks:
         raise ResimError(f"{name}: no samples recorded: nothing to re-simulate")
+    for record_name, record in recording.metadata:
+        if record_name != metadata.PARAMETER_CHANGE:
+            continue
+        where = f"{name}: {metadata.PARAMETER_CHANGE}"
+        values = {k: _literal(v, f"{where} {k[:64]}") for k, v in record.items()}
+        sample = values.pop("sample_index", None)
+        if isinstance(sample, bool) or not isinstance(sample, int) or sample < 0:
+            raise ResimError(f"{where}: sample_index {sample!r}: allowed a sample index >= 0")
+        out.changes.append(RecordedChange(sample, values))
     return out
 
 
@@ -333,6 +353,118 @@ def _stepper(run: RecordedRun, scenario: Scenario) -> FixedStepStepper:
     return stepper
 
 
+# parameters whose change leaves the samples and the stream as they were (pacing, the
+# end of the run, the chunking: resim cuts the recording's own chunks)
+_NEUTRAL = frozenset(
+    {"paused", "real_time_factor", "diagnostics_period_s", "chunk_rate_hz", "duration_s",
+     "continuous"}
+)  # fmt: skip
+_POLICY = ("command_timeout_s", "on_command_timeout", "command_ramp_rate_n_per_s")
+
+
+class _Replay:
+    """The node's run state re-simulated: the stepper, the command planner and the
+    settings changed while the node ran, each event applied as the node applied it."""
+
+    def __init__(self, run: RecordedRun, scenario: Scenario, stepper: FixedStepStepper) -> None:
+        self.run, self.scenario, self.stepper = run, scenario, stepper
+        self.period = stepper.sample_period_s
+        self.run_id = run.run.get("run_id", "")
+        defects = stepper.setup.defects
+        self.angles = (defects.left.initial_angle_deg, defects.right.initial_angle_deg)
+        self.publish_clock = bool(_run_value(run.run, "publish_clock", run.name, (bool,)))
+        self.stride = stream.samples_per(
+            float(_run_value(run.run, "state_rate_hz", run.name, (float, int))), self.period
+        )
+        self.policy = {
+            "command_timeout_s": run.policy.timeout_s,
+            "on_command_timeout": run.policy.behaviour.value,
+            "command_ramp_rate_n_per_s": run.policy.ramp_rate_n_per_s,
+        }
+        self.planner = ActuationPlanner(self.period, run.policy)
+        self.model = dict(run.setup_values or {})
+        self.updates = TruthUpdates(defects)
+
+    def truth(self, index: int, wear_m: dict[str, float] | None = None) -> tuple:
+        """The ground truth at ``index`` (DefectState), as the node publishes it."""
+        if wear_m is None:
+            wear_m = state_wear(self.stepper.state)
+        msg = conversion.defect_state(
+            scenario=self.scenario.name,
+            defects=self.stepper.setup.defects,
+            initial_angles_deg=self.angles,
+            ns=conversion.stamp_ns(index, self.period),
+            run_id=self.run_id,
+            seed=self.scenario.seed,
+            unit_id=self.scenario.unit_id,
+            time_s=index * self.period,
+            wear_m=wear_m,
+        )
+        return stream.DEFECTS, msg, conversion.stamp_ns(index, self.period)
+
+    def apply(self, event: RecordedCommand | RecordedChange) -> Iterator[tuple]:
+        """Apply one recorded event from its sample on; the messages it makes."""
+        try:
+            if isinstance(event, RecordedChange):
+                yield from self._change(event)
+            else:
+                yield self._command(event)
+        except ResimError:
+            raise
+        except (BrakeSimError, ValueError) as exc:
+            raise ResimError(f"{self.run.name}: at sample {event.sample}: {exc}") from None
+
+    def _command(self, command: RecordedCommand) -> tuple:
+        msg = command.msg
+        if command.topic.type_name == _ACTUATION:
+            forces = (float(msg.left_force_n), float(msg.right_force_n))
+            self.planner.command(forces, command.sample)
+            topic = stream.ACTUATION
+        else:
+            drive, reason = drive_command(msg.mode, msg.drive_torque_n_m, msg.target_speed_m_s)
+            if drive is None:
+                raise ValueError(f"recorded drive command refused: {reason}")
+            self.stepper.drive(drive)
+            topic = stream.DRIVE
+        return topic, msg, command.log_time_ns  # the decoded message encodes as it was
+
+    def _change(self, change: RecordedChange) -> Iterator[tuple]:
+        model = {}
+        for name, value in change.values.items():
+            if name in _NEUTRAL:
+                continue
+            if name in _POLICY:
+                self.policy[name] = value
+            elif name == "state_rate_hz":
+                self.stride = stream.samples_per(float(value), self.period)
+            elif name == "publish_clock":
+                self.publish_clock = bool(value)
+            elif name in self.model:
+                model[name] = value
+            else:
+                raise ResimError(
+                    f"{self.run.name}: parameter {name[:64]!r} set at sample {change.sample}:"
+                    " not re-simulated (allowed: the model's, the command timeout's, the"
+                    " stream's and the pacing's)"
+                )
+        self.planner.policy = CommandPolicy(
+            timeout_s=float(self.policy["command_timeout_s"]),
+            behaviour=TimeoutBehaviour.parse(str(self.policy["on_command_timeout"])),
+            ramp_rate_n_per_s=float(self.policy["command_ramp_rate_n_per_s"]),
+        )
+        if model:
+            self.model.update(model)
+            setup = ros_params.changed_setup(self.stepper.setup, self.model)
+            self.stepper.replace_setup(setup)
+            message = self.truth(self.stepper.sample_index)
+            self.updates.published(
+                setup.defects,
+                self.stepper.sample_index * self.period,
+                state_wear(self.stepper.state),
+            )
+            yield message
+
+
 def _messages(
     run: RecordedRun,
     scenario: Scenario,
@@ -342,102 +474,54 @@ def _messages(
     recorded_chunks: Iterator[Any],
     comparison: Comparison,
 ) -> Iterator[tuple[Topic, Any, int]]:
-    """The node's stream for ``run``: its commands applied at their samples."""
-    period = stepper.sample_period_s
-    run_id = run.run.get("run_id", "")
-    seed = scenario.seed
-    setup = stepper.setup
-    angles = (setup.defects.left.initial_angle_deg, setup.defects.right.initial_angle_deg)
-    publish_clock = bool(_run_value(run.run, "publish_clock", run.name, (bool,)))
-    stride = stream.samples_per(
-        float(_run_value(run.run, "state_rate_hz", run.name, (float, int))), period
-    )
-
-    def truth(index: int, wear_m: dict[str, float], time_s: float) -> Any:
-        return conversion.defect_state(
-            scenario=scenario.name,
-            defects=setup.defects,
-            initial_angles_deg=angles,
-            ns=conversion.stamp_ns(index, period),
-            run_id=run_id,
-            seed=seed,
-            unit_id=scenario.unit_id,
-            time_s=time_s,
-            wear_m=wear_m,
-        )
-
-    wear = state_wear(stepper.state)
-    yield stream.DEFECTS, truth(0, wear, 0.0), 0
-    updates = TruthUpdates(setup.defects)
-    updates.published(setup.defects, 0.0, wear)
-    if publish_clock:
+    """The node's stream for ``run``: its commands and parameter changes applied at their
+    samples, the samples cut into the recording's chunks."""
+    replay = _Replay(run, scenario, stepper)
+    period = replay.period
+    yield replay.truth(0)
+    replay.updates.published(stepper.setup.defects, 0.0, state_wear(stepper.state))
+    if replay.publish_clock:
         yield stream.CLOCK, conversion.clock(0), 0
     measured = None
     if publish_measured:
         rate = float(_run_value(run.run, "measured_rate_hz", run.name, (float, int)))
-        bank = sensor_bank_for(scenario, seed=seed)
+        bank = sensor_bank_for(scenario, seed=scenario.seed)
         measured = stream.MeasuredStream(bank, stream.samples_per(rate, period))
-    planner = ActuationPlanner(period, run.policy)
     detector = ContactEventDetector()
-    commands = list(run.commands)
+    events: list[RecordedCommand | RecordedChange] = sorted(
+        [*run.commands, *run.changes], key=lambda e: e.sample
+    )
     k = 0
     for first, n in run.chunks:
         end = first + n
         blocks = []
         while stepper.sample_index < end:
             at = stepper.sample_index
-            while k < len(commands) and commands[k].sample <= at:
-                yield _apply(commands[k], stepper, planner)
+            while k < len(events) and events[k].sample <= at:
+                yield from replay.apply(events[k])
                 k += 1
-            stop = commands[k].sample if k < len(commands) else end
+            stop = events[k].sample if k < len(events) else end
             count = min(stop, end) - at
-            for steps, forces in planner.segments(at, count):
+            for steps, forces in replay.planner.segments(at, count):
                 blocks.append(stepper.advance(steps, actuation_n=forces))
         block = blocks[0] if len(blocks) == 1 else SampleBlock.concatenate(blocks)
         if len(block) != n or not conversion.all_finite(block):
             raise ResimError(f"non-finite or missing samples between samples {first} and {end}")
         comparison.check(next(recorded_chunks), block)
-        for row in updates.due_rows(block.time_s, recorded_wear(block)):
-            index = block.first_index + row
-            yield (
-                stream.DEFECTS,
-                truth(index, recorded_wear(block, row), float(block.time_s[row])),
-                conversion.stamp_ns(index, period),
-            )
+        for row in replay.updates.due_rows(block.time_s, recorded_wear(block)):
+            yield replay.truth(block.first_index + row, recorded_wear(block, row))
         yield from stream.block_messages(
             block,
-            stride,
-            with_clock=publish_clock,
+            replay.stride,
+            with_clock=replay.publish_clock,
             contact_events=detector,
-            run_id=run_id,
+            run_id=replay.run_id,
             measured=measured,
         )
-    for command in commands[k:]:  # after the last sample: recorded, nothing to step
-        yield _apply(command, stepper, planner)
+    for event in events[k:]:  # after the last sample: recorded, nothing to step
+        yield from replay.apply(event)
     if measured is not None:
         yield from measured.flush()
-
-
-def _apply(
-    command: RecordedCommand, stepper: FixedStepStepper, planner: ActuationPlanner
-) -> tuple[Topic, Any, int]:
-    """Apply a recorded command from the next sample on, as the node did; the message to
-    record again."""
-    msg = command.msg
-    try:
-        if command.topic.type_name == _ACTUATION:
-            planner.command((float(msg.left_force_n), float(msg.right_force_n)), command.sample)
-        else:
-            drive, reason = drive_command(msg.mode, msg.drive_torque_n_m, msg.target_speed_m_s)
-            if drive is None:
-                raise ResimError(f"recorded drive command refused: {reason}")
-            stepper.drive(drive)
-    except ResimError as exc:
-        raise ResimError(f"sample {command.sample}: {exc}") from None
-    except BrakeSimError as exc:
-        raise ResimError(f"recorded command at sample {command.sample}: {exc}") from None
-    topic = stream.ACTUATION if command.topic.type_name == _ACTUATION else stream.DRIVE
-    return topic, msg, command.log_time_ns  # the decoded message encodes as it was
 
 
 def resimulate(

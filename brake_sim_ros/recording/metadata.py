@@ -43,6 +43,11 @@ Metadata records (MCAP ``Metadata``; every value a string):
     DefectState then carries the new seed.
 ``brake_sim_ros_parameters`` (live runs)
     every ROS parameter of the node at the start of the recording, ``repr()`` of its value.
+``brake_sim_parameter_change`` (live runs, one record per change, in the order made)
+    a parameter change the node accepted while it ran (``ros2 param set``):
+    ``sample_index``, the sample it took effect at (the next one), and each parameter
+    changed under its name, the ``repr()`` of its new value (:func:`parameter_change_record`);
+    ``brake-sim resim`` applies them at their samples.
 ``rosbag2`` (written when the file is closed)
     ``serialized_metadata``: the bag's ``BagMetadata`` (version 9) in the YAML that
     rosbag2's MCAP storage plugin writes and reads (``ros2 bag info`` shows it).
@@ -76,6 +81,7 @@ SCENARIO = "brake_sim_scenario"
 RUN = "brake_sim_run"
 UNIT = "brake_sim_unit"
 ROS_PARAMETERS = "brake_sim_ros_parameters"
+PARAMETER_CHANGE = "brake_sim_parameter_change"
 ROSBAG2 = "rosbag2"
 ROS_DISTRO = "jazzy"
 BAG_METADATA_VERSION = 9  # rosbag2 Jazzy's BagMetadata::version
@@ -136,6 +142,13 @@ def unit_record(scenario: Scenario) -> dict[str, str]:
     }
 
 
+def parameter_change_record(changes: Mapping[str, Any], sample_index: int) -> dict[str, str]:
+    """A ``brake_sim_parameter_change`` record: the new values at ``sample_index``."""
+    record = {name: repr(value) for name, value in sorted(changes.items())}
+    record["sample_index"] = repr(int(sample_index))
+    return record
+
+
 def run_record(
     *,
     mode: str,
@@ -175,7 +188,8 @@ def run_record(
         "time_base": TIME_BASE,
         "model_note": (
             "brake_sim_model holds the model at the start of the recording; changes made"
-            " while it ran are on /brake_sim/defects (DefectState)"
+            " while it ran are in brake_sim_parameter_change records and, for the defects,"
+            " on /brake_sim/defects (DefectState)"
         ),
         **(extra or {}),
     }

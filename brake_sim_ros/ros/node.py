@@ -64,8 +64,6 @@ from rclpy.parameter import Parameter
 from brake_sim_ros import stream
 from brake_sim_ros.analysis.contact_events import ContactEventDetector
 from brake_sim_ros.errors import BrakeSimError, ParameterError, ScenarioError
-from brake_sim_ros.model.catalogue import KIND_BY_NAME, label_column
-from brake_sim_ros.model.defects import Defects
 from brake_sim_ros.model.sensors import SensorBank
 from brake_sim_ros.model.trajectory import BrakeSetup, SampleBlock
 from brake_sim_ros.ros import qos
@@ -613,11 +611,7 @@ class BrakeSimNode(Node):
         if model_changes:
             old_setup = self._stepper.setup
             try:
-                params, defects = ros_params.build_model(
-                    self._model_values(model_changes), drum=old_setup.defects.drum
-                )
-                defects = _keep_growth(defects, old_setup.defects)
-                setup = dataclasses.replace(old_setup, params=params, defects=defects)
+                setup = ros_params.changed_setup(old_setup, self._model_values(model_changes))
                 self._stepper.replace_setup(setup)  # validates, or changes nothing
             except BrakeSimError as exc:
                 return SetParametersResult(successful=False, reason=str(exc))
@@ -629,6 +623,7 @@ class BrakeSimNode(Node):
                 return SetParametersResult(successful=False, reason=work)
             self._log_step_change("new model parameters")
         self._apply_run_changes(changes, policy)
+        self._record_change(changes)
         if model_changes:
             self._publish_defects()
             pending = sorted(model_changes.keys() & ros_params.INITIAL_CONDITIONS)
@@ -719,6 +714,20 @@ class BrakeSimNode(Node):
             return
         self._stepper.drive(drive)
         self._record_command(self._drive_topic, msg)
+
+    def _record_change(self, changes: dict) -> None:
+        """Hand an accepted parameter change to the sinks that record changes (a
+        recording: ``parameter_change``), at the sample it takes effect at (the next)."""
+        index = self._stepper.sample_index
+        ns = conversion.stamp_ns(index, self._stepper.sample_period_s)
+        for sink in list(self._sinks):
+            note = getattr(sink, "parameter_change", None)
+            if note is None:
+                continue
+            try:
+                note(changes, index, ns)
+            except Exception as exc:  # a sink's failure must not stop the simulation
+                self._drop_sink(sink, f"{type(exc).__name__}: {exc}")
 
     def _record_command(self, topic: Topic, msg) -> None:
         """Hand a command that takes effect to the sinks, stamped with the sample it takes
@@ -1131,16 +1140,3 @@ class BrakeSimNode(Node):
 
     def summary(self) -> str:
         return summary(self.run_view(), self.stats)
-
-
-def _keep_growth(defects: Defects, old: Defects) -> Defects:
-    """``defects`` (rebuilt from the node's parameters, which set final values only) with
-    the onsets and growth laws of ``old`` for the defects still present: a live change of a
-    growing defect's value changes where it grows to, not how."""
-    at = defects.severities()
-    kept = tuple(
-        (kind, loc, law)
-        for kind, loc, law in old.growth
-        if at[label_column(KIND_BY_NAME[kind], loc)] != 0.0
-    )
-    return dataclasses.replace(defects, growth=kept)

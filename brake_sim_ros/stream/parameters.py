@@ -36,7 +36,7 @@ from typing import Any
 
 from brake_sim_ros.errors import ParameterError
 from brake_sim_ros.model.actuation import MAX_ACTUATION_FORCE_N, NOMINAL_PEAK_ACTUATION_N
-from brake_sim_ros.model.catalogue import DRUM_KIND, KINDS
+from brake_sim_ros.model.catalogue import DRUM_KIND, KIND_BY_NAME, KINDS, label_column
 from brake_sim_ros.model.defects import (
     MAX_FLAT_WIDTH_DEG,
     MAX_PULSATION_HZ,
@@ -493,3 +493,25 @@ def node_setup(
     params, defects = build_model(values, drum=setup.defects.drum)
     setup = dataclasses.replace(setup, params=params, defects=defects)
     return with_drive_limits(setup, drive_overrides)
+
+
+def changed_setup(setup: BrakeSetup, values: dict[str, Any]) -> BrakeSetup:
+    """``setup`` with the model of the flat ROS ``values`` (every model field: the
+    parameters after a run-time change): its drum harmonics, vehicle, cycle and the
+    onsets and growth laws of its defects still present are kept (the parameters set
+    final values only, so a live change of a growing defect changes where it grows to,
+    not how). The node's rule for a change while it runs, and ``brake-sim resim``'s for
+    a recorded one.
+
+    Raises:
+        ParameterError: from the core, one line, for an invalid value or combination.
+    """
+    params, defects = build_model(values, drum=setup.defects.drum)
+    at = defects.severities()
+    kept = tuple(
+        (kind, loc, law)
+        for kind, loc, law in setup.defects.growth
+        if at[label_column(KIND_BY_NAME[kind], loc)] != 0.0
+    )
+    defects = dataclasses.replace(defects, growth=kept)
+    return dataclasses.replace(setup, params=params, defects=defects)

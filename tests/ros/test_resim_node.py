@@ -96,10 +96,13 @@ def session(tmp_path_factory):
         client.drive(DriveCommand.MODE_TORQUE, torque_n_m=LIMIT_N_M - 20.0)
         _counted(client, "drive_commands_accepted", 2)
         _step(client, RATE)
+        # set while the node runs: recorded (brake_sim_parameter_change), re-simulated
+        assert client.set_parameter("command_timeout_s", 0.3).successful
         client.drive(DriveCommand.MODE_COAST)
-        client.command(800.0, 800.0)  # times out after 0.5 s, then ramps to zero
+        client.command(800.0, 800.0)  # times out after 0.3 s, then ramps to zero
         _counted(client, "commands_accepted", 1)
         _step(client, RATE)
+        assert client.set_parameter("friction.coefficient", 0.3).successful
         # a free run in real time: commands land wherever the wall clock cuts the chunks
         assert client.set_parameter("paused", False).successful
         client.spin_for(0.4)
@@ -155,9 +158,21 @@ def test_the_resimulation_gives_the_recorded_samples_bit_for_bit(session):
 
 
 def test_the_command_timeout_ramp_and_the_brake_acted(session):
-    """The actuation recorded: 800 N for the 0.5 s timeout, then down at 5000 N/s to 0,
-    then the free run's 1500 N: the planner's rules were replayed, not bypassed."""
+    """The actuation recorded: 800 N for the timeout, then down at 5000 N/s to 0, then the
+    free run's 1500 N: the planner's rules were replayed, not bypassed. The parameters set
+    while the node ran are recorded at the samples they took effect at, in order."""
     recording = session[0]
+    with recording.open("rb") as f:
+        changes = [m.metadata for m in make_reader(f).iter_metadata()]
+    changes = [c for c in changes if "sample_index" in c]
+    assert [sorted(set(c) - {"sample_index"}) for c in changes] == [
+        ["command_timeout_s"],
+        ["friction.coefficient"],
+        ["paused"],
+        ["paused"],
+    ]
+    samples = [int(c["sample_index"]) for c in changes]
+    assert samples[:2] == [3 * RATE, 4 * RATE] and samples == sorted(samples)
     states = [m for _ns, m in _decoded(recording, stream.STATE.name)]
     force = np.array([s.left_actuation_force_n for s in states])
     assert force.max() == 1500.0 and 800.0 in force
