@@ -2,22 +2,25 @@
 
 A recording of a live node (``brake-sim node --record``, ``brake-sim live``) holds what the
 run was made of: the scenario file's text, the unit and seed, the model as the node's
-parameters had it, the run settings, the node's parameters, and every command that took
+parameters had it, the run settings, the node's parameters, every command that took
 effect (``~/actuation``, ``~/drive``), each at the log time of the sample it took effect
-at (:meth:`brake_sim_ros.ros.node.BrakeSimNode._record_command`). :func:`resimulate`
-rebuilds the run from the recording alone (no other file is read), steps it offline with
-the same commands at the same samples through the node's own rules (the command timeout
-of :class:`~brake_sim_ros.ros.commands.ActuationPlanner`, the stepper's live drive), cut
-into the recording's own chunks, and writes the node's stream (minus /diagnostics) to a
-new MCAP file with the same metadata (``brake_sim_run`` mode ``resim``). With the same
-preset, the samples equal the recording's bit for bit; the recorded samples are compared
-as they are re-simulated and the result says where they first differ, if they do (a
-parameter set while the node ran is not recorded: the samples then part there).
+at (:meth:`brake_sim_ros.ros.node.BrakeSimNode._record_command`), and every parameter
+change the node accepted while it ran (``brake_sim_parameter_change`` records, at their
+samples). :func:`resimulate` rebuilds the run from the recording alone (no other file is
+read), steps it offline with the same commands and changes at the same samples through
+the node's own rules (the command timeout of
+:class:`~brake_sim_ros.ros.commands.ActuationPlanner`, the stepper's live drive,
+:func:`~brake_sim_ros.stream.parameters.changed_setup`), cut into the recording's own
+chunks, and writes the node's stream (minus /diagnostics) to a new MCAP file with the same
+metadata (``brake_sim_run`` mode ``resim``). With the same preset, the samples equal the
+recording's bit for bit; the recorded samples are compared as they are re-simulated and
+the result says where they first differ, if they do.
 
-What it refuses, in one line, before anything is written: a file the checked reader
+What it refuses, in one line, leaving nothing written: a file the checked reader
 refuses (missing, not MCAP, damaged: :func:`~brake_sim_ros.recording.reader.
 open_recording`), a recording without the simulator's metadata, one of several runs (a
-``~/reset``), a command not stamped at a sample, a scenario or model the core refuses.
+``~/reset``), a command not stamped at a sample, a parameter change it does not
+re-simulate, a scenario or model the core refuses.
 The output follows :mod:`brake_sim_ros.recording.output` (never an input, never through a
 link, written whole or not at all).
 """
@@ -300,8 +303,8 @@ class Comparison:
             return f"{self.samples} samples equal to the recording's, bit for bit"
         return (
             f"samples differ from the recording's from sample {self.first_difference}"
-            f" ({self.column}): another preset or model, a parameter set while the node ran"
-            " (not recorded), or another software version"
+            f" ({self.column}): another preset or model, a recording made before parameter"
+            " changes were recorded, or another software version"
         )
 
     def check(self, recorded: Any, block: SampleBlock) -> None:
@@ -597,6 +600,12 @@ def resimulate(
                 custom_data=custom,
             )
             try:
+                for change in run.changes:  # for a re-simulation of this one
+                    recorder.parameter_change(
+                        change.values,
+                        change.sample,
+                        conversion.stamp_ns(change.sample, stepper.sample_period_s),
+                    )
                 for topic, msg, ns in _messages(
                     run,
                     scenario,

@@ -123,6 +123,14 @@ def session(tmp_path_factory):
         timeout=600,
     )
     assert done.returncode == 0, done.stderr
+    twice = folder / "twice.mcap"  # a re-simulation holds what re-simulates it again
+    again = subprocess.run(
+        [sys.executable, "-m", "brake_sim_ros.cli", "resim", str(out), "--out", str(twice)],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert again.returncode == 0 and "bit for bit" in again.stdout, again.stderr
     return recording, out, done.stdout, rejected, refused
 
 
