@@ -299,6 +299,7 @@ def test_the_nodes_overrides_replace_the_scenarios_settings_where_given(rig):
     urban = load_scenario("urban").setup
     assert ros_params.with_drive_limits(urban, {"max_drive_torque_n_m": 250.0}) is urban
     for name, value in (("max_drive_torque_n_m", -3.0), ("speed_time_constant_s", 0.001)):
-        with pytest.raises(ParameterError) as info:
-            ros_params.with_drive_limits(rig.setup, {name: value})
-        assert f"vehicle {name} {value!r}" in str(info.value)
+        for setup in (rig.setup, urban):  # checked even where unused: a ~/reset may use it
+            with pytest.raises(ParameterError) as info:
+                ros_params.with_drive_limits(setup, {name: value})
+            assert f"vehicle {name} {value!r}" in str(info.value)

@@ -51,6 +51,7 @@ from brake_sim_ros.model.vehicle import (
     DEFAULT_MAX_DRIVE_TORQUE_N_M,
     DEFAULT_SPEED_TIME_CONSTANT_S,
     DRIVE_LIMITS,
+    Vehicle,
 )
 
 DRIVE_LIMIT_RANGES = {name: (lo, hi) for name, lo, hi in DRIVE_LIMITS}
@@ -463,7 +464,7 @@ def with_drive_limits(setup: BrakeSetup, overrides: dict[str, float]) -> BrakeSe
     """``setup`` with its vehicle's live-drive settings (``max_drive_torque_n_m`` N m,
     ``speed_time_constant_s`` s) replaced by ``overrides`` where they are > 0 (0: the
     scenario's); unchanged for a run that takes no live drive (no vehicle, or a cycle,
-    whose controller has its own settings).
+    whose controller has its own settings), but the values are checked all the same.
 
     Raises:
         ParameterError: a value outside the vehicle's limits (``vehicle.DRIVE_LIMITS``),
@@ -473,6 +474,7 @@ def with_drive_limits(setup: BrakeSetup, overrides: dict[str, float]) -> BrakeSe
     unknown = set(given) - set(DRIVE_LIMIT_NAMES)
     if unknown:
         raise ParameterError(f"drive settings {sorted(unknown)}: allowed {DRIVE_LIMIT_NAMES}")
+    Vehicle(**given)  # checked whether this run uses them or not (a later ~/reset may)
     if not given or setup.vehicle is None or setup.cycle is not None:
         return setup
     return dataclasses.replace(setup, vehicle=dataclasses.replace(setup.vehicle, **given))
