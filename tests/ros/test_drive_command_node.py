@@ -58,11 +58,6 @@ def rig(tmp_path_factory):
     client = SimClient(DOMAIN, stream_qos=LOSSLESS)
     try:
         client.wait_for_node(60.0)
-        client.wait_for(
-            lambda: client.node.count_subscribers(client.drive_commands.topic_name) > 0,
-            10.0,
-            "subscriber of the drive topic",
-        )
         yield client, path
     finally:
         client.close()
