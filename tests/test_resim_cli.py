@@ -87,6 +87,25 @@ def test_an_offline_recording_resimulates_to_the_same_bits(recorded, tmp_path):
     assert run["run_id"] == run_record(recorded)["run_id"]
 
 
+def test_a_resimulation_resimulates_again_as_the_run_it_came_from(tmp_path):
+    """An offline run whose defect grows (from 0.05 s), re-simulated, then re-simulated
+    again: each time bit for bit (the second from the first's file alone, which says the
+    run was offline: the scenario's own setup, growth and all)."""
+    growing = (
+        'name = "growing"\nduration_s = 1.0\n[defects.left]\n'
+        'pivot_radius_change_pct = {value = 4.0, onset_s = 0.05, growth = "linear",'
+        " rate_per_s = 40.0}\n"
+    )
+    first = tmp_path / "grown.mcap"
+    record_offline(parse_scenario(growing, "growing.toml"), first, duration_s=0.2)
+    again, twice = tmp_path / "again.mcap", tmp_path / "twice.mcap"
+    for source, out in ((first, again), (again, twice)):
+        r = _cli("resim", source, "--out", out)
+        assert r.returncode == 0 and "5120 samples equal" in r.stdout, r.stdout + r.stderr
+    assert run_record(twice)["recorded_mode"] == "offline"
+    assert pivot_arrays(twice)["left_fx_n"].tobytes() == pivot_arrays(first)["left_fx_n"].tobytes()
+
+
 def test_a_recording_holds_the_live_drives_settings(tmp_path):
     """A run that takes live drive commands records the settings in force (brake_sim_run)
     and its re-simulation keeps them."""

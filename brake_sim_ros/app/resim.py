@@ -119,6 +119,7 @@ class RecordedRun:
     changes: list[RecordedChange] = field(default_factory=list)
     pivot_topic: str = stream.PIVOT_FORCES.name
     name: str = "recording"
+    mode: str = "live"  # how the run was made: live (a node) or offline
 
     @property
     def samples(self) -> int:
@@ -211,8 +212,12 @@ def read_run(recording: Recording) -> RecordedRun:
         )
     run = records[metadata.RUN]
     mode = run.get("mode")
-    if mode not in ("live", "offline", "resim"):
-        raise ResimError(f"{name}: {metadata.RUN} mode {str(mode)[:20]!r}: allowed live, offline")
+    if mode == "resim":  # a re-simulation re-simulates as the run it came from
+        mode = run.get("recorded_mode")
+    if mode not in ("live", "offline"):
+        raise ResimError(
+            f"{name}: {metadata.RUN} mode {str(mode)[:20]!r}: allowed live, offline, resim"
+        )
     scenario = _scenario(records, name)
     period = scenario.sample_period_s
     if _run_value(run, "sample_period_s", name, (float,)) != period:
@@ -224,7 +229,7 @@ def read_run(recording: Recording) -> RecordedRun:
         if key in run
     }
     setup_values = None
-    if mode != "offline":  # the node's model: its parameters at the start
+    if mode == "live":  # the node's model: its parameters at the start
         setup_values = {
             k: _literal(v, f"{name}: {metadata.MODEL} {k}")
             for k, v in records[metadata.MODEL].items()
@@ -237,6 +242,7 @@ def read_run(recording: Recording) -> RecordedRun:
         records=records,
         policy=_policy(records.get(metadata.ROS_PARAMETERS), name),
         name=name,
+        mode=mode,
     )
     rate = Fraction(conversion.sample_rate_hz(period))
     channels = recording.channels.values()
@@ -414,7 +420,7 @@ class _Replay:
                 yield self._command(event)
         except ResimError:
             raise
-        except (BrakeSimError, ValueError) as exc:
+        except (BrakeSimError, ValueError, TypeError, ArithmeticError) as exc:
             raise ResimError(f"{self.run.name}: at sample {event.sample}: {exc}") from None
 
     def _command(self, command: RecordedCommand) -> tuple:
@@ -577,7 +583,7 @@ def resimulate(
             measured_rate_hz=float(
                 _run_value(run.run, "measured_rate_hz", recording.name, (float,))
             ),
-            extra={"resimulated_from": describe_path(source), "recorded_mode": run.run["mode"]},
+            extra={"resimulated_from": describe_path(source), "recorded_mode": run.mode},
         )
         custom = {
             "brake_sim_run_id": run.run.get("run_id", ""),
