@@ -158,3 +158,19 @@ def test_the_live_drives_settings_are_parameters_fixed_at_start():
     for name, _lo, hi in DRIVE_LIMITS:
         assert specs[name].default == 0.0 and specs[name].range == (0.0, hi)
         assert name in ros_params.FIXED_AT_START and "[vehicle]" in specs[name].description
+
+
+def test_the_nodes_start_up_setup_keeps_a_growing_defects_law():
+    """node_setup (the node at start, and resim of its recordings): the parameters set the
+    final values; the onset and growth law stay the scenario's, as on a ~/reset to it."""
+    from brake_sim_ros.scenarios import parse_scenario
+
+    scenario = parse_scenario(
+        'name = "g"\n[defects.left]\npivot_radius_change_pct = {value = 2.0, onset_s = 0.1,'
+        ' growth = "linear", rate_per_s = 4.0}\n'
+    )
+    setup = scenario.setup
+    values = ros_params.model_values(setup.params, setup.defects)
+    assert ros_params.node_setup(setup, values, {}) == setup
+    values["defects.left.pivot_radius_change_pct"] = 0.0  # no defect: no growth of it
+    assert ros_params.node_setup(setup, values, {}).defects.growth == ()

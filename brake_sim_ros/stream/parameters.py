@@ -485,16 +485,15 @@ def node_setup(
 ) -> BrakeSetup:
     """The setup a node steps for a scenario's ``setup``: its model from the flat ROS
     ``values`` (every model field: the node's parameters, the scenario's with any
-    overrides; :func:`build_model`, the scenario's drum harmonics kept) and its live
-    drive's settings from ``drive_overrides`` (:func:`with_drive_limits`). The node at
-    start and ``brake-sim resim`` of its recording build it here, so they step the same.
+    overrides; :func:`changed_setup`: the scenario's drum harmonics and growth laws kept)
+    and its live drive's settings from ``drive_overrides`` (:func:`with_drive_limits`).
+    The node at start and ``brake-sim resim`` of its recording build it here, so they
+    step the same.
 
     Raises:
         ParameterError: from the core, one line, for an invalid value or combination.
     """
-    params, defects = build_model(values, drum=setup.defects.drum)
-    setup = dataclasses.replace(setup, params=params, defects=defects)
-    return with_drive_limits(setup, drive_overrides)
+    return with_drive_limits(changed_setup(setup, values), drive_overrides)
 
 
 def changed_setup(setup: BrakeSetup, values: dict[str, Any]) -> BrakeSetup:
