@@ -224,3 +224,45 @@ def test_bad_drive_settings_refuse_the_node_in_one_line(tmp_path, override, says
     refusal = [line for line in node.output().splitlines() if "refused" in line]
     assert len(refusal) == 1 and says in refusal[0], node.output()
     assert "Traceback" not in node.output()
+
+
+def test_a_node_started_on_a_growing_defect_grows_it_and_resimulates(tmp_path):
+    """A node started on a scenario whose defect grows (not reset to it): its recording
+    holds the growing truth, its samples are the offline run's (the scenario's own setup,
+    growth and all), and its re-simulation gives them bit for bit."""
+    text = (
+        'name = "growing"\nsample_rate_hz = 2560.0\n[defects.left]\n'
+        'pivot_radius_change_pct = {value = 4.0, onset_s = 0.05, growth = "linear",'
+        " rate_per_s = 40.0}\n"
+    )
+    scenario = tmp_path / "growing.toml"
+    scenario.write_text(text)
+    recording = tmp_path / "live.mcap"
+    domain = domain_id_for(63)
+    node = NodeProcess.start(
+        ["--scenario", str(scenario), "--record", str(recording), "--ros-args",
+         "-p", "paused:=true"],
+        domain_id=domain,
+        log_path=tmp_path / "node.log",
+    )  # fmt: skip
+    client = SimClient(domain)
+    try:
+        client.wait_for_node(60.0)
+        _step(client, RATE)
+    finally:
+        client.close()
+        assert node.stop() == 0, node.output()
+    truths = _decoded(recording, stream.DEFECTS.name)
+    assert len(truths) > 3  # the start, then the growth's updates
+    stepper = stepper_for(parse_scenario(text))
+    offline = stepper.advance(RATE)
+    live = pivot_arrays(recording)
+    assert live["left_fx_n"].tobytes() == offline["left_pivot_fx_n"].tobytes()
+    out = tmp_path / "again.mcap"
+    done = subprocess.run(
+        [sys.executable, "-m", "brake_sim_ros.cli", "resim", str(recording), "--out", str(out)],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert done.returncode == 0 and f"{RATE} samples equal" in done.stdout, done.stderr
