@@ -31,9 +31,10 @@ from tests.test_drive_command import RIG
 SECONDS = 0.25
 
 
-def _cli(*args):
+def resim(*args):
+    """``brake-sim resim ARGS`` in a process of its own (str() of each argument)."""
     return subprocess.run(
-        [sys.executable, "-m", "brake_sim_ros.cli", *map(str, args)],
+        [sys.executable, "-m", "brake_sim_ros.cli", "resim", *map(str, args)],
         capture_output=True,
         text=True,
         timeout=600,
@@ -73,7 +74,7 @@ def recorded(tmp_path_factory) -> Path:
 
 def test_an_offline_recording_resimulates_to_the_same_bits(recorded, tmp_path):
     out = tmp_path / "again.mcap"
-    r = _cli("resim", recorded, "--out", out)
+    r = resim(recorded, "--out", out)
     assert r.returncode == 0, r.stderr
     n = round(SECONDS * 25_600)
     assert f"{n} samples equal to the recording's, bit for bit" in r.stdout
@@ -100,7 +101,7 @@ def test_a_resimulation_resimulates_again_as_the_run_it_came_from(tmp_path):
     record_offline(parse_scenario(growing, "growing.toml"), first, duration_s=0.2)
     again, twice = tmp_path / "again.mcap", tmp_path / "twice.mcap"
     for source, out in ((first, again), (again, twice)):
-        r = _cli("resim", source, "--out", out)
+        r = resim(source, "--out", out)
         assert r.returncode == 0 and "5120 samples equal" in r.stdout, r.stdout + r.stderr
     assert run_record(twice)["recorded_mode"] == "offline"
     assert pivot_arrays(twice)["left_fx_n"].tobytes() == pivot_arrays(first)["left_fx_n"].tobytes()
@@ -115,7 +116,7 @@ def test_a_recording_holds_the_live_drives_settings(tmp_path):
     run = run_record(path)
     assert (run["max_drive_torque_n_m"], run["speed_time_constant_s"]) == ("90.0", "1.0")
     out = tmp_path / "again.mcap"
-    r = _cli("resim", path, "--out", out)
+    r = resim(path, "--out", out)
     assert r.returncode == 0, r.stderr
     assert run_record(out)["max_drive_torque_n_m"] == "90.0"
     assert "max_drive_torque_n_m" not in run_record(recorded_symmetric(tmp_path))
@@ -131,7 +132,7 @@ def test_another_preset_resimulates_and_says_the_samples_differ(recorded, tmp_pa
     """The same recording under another preset (another physics step): written, and the
     comparison names the first sample that differs instead of claiming equality."""
     out = tmp_path / "fine.mcap"
-    r = _cli("resim", recorded, "--out", out, "--preset", "accurate")
+    r = resim(recorded, "--out", out, "--preset", "accurate")
     assert r.returncode == 0, r.stderr
     assert "samples differ from the recording's from sample" in r.stdout
     assert run_record(recorded)["preset"] != "accurate" == run_record(out)["preset"]
@@ -141,7 +142,7 @@ def test_sensors_added_later_measure_the_same_samples(recorded, tmp_path):
     """--measured: the recording had no ~/measured; the re-simulation runs the scenario's
     sensors on the same samples (the pivot forces still equal, bit for bit)."""
     out = tmp_path / "measured.mcap"
-    r = _cli("resim", recorded, "--out", out, "--measured")
+    r = resim(recorded, "--out", out, "--measured")
     assert r.returncode == 0, r.stderr
     assert "bit for bit" in r.stdout
     with out.open("rb") as f:
@@ -168,7 +169,7 @@ def test_a_recording_of_two_runs_is_refused(tmp_path):
             recorder.write(topic, msg, ns)
     recorder.close()
     out = tmp_path / "out.mcap"
-    _refused(_cli("resim", both, "--out", out), out, "(a ~/reset")
+    _refused(resim(both, "--out", out), out, "(a ~/reset")
 
 
 def _refused(r, out: Path, says: str) -> None:
@@ -182,14 +183,14 @@ def _refused(r, out: Path, says: str) -> None:
 
 def test_a_missing_file_is_refused_in_one_line(tmp_path):
     out = tmp_path / "out.mcap"
-    _refused(_cli("resim", tmp_path / "missing.mcap", "--out", out), out, "missing.mcap")
+    _refused(resim(tmp_path / "missing.mcap", "--out", out), out, "missing.mcap")
 
 
 def test_a_file_that_is_not_mcap_is_refused_in_one_line(tmp_path):
     notes = tmp_path / "notes.mcap"
     notes.write_text("not a recording\n")
     out = tmp_path / "out.mcap"
-    _refused(_cli("resim", notes, "--out", out), out, "notes.mcap is not an MCAP file")
+    _refused(resim(notes, "--out", out), out, "notes.mcap is not an MCAP file")
 
 
 def test_an_mcap_without_the_simulators_metadata_is_refused_in_one_line(tmp_path):
@@ -200,13 +201,13 @@ def test_an_mcap_without_the_simulators_metadata_is_refused_in_one_line(tmp_path
         writer.add_metadata("notes", {"what": "a foreign file"})
         writer.finish()
     out = tmp_path / "out.mcap"
-    _refused(_cli("resim", foreign, "--out", out), out, "no brake_sim_scenario, brake_sim_unit,")
+    _refused(resim(foreign, "--out", out), out, "no brake_sim_scenario, brake_sim_unit,")
 
 
 def test_the_input_as_output_is_refused_and_left_as_it_was(recorded):
     before = hashlib.sha256(recorded.read_bytes()).hexdigest()
     for extra in ((), ("--overwrite",)):
-        r = _cli("resim", recorded, "--out", recorded, *extra)
+        r = resim(recorded, "--out", recorded, *extra)
         assert r.returncode != 0 and len(r.stderr.strip().splitlines()) == 1
         assert "is the input" in r.stderr, r.stderr
     assert hashlib.sha256(recorded.read_bytes()).hexdigest() == before
@@ -216,7 +217,7 @@ def test_an_output_through_a_symlink_is_refused(recorded, tmp_path):
     target = tmp_path / "elsewhere.mcap"
     link = tmp_path / "link.mcap"
     link.symlink_to(target)
-    r = _cli("resim", recorded, "--out", link, "--overwrite")
+    r = resim(recorded, "--out", link, "--overwrite")
     assert r.returncode != 0 and "symbolic link" in r.stderr
     assert len(r.stderr.strip().splitlines()) == 1
     assert not target.exists() and os.readlink(link) == str(target)
@@ -225,6 +226,6 @@ def test_an_output_through_a_symlink_is_refused(recorded, tmp_path):
 def test_an_existing_output_needs_overwrite(recorded, tmp_path):
     out = tmp_path / "taken.mcap"
     out.write_bytes(b"mine")
-    r = _cli("resim", recorded, "--out", out)
+    r = resim(recorded, "--out", out)
     assert r.returncode != 0 and "pass --overwrite" in r.stderr
     assert out.read_bytes() == b"mine"

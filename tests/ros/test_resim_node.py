@@ -11,8 +11,6 @@ stepped while paused, some in a free run whose chunk boundaries the wall clock s
 
 from __future__ import annotations
 
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -36,7 +34,7 @@ from brake_sim_ros.ros.harness import NodeProcess, SimClient, domain_id_for  # n
 from brake_sim_ros.scenarios import parse_scenario  # noqa: E402
 from brake_sim_ros.stream.build import stepper_for  # noqa: E402
 from tests.test_drive_command import RATE, RIG  # noqa: E402
-from tests.test_resim_cli import pivot_arrays, run_record  # noqa: E402
+from tests.test_resim_cli import pivot_arrays, resim, run_record  # noqa: E402
 
 LOSSLESS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
 LIMIT_N_M = 200.0  # the node's max_drive_torque_n_m (the rig's own: the default 120)
@@ -111,20 +109,10 @@ def session(tmp_path_factory):
         client.close()
         assert node.stop() == 0, node.output()
     out = folder / "resim.mcap"
-    done = subprocess.run(
-        [sys.executable, "-m", "brake_sim_ros.cli", "resim", str(recording), "--out", str(out)],
-        capture_output=True,
-        text=True,
-        timeout=600,
-    )
+    done = resim(recording, "--out", out)
     assert done.returncode == 0, done.stderr
     twice = folder / "twice.mcap"  # a re-simulation holds what re-simulates it again
-    again = subprocess.run(
-        [sys.executable, "-m", "brake_sim_ros.cli", "resim", str(out), "--out", str(twice)],
-        capture_output=True,
-        text=True,
-        timeout=600,
-    )
+    again = resim(out, "--out", twice)
     assert again.returncode == 0 and "bit for bit" in again.stdout, again.stderr
     return recording, out, done.stdout, rejected, refused
 
@@ -259,10 +247,5 @@ def test_a_node_started_on_a_growing_defect_grows_it_and_resimulates(tmp_path):
     live = pivot_arrays(recording)
     assert live["left_fx_n"].tobytes() == offline["left_pivot_fx_n"].tobytes()
     out = tmp_path / "again.mcap"
-    done = subprocess.run(
-        [sys.executable, "-m", "brake_sim_ros.cli", "resim", str(recording), "--out", str(out)],
-        capture_output=True,
-        text=True,
-        timeout=600,
-    )
+    done = resim(recording, "--out", out)
     assert done.returncode == 0 and f"{RATE} samples equal" in done.stdout, done.stderr
