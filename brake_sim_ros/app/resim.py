@@ -99,13 +99,17 @@ class RecordedRun:
         scenario: the scenario from the recorded text, as the recorded unit and seed.
         setup_values: the recorded model (flat ROS values), for a live run.
         drive_limits: the live drive's settings in force (``brake_sim_run``), or {}.
-        run: the ``brake_sim_run`` record; ``records``: every simulator record, as read.
+        run: the ``brake_sim_run`` record; ``records``: the scenario, unit, run, model
+            and (live) ROS parameter records, as read.
         policy: the command timeout policy (the node's parameters at the start).
         chunks: ``(first sample, samples)`` of every recorded PivotForceChunk, in order,
             contiguous from sample 0.
         commands: the recorded commands in log-time order (file order within a time).
         changes: the parameter changes recorded (``brake_sim_parameter_change``), in order.
         pivot_topic: the recorded PivotForceChunk topic (its name as recorded).
+        name: the recording's file name, for messages.
+        mode: how the run was made: ``live`` (a node: its model from its parameters) or
+            ``offline`` (the scenario's own setup); a re-simulation's is its source's.
     """
 
     scenario: Scenario
@@ -119,7 +123,7 @@ class RecordedRun:
     changes: list[RecordedChange] = field(default_factory=list)
     pivot_topic: str = stream.PIVOT_FORCES.name
     name: str = "recording"
-    mode: str = "live"  # how the run was made: live (a node) or offline
+    mode: str = "live"
 
     @property
     def samples(self) -> int:
