@@ -172,6 +172,34 @@ def test_a_recording_of_two_runs_is_refused(tmp_path):
     _refused(resim(both, "--out", out), out, "(a ~/reset")
 
 
+@pytest.mark.parametrize(
+    ("change", "says"),
+    [
+        ({"run_id": "other"}, "parameter 'run_id' set at sample 64: not re-simulated"),
+        ({"command_timeout_s": "soon"}, "at sample 64: command_timeout_s="),
+    ],
+)
+def test_a_parameter_change_it_cannot_resimulate_is_refused(tmp_path, change, says):
+    """A recorded change of a parameter resim does not re-simulate, or of a value the
+    node's own checks refuse: one line, nothing written (the run stops there)."""
+    scenario = load_scenario("symmetric")
+    source = tmp_path / "source.mcap"
+    record_offline(scenario, source, duration_s=0.01)
+    with source.open("rb") as f:
+        records = {m.name: m.metadata for m in make_reader(f).iter_metadata()}
+    del records["rosbag2"]
+    changed = tmp_path / "changed.mcap"
+    recorder = McapRecorder(changed, records=records)
+    recorder.parameter_change(change, 64, 0)
+    for topic, msg, ns in offline_messages(
+        scenario, duration_s=0.01, run_id=records["brake_sim_run"]["run_id"]
+    ):
+        recorder.write(topic, msg, ns)
+    recorder.close()
+    out = tmp_path / "out.mcap"
+    _refused(resim(changed, "--out", out), out, says)
+
+
 def _refused(r, out: Path, says: str) -> None:
     assert r.returncode != 0
     lines = r.stderr.strip().splitlines()

@@ -157,13 +157,26 @@ def _policy(parameters: dict[str, str] | None, name: str) -> CommandPolicy:
             raise ResimError(f"{name}: its {metadata.ROS_PARAMETERS} record has no {key!r}")
         values[key] = _literal(parameters[key], f"{name}: parameter {key}")
     try:
-        return CommandPolicy(
-            timeout_s=float(values["command_timeout_s"]),
-            behaviour=TimeoutBehaviour.parse(str(values["on_command_timeout"])),
-            ramp_rate_n_per_s=float(values["command_ramp_rate_n_per_s"]),
-        )
-    except (TypeError, ValueError) as exc:
+        return _command_policy(values)
+    except ValueError as exc:
         raise ResimError(f"{name}: recorded {exc}") from None
+
+
+def _command_policy(values: dict[str, Any]) -> CommandPolicy:
+    """The command timeout policy of the node's parameter values (by name, as recorded).
+
+    Raises:
+        ValueError: a value of the wrong type, or one the policy refuses (one line).
+    """
+    for key in ("command_timeout_s", "command_ramp_rate_n_per_s"):
+        value = values[key]
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            raise ValueError(f"{key}={value!r}: allowed a number")
+    return CommandPolicy(
+        timeout_s=float(values["command_timeout_s"]),
+        behaviour=TimeoutBehaviour.parse(str(values["on_command_timeout"])),
+        ramp_rate_n_per_s=float(values["command_ramp_rate_n_per_s"]),
+    )
 
 
 def _scenario(records: dict[str, dict[str, str]], name: str) -> Scenario:
@@ -460,11 +473,7 @@ class _Replay:
                     " not re-simulated (allowed: the model's, the command timeout's, the"
                     " stream's and the pacing's)"
                 )
-        self.planner.policy = CommandPolicy(
-            timeout_s=float(self.policy["command_timeout_s"]),
-            behaviour=TimeoutBehaviour.parse(str(self.policy["on_command_timeout"])),
-            ramp_rate_n_per_s=float(self.policy["command_ramp_rate_n_per_s"]),
-        )
+        self.planner.policy = _command_policy(self.policy)
         if model:
             self.model.update(model)
             setup = ros_params.changed_setup(self.stepper.setup, self.model)
