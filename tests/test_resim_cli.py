@@ -221,6 +221,15 @@ def test_a_file_that_is_not_mcap_is_refused_in_one_line(tmp_path):
     _refused(resim(notes, "--out", out), out, "notes.mcap is not an MCAP file")
 
 
+def test_a_damaged_recording_is_refused_in_one_line(recorded, tmp_path):
+    """Cut short (a crash): the checked reader refuses it whole and points to recover."""
+    data = recorded.read_bytes()
+    cut = tmp_path / "cut.mcap"
+    cut.write_bytes(data[: len(data) // 2])
+    out = tmp_path / "out.mcap"
+    _refused(resim(cut, "--out", out), out, "brake-sim recover")
+
+
 def test_an_mcap_without_the_simulators_metadata_is_refused_in_one_line(tmp_path):
     foreign = tmp_path / "foreign.mcap"
     with foreign.open("wb") as f:
