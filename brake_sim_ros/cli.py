@@ -373,6 +373,21 @@ def cmd_recover(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_resim(args: argparse.Namespace) -> int:
+    from brake_sim_ros.app.resim import resimulate
+
+    done = resimulate(
+        args.recording,
+        args.out,
+        preset=args.preset,
+        measured=args.measured,
+        overwrite=args.overwrite,
+        compression=args.compression,
+    )
+    print(f"brake-sim resim: {done.describe()}")
+    return 0
+
+
 def cmd_view(args: argparse.Namespace) -> int:
     from brake_sim_ros.viz.commands import cmd_view as view
 
@@ -1004,6 +1019,33 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--overwrite", action="store_true", help="replace FIXED if it exists")
     p.set_defaults(func=cmd_recover)
 
+    p = sub.add_parser(
+        "resim",
+        help="re-simulate a recorded run offline, its commands at their recorded samples",
+        description="Re-simulate the run a brake-sim recording holds (brake-sim node --record,"
+        " live, simulate --mcap) from the recording alone: its scenario text, unit, seed,"
+        " model and settings, and every actuation and drive command at the sample it took"
+        " effect at. Writes the node's stream to a new MCAP file (never the input, never"
+        " through a link, whole or not at all) and says whether the samples equal the"
+        " recording's bit for bit (they do with the same preset and sensors).",
+    )
+    p.add_argument("recording", help="the .mcap file recorded (only read)")
+    p.add_argument("--out", required=True, metavar="NEW.mcap", help="the .mcap file to write")
+    p.add_argument(
+        "--preset",
+        choices=tuple(PRESETS),
+        help="another solver preset (default: the recorded scenario's)",
+    )
+    p.add_argument(
+        "--measured",
+        action=argparse.BooleanOptionalAction,
+        default=None,
+        help="run the scenario's sensors and record ~/measured, or not (default: as the run)",
+    )
+    p.add_argument("--compression", choices=("zstd", "none"), default="zstd")
+    p.add_argument("--overwrite", action="store_true", help="replace an existing --out")
+    p.set_defaults(func=cmd_resim)
+
     p = sub.add_parser("validate", help="run the study's cases and write the validation report")
     p.add_argument("--out", default="out/validation", help="report directory")
     p.add_argument("--json", help="also write the figures as JSON to this file")
@@ -1166,7 +1208,9 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 # commands that run the physics kernels (compiled on first use)
-PHYSICS_COMMANDS = ("node", "live", "simulate", "validate", "bench", "severity", "sweep")
+PHYSICS_COMMANDS = (
+    "node", "live", "simulate", "resim", "validate", "bench", "severity", "sweep",
+)  # fmt: skip
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -147,3 +147,30 @@ def test_the_drums_flat_is_a_node_parameter_and_the_scenarios_harmonics_are_kept
     values["defects.drum.flat_depth_um"] = 1500.0
     with pytest.raises(ParameterError, match="flat_depth_um=1500 is invalid: allowed 0 to 1000"):
         _p.build_model(values, drum=oval)
+
+
+def test_the_live_drives_settings_are_parameters_fixed_at_start():
+    """max_drive_torque_n_m and speed_time_constant_s: 0 = the scenario's [vehicle], an
+    envelope up to the vehicle's limits (which check the rest), fixed at start."""
+    from brake_sim_ros.model.vehicle import DRIVE_LIMITS
+
+    specs = {s.name: s for s in ros_params.run_parameter_specs()}
+    for name, _lo, hi in DRIVE_LIMITS:
+        assert specs[name].default == 0.0 and specs[name].range == (0.0, hi)
+        assert name in ros_params.FIXED_AT_START and "[vehicle]" in specs[name].description
+
+
+def test_the_nodes_start_up_setup_keeps_a_growing_defects_law():
+    """node_setup (the node at start, and resim of its recordings): the parameters set the
+    final values; the onset and growth law stay the scenario's, as on a ~/reset to it."""
+    from brake_sim_ros.scenarios import parse_scenario
+
+    scenario = parse_scenario(
+        'name = "g"\n[defects.left]\npivot_radius_change_pct = {value = 2.0, onset_s = 0.1,'
+        ' growth = "linear", rate_per_s = 4.0}\n'
+    )
+    setup = scenario.setup
+    values = ros_params.model_values(setup.params, setup.defects)
+    assert ros_params.node_setup(setup, values, {}) == setup
+    values["defects.left.pivot_radius_change_pct"] = 0.0  # no defect: no growth of it
+    assert ros_params.node_setup(setup, values, {}).defects.growth == ()

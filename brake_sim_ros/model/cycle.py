@@ -51,11 +51,12 @@ kinetic energy the change brings, ``(I_new - I_old) w_f^2 / 2``, is booked
 Live drive (:class:`LiveDrive`, the node's ``~/drive``): a run with a vehicle and no
 cycle takes drive commands that hold until the next one: coast (no drive torque), a
 constant drive torque, or a target speed held by the same speed controller as an
-accelerate or cruise segment (:func:`speed_control_torque`), with the default settings
-of a cycle's controller (:data:`DEFAULT_MAX_DRIVE_TORQUE_N_M`,
-:data:`DEFAULT_SPEED_TIME_CONSTANT_S`: a run without a cycle has no table to set them).
-A run with a cycle takes none: its cycle drives. The brake stays the actuation
-history's (live actuation commands), so a rig drives stops with both.
+accelerate or cruise segment (:func:`speed_control_torque`), with the settings of the
+run's vehicle (``[vehicle]`` ``max_drive_torque_n_m``, ``speed_time_constant_s``;
+default :data:`DEFAULT_MAX_DRIVE_TORQUE_N_M`, :data:`DEFAULT_SPEED_TIME_CONSTANT_S` as a
+cycle's): a torque command above the vehicle's largest drive torque is refused
+(:func:`torque_refusal`). A run with a cycle takes none: its cycle drives. The brake
+stays the actuation history's (live actuation commands), so a rig drives stops with both.
 
 Determinism: the controller runs inside the compiled stepping
 (:func:`brake_sim_ros.model.kernel.fixed_step_advance`) at the start of every physics
@@ -91,11 +92,10 @@ NOMINAL_BRAKE_GAIN_N_M_PER_N = 0.21
 MAX_SPEED_KMH = 250.0
 MAX_DURATION_S = 86_400.0
 MAX_SPEED_M_S = MAX_SPEED_KMH / KMH_PER_M_S
-# The speed controller's settings of a [cycle] by default, and of a live drive: this
-# brake's share of the traction (120 N m gives the nominal 17.1 kg m^2 about 1.8 m/s^2)
-# and the time constant of its approach to a target speed.
-DEFAULT_MAX_DRIVE_TORQUE_N_M = 120.0
-DEFAULT_SPEED_TIME_CONSTANT_S = 1.0
+# The speed controller's settings of a [cycle] by default, and of a live drive (the
+# vehicle's, model/vehicle.py)
+DEFAULT_MAX_DRIVE_TORQUE_N_M = vehicle.DEFAULT_MAX_DRIVE_TORQUE_N_M
+DEFAULT_SPEED_TIME_CONSTANT_S = vehicle.DEFAULT_SPEED_TIME_CONSTANT_S
 # A live drive command's modes, in the order of DriveCommand's MODE_* (msg_defs/)
 DRIVE_MODES = ("coast", "torque", "target_speed")
 
@@ -124,8 +124,7 @@ class Segment:
 
 # the controller's settings: (low, high) each (the scenario's [cycle] keys)
 LIMITS: dict[str, tuple[float, float]] = {
-    "max_drive_torque_n_m": (0.0, 10_000.0),
-    "speed_time_constant_s": (0.01, 100.0),
+    **{name: (lo, hi) for name, lo, hi in vehicle.DRIVE_LIMITS},
     "brake_rise_s": (1e-3, 10.0),
     "max_force_n": (0.0, MAX_ACTUATION_FORCE_N),
 }
@@ -244,8 +243,9 @@ class LiveDrive:
         mode: one of :data:`DRIVE_MODES`: ``coast`` (no drive torque), ``torque``
             (``drive_torque_n_m``, constant) or ``target_speed`` (the speed controller
             toward ``target_speed_m_s``).
-        drive_torque_n_m: drive torque on the flywheel, N m, forward; 0 to
-            :data:`DEFAULT_MAX_DRIVE_TORQUE_N_M` (the drive never brakes). Mode torque only.
+        drive_torque_n_m: drive torque on the flywheel, N m, forward; 0 to the largest a
+            vehicle may have (``vehicle.DRIVE_LIMITS``; the drive never brakes); a run
+            refuses one above its vehicle's (:func:`torque_refusal`). Mode torque only.
         target_speed_m_s: vehicle speed (flywheel speed x rolling radius), m/s, forward;
             0 to :data:`MAX_SPEED_M_S`. Mode target_speed only.
 
@@ -265,7 +265,7 @@ class LiveDrive:
             name, value, hi, unit = (
                 "drive_torque_n_m",
                 self.drive_torque_n_m,
-                DEFAULT_MAX_DRIVE_TORQUE_N_M,
+                LIMITS["max_drive_torque_n_m"][1],
                 "N m (the drive never brakes)",
             )
         elif self.mode == "target_speed":
@@ -278,14 +278,26 @@ class LiveDrive:
             )
 
 
-def pack_live_drive(p: np.ndarray, drive: LiveDrive) -> None:
-    """Write ``drive`` into the packed vector ``p`` of a run with a vehicle and no cycle
-    (P_DRIVE_TORQUE, P_LIVE_*; the speed controller's limits in P_CYCLE_MAX_DRIVE_TORQUE
-    and P_CYCLE_TIME_CONSTANT), its target speed as a flywheel speed for the wheel radius
-    packed (:func:`vehicle.pack_vehicle`)."""
+def torque_refusal(drive: LiveDrive, car: vehicle.Vehicle) -> str | None:
+    """Why ``car`` refuses ``drive`` (one line naming its limit), or None: a torque command
+    above its ``max_drive_torque_n_m``; the rule, written once."""
+    limit = car.max_drive_torque_n_m
+    if drive.mode == "torque" and drive.drive_torque_n_m > limit:
+        return (
+            f"drive_torque_n_m={drive.drive_torque_n_m:g} N m exceeds this run's"
+            f" max_drive_torque_n_m = {limit:g} N m: allowed 0 to {limit:g} N m"
+        )
+    return None
+
+
+def pack_live_drive(p: np.ndarray, drive: LiveDrive, car: vehicle.Vehicle) -> None:
+    """Write ``drive`` into the packed vector ``p`` of a run with vehicle ``car`` and no
+    cycle (P_DRIVE_TORQUE, P_LIVE_*; the speed controller's settings, ``car``'s, in
+    P_CYCLE_MAX_DRIVE_TORQUE and P_CYCLE_TIME_CONSTANT), its target speed as a flywheel
+    speed for the wheel radius packed (:func:`vehicle.pack_vehicle`)."""
     speed = drive.mode == "target_speed"
-    p[L.P_CYCLE_MAX_DRIVE_TORQUE] = DEFAULT_MAX_DRIVE_TORQUE_N_M
-    p[L.P_CYCLE_TIME_CONSTANT] = DEFAULT_SPEED_TIME_CONSTANT_S
+    p[L.P_CYCLE_MAX_DRIVE_TORQUE] = car.max_drive_torque_n_m
+    p[L.P_CYCLE_TIME_CONSTANT] = car.speed_time_constant_s
     p[L.P_LIVE_SPEED_CONTROL] = 1.0 if speed else 0.0
     p[L.P_LIVE_TARGET_SPEED] = drive.target_speed_m_s / p[L.P_WHEEL_RADIUS] if speed else 0.0
     p[L.P_DRIVE_TORQUE] = drive.drive_torque_n_m if drive.mode == "torque" else 0.0

@@ -51,6 +51,12 @@ DEFAULT_WHEEL_RADIUS_M = (100.0 / 3.6) / 103.5
 # of a drawn condition (model/conditions.py) and of a cycle's per-stop load (model/cycle.py).
 LOAD_FACTOR_RANGE = (0.5, 3.0)
 
+# The speed controller's settings by default (a [cycle]'s, and a live drive's): this
+# brake's share of the traction (120 N m gives the nominal 17.1 kg m^2 about 1.8 m/s^2)
+# and the time constant of its approach to a target speed.
+DEFAULT_MAX_DRIVE_TORQUE_N_M = 120.0
+DEFAULT_SPEED_TIME_CONSTANT_S = 1.0
+
 
 @dataclass(frozen=True)
 class Vehicle:
@@ -70,6 +76,12 @@ class Vehicle:
         air_density_kg_m3: air density, kg/m^3 (ISA sea level, 15 degC: 1.225).
         grade_pct: road grade, % (rise over run, uphill positive in the direction of
             travel; -6 % is a steep mountain-road descent).
+        max_drive_torque_n_m: a live drive's largest drive torque on the flywheel, N m
+            (this brake's share of the traction; model/cycle.py LiveDrive): a torque
+            command above it is refused, the speed controller is clamped to it. A
+            ``[cycle]`` has its own (``Cycle.max_drive_torque_n_m``).
+        speed_time_constant_s: a live target speed's controller time constant, s (the
+            first-order approach of model/cycle.py); a ``[cycle]`` has its own.
     """
 
     wheel_radius_m: float = DEFAULT_WHEEL_RADIUS_M
@@ -78,6 +90,8 @@ class Vehicle:
     drag_area_m2: float = 0.66
     air_density_kg_m3: float = 1.225
     grade_pct: float = 0.0
+    max_drive_torque_n_m: float = DEFAULT_MAX_DRIVE_TORQUE_N_M
+    speed_time_constant_s: float = DEFAULT_SPEED_TIME_CONSTANT_S
 
     def __post_init__(self) -> None:
         for name, lo, hi in LIMITS:
@@ -99,6 +113,12 @@ class Vehicle:
         return flywheel_inertia_kg_m2 / self.wheel_radius_m**2
 
 
+# (field, low, high) of the speed controller's settings: a live drive's here, a cycle's
+# in model/cycle.py LIMITS (the same ranges, written here once)
+DRIVE_LIMITS: tuple[tuple[str, float, float], ...] = (
+    ("max_drive_torque_n_m", 0.0, 10_000.0),
+    ("speed_time_constant_s", 0.01, 100.0),
+)
 # (field, low, high): the model's limits (a wheel from 0.1 to 1 m, a grade up to 30 %)
 LIMITS: tuple[tuple[str, float, float], ...] = (
     ("wheel_radius_m", 0.1, 1.0),
@@ -107,6 +127,7 @@ LIMITS: tuple[tuple[str, float, float], ...] = (
     ("drag_area_m2", 0.0, 20.0),
     ("air_density_kg_m3", 0.0, 2.0),
     ("grade_pct", -30.0, 30.0),
+    *DRIVE_LIMITS,
 )
 _POSITIVE = frozenset({"wheel_radius_m", "mass_share"})
 

@@ -16,11 +16,16 @@ Metadata records (MCAP ``Metadata``; every value a string):
     ``software_version``, ``sample_rate_hz`` and ``sample_period_s`` (the
     scenario's), the stepper at the start of the recording (``scheme``, ``preset``,
     ``physics_step_s``, ``substeps_per_sample``, ``step_limit_s``; a live run may re-pick
-    the substeps later, which its /diagnostics and log say), ``mode`` (``live`` or
-    ``offline``), ``duration_s``, the stream settings (``chunk_rate_hz``,
+    the substeps later, which its /diagnostics and log say), ``mode`` (``live``,
+    ``offline``, or ``resim``: re-simulated from a recording by ``brake-sim resim``,
+    which adds ``resimulated_from`` and ``recorded_mode``), ``duration_s``, the stream
+    settings (``chunk_rate_hz``,
     ``state_rate_hz``, ``publish_clock``, ``publish_measured``, ``measured_rate_hz``),
     ``time_base`` and
-    ``model_note``; a live run adds its node name and ``real_time_factor``; values are
+    ``model_note``; a run that takes live drive commands (a ``[vehicle]`` and no
+    ``[cycle]``) adds the drive's settings in force, ``max_drive_torque_n_m`` and
+    ``speed_time_constant_s`` (the scenario's, or the node's parameters); a live run
+    adds its node name and ``real_time_factor``; values are
     ``repr()`` of the Python value except strings, which are given as they are.
 ``brake_sim_unit``
     which brake unit was run (:mod:`brake_sim_ros.model.units`): ``unit_id`` and
@@ -38,6 +43,11 @@ Metadata records (MCAP ``Metadata``; every value a string):
     DefectState then carries the new seed.
 ``brake_sim_ros_parameters`` (live runs)
     every ROS parameter of the node at the start of the recording, ``repr()`` of its value.
+``brake_sim_parameter_change`` (live runs, one record per change, in the order made)
+    a parameter change the node accepted while it ran (``ros2 param set``):
+    ``sample_index``, the sample it took effect at (the next one), and each parameter
+    changed under its name, the ``repr()`` of its new value (:func:`parameter_change_record`);
+    ``brake-sim resim`` applies them at their samples.
 ``rosbag2`` (written when the file is closed)
     ``serialized_metadata``: the bag's ``BagMetadata`` (version 9) in the YAML that
     rosbag2's MCAP storage plugin writes and reads (``ros2 bag info`` shows it).
@@ -71,6 +81,7 @@ SCENARIO = "brake_sim_scenario"
 RUN = "brake_sim_run"
 UNIT = "brake_sim_unit"
 ROS_PARAMETERS = "brake_sim_ros_parameters"
+PARAMETER_CHANGE = "brake_sim_parameter_change"
 ROSBAG2 = "rosbag2"
 ROS_DISTRO = "jazzy"
 BAG_METADATA_VERSION = 9  # rosbag2 Jazzy's BagMetadata::version
@@ -131,6 +142,13 @@ def unit_record(scenario: Scenario) -> dict[str, str]:
     }
 
 
+def parameter_change_record(changes: Mapping[str, Any], sample_index: int) -> dict[str, str]:
+    """A ``brake_sim_parameter_change`` record: the new values at ``sample_index``."""
+    record = {name: repr(value) for name, value in sorted(changes.items())}
+    record["sample_index"] = repr(int(sample_index))
+    return record
+
+
 def run_record(
     *,
     mode: str,
@@ -147,8 +165,8 @@ def run_record(
     extra: Mapping[str, Any] | None = None,
 ) -> dict[str, str]:
     """The ``brake_sim_run`` record (see the module doc); ``stepper`` as it is now."""
-    if mode not in ("live", "offline"):
-        raise ValueError(f"mode={mode!r}: allowed 'live' or 'offline'")
+    if mode not in ("live", "offline", "resim"):
+        raise ValueError(f"mode={mode!r}: allowed 'live', 'offline' or 'resim'")
     values: dict[str, Any] = {
         "mode": mode,
         "run_id": run_id,
@@ -170,10 +188,14 @@ def run_record(
         "time_base": TIME_BASE,
         "model_note": (
             "brake_sim_model holds the model at the start of the recording; changes made"
-            " while it ran are on /brake_sim/defects (DefectState)"
+            " while it ran are in brake_sim_parameter_change records and, for the defects,"
+            " on /brake_sim/defects (DefectState)"
         ),
         **(extra or {}),
     }
+    if stepper.drive_refusal() is None:  # a live drive's settings, as the stepper has them
+        for name in ros_params.DRIVE_LIMIT_NAMES:
+            values[name] = float(getattr(stepper.setup.vehicle, name))
     return {k: v if isinstance(v, str) else repr(v) for k, v in values.items()}
 
 

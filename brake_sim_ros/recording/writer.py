@@ -314,6 +314,29 @@ class McapRecorder:
         s.first_ns = time_ns if s.first_ns is None else min(s.first_ns, time_ns)
         s.last_ns = time_ns if s.last_ns is None else max(s.last_ns, time_ns)
 
+    def parameter_change(self, changes: Mapping[str, Any], sample_index: int, time_ns: int) -> None:
+        """Record a parameter change of a live node, at ``sample_index`` (simulated time
+        ``time_ns``, unused: the record carries the sample): a
+        ``brake_sim_parameter_change`` metadata record (:mod:`.metadata`), after the
+        messages written before it.
+
+        Raises:
+            RecordingError: the recorder is closed, or writing failed (it is then closed).
+        """
+        if self._closed:
+            raise RecordingError(f"{self.path}: the recording is closed")
+        try:
+            self._flush(sync=False)  # the messages before the change come before it in the file
+            self._writer.add_metadata(
+                metadata.PARAMETER_CHANGE, metadata.parameter_change_record(changes, sample_index)
+            )
+        except OSError as exc:
+            self._abandon()
+            raise RecordingError(
+                f"recording to {self.path} stopped at a parameter change{self._upto()}:"
+                f" {_cause(exc)}"
+            ) from None
+
     def _flush(self, *, sync: bool) -> None:
         self._writer.flush()
         self._chunk_first_ns = None

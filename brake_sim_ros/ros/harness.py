@@ -253,18 +253,20 @@ class SimClient:
         """Wait until the node is up and discovered both ways.
 
         Its latched ground truth arrived, its services answer, it subscribes to our
-        commands and we see its stream publishers. A node that starts running at once
-        publishes before any subscriber has matched (volatile topics do not replay), so
-        start it paused and unpause it after this to receive its stream from sample 0.
+        commands (actuation and drive) and we see its stream publishers. A node that
+        starts running at once publishes before any subscriber has matched (volatile
+        topics do not replay), so start it paused and unpause it after this to receive its
+        stream from sample 0.
         """
         self.wait_for(lambda: bool(self.rx.defects), timeout_s, "DefectState from the node")
         for client in (self._step, self._reset, self._set, self._set_atomic, self._get):
             self.wait_for(client.service_is_ready, timeout_s, f"service {client.srv_name}")
-        self.wait_for(
-            lambda: self.node.count_subscribers(self.actuation.topic_name) > 0,
-            timeout_s,
-            "subscriber of the actuation topic",
-        )
+        for commands in (self.actuation, self.drive_commands):
+            self.wait_for(
+                lambda commands=commands: self.node.count_subscribers(commands.topic_name) > 0,
+                timeout_s,
+                f"subscriber of {commands.topic_name}",
+            )
         for topic in self._stream_topics:
             self.wait_for(
                 lambda topic=topic: self.node.count_publishers(topic) > 0,

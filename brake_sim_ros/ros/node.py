@@ -64,8 +64,6 @@ from rclpy.parameter import Parameter
 from brake_sim_ros import stream
 from brake_sim_ros.analysis.contact_events import ContactEventDetector
 from brake_sim_ros.errors import BrakeSimError, ParameterError, ScenarioError
-from brake_sim_ros.model.catalogue import KIND_BY_NAME, label_column
-from brake_sim_ros.model.defects import Defects
 from brake_sim_ros.model.sensors import SensorBank
 from brake_sim_ros.model.trajectory import BrakeSetup, SampleBlock
 from brake_sim_ros.ros import qos
@@ -168,10 +166,11 @@ class BrakeSimNode(Node):
             for k, v in ros_params.complete_actuation_share(overridden).items()
             if k not in overridden
         }
-        params, defects = ros_params.build_model(
-            {**values, **implied}, drum=self.scenario.setup.defects.drum
+        # a live drive's settings: the scenario's [vehicle], or these parameters when > 0
+        self._drive_overrides = {n: self._param(n) for n in ros_params.DRIVE_LIMIT_NAMES}
+        setup = ros_params.node_setup(
+            self.scenario.setup, {**values, **implied}, self._drive_overrides
         )
-        setup = dataclasses.replace(self.scenario.setup, params=params, defects=defects)
         self._stepper = self._make_stepper(setup, self.scenario, self._param("chunk_rate_hz"))
         self._publish_measured = bool(self._param("publish_measured"))
         if self._publish_measured:  # asked for what the scenario's plan does not build
@@ -189,6 +188,7 @@ class BrakeSimNode(Node):
                 **implied,
                 "duration_s": self._duration_s(),
                 "max_actuation_force_n": self._max_force_n(setup),
+                **self._drive_values(setup),
             }
         )
         self._exit_at_end = bool(self._param("exit_at_end"))
@@ -477,6 +477,16 @@ class BrakeSimNode(Node):
         for topic, msg, ns in messages:
             self._emit(topic, msg, ns)
 
+    @staticmethod
+    def _drive_values(setup: BrakeSetup) -> dict[str, float]:
+        """The live-drive parameters as in force for ``setup``: its vehicle's settings, or
+        0 for a run that takes no live drive."""
+        drives = setup.vehicle is not None and setup.cycle is None
+        return {
+            name: float(getattr(setup.vehicle, name)) if drives else 0.0
+            for name in ros_params.DRIVE_LIMIT_NAMES
+        }
+
     def _max_force_n(self, setup: BrakeSetup) -> float:
         """max_actuation_force_n: as set at start-up, or 2 x the scenario's peak."""
         if self._max_force_explicit:
@@ -601,11 +611,7 @@ class BrakeSimNode(Node):
         if model_changes:
             old_setup = self._stepper.setup
             try:
-                params, defects = ros_params.build_model(
-                    self._model_values(model_changes), drum=old_setup.defects.drum
-                )
-                defects = _keep_growth(defects, old_setup.defects)
-                setup = dataclasses.replace(old_setup, params=params, defects=defects)
+                setup = ros_params.changed_setup(old_setup, self._model_values(model_changes))
                 self._stepper.replace_setup(setup)  # validates, or changes nothing
             except BrakeSimError as exc:
                 return SetParametersResult(successful=False, reason=str(exc))
@@ -617,6 +623,7 @@ class BrakeSimNode(Node):
                 return SetParametersResult(successful=False, reason=work)
             self._log_step_change("new model parameters")
         self._apply_run_changes(changes, policy)
+        self._record_change(changes)
         if model_changes:
             self._publish_defects()
             pending = sorted(model_changes.keys() & ros_params.INITIAL_CONDITIONS)
@@ -679,23 +686,19 @@ class BrakeSimNode(Node):
             )
             return
         self.stats.commands_accepted += 1
-        self._to_sinks(
-            self._actuation_topic,
-            msg,
-            conversion.stamp_ns(self._stepper.sample_index, self._stepper.sample_period_s),
-        )
         if self._failure or (self._finished and not self._pacer.paused):
             self.stats.commands_dropped += 1  # no physics will run to use it
             return
         forces = (msg.left_force_n, msg.right_force_n)
         if self._planner.command(forces, self._stepper.sample_index):
             self.stats.commands_dropped += 1
+        self._record_command(self._actuation_topic, msg)
 
     def _on_drive(self, msg: DriveCommand) -> None:
         """A drive command: from the next sample on, until the next one or a reset."""
         drive, reason = drive_command(msg.mode, msg.drive_torque_n_m, msg.target_speed_m_s)
         if reason is None:
-            refusal = self._stepper.drive_refusal()
+            refusal = self._stepper.drive_refusal(drive)
             if refusal is not None:
                 reason = f"scenario '{self.scenario.name}': {refusal}"
         if reason is not None:
@@ -706,15 +709,34 @@ class BrakeSimNode(Node):
             )
             return
         self.stats.drive_commands_accepted += 1
-        self._to_sinks(
-            self._drive_topic,
-            msg,
-            conversion.stamp_ns(self._stepper.sample_index, self._stepper.sample_period_s),
-        )
         if self._failure or (self._finished and not self._pacer.paused):
             self.stats.drive_commands_dropped += 1  # no physics will run to use it
             return
         self._stepper.drive(drive)
+        self._record_command(self._drive_topic, msg)
+
+    def _record_change(self, changes: dict) -> None:
+        """Hand an accepted parameter change to the sinks that record changes (a
+        recording: ``parameter_change``), at the sample it takes effect at (the next)."""
+        index = self._stepper.sample_index
+        ns = conversion.stamp_ns(index, self._stepper.sample_period_s)
+        for sink in list(self._sinks):
+            note = getattr(sink, "parameter_change", None)
+            if note is None:
+                continue
+            try:
+                note(changes, index, ns)
+            except Exception as exc:  # a sink's failure must not stop the simulation
+                self._drop_sink(sink, f"{type(exc).__name__}: {exc}")
+
+    def _record_command(self, topic: Topic, msg) -> None:
+        """Hand a command that takes effect to the sinks, stamped with the sample it takes
+        effect at (the next one: the stepper's sample index), so that a recording can be
+        re-simulated (brake-sim resim): a command is applied at that sample and holds
+        until a later one. A command replaced before its sample (two in one chunk) is
+        recorded at the same sample, before the one that replaced it."""
+        ns = conversion.stamp_ns(self._stepper.sample_index, self._stepper.sample_period_s)
+        self._to_sinks(topic, msg, ns)
 
     # -- stepping and publishing --------------------------------------------------------------
     def _on_tick(self) -> None:
@@ -1001,7 +1023,8 @@ class BrakeSimNode(Node):
         if self._publish_measured:
             require_measured(scenario, "publish_measured is on")
         chunk_rate = self._param("chunk_rate_hz")
-        stepper = self._make_stepper(scenario.setup, scenario, chunk_rate)
+        setup = ros_params.with_drive_limits(scenario.setup, self._drive_overrides)
+        stepper = self._make_stepper(setup, scenario, chunk_rate)
         dt = stepper.sample_period_s
         chunk = max(1, round(1.0 / (dt * chunk_rate)))
         stride = max(1, round(1.0 / (dt * self._param("state_rate_hz"))))
@@ -1021,6 +1044,7 @@ class BrakeSimNode(Node):
         values = ros_params.model_values(scenario.setup.params, scenario.setup.defects)
         values["scenario"] = name_or_path
         values["max_actuation_force_n"] = self._max_force_n(scenario.setup)
+        values.update(self._drive_values(setup))
         if not self._duration_explicit:
             values["duration_s"] = scenario.duration_s
         self._set_internal(values)
@@ -1116,16 +1140,3 @@ class BrakeSimNode(Node):
 
     def summary(self) -> str:
         return summary(self.run_view(), self.stats)
-
-
-def _keep_growth(defects: Defects, old: Defects) -> Defects:
-    """``defects`` (rebuilt from the node's parameters, which set final values only) with
-    the onsets and growth laws of ``old`` for the defects still present: a live change of a
-    growing defect's value changes where it grows to, not how."""
-    at = defects.severities()
-    kept = tuple(
-        (kind, loc, law)
-        for kind, loc, law in old.growth
-        if at[label_column(KIND_BY_NAME[kind], loc)] != 0.0
-    )
-    return dataclasses.replace(defects, growth=kept)

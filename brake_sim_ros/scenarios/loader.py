@@ -76,6 +76,7 @@ from brake_sim_ros.model.units import (
     unit_sensors,
     unit_values,
 )
+from brake_sim_ros.model.vehicle import DRIVE_LIMITS as VEHICLE_DRIVE_LIMITS
 from brake_sim_ros.model.vehicle import LIMITS as VEHICLE_LIMITS
 from brake_sim_ros.model.vehicle import LOAD_FACTOR_RANGE, Vehicle
 from brake_sim_ros.scenarios.sensors import parse_sensors
@@ -1032,6 +1033,15 @@ def _parse(data: dict[str, Any], text: str, source: str) -> Scenario:
             "actuation", top["actuation"], "no [actuation] with a [cycle] (the cycle brakes)"
         )
     vehicle = _vehicle(ctx, top.get("vehicle", {})) if "vehicle" in top or cycle else None
+    if cycle is not None:  # the cycle's controller has its own settings
+        for key, _lo, _hi in VEHICLE_DRIVE_LIMITS:
+            if key in top.get("vehicle", {}):
+                raise ctx.fail(
+                    f"vehicle.{key}",
+                    top["vehicle"][key],
+                    f"no [vehicle] {key} with a [cycle] (a live drive's setting; the"
+                    f" cycle's controller takes [cycle] {key})",
+                )
     setup = BrakeSetup(
         params=params,
         defects=defects,

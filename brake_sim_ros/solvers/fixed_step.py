@@ -42,7 +42,7 @@ from brake_sim_ros.model import kernel
 from brake_sim_ros.model import layout as L
 from brake_sim_ros.model.actuation import MAX_ACTUATION_FORCE_N
 from brake_sim_ros.model.assembly import initial_state, pack
-from brake_sim_ros.model.cycle import LiveDrive, pack_drive, pack_live_drive
+from brake_sim_ros.model.cycle import LiveDrive, pack_drive, pack_live_drive, torque_refusal
 from brake_sim_ros.model.thermal import pack_thermal
 from brake_sim_ros.model.trajectory import BrakeSetup, SampleBlock
 from brake_sim_ros.solvers.stability import StepLimit, step_limit
@@ -360,8 +360,9 @@ class FixedStepStepper:
             grown[L.Y_BRAKE_TEMPERATURE] = start
             self._y = grown
 
-    def drive_refusal(self) -> str | None:
-        """Why this run takes no live drive commands, or None when it does."""
+    def drive_refusal(self, command: LiveDrive | None = None) -> str | None:
+        """Why this run takes no live drive commands (or not ``command``: a torque above
+        its vehicle's ``max_drive_torque_n_m``), or None when it does."""
         if self.setup.cycle is not None:
             return (
                 "this run's drive cycle drives the vehicle ([cycle]): allowed only for a"
@@ -372,7 +373,7 @@ class FixedStepStepper:
                 "this run has no vehicle for the drive to act on: allowed only for a scenario"
                 " with a [vehicle] table"
             )
-        return None
+        return None if command is None else torque_refusal(command, self.setup.vehicle)
 
     @property
     def live_drive(self) -> LiveDrive:
@@ -385,9 +386,10 @@ class FixedStepStepper:
         cycle's speed controller, run at every physics step in the compiled stepping).
 
         Raises:
-            ParameterError: a run that takes none (:meth:`drive_refusal`); nothing changes.
+            ParameterError: a run that takes none, or not this command
+                (:meth:`drive_refusal`); nothing changes.
         """
-        refusal = self.drive_refusal()
+        refusal = self.drive_refusal(command)
         if refusal is not None:
             raise ParameterError(f"drive commands: {refusal}")
         self._drive = command
@@ -395,7 +397,7 @@ class FixedStepStepper:
 
     def _pack_live_drive(self) -> None:
         if self.drive_refusal() is None:
-            pack_live_drive(self._p, self._drive)
+            pack_live_drive(self._p, self._drive, self.setup.vehicle)
 
     def _raise_limit_force(self, force_n: float) -> None:
         """Recompute the step limit for a larger actuation force and re-pick the substeps."""

@@ -36,7 +36,7 @@ from typing import Any
 
 from brake_sim_ros.errors import ParameterError
 from brake_sim_ros.model.actuation import MAX_ACTUATION_FORCE_N, NOMINAL_PEAK_ACTUATION_N
-from brake_sim_ros.model.catalogue import DRUM_KIND, KINDS
+from brake_sim_ros.model.catalogue import DRUM_KIND, KIND_BY_NAME, KINDS, label_column
 from brake_sim_ros.model.defects import (
     MAX_FLAT_WIDTH_DEG,
     MAX_PULSATION_HZ,
@@ -47,6 +47,14 @@ from brake_sim_ros.model.defects import (
 from brake_sim_ros.model.layout import SIDES
 from brake_sim_ros.model.parameters import PARAMETER_GROUPS, BrakeParameters, unit_of
 from brake_sim_ros.model.trajectory import BrakeSetup
+from brake_sim_ros.model.vehicle import (
+    DEFAULT_MAX_DRIVE_TORQUE_N_M,
+    DEFAULT_SPEED_TIME_CONSTANT_S,
+    DRIVE_LIMITS,
+    Vehicle,
+)
+
+DRIVE_LIMIT_RANGES = {name: (lo, hi) for name, lo, hi in DRIVE_LIMITS}
 
 DEFAULT_SCENARIO = "symmetric"
 
@@ -233,6 +241,33 @@ def run_parameter_specs() -> list[ParamSpec]:
             "sample). 0 at start-up = 2 x the scenario's peak force. " + fixed,
             (0.0, MAX_ACTUATION_FORCE_N),
         ),
+        *(
+            ParamSpec(
+                name,
+                0.0,
+                f"{what} of a live drive (~/drive; a scenario with a [vehicle] and no "
+                f"[cycle]), {unit}: 0 at start-up = the scenario's [vehicle] {name} "
+                f"(default {default:g}); applies to every scenario ~/reset loads. " + fixed,
+                (0.0, hi),
+            )
+            for name, what, unit, default, hi in (
+                (
+                    "max_drive_torque_n_m",
+                    "Largest drive torque on the flywheel (a larger torque command is "
+                    "refused; the speed controller is clamped to it)",
+                    "N m",
+                    DEFAULT_MAX_DRIVE_TORQUE_N_M,
+                    DRIVE_LIMIT_RANGES["max_drive_torque_n_m"][1],
+                ),
+                (
+                    "speed_time_constant_s",
+                    "Time constant of the speed controller's approach to a target speed",
+                    "s",
+                    DEFAULT_SPEED_TIME_CONSTANT_S,
+                    DRIVE_LIMIT_RANGES["speed_time_constant_s"][1],
+                ),
+            )
+        ),
         ParamSpec(
             "command_timeout_s",
             0.2,
@@ -262,6 +297,8 @@ FIXED_AT_START = frozenset(
         "scenario_dirs",
         "exit_at_end",
         "max_actuation_force_n",
+        "max_drive_torque_n_m",
+        "speed_time_constant_s",
         "run_id",
         "unit_id",
         "publish_measured",
@@ -417,3 +454,65 @@ def auto_max_actuation_force(setup: BrakeSetup) -> float:
     peak = max(setup.actuation.left.peak_n, setup.actuation.right.peak_n)
     base = peak if peak > 0 else NOMINAL_PEAK_ACTUATION_N
     return min(2.0 * base, MAX_ACTUATION_FORCE_N)
+
+
+# -- a live drive's settings --------------------------------------------------------------------
+DRIVE_LIMIT_NAMES = tuple(DRIVE_LIMIT_RANGES)
+
+
+def with_drive_limits(setup: BrakeSetup, overrides: dict[str, float]) -> BrakeSetup:
+    """``setup`` with its vehicle's live-drive settings (``max_drive_torque_n_m`` N m,
+    ``speed_time_constant_s`` s) replaced by ``overrides`` where they are > 0 (0: the
+    scenario's); unchanged for a run that takes no live drive (no vehicle, or a cycle,
+    whose controller has its own settings), but the values are checked all the same.
+
+    Raises:
+        ParameterError: a value outside the vehicle's limits (``vehicle.DRIVE_LIMITS``),
+            named with what is allowed.
+    """
+    given = {k: float(v) for k, v in overrides.items() if v != 0.0}
+    unknown = set(given) - set(DRIVE_LIMIT_NAMES)
+    if unknown:
+        raise ParameterError(f"drive settings {sorted(unknown)}: allowed {DRIVE_LIMIT_NAMES}")
+    Vehicle(**given)  # checked whether this run uses them or not (a later ~/reset may)
+    if not given or setup.vehicle is None or setup.cycle is not None:
+        return setup
+    return dataclasses.replace(setup, vehicle=dataclasses.replace(setup.vehicle, **given))
+
+
+def node_setup(
+    setup: BrakeSetup, values: dict[str, Any], drive_overrides: dict[str, float]
+) -> BrakeSetup:
+    """The setup a node steps for a scenario's ``setup``: its model from the flat ROS
+    ``values`` (every model field: the node's parameters, the scenario's with any
+    overrides; :func:`changed_setup`: the scenario's drum harmonics and growth laws kept)
+    and its live drive's settings from ``drive_overrides`` (:func:`with_drive_limits`).
+    The node at start and ``brake-sim resim`` of its recording build it here, so they
+    step the same.
+
+    Raises:
+        ParameterError: from the core, one line, for an invalid value or combination.
+    """
+    return with_drive_limits(changed_setup(setup, values), drive_overrides)
+
+
+def changed_setup(setup: BrakeSetup, values: dict[str, Any]) -> BrakeSetup:
+    """``setup`` with the model of the flat ROS ``values`` (every model field: the
+    parameters after a run-time change): its drum harmonics, vehicle, cycle and the
+    onsets and growth laws of its defects still present are kept (the parameters set
+    final values only, so a live change of a growing defect changes where it grows to,
+    not how). The node's rule for a change while it runs, and ``brake-sim resim``'s for
+    a recorded one.
+
+    Raises:
+        ParameterError: from the core, one line, for an invalid value or combination.
+    """
+    params, defects = build_model(values, drum=setup.defects.drum)
+    at = defects.severities()
+    kept = tuple(
+        (kind, loc, law)
+        for kind, loc, law in setup.defects.growth
+        if at[label_column(KIND_BY_NAME[kind], loc)] != 0.0
+    )
+    defects = dataclasses.replace(defects, growth=kept)
+    return dataclasses.replace(setup, params=params, defects=defects)

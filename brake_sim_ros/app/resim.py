@@ -1,0 +1,646 @@
+"""``brake-sim resim REC.mcap --out NEW.mcap``: re-simulate a recorded run offline.
+
+A recording of a live node (``brake-sim node --record``, ``brake-sim live``) holds what the
+run was made of: the scenario file's text, the unit and seed, the model as the node's
+parameters had it, the run settings, the node's parameters, every command that took
+effect (``~/actuation``, ``~/drive``), each at the log time of the sample it took effect
+at (:meth:`brake_sim_ros.ros.node.BrakeSimNode._record_command`), and every parameter
+change the node accepted while it ran (``brake_sim_parameter_change`` records, at their
+samples). :func:`resimulate` rebuilds the run from the recording alone (no other file is
+read), steps it offline with the same commands and changes at the same samples through
+the node's own rules (the command timeout of
+:class:`~brake_sim_ros.ros.commands.ActuationPlanner`, the stepper's live drive,
+:func:`~brake_sim_ros.stream.parameters.changed_setup`), cut into the recording's own
+chunks, and writes the node's stream (minus /diagnostics) to a new MCAP file with the same
+metadata (``brake_sim_run`` mode ``resim``). With the same preset, the samples equal the
+recording's bit for bit; the recorded samples are compared as they are re-simulated and
+the result says where they first differ, if they do.
+
+What it refuses, in one line, leaving nothing written: a file the checked reader
+refuses (missing, not MCAP, damaged: :func:`~brake_sim_ros.recording.reader.
+open_recording`), a recording without the simulator's metadata, one of several runs (a
+``~/reset``), a command not stamped at a sample, a parameter change it does not
+re-simulate, a scenario or model the core refuses.
+The output follows :mod:`brake_sim_ros.recording.output` (never an input, never through a
+link, written whole or not at all).
+"""
+
+from __future__ import annotations
+
+import ast
+import os
+import time
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+from fractions import Fraction
+from typing import Any
+
+import numpy as np
+
+from brake_sim_ros import stream
+from brake_sim_ros.analysis.contact_events import ContactEventDetector
+from brake_sim_ros.errors import BrakeSimError
+from brake_sim_ros.model.trajectory import SampleBlock
+from brake_sim_ros.recording import cdr, metadata
+from brake_sim_ros.recording.output import atomic_output, check_outputs
+from brake_sim_ros.recording.reader import Recording, open_recording
+from brake_sim_ros.recording.records import describe_path
+from brake_sim_ros.recording.writer import McapRecorder, RecordingOptions
+from brake_sim_ros.ros.commands import (
+    ActuationPlanner,
+    CommandPolicy,
+    TimeoutBehaviour,
+    drive_command,
+)
+from brake_sim_ros.scenarios import Scenario
+from brake_sim_ros.scenarios.loader import parse_scenario
+from brake_sim_ros.solvers.fixed_step import FixedStepStepper
+from brake_sim_ros.stream import Topic, conversion
+from brake_sim_ros.stream import parameters as ros_params
+from brake_sim_ros.stream.build import require_measured, sensor_bank_for, stepper_for
+from brake_sim_ros.stream.ground_truth import TruthUpdates, recorded_wear, state_wear
+
+_PIVOT = stream.PIVOT_FORCES.type_name
+_ACTUATION = stream.ACTUATION.type_name
+_DRIVE = stream.DRIVE.type_name
+_DEFECTS = stream.DEFECTS.type_name
+_NEEDED = (metadata.SCENARIO, metadata.UNIT, metadata.RUN, metadata.MODEL)
+
+
+class ResimError(BrakeSimError, ValueError):
+    """A recording that cannot be re-simulated (one line: the file, what, what is allowed)."""
+
+
+@dataclass(frozen=True)
+class RecordedCommand:
+    """A command that took effect: at ``sample`` (the first sample it holds for), the
+    decoded ``msg`` on ``topic`` as recorded, ``log_time_ns`` its stamp."""
+
+    sample: int
+    topic: Topic
+    msg: Any
+    log_time_ns: int
+
+
+@dataclass(frozen=True)
+class RecordedChange:
+    """Parameters the node accepted while it ran: from ``sample`` on, ``values`` (new
+    values by parameter name)."""
+
+    sample: int
+    values: dict[str, Any]
+
+
+@dataclass
+class RecordedRun:
+    """A recorded run, rebuilt from its recording (:func:`read_run`).
+
+    Attributes:
+        scenario: the scenario from the recorded text, as the recorded unit and seed.
+        setup_values: the recorded model (flat ROS values), for a live run.
+        drive_limits: the live drive's settings in force (``brake_sim_run``), or {}.
+        run: the ``brake_sim_run`` record; ``records``: the scenario, unit, run, model
+            and (live) ROS parameter records, as read.
+        policy: the command timeout policy (the node's parameters at the start).
+        chunks: ``(first sample, samples)`` of every recorded PivotForceChunk, in order,
+            contiguous from sample 0.
+        commands: the recorded commands in log-time order (file order within a time).
+        changes: the parameter changes recorded (``brake_sim_parameter_change``), in order.
+        pivot_topic: the recorded PivotForceChunk topic (its name as recorded).
+        name: the recording's file name, for messages.
+        mode: how the run was made: ``live`` (a node: its model from its parameters) or
+            ``offline`` (the scenario's own setup); a re-simulation's is its source's.
+    """
+
+    scenario: Scenario
+    setup_values: dict[str, Any] | None
+    drive_limits: dict[str, float]
+    run: dict[str, str]
+    records: dict[str, dict[str, str]]
+    policy: CommandPolicy
+    chunks: list[tuple[int, int]] = field(default_factory=list)
+    commands: list[RecordedCommand] = field(default_factory=list)
+    changes: list[RecordedChange] = field(default_factory=list)
+    pivot_topic: str = stream.PIVOT_FORCES.name
+    name: str = "recording"
+    mode: str = "live"
+
+    @property
+    def samples(self) -> int:
+        first, n = self.chunks[-1]
+        return first + n
+
+
+def _literal(value: str, where: str) -> Any:
+    try:
+        return ast.literal_eval(value)
+    except (ValueError, SyntaxError, TypeError, MemoryError, RecursionError):
+        raise ResimError(f"{where} = {value[:60]!r}: allowed a Python literal") from None
+
+
+def _run_value(run: dict[str, str], key: str, name: str, kinds: tuple[type, ...]) -> Any:
+    if key not in run:
+        raise ResimError(f"{name}: its {metadata.RUN} record has no {key!r}")
+    value = _literal(run[key], f"{name}: {metadata.RUN} {key}")
+    if isinstance(value, bool) != (bool in kinds) or not isinstance(value, kinds):
+        raise ResimError(f"{name}: {metadata.RUN} {key} = {run[key][:60]!r}: not a {kinds[0]}")
+    return value
+
+
+def _policy(parameters: dict[str, str] | None, name: str) -> CommandPolicy:
+    """The node's command timeout policy at the start (its defaults for an offline run)."""
+    if parameters is None:
+        return CommandPolicy()
+    values = {}
+    for key in ("command_timeout_s", "on_command_timeout", "command_ramp_rate_n_per_s"):
+        if key not in parameters:
+            raise ResimError(f"{name}: its {metadata.ROS_PARAMETERS} record has no {key!r}")
+        values[key] = _literal(parameters[key], f"{name}: parameter {key}")
+    try:
+        return _command_policy(values)
+    except ValueError as exc:
+        raise ResimError(f"{name}: recorded {exc}") from None
+
+
+def _command_policy(values: dict[str, Any]) -> CommandPolicy:
+    """The command timeout policy of the node's parameter values (by name, as recorded).
+
+    Raises:
+        ValueError: a value of the wrong type, or one the policy refuses (one line).
+    """
+    for key in ("command_timeout_s", "command_ramp_rate_n_per_s"):
+        value = values[key]
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            raise ValueError(f"{key}={value!r}: allowed a number")
+    return CommandPolicy(
+        timeout_s=float(values["command_timeout_s"]),
+        behaviour=TimeoutBehaviour.parse(str(values["on_command_timeout"])),
+        ramp_rate_n_per_s=float(values["command_ramp_rate_n_per_s"]),
+    )
+
+
+def _scenario(records: dict[str, dict[str, str]], name: str) -> Scenario:
+    """The recorded scenario text, parsed, as the recorded unit and seed."""
+    recorded = records[metadata.SCENARIO]
+    text = recorded.get("toml")
+    if text is None:
+        raise ResimError(f"{name}: its {metadata.SCENARIO} record has no scenario text ('toml')")
+    source = f"{name} (recorded scenario {recorded.get('source', '?')[:80]})"
+    scenario = parse_scenario(text, source)
+    if recorded.get("sha256", scenario.digest) != scenario.digest:
+        raise ResimError(f"{name}: the recorded scenario text does not match its sha256")
+    unit = records[metadata.UNIT]
+    unit_id = unit.get("unit_id", scenario.unit_id)
+    seed = _literal(unit.get("seed", repr(scenario.seed)), f"{name}: {metadata.UNIT} seed")
+    fleet = _literal(
+        unit.get("fleet_seed", repr(scenario.fleet_seed)), f"{name}: {metadata.UNIT} fleet_seed"
+    )
+    if (unit_id, seed, fleet) != (scenario.unit_id, scenario.seed, scenario.fleet_seed):
+        scenario = scenario.with_unit(unit_id, seed=seed, fleet_seed=fleet)
+    return scenario
+
+
+def _sample_of(ns: int, rate: Fraction, period_s: float, where: str) -> int:
+    """The sample index whose stamp is ``ns`` (ResimError if none is)."""
+    sample = round(Fraction(ns) * rate / 1_000_000_000)
+    if sample < 0 or conversion.stamp_ns(sample, period_s) != ns:
+        raise ResimError(f"{where}: log time {ns} ns is no sample's time: allowed a sample's")
+    return sample
+
+
+def read_run(recording: Recording) -> RecordedRun:
+    """Everything :func:`resimulate` needs from a checked recording.
+
+    Raises:
+        ResimError: what the module doc lists (one line naming the file).
+        ScenarioError, ParameterError: the recorded scenario or unit refused by the core.
+    """
+    name = recording.name
+    records = {}
+    for record_name in (*_NEEDED, metadata.ROS_PARAMETERS):
+        record = recording.metadata_record(record_name)
+        if record is not None:
+            records[record_name] = record
+    missing = [r for r in _NEEDED if r not in records]
+    if missing:
+        raise ResimError(
+            f"{name}: no {', '.join(missing)} metadata: allowed a recording brake-sim made"
+            " (brake-sim node --record, brake-sim live, brake-sim simulate --mcap)"
+        )
+    run = records[metadata.RUN]
+    mode = run.get("mode")
+    if mode == "resim":  # a re-simulation re-simulates as the run it came from
+        mode = run.get("recorded_mode")
+    if mode not in ("live", "offline"):
+        raise ResimError(
+            f"{name}: {metadata.RUN} mode {str(mode)[:20]!r}: allowed live, offline, resim"
+        )
+    scenario = _scenario(records, name)
+    period = scenario.sample_period_s
+    if _run_value(run, "sample_period_s", name, (float,)) != period:
+        raise ResimError(f"{name}: the recorded sample period differs from its scenario's")
+    run_id = run.get("run_id", "")
+    drive_limits = {
+        key: float(_run_value(run, key, name, (float, int)))
+        for key in ros_params.DRIVE_LIMIT_NAMES
+        if key in run
+    }
+    setup_values = None
+    if mode == "live":  # the node's model: its parameters at the start
+        setup_values = {
+            k: _literal(v, f"{name}: {metadata.MODEL} {k}")
+            for k, v in records[metadata.MODEL].items()
+        }
+    out = RecordedRun(
+        scenario=scenario,
+        setup_values=setup_values,
+        drive_limits=drive_limits,
+        run=run,
+        records=records,
+        policy=_policy(records.get(metadata.ROS_PARAMETERS), name),
+        name=name,
+        mode=mode,
+    )
+    rate = Fraction(conversion.sample_rate_hz(period))
+    channels = recording.channels.values()
+    pivot_topics = {c.topic.name for c in channels if c.topic.type_name == _PIVOT}
+    if len(pivot_topics) != 1:
+        raise ResimError(
+            f"{name}: {len(pivot_topics)} PivotForceChunk topics: allowed the recording of"
+            " one node (one topic)"
+        )
+    out.pivot_topic = pivot_topics.pop()
+    decoders = {t: cdr.decoder(t) for t in (_PIVOT, _ACTUATION, _DRIVE, _DEFECTS)}
+    wanted = {
+        c.topic.name
+        for c in recording.channels.values()
+        if c.topic.type_name in decoders and c.topic.type_name != _PIVOT
+    } | {out.pivot_topic}
+    next_sample = 0
+    for message in recording.messages(topics=wanted):
+        type_name = message.topic.type_name
+        msg = decoders[type_name](message.data)
+        where = f"{name}: {message.topic.name} message {message.index}"
+        if type_name == _PIVOT:
+            first, n = int(msg.first_sample_index), len(msg.left_fx_n)
+            if first != next_sample:
+                raise ResimError(
+                    f"{where}: samples from {first} where {next_sample} was next (a ~/reset or"
+                    " a gap): allowed one run recorded from its first sample to its last"
+                )
+            out.chunks.append((first, n))
+            next_sample = first + n
+        elif type_name == _DEFECTS:
+            if msg.run_id != run_id:
+                raise ResimError(
+                    f"{where}: run {msg.run_id[:64]!r} after run {run_id[:64]!r} (a ~/reset):"
+                    " allowed a recording of one run"
+                )
+        else:
+            sample = _sample_of(message.log_time_ns, rate, period, where)
+            out.commands.append(RecordedCommand(sample, message.topic, msg, message.log_time_ns))
+    if not out.chunks:
+        raise ResimError(f"{name}: no samples recorded: nothing to re-simulate")
+    for record_name, record in recording.metadata:
+        if record_name != metadata.PARAMETER_CHANGE:
+            continue
+        where = f"{name}: {metadata.PARAMETER_CHANGE}"
+        values = {k: _literal(v, f"{where} {k[:64]}") for k, v in record.items()}
+        sample = values.pop("sample_index", None)
+        if isinstance(sample, bool) or not isinstance(sample, int) or sample < 0:
+            raise ResimError(f"{where}: sample_index {sample!r}: allowed a sample index >= 0")
+        out.changes.append(RecordedChange(sample, values))
+    return out
+
+
+@dataclass
+class Comparison:
+    """The re-simulated samples against the recorded ones (pivot forces, every sample)."""
+
+    samples: int = 0
+    first_difference: int | None = None
+    column: str = ""
+
+    def describe(self) -> str:
+        if self.first_difference is None:
+            return f"{self.samples} samples equal to the recording's, bit for bit"
+        return (
+            f"samples differ from the recording's from sample {self.first_difference}"
+            f" ({self.column}): another preset or model, a recording made before parameter"
+            " changes were recorded, or another software version"
+        )
+
+    def check(self, recorded: Any, block: SampleBlock) -> None:
+        """Compare one recorded PivotForceChunk with the block re-simulated for it."""
+        self.samples += len(block)
+        if self.first_difference is not None:
+            return
+        ours = conversion.pivot_force_chunk(block)
+        for column in conversion.PIVOT_CHUNK_ARRAYS:
+            a = np.asarray(getattr(recorded, column), dtype=float)
+            b = np.asarray(getattr(ours, column), dtype=float)
+            n = min(len(a), len(b))
+            # bits, not values: -0.0 against 0.0, or one NaN against another, is a difference
+            differ = np.flatnonzero(a[:n].view(np.int64) != b[:n].view(np.int64))
+            if len(a) != len(b) or len(differ):
+                at = int(differ[0]) if len(differ) else n
+                self.first_difference = block.first_index + at
+                self.column = column
+                return
+
+
+@dataclass
+class Resimulation:
+    """What :func:`resimulate` wrote and found."""
+
+    path: str
+    messages: int
+    commands: int
+    comparison: Comparison
+    cpu_s: float
+    sim_s: float
+
+    def describe(self) -> str:
+        return (
+            f"re-simulated {self.sim_s:g} s with {self.commands} recorded commands in"
+            f" {self.cpu_s:.2f} s CPU: {self.path} ({self.messages} messages);"
+            f" {self.comparison.describe()}"
+        )
+
+
+def _stepper(run: RecordedRun, scenario: Scenario) -> FixedStepStepper:
+    setup = scenario.setup
+    if run.setup_values is not None:
+        setup = ros_params.node_setup(setup, run.setup_values, run.drive_limits)
+    else:
+        setup = ros_params.with_drive_limits(setup, run.drive_limits)
+    stepper = stepper_for(scenario, setup=setup)
+    stepper.advance(0)  # as the node's (loads the compiled kernel)
+    return stepper
+
+
+# parameters whose change leaves the samples and the stream as they were (pacing, the
+# end of the run, the chunking: resim cuts the recording's own chunks)
+_NEUTRAL = frozenset(
+    {"paused", "real_time_factor", "diagnostics_period_s", "chunk_rate_hz", "duration_s",
+     "continuous"}
+)  # fmt: skip
+_POLICY = ("command_timeout_s", "on_command_timeout", "command_ramp_rate_n_per_s")
+
+
+class _Replay:
+    """The node's run state re-simulated: the stepper, the command planner and the
+    settings changed while the node ran, each event applied as the node applied it."""
+
+    def __init__(self, run: RecordedRun, scenario: Scenario, stepper: FixedStepStepper) -> None:
+        self.run, self.scenario, self.stepper = run, scenario, stepper
+        self.period = stepper.sample_period_s
+        self.run_id = run.run.get("run_id", "")
+        defects = stepper.setup.defects
+        self.angles = (defects.left.initial_angle_deg, defects.right.initial_angle_deg)
+        self.publish_clock = bool(_run_value(run.run, "publish_clock", run.name, (bool,)))
+        self.stride = stream.samples_per(
+            float(_run_value(run.run, "state_rate_hz", run.name, (float, int))), self.period
+        )
+        self.policy = {
+            "command_timeout_s": run.policy.timeout_s,
+            "on_command_timeout": run.policy.behaviour.value,
+            "command_ramp_rate_n_per_s": run.policy.ramp_rate_n_per_s,
+        }
+        self.planner = ActuationPlanner(self.period, run.policy)
+        self.model = dict(run.setup_values or {})
+        self.updates = TruthUpdates(defects)
+
+    def truth(self, index: int, wear_m: dict[str, float] | None = None) -> tuple:
+        """The ground truth at ``index`` (DefectState), as the node publishes it."""
+        if wear_m is None:
+            wear_m = state_wear(self.stepper.state)
+        msg = conversion.defect_state(
+            scenario=self.scenario.name,
+            defects=self.stepper.setup.defects,
+            initial_angles_deg=self.angles,
+            ns=conversion.stamp_ns(index, self.period),
+            run_id=self.run_id,
+            seed=self.scenario.seed,
+            unit_id=self.scenario.unit_id,
+            time_s=index * self.period,
+            wear_m=wear_m,
+        )
+        return stream.DEFECTS, msg, conversion.stamp_ns(index, self.period)
+
+    def apply(self, event: RecordedCommand | RecordedChange) -> Iterator[tuple]:
+        """Apply one recorded event from its sample on; the messages it makes."""
+        try:
+            if isinstance(event, RecordedChange):
+                yield from self._change(event)
+            else:
+                yield self._command(event)
+        except ResimError:
+            raise
+        except (BrakeSimError, ValueError, TypeError, ArithmeticError) as exc:
+            raise ResimError(f"{self.run.name}: at sample {event.sample}: {exc}") from None
+
+    def _command(self, command: RecordedCommand) -> tuple:
+        msg = command.msg
+        if command.topic.type_name == _ACTUATION:
+            forces = (float(msg.left_force_n), float(msg.right_force_n))
+            self.planner.command(forces, command.sample)
+            topic = stream.ACTUATION
+        else:
+            drive, reason = drive_command(msg.mode, msg.drive_torque_n_m, msg.target_speed_m_s)
+            if drive is None:
+                raise ValueError(f"recorded drive command refused: {reason}")
+            self.stepper.drive(drive)
+            topic = stream.DRIVE
+        return topic, msg, command.log_time_ns  # the decoded message encodes as it was
+
+    def _change(self, change: RecordedChange) -> Iterator[tuple]:
+        model = {}
+        for name, value in change.values.items():
+            if name in _NEUTRAL:
+                continue
+            if name in _POLICY:
+                self.policy[name] = value
+            elif name == "state_rate_hz":
+                self.stride = stream.samples_per(float(value), self.period)
+            elif name == "publish_clock":
+                self.publish_clock = bool(value)
+            elif name in self.model:
+                model[name] = value
+            else:
+                raise ResimError(
+                    f"{self.run.name}: parameter {name[:64]!r} set at sample {change.sample}:"
+                    " not re-simulated (allowed: the model's, the command timeout's, the"
+                    " stream's and the pacing's)"
+                )
+        self.planner.policy = _command_policy(self.policy)
+        if model:
+            self.model.update(model)
+            setup = ros_params.changed_setup(self.stepper.setup, self.model)
+            self.stepper.replace_setup(setup)
+            message = self.truth(self.stepper.sample_index)
+            self.updates.published(
+                setup.defects,
+                self.stepper.sample_index * self.period,
+                state_wear(self.stepper.state),
+            )
+            yield message
+
+
+def _messages(
+    run: RecordedRun,
+    scenario: Scenario,
+    stepper: FixedStepStepper,
+    *,
+    publish_measured: bool,
+    recorded_chunks: Iterator[Any],
+    comparison: Comparison,
+) -> Iterator[tuple[Topic, Any, int]]:
+    """The node's stream for ``run``: its commands and parameter changes applied at their
+    samples, the samples cut into the recording's chunks."""
+    replay = _Replay(run, scenario, stepper)
+    period = replay.period
+    yield replay.truth(0)
+    replay.updates.published(stepper.setup.defects, 0.0, state_wear(stepper.state))
+    if replay.publish_clock:
+        yield stream.CLOCK, conversion.clock(0), 0
+    measured = None
+    if publish_measured:
+        rate = float(_run_value(run.run, "measured_rate_hz", run.name, (float, int)))
+        bank = sensor_bank_for(scenario, seed=scenario.seed)
+        measured = stream.MeasuredStream(bank, stream.samples_per(rate, period))
+    detector = ContactEventDetector()
+    events: list[RecordedCommand | RecordedChange] = sorted(
+        [*run.commands, *run.changes], key=lambda e: e.sample
+    )
+    k = 0
+    for first, n in run.chunks:
+        end = first + n
+        blocks = []
+        while stepper.sample_index < end:
+            at = stepper.sample_index
+            while k < len(events) and events[k].sample <= at:
+                yield from replay.apply(events[k])
+                k += 1
+            stop = events[k].sample if k < len(events) else end
+            count = min(stop, end) - at
+            for steps, forces in replay.planner.segments(at, count):
+                blocks.append(stepper.advance(steps, actuation_n=forces))
+        block = blocks[0] if len(blocks) == 1 else SampleBlock.concatenate(blocks)
+        if len(block) != n or not conversion.all_finite(block):
+            raise ResimError(f"non-finite or missing samples between samples {first} and {end}")
+        comparison.check(next(recorded_chunks), block)
+        for row in replay.updates.due_rows(block.time_s, recorded_wear(block)):
+            yield replay.truth(block.first_index + row, recorded_wear(block, row))
+        yield from stream.block_messages(
+            block,
+            replay.stride,
+            with_clock=replay.publish_clock,
+            contact_events=detector,
+            run_id=replay.run_id,
+            measured=measured,
+        )
+    for event in events[k:]:  # after the last sample: recorded, nothing to step
+        yield from replay.apply(event)
+    if measured is not None:
+        yield from measured.flush()
+
+
+def resimulate(
+    source: str | os.PathLike[str],
+    out: str | os.PathLike[str],
+    *,
+    preset: str | None = None,
+    measured: bool | None = None,
+    overwrite: bool = False,
+    compression: str = "zstd",
+) -> Resimulation:
+    """Re-simulate the run recorded in ``source`` into the new MCAP file ``out``.
+
+    Args:
+        preset: another solver preset (None: the recorded scenario's).
+        measured: run the scenario's sensors and record ~/measured (None: as the run did).
+        overwrite: replace an existing ``out`` (never an input, never a link).
+
+    Raises:
+        BrakeSimError: one line, nothing written (OutputError, RecordingReadError,
+            ResimError, ScenarioError, ...).
+    """
+    check_outputs([("--out", out, {".mcap": ""})], inputs=[source], overwrite=overwrite)
+    cpu0 = time.process_time()
+    with open_recording(source) as recording:
+        run = read_run(recording)
+        scenario = run.scenario
+        if preset is not None:
+            scenario = scenario.with_solver(preset=preset)
+        publish_measured = (
+            bool(_run_value(run.run, "publish_measured", recording.name, (bool,)))
+            if measured is None
+            else measured
+        )
+        if publish_measured:
+            require_measured(scenario, "--measured")
+        stepper = _stepper(run, scenario)
+        records = dict(run.records)
+        records[metadata.RUN] = metadata.run_record(
+            mode="resim",
+            run_id=run.run.get("run_id", ""),
+            seed=scenario.seed,
+            scenario=scenario,
+            stepper=stepper,
+            duration_s=run.samples * stepper.sample_period_s,
+            chunk_rate_hz=float(_run_value(run.run, "chunk_rate_hz", recording.name, (float,))),
+            state_rate_hz=float(_run_value(run.run, "state_rate_hz", recording.name, (float,))),
+            publish_clock=bool(_run_value(run.run, "publish_clock", recording.name, (bool,))),
+            publish_measured=publish_measured,
+            measured_rate_hz=float(
+                _run_value(run.run, "measured_rate_hz", recording.name, (float,))
+            ),
+            extra={"resimulated_from": describe_path(source), "recorded_mode": run.mode},
+        )
+        custom = {
+            "brake_sim_run_id": run.run.get("run_id", ""),
+            "brake_sim_scenario": scenario.name,
+            "brake_sim_unit_id": scenario.unit_id,
+            "brake_sim_seed": str(scenario.seed),
+            "brake_sim_mode": "resim",
+            "brake_sim_version": metadata.software_version(),
+        }
+        decode = cdr.decoder(_PIVOT)
+        recorded_chunks = (decode(m.data) for m in recording.messages(topics=[run.pivot_topic]))
+        comparison = Comparison()
+        with atomic_output(
+            out, inputs=[source], overwrite=overwrite, suffix=".mcap", option="--out"
+        ) as partial:
+            recorder = McapRecorder(
+                partial,
+                records=records,
+                options=RecordingOptions(compression=compression, durable=False),
+                custom_data=custom,
+            )
+            try:
+                for change in run.changes:  # for a re-simulation of this one
+                    recorder.parameter_change(
+                        change.values,
+                        change.sample,
+                        conversion.stamp_ns(change.sample, stepper.sample_period_s),
+                    )
+                for topic, msg, ns in _messages(
+                    run,
+                    scenario,
+                    stepper,
+                    publish_measured=publish_measured,
+                    recorded_chunks=recorded_chunks,
+                    comparison=comparison,
+                ):
+                    recorder.write(topic, msg, ns)
+            finally:
+                recorder.close()
+    return Resimulation(
+        path=str(out),
+        messages=recorder.stats.messages,
+        commands=len(run.commands),
+        comparison=comparison,
+        cpu_s=time.process_time() - cpu0,
+        sim_s=run.samples * stepper.sample_period_s,
+    )
