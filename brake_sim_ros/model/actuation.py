@@ -12,9 +12,10 @@ import numpy as np
 from numba import njit
 
 from brake_sim_ros.errors import ParameterError
+from brake_sim_ros.model.compiled import JIT
 
 
-@njit(cache=True, inline="always")
+@njit(inline="always", **JIT)
 def pwl(t, ts, fs):
     """Piecewise-linear interpolation, held constant outside the knots."""
     n = ts.shape[0]
@@ -34,7 +35,7 @@ def pwl(t, ts, fs):
     return fs[lo] + w * (fs[hi] - fs[lo])
 
 
-@njit(cache=True)
+@njit(**JIT)
 def shoe_gain(share, change_pct):
     """Multiplier on a shoe's commanded force: ``2 share (1 + change_pct / 100)`` (its
     share of the total, and a pressure loss, negative, or gain at its wheel cylinder)."""
@@ -51,7 +52,7 @@ RESIDUAL_FORCE_N = 20.0
 RETURN_SPRING_PRELOAD_N = 60.0
 
 
-@njit(cache=True, inline="always")
+@njit(inline="always", **JIT)
 def spring_release(force, released, margin):
     """Actuation force at the tip (N) when the return spring has lost ``released`` N of its
     preload, for the healthy model's net force ``force`` (N): off its stop (``force > 0``)
@@ -63,7 +64,7 @@ def spring_release(force, released, margin):
     return released - margin if released > margin else 0.0
 
 
-@njit(cache=True)
+@njit(**JIT)
 def shaped(t, ts, fs, delay_s, lag_s, amplitude, frequency_hz):
     """The force a shoe's wheel cylinder delivers at ``t`` (s) for the commanded
     piecewise-linear history (knots ``ts`` s, ``fs`` N), before the gain.

@@ -39,6 +39,7 @@ import numpy as np
 from numba import njit
 
 from brake_sim_ros.errors import ParameterError
+from brake_sim_ros.model.compiled import JIT
 from brake_sim_ros.model.layout import SIDES
 
 # how a severity evolves after its onset; the index is the law's id in the compiled model
@@ -66,7 +67,7 @@ MAX_WEAR_RATE_MM_PER_MJ = 1000.0
 MAX_GROWTH_TIME_S = 86_400.0
 
 
-@njit(cache=True)
+@njit(**JIT)
 def severity_at(t, law, onset_s, rate, start, final):
     """Severity at simulated time ``t`` (s) of a defect of final severity ``final``.
 
@@ -99,7 +100,7 @@ def severity_at(t, law, onset_s, rate, start, final):
     return final
 
 
-@njit(cache=True)
+@njit(**JIT)
 def severity_series(times, law, onset_s, rate, start, final):
     """:func:`severity_at` at each of ``times`` (s, shape (n,)), in the kind's unit."""
     out = np.empty(times.shape[0])

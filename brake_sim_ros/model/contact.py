@@ -32,6 +32,7 @@ import math
 from numba import njit
 
 from brake_sim_ros.model import layout as L
+from brake_sim_ros.model.compiled import JIT
 
 # shoe_eval result slots (named so that callers never write a bare index)
 E_THETA_DDOT = 0  # shoe angular acceleration, rad/s^2 (positive outward)
@@ -51,7 +52,7 @@ E_ACTUATION_POWER = 13  # W, supplied by the actuator
 N_EVAL = 14
 
 
-@njit(cache=True, inline="always")
+@njit(inline="always", **JIT)
 def contact_point(p, base, c, sn):
     """Lining point farthest from the drum centre for a shoe turned by phi (cos c, sin sn).
 
@@ -95,7 +96,7 @@ def contact_point(p, base, c, sn):
     return xx, xy, dist, xx / dist, xy / dist, (xx * (xx - px) + xy * (xy - py)) / (dist * dist)
 
 
-@njit(cache=True, inline="always")
+@njit(inline="always", **JIT)
 def drum_radius(p, psi):
     """Radius of the drum at the angle ``psi`` of its own frame (rad) and its slope.
 
@@ -127,7 +128,7 @@ def drum_radius(p, psi):
     return r, slope
 
 
-@njit(cache=True, inline="always")
+@njit(inline="always", **JIT)
 def kinematics(p, base, theta, omega, drum_angle, drum_speed):
     """Contact kinematics of a shoe at angle ``theta`` (rad) turning at ``omega`` (rad/s)
     against a drum at ``drum_angle`` (rad) turning at ``drum_speed`` (rad/s, about +z).
@@ -175,7 +176,7 @@ def kinematics(p, base, theta, omega, drum_angle, drum_speed):
     )
 
 
-@njit(cache=True)
+@njit(**JIT)
 def _out_of_round(p, px, py, xx, xy, dist, nx, ny, turn, vx, vy, w, c, sn, drum_angle, drum_speed):
     """:func:`kinematics` on an out-of-round drum (harmonics, a flat), from the lining point
     ``X`` = (``xx``, ``xy``) at ``dist`` from the centre, its radial unit vector
@@ -205,7 +206,7 @@ def _out_of_round(p, px, py, xx, xy, dist, nx, ny, turn, vx, vy, w, c, sn, drum_
     return eps, eps_dot, vt, xx, xy, dist / norm, gx / norm, gy / norm, c, sn, qx, qy, r_slope
 
 
-@njit(cache=True, inline="always")
+@njit(inline="always", **JIT)
 def normal_force(p, base, eps, eps_dot, mode):
     """Kelvin-Voigt normal force, N: on while ``eps > 0`` (``CONTACT_AUTO``) or as forced by
     ``mode``; never negative; zero for a shoe removed from the model."""
@@ -216,7 +217,7 @@ def normal_force(p, base, eps, eps_dot, mode):
     return fn if fn > 0.0 else 0.0
 
 
-@njit(cache=True, inline="always")
+@njit(inline="always", **JIT)
 def switching_function(p, base, theta, omega, drum_angle, drum_speed):
     """Indentation ``eps`` and switching function ``h`` of one shoe, both in m (shoe and
     drum angles and speeds as for :func:`kinematics`).
@@ -233,7 +234,7 @@ def switching_function(p, base, theta, omega, drum_angle, drum_speed):
     return switching_of(p, kinematics(p, base, theta, omega, drum_angle, drum_speed))
 
 
-@njit(cache=True, inline="always")
+@njit(inline="always", **JIT)
 def switching_of(p, kin):
     """:func:`switching_function` (``eps`` and ``h``, m) of a shoe in the model from its
     contact kinematics ``kin`` (:func:`kinematics`)."""
@@ -242,7 +243,7 @@ def switching_of(p, kin):
     return eps, min(eps, g)
 
 
-@njit(cache=True, inline="always")
+@njit(inline="always", **JIT)
 def sliding_friction(p, base, fn, v_slide):
     """Smoothed Coulomb friction force while the drum slides, N: ``mu Fn tanh(v / v_s)``
     with ``mu`` the lining's of the shoe at ``base`` (a friction-change defect sets it)."""
@@ -252,7 +253,7 @@ def sliding_friction(p, base, fn, v_slide):
     return mu * fn * math.tanh(v_slide / p[L.P_FRICTION_SMOOTHING_SPEED])
 
 
-@njit(cache=True, inline="always")
+@njit(inline="always", **JIT)
 def shoe_forces(p, base, omega, actuation, kin, fn, ff, v_slide):
     """Moment balance of one shoe given its contact kinematics ``kin`` (from
     :func:`kinematics`), normal force ``fn`` and friction force ``ff`` (N), and the
@@ -305,13 +306,13 @@ def shoe_forces(p, base, omega, actuation, kin, fn, ff, v_slide):
     )
 
 
-@njit(cache=True, inline="always")
+@njit(inline="always", **JIT)
 def sliding_speed(kin, drum_speed):
     """Sliding speed of the drum surface relative to the shoe at the contact, m/s."""
     return drum_speed * kin[5] - kin[2]
 
 
-@njit(cache=True, inline="always")
+@njit(inline="always", **JIT)
 def shoe_eval(
     p, base, theta, omega, drum_speed, actuation, mode, stuck=0, share=0.0, drum_angle=0.0
 ):

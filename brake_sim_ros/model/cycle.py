@@ -82,6 +82,7 @@ from brake_sim_ros.errors import ParameterError
 from brake_sim_ros.model import actuation, standstill, vehicle
 from brake_sim_ros.model import layout as L
 from brake_sim_ros.model.actuation import MAX_ACTUATION_FORCE_N
+from brake_sim_ros.model.compiled import JIT
 
 KMH_PER_M_S = 3.6
 SPEED_TOLERANCE = 0.01  # an acceleration ends within 1 % of its target speed
@@ -355,7 +356,7 @@ def load_key(seed: int) -> int:
     return int.from_bytes(digest[:8], "big")
 
 
-@njit(cache=True)
+@njit(**JIT)
 def load_draw(p, number):
     """The ``number``-th per-stop load draw (0, 1, ...) of the run whose key ``p`` packs
     (P_CYCLE_LOAD_KEY): uniform in [0, 1), the top 53 bits of splitmix64's output for
@@ -368,7 +369,7 @@ def load_draw(p, number):
     return float(z >> np.uint64(11)) * (1.0 / 9007199254740992.0)
 
 
-@njit(cache=True, inline="always")
+@njit(inline="always", **JIT)
 def speed_control_torque(p, flywheel_speed, target):
     """The speed controller's drive torque (accelerate, cruise, a live target speed), N m:
     ``I_f (target - w_f) / tau + T_road(w_f)`` clamped to ``[0, max drive torque]``
@@ -379,7 +380,7 @@ def speed_control_torque(p, flywheel_speed, target):
     return min(max(ask, 0.0), p[L.P_CYCLE_MAX_DRIVE_TORQUE])
 
 
-@njit(cache=True)
+@njit(**JIT)
 def live_control(p, y):
     """A live target speed's drive torque at the start of a physics step, from the state
     ``y`` then, into ``p`` (the kernel's working copy, P_DRIVE_TORQUE; held over the step
@@ -387,7 +388,7 @@ def live_control(p, y):
     p[L.P_DRIVE_TORQUE] = speed_control_torque(p, y[L.Y_FLYWHEEL_SPEED], p[L.P_LIVE_TARGET_SPEED])
 
 
-@njit(cache=True)
+@njit(**JIT)
 def _enter(p, base, seg, y, kstate, fstate, t):
     """Start segment ``seg`` at ``t``: its brake ramp from the force now to its own; a
     hold with a load draws its factor (``base``: the packed vector the factor scales)."""
@@ -421,7 +422,7 @@ def _enter(p, base, seg, y, kstate, fstate, t):
     fstate[L.F_RAMP_F1] = target
 
 
-@njit(cache=True)
+@njit(**JIT)
 def _finished(p, seg, y, kstate, fstate, t, dt):
     """Whether segment ``seg`` has reached its end in state ``y`` at ``t``."""
     b = L.P_CYCLE_BASE + seg * L.CYCLE_STRIDE
@@ -437,7 +438,7 @@ def _finished(p, seg, y, kstate, fstate, t, dt):
     return t - fstate[L.F_SEGMENT_START] >= p[b + L.Q_DURATION] - 0.5 * dt
 
 
-@njit(cache=True)
+@njit(**JIT)
 def control(p, base, y, kstate, fstate, t, dt):
     """The controller at the start of a physics step at ``t`` (s, step ``dt``): advance
     the segment while the current one has ended (each segment at most once per step; a

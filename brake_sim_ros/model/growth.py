@@ -19,12 +19,13 @@ from numba import njit
 
 from brake_sim_ros.model import layout as L
 from brake_sim_ros.model.catalogue import LAW_FRICTION_WORK, severity_at
+from brake_sim_ros.model.compiled import JIT
 
 # mm of wear per MJ of friction work (the scenario's unit) -> m per J (the kernel's)
 _MM_PER_MJ_TO_M_PER_J = 1e-9
 
 
-@njit(cache=True)
+@njit(**JIT)
 def shoe_placement(shift, mirror, px, py, tx, ty, mcx, mcy, inertia0, mass, mid0):
     """Assemble a shoe whose pin sits ``shift`` (a fraction of its nominal radius) out of
     place: the rule of :func:`brake_sim_ros.model.assembly.place_shoe` (documented there).
@@ -65,14 +66,14 @@ def shoe_placement(shift, mirror, px, py, tx, ty, mcx, mcy, inertia0, mass, mid0
     return qx, qy, cx, cy, mid, gx, gy, inertia, turn, seat
 
 
-@njit(cache=True)
+@njit(**JIT)
 def lining_friction(mu, change_pct):
     """Friction coefficient of a lining whose coefficient ``mu`` changed by ``change_pct``
     percent (fade, contamination: negative), 1."""
     return mu * (1.0 + change_pct / 100.0)
 
 
-@njit(cache=True)
+@njit(**JIT)
 def write_placement(p, base, px, py, cx, cy, mid, gx, gy, inertia):
     """Write a shoe's placement (pin, lining centre and middle, mass centre, inertia; as
     :func:`shoe_placement` returns them) into its block at ``base`` of ``p``."""
@@ -88,7 +89,7 @@ def write_placement(p, base, px, py, cx, cy, mid, gx, gy, inertia):
     p[base + L.S_INERTIA] = inertia
 
 
-@njit(cache=True)
+@njit(**JIT)
 def working_copy(p):
     """A copy of ``p`` for :func:`apply`, with no severity set yet."""
     pw = p.copy()
@@ -97,7 +98,7 @@ def working_copy(p):
     return pw
 
 
-@njit(cache=True)
+@njit(**JIT)
 def lining_wear(p, pw, g, shoe, t, y, severity):
     """Lining wear of ``shoe`` (0 left, 1 right) at time ``t`` (s) for the growth entry at
     ``g`` of ``p``, m: ``severity`` (mm, :func:`severity_at` of the entry) for a law of
@@ -117,7 +118,7 @@ def lining_wear(p, pw, g, shoe, t, y, severity):
     return worn if worn < final else final
 
 
-@njit(cache=True)
+@njit(**JIT)
 def apply(p, pw, t, y):
     """Write the parameters at simulated time ``t`` (s) of every growing defect of ``p``
     into ``pw`` (:func:`working_copy` of ``p``); return the shoes' actuation gains (left,

@@ -17,11 +17,12 @@ from numba import njit
 
 from brake_sim_ros.model import actuation, contact, cycle, growth, standstill, thermal, vehicle
 from brake_sim_ros.model import layout as L
+from brake_sim_ros.model.compiled import JIT
 
 _pwl = actuation.pwl
 
 
-@njit(cache=True, inline="always")
+@njit(inline="always", **JIT)
 def _force(p, base, t, ts, fs, gain):
     """Actuation force on the shoe at ``base`` at ``t`` (s), N: the commanded history
     (knots ``ts``, ``fs``) times ``gain``; shaped by the shoe's actuation defects
@@ -32,7 +33,7 @@ def _force(p, base, t, ts, fs, gain):
     return _shaped_force(p, base, t, ts, fs, gain)
 
 
-@njit(cache=True)
+@njit(**JIT)
 def _shaped_force(p, base, t, ts, fs, gain):
     """:func:`_force` of a shoe with a delay, lag or pulsation (:func:`.actuation.shaped`)
     or a weakened return spring (:func:`.actuation.spring_release`)."""
@@ -52,7 +53,7 @@ def _shaped_force(p, base, t, ts, fs, gain):
     )
 
 
-@njit(cache=True)
+@njit(**JIT)
 def _driven_flywheel(p, flywheel_speed, coupling, dydt):
     """The flywheel's acceleration and the drive and road-load powers of a vehicle
     (layout.P_DRIVEN): the step's drive torque minus the road load
@@ -67,7 +68,7 @@ def _driven_flywheel(p, flywheel_speed, coupling, dydt):
     return road
 
 
-@njit(cache=True)
+@njit(**JIT)
 def evaluate(y, p, fe_left, fe_right, stuck, mode_left, mode_right, dydt, out, row, t):
     """Time derivative of the state ``y`` (layout.Y_*) into ``dydt``; if ``row >= 0``, also
     every recorded quantity at time ``t`` into ``out[row]`` (layout.COLUMNS).
@@ -85,7 +86,7 @@ def evaluate(y, p, fe_left, fe_right, stuck, mode_left, mode_right, dydt, out, r
     _evaluate_from(y, p, fe_left, fe_right, stuck, mode_left, mode_right, kl, kr, dydt, out, row, t)
 
 
-@njit(cache=True, inline="always")
+@njit(inline="always", **JIT)
 def _evaluate_from(
     y, p, fe_left, fe_right, stuck, mode_left, mode_right, kl, kr, dydt, out, row, t
 ):
@@ -188,7 +189,7 @@ def _evaluate_from(
     o[L.C_LOAD_CHANGE_WORK] = 0.0  # no load change; fixed_step_advance writes a cycle's
 
 
-@njit(cache=True, inline="always")
+@njit(inline="always", **JIT)
 def _derivatives(
     y,
     p,
@@ -246,7 +247,7 @@ def _derivatives(
     return road
 
 
-@njit(cache=True, inline="always")
+@njit(inline="always", **JIT)
 def _free_evaluate(y, p, dydt):
     """:func:`evaluate`'s derivative for a state whose shoes exert nothing: the drum
     slides, no actuation force, and neither shoe presses (its indentation is not positive
@@ -265,7 +266,7 @@ def _free_evaluate(y, p, dydt):
 NOT_FREE = np.ones(4)
 
 
-@njit(cache=True, inline="always")
+@njit(inline="always", **JIT)
 def _lining_reach(p, base):
     """Largest distance of the shoe's lining from its pivot, m: at most that of the
     lining's arc centre plus the arc's radius."""
@@ -274,7 +275,7 @@ def _lining_reach(p, base):
     return math.sqrt(dx * dx + dy * dy) + p[base + L.S_LINING_RADIUS]
 
 
-@njit(cache=True, inline="always")
+@njit(inline="always", **JIT)
 def _rides_free(y, y0, free_bound, stuck, ml, mr, fel, fer):
     """Whether an RK4 stage at ``y`` of a step from ``y0`` may take :func:`_free_evaluate`:
     the drum slides, no force on either shoe's tip, neither contact forced on, and each
@@ -290,7 +291,7 @@ def _rides_free(y, y0, free_bound, stuck, ml, mr, fel, fer):
     return free_bound[0] + free_bound[1] * dl < 0.0 and free_bound[2] + free_bound[3] * dr < 0.0
 
 
-@njit(cache=True)
+@njit(**JIT)
 def _wear_rates(p, power_left, power_right, dydt):
     """Wear rates of the linings, m/s: each shoe's wear per joule (layout.LN_WEAR_RATE,
     0 but for a lining that wears with its friction work, from its onset) times its own
@@ -300,7 +301,7 @@ def _wear_rates(p, power_left, power_right, dydt):
     dydt[L.Y_RIGHT_WEAR] = p[b + L.LINING_STRIDE] * power_right
 
 
-@njit(cache=True)
+@njit(**JIT)
 def evaluate_rows(ys, times, p, fe_left, fe_right, stuck, out):
     """Recorded quantities for many states: ``ys`` (n, N_STATE) at ``times`` into ``out``
     (``stuck``: the drum's stick state for all of them)."""
@@ -321,14 +322,14 @@ def evaluate_rows(ys, times, p, fe_left, fe_right, stuck, out):
         )
 
 
-@njit(cache=True)
+@njit(**JIT)
 def rhs(y, p, fe_left, fe_right, stuck, mode_left, mode_right, dydt):
     """Time derivative only (see :func:`evaluate`)."""
     no_out = np.empty((0, L.N_COLUMNS))
     evaluate(y, p, fe_left, fe_right, stuck, mode_left, mode_right, dydt, no_out, -1, 0.0)
 
 
-@njit(cache=True, inline="always")
+@njit(inline="always", **JIT)
 def _pivot_force(p, base, c, sn, omega, theta_ddot, fx, fy):
     """Force the pivot pin exerts on the shoe: m a_G - (applied forces), N. ``c``, ``sn``:
     cos and sin of the shoe's turn (from :func:`contact.kinematics`)."""
@@ -347,7 +348,7 @@ def _pivot_force(p, base, c, sn, omega, theta_ddot, fx, fy):
     return m * ax - fx, m * ay - fy
 
 
-@njit(cache=True, inline="always")
+@njit(inline="always", **JIT)
 def _update_regime(kstate, k_regime, k_flag, k_change, touching, step, settle_steps):
     if touching != kstate[k_flag]:
         kstate[k_flag] = touching
@@ -367,7 +368,7 @@ def _update_regime(kstate, k_regime, k_flag, k_change, touching, step, settle_st
     kstate[k_regime] = regime
 
 
-@njit(cache=True, inline="always")
+@njit(inline="always", **JIT)
 def _shoe_switch(p, shoe, y):
     """:func:`contact.switching_function` of shoe 0 (left) or 1 (right) for the state ``y``."""
     return contact.switching_function(
@@ -380,7 +381,7 @@ def _shoe_switch(p, shoe, y):
     )
 
 
-@njit(cache=True, inline="always")
+@njit(inline="always", **JIT)
 def rk4_step(
     y, k1, t0, h, p, gl, tl, fl, gr, tr, fr, stuck, ml, mr, k2, k3, k4, tmp, out, y_out, free
 ):
@@ -417,7 +418,7 @@ def rk4_step(
         y_out[j] = y[j] + h / 6.0 * (k1[j] + 2.0 * k2[j] + 2.0 * k3[j] + k4[j])
 
 
-@njit(cache=True)
+@njit(**JIT)
 def _locate_switch(
     shoe, on, ya, ka, t0, rem, f_end, p, gl, tl, fl, gr, tr, fr, stuck, ml, mr, work, out, tol
 ):
@@ -487,7 +488,7 @@ def _locate_switch(
     return b
 
 
-@njit(cache=True)
+@njit(**JIT)
 def _located_step(y, k1, t, dt, p, gl, tl, fl, gr, tr, fr, stuck, h_start, work, out, h_end):
     """RK4 step of ``dt`` from ``y`` (in place) with contact switches located in the step.
 
@@ -652,7 +653,7 @@ def _located_step(y, k1, t, dt, p, gl, tl, fl, gr, tr, fr, stuck, h_start, work,
     return switches
 
 
-@njit(cache=True)
+@njit(**JIT)
 def fixed_step_advance(
     y,
     step0,

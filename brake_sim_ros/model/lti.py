@@ -36,6 +36,8 @@ import numpy as np
 from numba import njit
 from scipy.linalg import expm, matrix_balance
 
+from brake_sim_ros.model.compiled import JIT
+
 
 @dataclass(frozen=True)
 class SampledLti:
@@ -286,7 +288,7 @@ def transposed(*matrices: np.ndarray) -> tuple[np.ndarray, ...]:
     return tuple(np.ascontiguousarray(np.swapaxes(m, -1, -2)) for m in matrices)
 
 
-@njit(cache=True)
+@njit(**JIT)
 def lti_advance(phi_t, g_prev_t, g_next_t, c_t, d_t, x, u_prev, u, y):  # pragma: no cover
     """Advance ``x`` over the input rows ``u`` (k, m), writing outputs into ``y`` (k, p);
     ``x`` and ``u_prev`` are updated in place to the last sample. The matrices come

@@ -32,6 +32,7 @@ from numba import njit
 
 from brake_sim_ros.model import contact, kernel, standstill
 from brake_sim_ros.model import layout as L
+from brake_sim_ros.model.compiled import JIT
 
 N_ROTOR = 6
 R_FLY_ANGLE, R_DRUM_ANGLE, R_FLY_SPEED, R_DRUM_SPEED, R_FRICTION, R_DAMPER = range(N_ROTOR)
@@ -51,7 +52,7 @@ STATUS_NO_CONVERGENCE = 2
 STATUS_NON_FINITE = 3
 
 
-@njit(cache=True)
+@njit(**JIT)
 def shoe_equilibrium(p, base, fe, drum_speed, stuck, share, touch, guess, slope):
     """Shoe angle where the moments about the pivot balance.
 
@@ -117,7 +118,7 @@ SHARE_TOL = 1e-13
 MAX_SHARE_ITERATIONS = 60
 
 
-@njit(cache=True)
+@njit(**JIT)
 def _solve_shoe(p, i, fe, wd, stuck, share, touch, shoes, cache):
     """Balance shoe ``i`` for actuation ``fe`` (N), drum speed ``wd`` (rad/s) and stick state
     into ``cache[i]``; returns the status. A sliding balance with saturated friction is
@@ -139,7 +140,7 @@ def _solve_shoe(p, i, fe, wd, stuck, share, touch, shoes, cache):
     return st
 
 
-@njit(cache=True)
+@njit(**JIT)
 def _balance(p, y, fel, fer, stuck, touch, shoes, cache):
     """Balance both shoes for the rotor state ``y`` into ``cache``; returns the status.
 
@@ -190,7 +191,7 @@ def _balance(p, y, fel, fer, stuck, touch, shoes, cache):
     return STATUS_NO_CONVERGENCE
 
 
-@njit(cache=True)
+@njit(**JIT)
 def _share_map(p, coupling, share, fel, fer, touch, shoes, cache):
     """Balance both shoes with the static share ``share``; returns (the share their normal
     forces imply, status)."""
@@ -208,7 +209,7 @@ def _share_map(p, coupling, share, fel, fer, touch, shoes, cache):
     return standstill.stuck_share(coupling, capacity), STATUS_OK
 
 
-@njit(cache=True, inline="always")
+@njit(inline="always", **JIT)
 def _coupling(p, y, drum_speed):
     """Coupling torque on the drum (model/standstill.py) of the rotor state ``y``, N m."""
     return standstill.coupling_torque(
@@ -216,7 +217,7 @@ def _coupling(p, y, drum_speed):
     )
 
 
-@njit(cache=True)
+@njit(**JIT)
 def _full_state(y, shoes, out):
     """The full model's state (layout.Y_*) of the rotor state ``y`` and the shoe angles
     (shoes at rest), so that the stick/slip rule of model/standstill.py applies as is."""
@@ -229,7 +230,7 @@ def _full_state(y, shoes, out):
     out[L.Y_RIGHT_ANGLE] = shoes[1]
 
 
-@njit(cache=True)
+@njit(**JIT)
 def _record(o, t, y, p, fel, fer, stuck, cache, fstate):
     """One sample row (layout.COLUMNS + braking torque) of the balanced state in ``cache``."""
     o[:] = 0.0
@@ -278,7 +279,7 @@ def _record(o, t, y, p, fel, fer, stuck, cache, fstate):
     o[COL_BRAKING_TORQUE] = -torque
 
 
-@njit(cache=True)
+@njit(**JIT)
 def advance(y, step0, h, n_steps, p, tl, fl, tr, fr, touch, shoes, cache, kstate, fstate, out):
     """Advance the rotor ``n_steps`` macro steps of ``h`` seconds, one sample per step.
 

@@ -22,6 +22,7 @@ import numpy as np
 from numba import njit
 
 from brake_sim_ros.model import sensor_faults as sf
+from brake_sim_ros.model.compiled import JIT
 from brake_sim_ros.model.lti import SampledLti, transposed
 
 KIND_CODE: dict[str, int] = {kind: i for i, kind in enumerate(sf.FAULT_KINDS)}
@@ -84,7 +85,7 @@ def no_systems() -> tuple[np.ndarray, ...]:
     return (*(np.zeros((1, 0, 0)) for _ in range(5)), np.zeros((1, 0)))
 
 
-@njit(cache=True)
+@njit(**JIT)
 def _hold(value, stuck, dropped, hold):  # pragma: no cover - compiled
     """Stuck, then dropout, on one reported value; updates ``hold`` (module HOLD)."""
     out = value
@@ -99,7 +100,7 @@ def _hold(value, stuck, dropped, hold):  # pragma: no cover - compiled
     return out
 
 
-@njit(cache=True, inline="always")
+@njit(inline="always", **JIT)
 def _faults_at(t, f_kind, f_onset, f_end, f_size):  # pragma: no cover - compiled
     """What the active faults do at time ``t``: (label bits, gain factor, bias, saturation
     limit, loose mount 0/1, stuck, dropped) (``sensor_faults`` module docstring)."""
@@ -130,7 +131,7 @@ def _faults_at(t, f_kind, f_onset, f_end, f_size):  # pragma: no cover - compile
     return label, gain, bias, limit, loose, stuck, dropped
 
 
-@njit(cache=True)
+@njit(**JIT)
 def analog_advance(  # pragma: no cover - compiled
     time_s,
     true,
@@ -238,7 +239,7 @@ def analog_advance(  # pragma: no cover - compiled
         values[k] = _hold(v, stuck, dropped, hold)
 
 
-@njit(cache=True)
+@njit(**JIT)
 def tone_ring_advance(  # pragma: no cover - compiled
     time_s,
     drum_angle_rad,
@@ -282,7 +283,7 @@ def tone_ring_advance(  # pragma: no cover - compiled
     return n_edges
 
 
-@njit(cache=True)
+@njit(**JIT)
 def gather_columns(data, by_row, by_row_out, by_column, by_column_out):  # pragma: no cover
     """Copy the columns ``by_row`` (int64 indices) of ``data`` (n, c) into ``by_row_out``
     (n, len(by_row)) and the columns ``by_column`` into the rows of ``by_column_out``

@@ -46,9 +46,10 @@ from numba import njit
 
 from brake_sim_ros.model import contact
 from brake_sim_ros.model import layout as L
+from brake_sim_ros.model.compiled import JIT
 
 
-@njit(cache=True, inline="always")
+@njit(inline="always", **JIT)
 def coupling_torque(p, flywheel_angle, drum_angle, flywheel_speed, drum_speed):
     """Torque of the torsional coupling on the drum, N m (positive counter-clockwise):
     ``K_s (th_f - th_d) + C_s (w_f - w_d)`` (rad, rad/s); 0 with a rigid coupling."""
@@ -59,7 +60,7 @@ def coupling_torque(p, flywheel_angle, drum_angle, flywheel_speed, drum_speed):
     return p[L.P_COUPLING_STIFFNESS] * twist + p[L.P_COUPLING_DAMPING] * slip
 
 
-@njit(cache=True, inline="always")
+@njit(inline="always", **JIT)
 def static_capacity(p, fn_left, dist_left, fn_right, dist_right):
     """Largest torque the pressed shoes hold on the drum, N m: ``mu_l Fn_l r_l + mu_r Fn_r
     r_r`` (``r``: the friction arms about the drum centre, m; ``mu``: each lining's)."""
@@ -70,7 +71,7 @@ def static_capacity(p, fn_left, dist_left, fn_right, dist_right):
     return mu_l * fn_left * dist_left + mu_r * fn_right * dist_right
 
 
-@njit(cache=True, inline="always")
+@njit(inline="always", **JIT)
 def stuck_share(coupling, capacity):
     """Fraction (in [-1, 1]) of each shoe's capacity ``mu Fn`` that static friction uses to
     hold the drum against ``coupling`` (N m); 0 without capacity."""
@@ -84,7 +85,7 @@ def stuck_share(coupling, capacity):
     return share
 
 
-@njit(cache=True, inline="always")
+@njit(inline="always", **JIT)
 def held_torque(coupling, fn_left, kin_left, fn_right, kin_right):
     """Torque static friction must hold on the drum, N m: the coupling's plus, on an
     out-of-round drum, the normal forces' (``-Fn dr/dpsi`` each, the wave arm of
@@ -92,7 +93,7 @@ def held_torque(coupling, fn_left, kin_left, fn_right, kin_right):
     return coupling - (fn_left * kin_left[12] + fn_right * kin_right[12])
 
 
-@njit(cache=True, inline="always")
+@njit(inline="always", **JIT)
 def hold_torques(p, y):
     """(torque to hold N m, static capacity N m) of the state ``y`` with the drum held:
     the coupling's torque on the drum (plus the normal forces' on an out-of-round drum,
@@ -111,7 +112,7 @@ def hold_torques(p, y):
     return held_torque(coupling, fnl, kl, fnr, kr), capacity
 
 
-@njit(cache=True, inline="always")
+@njit(inline="always", **JIT)
 def sticks(p, y, surface_before):
     """Whether a slipping drum sticks at the end of a step that started with surface speed
     ``surface_before`` (m/s) and ended in state ``y``."""
@@ -122,7 +123,7 @@ def sticks(p, y, surface_before):
     return capacity > 0.0 and abs(coupling) <= capacity
 
 
-@njit(cache=True, inline="always")
+@njit(inline="always", **JIT)
 def slips(p, y):
     """Whether a sticking drum breaks away in state ``y``: the coupling torque exceeds what
     the shoes hold (with a rigid coupling: the shoes no longer hold at all)."""
@@ -132,7 +133,7 @@ def slips(p, y):
     return abs(coupling) > capacity
 
 
-@njit(cache=True, inline="always")
+@njit(inline="always", **JIT)
 def at_rest(p, y):
     """Whether the vehicle has come to rest in the state ``y`` of a held drum: the rotor's
     remaining energy fits in the coupling below the static capacity (see the module notes)."""
@@ -145,7 +146,7 @@ def at_rest(p, y):
     return energy <= 0.5 * capacity * capacity / k_s
 
 
-@njit(cache=True, inline="always")
+@njit(inline="always", **JIT)
 def stick(p, y):
     """Hold the drum (and, with a rigid coupling, the flywheel) in ``y``; returns the kinetic
     energy removed, J."""
@@ -157,7 +158,7 @@ def stick(p, y):
     return loss
 
 
-@njit(cache=True, inline="always")
+@njit(inline="always", **JIT)
 def interpolated_stick_time(t, h, surface_before, surface_after, v_lock):
     """Instant (s) within the step ``[t, t + h]`` at which the surface speed reached
     ``v_lock``, linearly interpolated (the end of the step if it was already below)."""

@@ -48,6 +48,7 @@ from numba import njit
 
 from brake_sim_ros.errors import ParameterError
 from brake_sim_ros.model import layout as L
+from brake_sim_ros.model.compiled import JIT
 from brake_sim_ros.model.vehicle import DEFAULT_WHEEL_RADIUS_M
 
 # The fade law's assumption (module doc): onset, full fade, deg C; the ratio at full fade.
@@ -59,7 +60,7 @@ FADE_FULL_RATIO = 0.5
 DEFAULT_TEMPERATURE_C = 20.0
 
 
-@njit(cache=True, inline="always")
+@njit(inline="always", **JIT)
 def fade_ratio(temperature_c, onset_c, full_c, full_ratio):
     """A lining's friction at ``temperature_c`` over its friction when cool: 1 up to
     ``onset_c``, linear to ``full_ratio`` at ``full_c``, held above (deg C); the rule."""
@@ -164,7 +165,7 @@ def pack_thermal(p: np.ndarray, setup) -> None:
     p[L.P_AMBIENT] = thermal.ambient_c
 
 
-@njit(cache=True, inline="always")
+@njit(inline="always", **JIT)
 def heating_rate(p, friction_power, drum_speed, temperature):
     """``dT/dt`` of the brake, K/s, for the friction power ``friction_power`` (W) at
     ``drum_speed`` (rad/s) and ``temperature`` (deg C) (module doc)."""
@@ -172,7 +173,7 @@ def heating_rate(p, friction_power, drum_speed, temperature):
     return (friction_power - conductance * (temperature - p[L.P_AMBIENT])) / p[L.P_HEAT_CAPACITY]
 
 
-@njit(cache=True)
+@njit(**JIT)
 def fade_linings(p, pw, temperature):
     """Write both linings' friction coefficient at ``temperature`` (deg C) into ``pw``:
     each one's coefficient when cool (``pw``'s layout.P_COOL_FRICTION, which a growing

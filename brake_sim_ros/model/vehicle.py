@@ -38,6 +38,7 @@ from numba import njit
 
 from brake_sim_ros.errors import ParameterError
 from brake_sim_ros.model import layout as L
+from brake_sim_ros.model.compiled import JIT
 
 GRAVITY_M_S2 = 9.80665  # standard gravity
 # Width of the rolling resistance's smoothed sign, m/s (0.036 km/h): well below any speed
@@ -146,7 +147,7 @@ def pack_vehicle(p: np.ndarray, vehicle: Vehicle) -> None:
     p[L.P_DRIVE_TORQUE] = 0.0
 
 
-@njit(cache=True, inline="always")
+@njit(inline="always", **JIT)
 def road_load_torque(p, flywheel_speed):
     """Road load on the flywheel at ``flywheel_speed`` (rad/s), N m, opposing forward
     motion (see the module doc); the rule, written once."""
@@ -156,7 +157,7 @@ def road_load_torque(p, flywheel_speed):
     return r * (rolling + p[L.P_GRADE_FORCE] + p[L.P_DRAG_FACTOR] * v * abs(v))
 
 
-@njit(cache=True, inline="always")
+@njit(inline="always", **JIT)
 def scale_load(p, pw, factor):
     """Set in ``pw`` (the kernel's working copy of ``p``) the flywheel inertia and the
     road-load forces that scale with the vehicle's mass (rolling resistance, grade) for the
