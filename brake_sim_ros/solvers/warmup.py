@@ -54,7 +54,10 @@ def ensure_compiled(say: Callable[[str], None] | None = None) -> None:
     if is_compiled():
         return
     say = say or (lambda line: print(line, file=sys.stderr, flush=True))
-    say("brake-sim: compiling the physics kernels (once per installed version, up to a minute)")
+    say(
+        "brake-sim: compiling the physics kernels"
+        " (once per installed version: about 4 minutes on 2 cores)"
+    )
     took = compile_kernels()
     marker = _marker()
     if marker is not None:
