@@ -127,3 +127,34 @@ def test_invalid_modes_are_refused(change):
 def test_mode_rejects_nonfinite_shape():
     with pytest.raises(ParameterError):
         Mode("x", 1000.0, 0.02, 1.0, 1.0, 1.0, (float("nan"), 0.0))
+
+
+def test_selected_outputs_are_the_full_outputs_bit_for_bit(symmetric_run):
+    """A structure that computes some outputs (what a sensor set reads) gives exactly those
+    columns of the full structure, in the order asked for, through the impacts."""
+    samples = symmetric_run.samples
+    n = round(1.0 / samples.sample_period_s)
+    block = SampleBlock(samples.data[:n], 0, samples.sample_period_s, samples.columns)
+    full = Structure(PARAMS, block.sample_period_s)
+    everything = full.advance(block)
+    assert np.max(np.abs(everything[:, full.names.index("backing_plate_accel_y_m_s2")])) > 100.0
+    for names in (
+        ("backing_plate_accel_x_m_s2", "backing_plate_accel_y_m_s2"),
+        ("knuckle_disp_y_m", "backing_plate_accel_x_m_s2"),
+        ("knuckle_accel_x_m_s2",),
+    ):
+        part = Structure(PARAMS, block.sample_period_s, names)
+        assert part.names == names
+        out = part.advance(block)
+        assert out.shape == (n, len(names))
+        for i, name in enumerate(names):
+            column = everything[:, full.names.index(name)]
+            assert np.array_equal(out[:, i].view(np.int64), column.view(np.int64)), name
+
+
+def test_an_unknown_output_is_refused_in_one_line():
+    with pytest.raises(ParameterError) as err:
+        Structure(PARAMS, 1e-4, ("backing_plate_accel_z_m_s2",))
+    message = str(err.value)
+    assert "\n" not in message
+    assert "backing_plate_accel_z_m_s2" in message and "knuckle_disp_y_m" in message

@@ -133,6 +133,8 @@ def _faults_at(t, f_kind, f_onset, f_end, f_size):  # pragma: no cover - compile
 
 @njit(**JIT)
 def analog_advance(  # pragma: no cover - compiled
+    x_size,
+    draw_size,
     time_s,
     true,
     sensitivity,
@@ -163,22 +165,24 @@ def analog_advance(  # pragma: no cover - compiled
     ``true`` (k,) in the channel unit at ``time_s`` (k,) -> ``values`` (k,), ``labels``
     (k,) uint8.
 
-    ``phi ... d`` hold the path's sampled systems (index 1: loose mount), of zero size for
-    a path without dynamics, ``phi``, ``g_prev`` and ``g_next`` transposed
-    (:func:`stack_systems`); ``x_unit`` their equilibrium states under a unit input;
-    ``x`` and ``u_prev`` (the last sample's inputs: scaled true value, then its noise
-    draw) their carried state. On the ``first`` block sample 0 starts at rest under its
-    input (``x = v x_unit``), output, not advanced to. ``draws`` (k, m): the block's unit
-    normal draws (m = 0 without noise), the systems' last inputs (``lti.with_input_noise``);
-    ``white_gain`` their scale without dynamics. ``adc_step`` 0: no ADC.
+    ``x_size`` and ``draw_size``: the number of the systems' states and of draws per sample,
+    as :func:`.lti.size_token` tuples (one compiled version per path shape, its loops of
+    constant length). ``phi ... d`` hold the path's sampled systems (index 1: loose mount),
+    of zero size for a path without dynamics, ``phi``, ``g_prev`` and ``g_next`` transposed
+    (:func:`stack_systems`); ``x_unit`` their equilibrium states under a unit input; ``x``
+    and ``u_prev`` (the last sample's inputs: scaled true value, then its noise draw) their
+    carried state. On the ``first`` block sample 0 starts at rest under its input (``x = v
+    x_unit``), output, not advanced to. ``draws`` (k, m): the block's unit normal draws (m =
+    0 without noise), the systems' last inputs (``lti.with_input_noise``); ``white_gain``
+    their scale without dynamics. ``adc_step`` 0: no ADC.
     ``hold`` is updated in place.
 
     The state's rows are summed in column order, one column added to every row at once
     (as :func:`.lti.lti_advance`); the output's sum skips the terms whose coefficient is
     exactly 0 (it reads one state of eight): an exact zero product changes no sum that
     starts at +0.0, so the bits are those of the full products."""
-    n_x = phi.shape[1]
-    n_draw = draws.shape[1]
+    n_x = len(x_size)
+    n_draw = len(draw_size)
     n_u = 1 + n_draw if n_x > 0 else 1
     x_new = np.empty(n_x)
     u = np.empty(n_u)

@@ -88,7 +88,7 @@ from scipy import signal
 from brake_sim_ros.errors import ParameterError
 from brake_sim_ros.model import sensor_faults as sf
 from brake_sim_ros.model.layout import SIDES
-from brake_sim_ros.model.lti import SampledLti, foh_discretise, with_input_noise
+from brake_sim_ros.model.lti import SampledLti, foh_discretise, size_token, with_input_noise
 from brake_sim_ros.model.sensor_faults import SensorFault
 from brake_sim_ros.model.sensor_paths import (
     PathState,
@@ -456,9 +456,9 @@ class SensorFrame:
     Attributes:
         series: every output series by name (:class:`ChannelSamples`).
         edges_s: rising-edge times of each wheel-speed channel in this block, s.
-        structure_names, structure: the structure's true accelerations (m/s^2) and
-            displacements (m) at its mounts, shape (n, len(names)), at the scenario rate;
-            empty when no accelerometer needs it.
+        structure_names, structure: the structure's true accelerations (m/s^2) that the
+            accelerometers read (each mount and axis once), shape (n, len(names)), at the
+            scenario rate; empty when no accelerometer needs it.
     """
 
     series: dict[str, ChannelSamples]
@@ -522,6 +522,7 @@ class AnalogPath:
             self.matrices = no_systems()
             self.state = PathState()
             self.n_draws = 1 if self.noise > 0.0 else 0
+        self.sizes = (size_token(self.state.x.shape[0]), size_token(self.n_draws))
         self.white_gain = self.noise * math.sqrt(0.5 / sample_period_s)
 
     def advance(self, time_s: np.ndarray, true: np.ndarray) -> np.ndarray:
@@ -542,6 +543,7 @@ class AnalogPath:
         first = not state.started
         state.started = True
         analog_advance(
+            *self.sizes,
             np.ascontiguousarray(time_s, dtype=np.float64),
             np.ascontiguousarray(true, dtype=np.float64),
             float(ch.sensitivity_ratio),
@@ -616,8 +618,18 @@ class SensorBank:
         self.sample_rate_hz = float(sample_rate_hz)
         self.sample_period_s = 1.0 / self.sample_rate_hz
         self.decimation = {c.name: c.decimation(self.sample_rate_hz) for c in sensors.channels}
+        # the structure computes what the accelerometers read, nothing more
+        read = tuple(
+            dict.fromkeys(
+                f"{c.location}_accel_{c.axis}_m_s2"
+                for c in sensors.channels
+                if c.kind == "accelerometer"
+            )
+        )
         self.structure = (
-            Structure(sensors.structure, self.sample_period_s) if sensors.needs_structure else None
+            Structure(sensors.structure, self.sample_period_s, read)
+            if sensors.needs_structure
+            else None
         )
         self.paths: dict[str, AnalogPath | ToneRing] = {}
         for c in sensors.channels:

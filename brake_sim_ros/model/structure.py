@@ -210,20 +210,32 @@ class StructureParameters:
 
 class Structure:
     """The structure driven by a stream of sample blocks; the modal state is carried from
-    block to block, so a stream in blocks equals one long run bit for bit."""
+    block to block, so a stream in blocks equals one long run bit for bit.
 
-    def __init__(self, params: StructureParameters, sample_period_s: float) -> None:
+    ``outputs`` names the outputs computed (:meth:`StructureParameters.output_names`, in
+    the order wanted; default all of them): a sensor set reads only its accelerometers'."""
+
+    def __init__(
+        self,
+        params: StructureParameters,
+        sample_period_s: float,
+        outputs: tuple[str, ...] | None = None,
+    ) -> None:
         self.params = params
-        self.names = params.output_names()
+        every = params.output_names()
+        self.names = every if outputs is None else tuple(outputs)
+        unknown = [n for n in self.names if n not in every]
+        _require(not unknown, "outputs", unknown, f"names among {list(every)}")
         self.system = params.sampled(sample_period_s)
-        self._state = LtiState(self.system)
+        self._state = LtiState(self.system, tuple(every.index(n) for n in self.names))
 
     def forces(self, block: SampleBlock) -> np.ndarray:
         """The pivot-force columns of ``block`` (n, 4), N, in :data:`FORCE_COLUMNS` order."""
         return np.column_stack([block[c] for c in FORCE_COLUMNS])
 
     def advance(self, block: SampleBlock) -> np.ndarray:
-        """Accelerations and displacements (n, len(names)) for the next block."""
+        """The outputs (n, len(names)) for the next block: accelerations, m/s^2, and
+        displacements, m."""
         return self.advance_forces(self.forces(block))
 
     def advance_forces(self, pivot_forces_n: np.ndarray) -> np.ndarray:
