@@ -3,15 +3,18 @@
 numba compiles a kernel on its first call and keeps the machine code in the on-disk cache
 (see :mod:`brake_sim_ros.model`). A first call otherwise sits silent for tens of seconds;
 :func:`ensure_compiled` runs a tiny event through every path (each fixed-step scheme, the
-sample evaluation of the reference solver, the contact-regime level and the step-limit
-analysis) when the cache has no record of it, printing one line before and one after. The
-set-up command runs it, so the first ``brake-sim`` command starts at once.
+sample evaluation of the reference solver, the contact-regime level, the step-limit
+analysis and the default sensors' paths) when the cache has no record of it, printing one
+line before and one after. The set-up command runs it, so the first ``brake-sim`` command
+starts at once.
 
 Run ``python -m brake_sim_ros.solvers.warmup`` to compile (or check) explicitly.
 """
 
 from __future__ import annotations
 
+import os
+import subprocess
 import sys
 import time
 from collections.abc import Callable
@@ -20,6 +23,8 @@ from pathlib import Path
 import numba
 
 _MARKER = "brake_sim_compiled"
+# what the child process runs (by the module's name: run as __main__, this one has another)
+_CHILD = "from brake_sim_ros.solvers.warmup import _compile_the_rest; _compile_the_rest()"
 
 
 def _marker() -> Path | None:
@@ -33,19 +38,58 @@ def is_compiled() -> bool:
     return marker is not None and marker.exists()
 
 
-def compile_kernels() -> float:
-    """Run every kernel path once on a tiny event; returns the wall time taken, s."""
+def _compile_stepping() -> None:
+    """The fixed-step kernel, every scheme: the longest compile by far."""
     from brake_sim_ros.model.trajectory import BrakeSetup
-    from brake_sim_ros.solvers.contact_regime import run_contact_regime
     from brake_sim_ros.solvers.fixed_step import FIXED_STEP_SCHEMES, FixedStepStepper
-    from brake_sim_ros.solvers.reference import run_reference
 
-    start = time.perf_counter()
     setup = BrakeSetup()
     for scheme in FIXED_STEP_SCHEMES:
         FixedStepStepper(setup, 4e-5, scheme=scheme).advance(8, record_every=2)
+
+
+def _compile_the_rest() -> None:
+    """The reference solver's sample evaluation, the contact-regime level and the default
+    sensor set's paths (on a block of zeros: no stepping, so no kernel of the other part)."""
+    import numpy as np
+
+    from brake_sim_ros.model.layout import COLUMNS
+    from brake_sim_ros.model.sensors import SensorBank, default_sensor_set
+    from brake_sim_ros.model.trajectory import BrakeSetup, SampleBlock
+    from brake_sim_ros.solvers.contact_regime import run_contact_regime
+    from brake_sim_ros.solvers.reference import run_reference
+
+    setup = BrakeSetup()
     run_reference(setup, 0.01, rtol=1e-6)
     run_contact_regime(setup, 0.01)
+    block = SampleBlock(np.zeros((8, len(COLUMNS))), 0, 1.0 / 25_600.0)
+    SensorBank(default_sensor_set(), 25_600.0, 0).advance(block)
+
+
+def compile_kernels() -> float:
+    """Run every kernel path once on a tiny event; returns the wall time taken, s.
+
+    On a machine with more than one core the two parts compile at once, the second in a
+    child process (numba compiles one function on one core; the cache takes both)."""
+    start = time.perf_counter()
+    if (os.cpu_count() or 1) < 2:
+        _compile_stepping()
+        _compile_the_rest()
+        return time.perf_counter() - start
+    child = subprocess.Popen(
+        [sys.executable, "-c", _CHILD],
+        stdin=subprocess.DEVNULL,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        _compile_stepping()
+    finally:
+        _, err = child.communicate()
+    if child.returncode != 0:
+        last = err.strip().splitlines()[-1] if err.strip() else f"exit status {child.returncode}"
+        raise RuntimeError(f"compiling the kernels failed in the child process: {last}")
     return time.perf_counter() - start
 
 
