@@ -133,15 +133,19 @@ def rerun_openers(targets: list[RerunTarget]) -> list:
 
     Each is called with the node once it is set up, before its first message; the drawing
     uses the model in force (the node's model parameters, ``--ros-args`` overrides included).
+    Each sink logs on a thread of its own (:class:`~brake_sim_ros.stream.background.
+    BackgroundSink`): its drawing would otherwise hold up the node's real-time ticks.
     """
     from brake_sim_ros.stream import parameters as ros_params
+    from brake_sim_ros.stream.background import BackgroundSink
 
     def opener(node, target: RerunTarget):
         base = ros_params.model_values(node.scenario.setup.params, node.scenario.setup.defects)
         values = {name: node.get_parameter(name).value for name in base}
         params, defects = ros_params.build_model(values)
-        return open_sink(
+        sink = open_sink(
             target, params=params, defects=defects, run_text=scenario_markdown(node.scenario)
         )
+        return BackgroundSink(sink)
 
     return [functools.partial(opener, target=target) for target in targets]
