@@ -21,3 +21,38 @@ def test_compilation_is_announced_once_per_version(tmp_path, monkeypatch):
     assert calls == [1] and len(said) == 2
     monkeypatch.setattr(numba.config, "CACHE_DIR", str(tmp_path / "v2"))  # another version
     assert not warmup.is_compiled()
+
+
+def _record_parts(monkeypatch) -> list[str]:
+    done: list[str] = []
+    monkeypatch.setattr(warmup, "_compile_stepping", lambda: done.append("stepping"))
+    monkeypatch.setattr(warmup, "_compile_the_rest", lambda: done.append("rest here"))
+    return done
+
+
+def test_the_rest_compiles_in_a_child_process_beside_the_stepping(monkeypatch, tmp_path):
+    monkeypatch.setattr(warmup.os, "cpu_count", lambda: 2)
+    done = _record_parts(monkeypatch)
+    started = tmp_path / "child_started"
+    monkeypatch.setattr(warmup, "_CHILD", f"open({str(started)!r}, 'w').close()")
+    warmup.compile_kernels()
+    assert done == ["stepping"]
+    assert started.exists()
+
+
+def test_a_failed_child_leaves_its_part_to_this_process(monkeypatch):
+    monkeypatch.setattr(warmup.os, "cpu_count", lambda: 2)
+    done = _record_parts(monkeypatch)
+    monkeypatch.setattr(warmup, "_CHILD", "import sys; sys.exit(3)")
+    warmup.compile_kernels()
+    assert done == ["stepping", "rest here"]
+
+
+def test_one_core_compiles_both_parts_here(monkeypatch, tmp_path):
+    monkeypatch.setattr(warmup.os, "cpu_count", lambda: 1)
+    done = _record_parts(monkeypatch)
+    started = tmp_path / "child_started"
+    monkeypatch.setattr(warmup, "_CHILD", f"open({str(started)!r}, 'w').close()")
+    warmup.compile_kernels()
+    assert done == ["stepping", "rest here"]
+    assert not started.exists()  # no child process on one core

@@ -70,26 +70,24 @@ def compile_kernels() -> float:
     """Run every kernel path once on a tiny event; returns the wall time taken, s.
 
     On a machine with more than one core the two parts compile at once, the second in a
-    child process (numba compiles one function on one core; the cache takes both)."""
+    child process (numba compiles one function on one core; the cache takes both). Should
+    the child fail, its part compiles here after all, where an error shows in full."""
     start = time.perf_counter()
-    if (os.cpu_count() or 1) < 2:
-        _compile_stepping()
-        _compile_the_rest()
-        return time.perf_counter() - start
-    child = subprocess.Popen(
-        [sys.executable, "-c", _CHILD],
-        stdin=subprocess.DEVNULL,
-        stdout=subprocess.DEVNULL,
-        stderr=subprocess.PIPE,
-        text=True,
-    )
+    child = None
+    if (os.cpu_count() or 1) > 1:
+        child = subprocess.Popen(
+            [sys.executable, "-c", _CHILD],
+            stdin=subprocess.DEVNULL,
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+        )
     try:
         _compile_stepping()
     finally:
-        _, err = child.communicate()
-    if child.returncode != 0:
-        last = err.strip().splitlines()[-1] if err.strip() else f"exit status {child.returncode}"
-        raise RuntimeError(f"compiling the kernels failed in the child process: {last}")
+        if child is not None:
+            child.wait()
+    if child is None or child.returncode != 0:
+        _compile_the_rest()
     return time.perf_counter() - start
 
 
