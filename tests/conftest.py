@@ -1,8 +1,13 @@
-"""Shared fixtures: runs of the built-in scenarios are cached per test session."""
+"""Shared fixtures: runs of the built-in scenarios are cached per test session (under
+pytest-xdist: per worker). And the suite on several cores: tests marked ``realtime`` run
+with no other test running beside them."""
 
 from __future__ import annotations
 
+import fcntl
 import functools
+import os
+from pathlib import Path
 
 import pytest
 
@@ -43,3 +48,65 @@ def symmetric_impacting(symmetric_run: RunResult) -> SampleBlock:
     return SampleBlock(
         samples.data[:n], samples.first_index, samples.sample_period_s, samples.columns
     )
+
+
+# --- the suite on several cores (pytest-xdist, options in pyproject.toml's addopts) -------
+
+
+def pytest_addoption(parser, pluginmanager):
+    """Without pytest-xdist (``-p no:xdist``, or not installed) accept its options that
+    addopts passes, and run every test in this process."""
+    if pluginmanager.has_plugin("xdist"):
+        return
+    group = parser.getgroup("xdist", "pytest-xdist not loaded: its options are ignored")
+    for name in ("--numprocesses", "--maxprocesses", "--dist"):
+        group.addoption(name, dest=f"ignored_{name[2:]}", help="ignored without pytest-xdist")
+
+
+def pytest_configure(config):
+    basetemp = config.option.basetemp
+    if os.environ.get("PYTEST_XDIST_WORKER") and basetemp:  # gwN/, one per worker, side by side
+        config.pluginmanager.register(RealtimeAlone(Path(basetemp).parent), "realtime-alone")
+
+
+def _exclusive(item: pytest.Item) -> bool:
+    return item.get_closest_marker("realtime") is not None
+
+
+class RealtimeAlone:
+    """In an xdist worker: each test holds a lock on a file the workers share, from the
+    set-up of its fixtures to their teardown. A ``realtime`` test holds it exclusively
+    (and keeps it over consecutive ``realtime`` tests, whose module fixtures may run a
+    node in real time between them); every other test holds it shared. A realtime test
+    waiting for the lock holds a gate that new shared holders must pass first, so it
+    waits only for the test running on the other worker(s), never longer."""
+
+    def __init__(self, folder: Path) -> None:
+        self._gate = (folder / "realtime.gate").open("a")
+        self._lock = (folder / "realtime.lock").open("a")
+        self._exclusive: bool | None = None  # None: not held
+
+    def _acquire(self, exclusive: bool) -> None:
+        fcntl.flock(self._gate, fcntl.LOCK_EX)
+        try:
+            fcntl.flock(self._lock, fcntl.LOCK_EX if exclusive else fcntl.LOCK_SH)
+        finally:
+            fcntl.flock(self._gate, fcntl.LOCK_UN)
+        self._exclusive = exclusive
+
+    def _release(self) -> None:
+        fcntl.flock(self._lock, fcntl.LOCK_UN)
+        self._exclusive = None
+
+    @pytest.hookimpl(wrapper=True)
+    def pytest_runtest_protocol(self, item: pytest.Item, nextitem: pytest.Item | None):
+        exclusive = _exclusive(item)
+        if self._exclusive is not None and self._exclusive != exclusive:
+            self._release()
+        if self._exclusive is None:
+            self._acquire(exclusive)
+        try:
+            return (yield)
+        finally:
+            if not (exclusive and nextitem is not None and _exclusive(nextitem)):
+                self._release()

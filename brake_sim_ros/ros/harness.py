@@ -51,10 +51,24 @@ NODE = "/brake_sim"
 def domain_id_for(offset: int) -> int:
     """A ROS domain id in 1..100 derived from this process's pid and ``offset``.
 
-    Different offsets give different ids within one process; different processes
-    (parallel test runs) most likely get different ones too.
+    Different offsets (below 100) give different ids within one process; different
+    processes (parallel test runs) most likely get different ones too. Under pytest-xdist
+    (``PYTEST_XDIST_WORKER`` gwN of ``PYTEST_XDIST_WORKER_COUNT``) worker N draws from its
+    own slice of 1..100 (two workers: 1..50 and 51..100), so two workers never share a
+    domain; within a slice of width w, offsets differing by a multiple of w share one.
     """
-    return 1 + (os.getpid() + 37 * offset) % 100
+    width, first = 100, 1
+    worker = os.environ.get("PYTEST_XDIST_WORKER", "")
+    if worker.startswith("gw"):
+        count = int(os.environ.get("PYTEST_XDIST_WORKER_COUNT", "1"))
+        width = 100 // count
+        if width < 10:
+            raise RuntimeError(
+                f"{count} pytest-xdist workers leave {width} ROS domains each: use -n 10 or fewer"
+            )
+        index = int(worker[2:])
+        first = 1 + index * width
+    return first + (os.getpid() + 37 * offset) % width
 
 
 def ros_environment(domain_id: int) -> dict[str, str]:

@@ -3,14 +3,14 @@
 Needs the interfaces built and installed by scripts/setup.sh. The round trip
 starts a publisher in a separate Python process and receives its
 PivotForceChunk messages in this process over DDS, on a ROS domain derived from
-the pid so that parallel runs on one host do not see each other.
+the pid (and the pytest-xdist worker) so that parallel runs on one host do not see each
+other.
 """
 
 from __future__ import annotations
 
 import inspect
 import math
-import os
 import signal
 import subprocess
 import sys
@@ -37,6 +37,8 @@ from brake_sim_msgs.msg import (  # noqa: E402
     PivotForceChunk,
 )
 from brake_sim_msgs.srv import ResetSimulation, StepSimulation  # noqa: E402
+
+from brake_sim_ros.ros.harness import domain_id_for  # noqa: E402
 
 FRAME = "brake_backing_plate"
 TOPIC = "/brake_sim_test/pivot_forces"
@@ -245,9 +247,10 @@ PUBLISHER = "import math\n\n" + inspect.getsource(_expected_chunk) + PUBLISHER_M
 
 @pytest.fixture
 def ros_domain(monkeypatch):
-    # 1..100: per run, and inside the range that is safe from the Linux
-    # ephemeral ports (domain ids above ~101 map to ports that can collide).
-    domain_id = 1 + os.getpid() % 100
+    # 1..100: per run (per pytest-xdist worker: a range of its own), and inside the range
+    # that is safe from the Linux ephemeral ports (domain ids above ~101 map to ports that
+    # can collide). Offset 0: no other test uses it.
+    domain_id = domain_id_for(0)
     monkeypatch.setenv("ROS_DOMAIN_ID", str(domain_id))
     monkeypatch.setenv("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
     monkeypatch.delenv("ROS_STATIC_PEERS", raising=False)

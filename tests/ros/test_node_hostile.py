@@ -19,6 +19,7 @@ import pytest
 
 pytestmark = [
     pytest.mark.ros,
+    pytest.mark.realtime,  # each refusal answered within 1-2 s of wall time, then a chunk in 1 s
     pytest.mark.filterwarnings("ignore:module 'sre_(parse|constants)' is deprecated"),
 ]
 

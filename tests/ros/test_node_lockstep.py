@@ -19,6 +19,7 @@ import pytest
 
 pytestmark = [
     pytest.mark.ros,
+    pytest.mark.realtime,  # a ~/step call is bounded by the node's measured wall cost per sample
     pytest.mark.filterwarnings("ignore:module 'sre_(parse|constants)' is deprecated"),
 ]
 

@@ -101,6 +101,7 @@ def run(tmp_path_factory):
         node.stop()
 
 
+@pytest.mark.realtime  # these share the module's run, paced against the wall clock
 def test_topics_types_qos_and_services(run):
     client, _ = run
     topics = dict(client.node.get_topic_names_and_types())
@@ -136,6 +137,7 @@ def test_topics_types_qos_and_services(run):
     assert services["/brake_sim/reset"] == ["brake_sim_msgs/srv/ResetSimulation"]
 
 
+@pytest.mark.realtime
 def test_chunks_are_contiguous_and_complete(run):
     client, _ = run
     chunks = client.rx.chunks
@@ -151,6 +153,7 @@ def test_chunks_are_contiguous_and_complete(run):
             assert np.isfinite(np.asarray(getattr(c, name))).all()
 
 
+@pytest.mark.realtime
 def test_stamps_are_simulated_time(run):
     client, _ = run
     rx = client.rx
@@ -181,6 +184,7 @@ def test_stamps_are_simulated_time(run):
         assert ns(array.header.stamp) <= at(N_SAMPLES)  # not the wall clock's epoch
 
 
+@pytest.mark.realtime
 def test_the_stream_equals_the_offline_stepper(run):
     """Sample for sample: the bad commands and parameters changed nothing."""
     client, _ = run
@@ -204,6 +208,7 @@ def test_the_stream_equals_the_offline_stepper(run):
     )
 
 
+@pytest.mark.realtime
 def test_bad_commands_and_parameters_are_refused_and_counted(run):
     client, _ = run
     diag = client.final
@@ -224,6 +229,7 @@ def test_bad_commands_and_parameters_are_refused_and_counted(run):
     assert values["max_actuation_force_n"] == float(diag["max_actuation_force_n"])
 
 
+@pytest.mark.realtime
 def test_pacing_tracks_the_wall_clock(run):
     client, _ = run
     times = client.rx.chunk_times
@@ -234,6 +240,7 @@ def test_pacing_tracks_the_wall_clock(run):
     assert int(diag["deadline_misses"]) <= 5  # a loaded CI machine may miss a few
 
 
+@pytest.mark.realtime
 def test_ground_truth_is_latched_for_late_subscribers(run):
     client, _ = run
     from brake_sim_msgs.msg import DefectState

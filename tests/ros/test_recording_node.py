@@ -185,6 +185,7 @@ def test_the_recording_holds_the_qos_the_node_offers(tmp_path):
         assert recorded[name] == (reliability, durability), name
 
 
+@pytest.mark.realtime  # signalled after 2.5 s of wall time: more than 1 s of signal
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
 def test_signal_closes_the_file_with_every_message(tmp_path, sig):
     path = tmp_path / "rec.mcap"
@@ -218,6 +219,7 @@ def test_signal_closes_the_file_with_every_message(tmp_path, sig):
     assert f"brake_sim: recorded {path}" in out
 
 
+@pytest.mark.realtime  # killed after 3 s of wall time, with a command flushed to the file
 def test_sigkill_then_recover_loses_less_than_the_flush_interval(tmp_path):
     path = tmp_path / "killed.mcap"
     domain = domain_id_for(50)
