@@ -60,13 +60,15 @@ def test_the_producer_does_not_wait_for_a_slow_sink():
     sink.close()
 
 
-def test_a_failure_is_raised_once_by_the_next_write():
+def test_a_failure_is_raised_by_the_next_write_and_not_again_by_close():
     inner = ListSink(fail_at=5)
     sink = BackgroundSink(inner, max_pending=2)
     with pytest.raises(OSError, match="disk full"):
         for i in range(1000):  # fails within the queue's length after the sixth
             sink.write(STATE, i, i)
     assert len(inner.got) == 5
+    with pytest.raises(OSError, match="disk full"):  # and on every write after it
+        sink.write(STATE, -1, -1)
     sink.close()  # the owner drops and closes it: no second report, and no hang
     assert inner.closed == 1
 

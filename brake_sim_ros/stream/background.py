@@ -6,9 +6,9 @@ chunk period of 10 ms, so the ticks that carried one ran late. :class:`Backgroun
 moves that work to a worker thread. The messages reach the wrapped sink in the order they
 were written; the producer never waits unless ``max_pending`` messages are queued (then
 it waits for room: memory stays bounded). A failure of the wrapped sink is raised by the
-next ``write`` (or by ``close``, if no ``write`` came after it), once, so its owner drops
-it as it would drop the sink itself; ``close`` hands over everything still queued, then
-closes the wrapped sink.
+next ``write`` (and every one after it), so its owner drops it as it would drop the sink
+itself; ``close`` raises it only if no ``write`` did, hands over everything still queued,
+and closes the wrapped sink.
 
 Only ``write`` and ``close`` are passed on: a sink with other hooks (a recorder's
 ``parameter_change``) stays in its producer's thread. The messages must not change after
@@ -59,12 +59,12 @@ class BackgroundSink:
                 self._queue.task_done()
 
     def _raise_failure(self) -> None:
-        if self._error is not None and not self._reported:
-            self._reported = True  # once: the owner that dropped the sink then closes it
+        if self._error is not None:
+            self._reported = True
             raise self._error
 
     def write(self, topic: Topic, msg: Any, time_ns: int) -> None:
-        """Queue one message; raises the wrapped sink's failure, if it has failed."""
+        """Queue one message; raises the wrapped sink's failure once it has failed."""
         if self._closed:
             raise RuntimeError(f"{self!r}: write() after close()")
         self._raise_failure()
@@ -85,6 +85,7 @@ class BackgroundSink:
         self._queue.put(_END)
         self._worker.join()
         try:
-            self._raise_failure()
+            if not self._reported:  # the owner that dropped the sink for it closes it
+                self._raise_failure()
         finally:
             self.inner.close()
