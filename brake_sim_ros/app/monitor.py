@@ -16,7 +16,9 @@ from typing import Any
 import rclpy
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.parameter import Parameter
+from rclpy.signals import SignalHandlerOptions
 
+from brake_sim_ros.app.stop import StopRequest
 from brake_sim_ros.errors import BrakeSimError
 from brake_sim_ros.ros.monitor import MonitorNode, StreamingDetector
 
@@ -43,7 +45,8 @@ def run(
         ``--ros-args`` out of range or of the wrong type, a topic name ROS refuses: bad
         arguments, like every other refusal of ``brake-sim monitor``).
     """
-    rclpy.init(args=ros_argv)
+    rclpy.init(args=ros_argv, signal_handler_options=SignalHandlerOptions.NO)
+    stop = StopRequest()  # the loop ends between callbacks, never on a dead context
     node = None
     try:
         try:
@@ -62,7 +65,7 @@ def run(
         )
         executor = SingleThreadedExecutor()
         executor.add_node(node)
-        while rclpy.ok():
+        while rclpy.ok() and not stop.requested:
             executor.spin_once(timeout_sec=0.1)
         return 0
     except (KeyboardInterrupt, ExternalShutdownException):
@@ -78,3 +81,4 @@ def run(
             )
             node.destroy_node()
         rclpy.try_shutdown()
+        stop.restore()

@@ -25,7 +25,6 @@ from __future__ import annotations
 import argparse
 import math
 import os
-import signal
 import sys
 import time
 
@@ -35,6 +34,7 @@ from rclpy.parameter import Parameter
 from rclpy.signals import SignalHandlerOptions
 from rclpy.utilities import remove_ros_args
 
+from brake_sim_ros.app.stop import StopRequest
 from brake_sim_ros.errors import BrakeSimError
 from brake_sim_ros.ros.node import BrakeSimNode
 
@@ -124,29 +124,6 @@ def _check_outputs(parser: argparse.ArgumentParser, args: argparse.Namespace) ->
         parser.error(str(exc))
 
 
-class _StopRequest:
-    """SIGINT/SIGTERM set a flag the spin loop checks (a second one interrupts at once).
-
-    rclpy's own handlers would raise KeyboardInterrupt wherever the node is, also inside a
-    recorder's write; a flag lets the loop end between callbacks and close the sinks.
-    """
-
-    def __init__(self) -> None:
-        self.requested = False
-        self._previous = {
-            sig: signal.signal(sig, self._handle) for sig in (signal.SIGINT, signal.SIGTERM)
-        }
-
-    def _handle(self, signum: int, _frame) -> None:
-        if self.requested:
-            raise KeyboardInterrupt
-        self.requested = True
-
-    def restore(self) -> None:
-        for sig, handler in self._previous.items():
-            signal.signal(sig, handler)
-
-
 def _overrides(cli: argparse.Namespace) -> list[Parameter]:
     overrides = []
     if cli.scenario is not None:
@@ -189,7 +166,7 @@ def main(args: list[str] | None = None) -> int:
     cli = _parse_cli(stripped[1:], prog)
     openers = _sink_openers(cli)
     rclpy.init(args=argv, signal_handler_options=SignalHandlerOptions.NO)
-    stop = _StopRequest()
+    stop = StopRequest()
     node = None
     try:
         try:
