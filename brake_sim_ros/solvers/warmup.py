@@ -98,7 +98,7 @@ def ensure_compiled(say: Callable[[str], None] | None = None) -> None:
     say = say or (lambda line: print(line, file=sys.stderr, flush=True))
     say(
         "brake-sim: compiling the physics kernels"
-        " (once per installed version: about 4 minutes on 2 cores)"
+        " (once per installed version: about 2 minutes on 2 cores)"
     )
     took = compile_kernels()
     marker = _marker()
