@@ -21,8 +21,10 @@ from pathlib import Path
 
 import rclpy
 from rclpy.executors import ExternalShutdownException
+from rclpy.signals import SignalHandlerOptions
 from rclpy.utilities import remove_ros_args
 
+from brake_sim_ros.app.stop import StopRequest
 from brake_sim_ros.errors import BrakeSimError
 from brake_sim_ros.recording.playback import Recording
 from brake_sim_ros.recording.reader import RecordingReadError
@@ -83,7 +85,12 @@ def main(args: list[str] | None = None) -> int:
             file=sys.stderr,
         )
         return 1
-    rclpy.init(args=argv)
+    rclpy.init(args=argv, signal_handler_options=SignalHandlerOptions.NO)
+    stop = StopRequest()  # Ctrl-C ends the play between two messages, never mid-publish
+
+    def stopped() -> bool:
+        return stop.requested or not rclpy.ok()
+
     node = None
     try:
         try:
@@ -101,8 +108,8 @@ def main(args: list[str] | None = None) -> int:
             cli.wait_for_subscribers, 10.0
         ):
             print("brake-sim replay: not every topic has its subscribers; playing anyway")
-        while rclpy.ok():
-            node.play_once()
+        while not stopped():
+            node.play_once(stopped)
             if not cli.loop:
                 break
         print(f"brake-sim replay: published {node.published} messages", flush=True)
@@ -117,6 +124,7 @@ def main(args: list[str] | None = None) -> int:
             node.destroy_node()
         recording.close()
         rclpy.try_shutdown()
+        stop.restore()
 
 
 if __name__ == "__main__":

@@ -25,7 +25,7 @@ import). A damaged or foreign file is refused with one line and nothing is publi
 from __future__ import annotations
 
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from typing import Protocol
 
@@ -106,8 +106,9 @@ class ReplayNode(Node):
             time.sleep(0.02)
         return False
 
-    def play_once(self) -> None:
-        """One pass from the start offset to the end of the recording."""
+    def play_once(self, stopped: Callable[[], bool] = lambda: not rclpy.ok()) -> None:
+        """One pass from the start offset to the end of the recording, or until ``stopped()``
+        (checked before every message and while waiting for one)."""
         for topic, data in self.recording.latched_before(self.start_ns):
             self._publish(topic, data)
         schedule = Schedule(self.start_ns, self.rate)
@@ -115,11 +116,11 @@ class ReplayNode(Node):
         for topic, data, log_ns in self.recording.messages(self.start_ns):
             due = wall0 + schedule.due_s(log_ns)
             while True:
+                if stopped():
+                    return
                 wait = due - time.monotonic()
                 if wait <= 0.0:
                     break
-                if not rclpy.ok():
-                    return
                 time.sleep(min(wait, MAX_SLEEP_S))
             self._publish(topic, data)
         self.loops += 1

@@ -270,3 +270,26 @@ def _topics(path: Path) -> list[tuple[str, str]]:
     with path.open("rb") as f:
         summary = make_reader(f).get_summary()
     return [(c.topic, summary.schemas[c.schema_id].name) for c in summary.channels.values()]
+
+
+@pytest.mark.parametrize("signum", [2, 15], ids=["SIGINT", "SIGTERM"])
+def test_a_signal_ends_a_looping_replay_cleanly(recording: Path, signum: int):
+    """SIGINT or SIGTERM while a looping replay is publishing: it stops between two
+    messages and exits 0 with its summary, never a traceback (rclpy's own handlers would
+    shut the context down under a publish)."""
+    topics = {t.name: t.type_name for t in stream.TOPICS if t.name in dict(_topics(recording))}
+    domain = domain_id_for(5 + signum)
+    listener = RawListener(domain, topics)
+    proc = _replay(recording, domain, "--loop", "--rate", "4")
+    try:
+        listener.spin_until(lambda: len(listener.received) > 200, 30.0)
+        assert len(listener.received) > 200, "the replay did not start publishing"
+        proc.send_signal(signum)
+        out = proc.communicate(timeout=10)[0]
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+        listener.close()
+    assert proc.returncode == 0, out
+    assert "Traceback" not in out and "RCLError" not in out, out
+    assert re.search(r"published \d+ messages", out), out
