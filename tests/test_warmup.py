@@ -23,36 +23,30 @@ def test_compilation_is_announced_once_per_version(tmp_path, monkeypatch):
     assert not warmup.is_compiled()
 
 
-def _record_parts(monkeypatch) -> list[str]:
+def _compile(monkeypatch, tmp_path, cores: int, child_fails: bool = False):
+    """compile_kernels on ``cores`` cores with both parts recorded, not compiled, and a
+    child that leaves a file (or fails); returns the parts run here and whether a child
+    started."""
     done: list[str] = []
+    monkeypatch.setattr(warmup.os, "cpu_count", lambda: cores)
     monkeypatch.setattr(warmup, "_compile_stepping", lambda: done.append("stepping"))
     monkeypatch.setattr(warmup, "_compile_the_rest", lambda: done.append("rest here"))
-    return done
+    started = tmp_path / "child_started"
+    child = f"open({str(started)!r}, 'w').close()"
+    monkeypatch.setattr(warmup, "_CHILD", child + ("; raise SystemExit(3)" if child_fails else ""))
+    warmup.compile_kernels()
+    return done, started.exists()
 
 
 def test_the_rest_compiles_in_a_child_process_beside_the_stepping(monkeypatch, tmp_path):
-    monkeypatch.setattr(warmup.os, "cpu_count", lambda: 2)
-    done = _record_parts(monkeypatch)
-    started = tmp_path / "child_started"
-    monkeypatch.setattr(warmup, "_CHILD", f"open({str(started)!r}, 'w').close()")
-    warmup.compile_kernels()
-    assert done == ["stepping"]
-    assert started.exists()
+    assert _compile(monkeypatch, tmp_path, cores=2) == (["stepping"], True)
 
 
-def test_a_failed_child_leaves_its_part_to_this_process(monkeypatch):
-    monkeypatch.setattr(warmup.os, "cpu_count", lambda: 2)
-    done = _record_parts(monkeypatch)
-    monkeypatch.setattr(warmup, "_CHILD", "import sys; sys.exit(3)")
-    warmup.compile_kernels()
-    assert done == ["stepping", "rest here"]
+def test_a_failed_child_leaves_its_part_to_this_process(monkeypatch, tmp_path):
+    done = _compile(monkeypatch, tmp_path, cores=2, child_fails=True)
+    assert done == (["stepping", "rest here"], True)
 
 
 def test_one_core_compiles_both_parts_here(monkeypatch, tmp_path):
-    monkeypatch.setattr(warmup.os, "cpu_count", lambda: 1)
-    done = _record_parts(monkeypatch)
-    started = tmp_path / "child_started"
-    monkeypatch.setattr(warmup, "_CHILD", f"open({str(started)!r}, 'w').close()")
-    warmup.compile_kernels()
-    assert done == ["stepping", "rest here"]
-    assert not started.exists()  # no child process on one core
+    # no child process on one core
+    assert _compile(monkeypatch, tmp_path, cores=1) == (["stepping", "rest here"], False)

@@ -16,9 +16,8 @@ from typing import Any
 import rclpy
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.parameter import Parameter
-from rclpy.signals import SignalHandlerOptions
 
-from brake_sim_ros.app.stop import StopRequest
+from brake_sim_ros.app.stop import start_ros
 from brake_sim_ros.errors import BrakeSimError
 from brake_sim_ros.ros.monitor import MonitorNode, StreamingDetector
 
@@ -45,8 +44,7 @@ def run(
         ``--ros-args`` out of range or of the wrong type, a topic name ROS refuses: bad
         arguments, like every other refusal of ``brake-sim monitor``).
     """
-    rclpy.init(args=ros_argv, signal_handler_options=SignalHandlerOptions.NO)
-    stop = StopRequest()  # the loop ends between callbacks, never on a dead context
+    stop = start_ros(ros_argv)  # the loop ends between callbacks, never on a dead context
     node = None
     try:
         try:

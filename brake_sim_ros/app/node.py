@@ -31,10 +31,9 @@ import time
 import rclpy
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.parameter import Parameter
-from rclpy.signals import SignalHandlerOptions
 from rclpy.utilities import remove_ros_args
 
-from brake_sim_ros.app.stop import StopRequest
+from brake_sim_ros.app.stop import start_ros
 from brake_sim_ros.errors import BrakeSimError
 from brake_sim_ros.ros.node import BrakeSimNode
 
@@ -165,8 +164,7 @@ def main(args: list[str] | None = None) -> int:
     prog = CLI_PROG if argv and argv[0] == CLI_PROG else MODULE_PROG
     cli = _parse_cli(stripped[1:], prog)
     openers = _sink_openers(cli)
-    rclpy.init(args=argv, signal_handler_options=SignalHandlerOptions.NO)
-    stop = StopRequest()
+    stop = start_ros(argv)
     node = None
     try:
         try:

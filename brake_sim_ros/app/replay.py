@@ -21,10 +21,9 @@ from pathlib import Path
 
 import rclpy
 from rclpy.executors import ExternalShutdownException
-from rclpy.signals import SignalHandlerOptions
 from rclpy.utilities import remove_ros_args
 
-from brake_sim_ros.app.stop import StopRequest
+from brake_sim_ros.app.stop import start_ros
 from brake_sim_ros.errors import BrakeSimError
 from brake_sim_ros.recording.playback import Recording
 from brake_sim_ros.recording.reader import RecordingReadError
@@ -85,8 +84,7 @@ def main(args: list[str] | None = None) -> int:
             file=sys.stderr,
         )
         return 1
-    rclpy.init(args=argv, signal_handler_options=SignalHandlerOptions.NO)
-    stop = StopRequest()  # Ctrl-C ends the play between two messages, never mid-publish
+    stop = start_ros(argv)  # Ctrl-C ends the play between two messages, never mid-publish
 
     def stopped() -> bool:
         return stop.requested or not rclpy.ok()

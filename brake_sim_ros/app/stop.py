@@ -3,13 +3,17 @@
 rclpy's own handlers shut the context down from the signal handler, wherever the program
 is: inside a recorder's write, or between a loop's ``rclpy.ok()`` and its ``spin_once``,
 which then fails on the dead context. With ``rclpy.init(...,
-signal_handler_options=SignalHandlerOptions.NO)`` and a :class:`StopRequest`, the loop
-ends between callbacks and shuts down itself. A second signal interrupts at once.
+signal_handler_options=SignalHandlerOptions.NO)`` and a :class:`StopRequest`
+(:func:`start_ros` does both), the loop ends between callbacks and shuts down itself. A
+second signal interrupts at once.
 """
 
 from __future__ import annotations
 
 import signal
+
+import rclpy
+from rclpy.signals import SignalHandlerOptions
 
 
 class StopRequest:
@@ -29,3 +33,10 @@ class StopRequest:
     def restore(self) -> None:
         for sig, handler in self._previous.items():
             signal.signal(sig, handler)
+
+
+def start_ros(args: list[str]) -> StopRequest:
+    """``rclpy.init(args=args)`` without rclpy's signal handlers, and the
+    :class:`StopRequest` that takes their place (restore it after shutting down)."""
+    rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+    return StopRequest()

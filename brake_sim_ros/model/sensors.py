@@ -100,7 +100,13 @@ from brake_sim_ros.model.sensor_paths import (
     tone_ring_advance,
     unit_equilibria,
 )
-from brake_sim_ros.model.structure import AXES, FORCE_COLUMNS, Structure, StructureParameters
+from brake_sim_ros.model.structure import (
+    AXES,
+    FORCE_COLUMNS,
+    Structure,
+    StructureParameters,
+    acceleration_output,
+)
 from brake_sim_ros.model.trajectory import SampleBlock
 
 STANDARD_GRAVITY_M_S2 = 9.80665
@@ -618,19 +624,19 @@ class SensorBank:
         self.sample_rate_hz = float(sample_rate_hz)
         self.sample_period_s = 1.0 / self.sample_rate_hz
         self.decimation = {c.name: c.decimation(self.sample_rate_hz) for c in sensors.channels}
-        # the structure computes what the accelerometers read, nothing more
-        read = tuple(
-            dict.fromkeys(
-                f"{c.location}_accel_{c.axis}_m_s2"
-                for c in sensors.channels
-                if c.kind == "accelerometer"
-            )
-        )
+        # the structure computes what the accelerometers read (each mount and axis once)
+        reads = {
+            c.name: acceleration_output(c.location, c.axis)
+            for c in sensors.channels
+            if c.kind == "accelerometer"
+        }
+        outputs = tuple(dict.fromkeys(reads.values()))
         self.structure = (
-            Structure(sensors.structure, self.sample_period_s, read)
+            Structure(sensors.structure, self.sample_period_s, outputs)
             if sensors.needs_structure
             else None
         )
+        self._structure_column = {name: outputs.index(out) for name, out in reads.items()}
         self.paths: dict[str, AnalogPath | ToneRing] = {}
         for c in sensors.channels:
             self.paths[c.name] = (
@@ -643,11 +649,6 @@ class SensorBank:
         # multiples of this.
         self.output_decimation: dict[str, int] = {
             name: self.decimation[c.name] for c in sensors.channels for name in c.output_names
-        }
-        self._structure_column = {
-            c.name: self.structure.names.index(f"{c.location}_accel_{c.axis}_m_s2")
-            for c in sensors.channels
-            if c.kind == "accelerometer" and self.structure is not None
         }
         # the block's columns the channels read, gathered once per block (time first)
         read = ["time_s"]

@@ -53,6 +53,12 @@ FORCE_COLUMNS: tuple[str, ...] = tuple(f"{s}_pivot_f{a}_n" for s in SIDES for a 
 DEFAULT_MOUNTS: tuple[str, ...] = ("backing_plate", "knuckle")
 
 
+def acceleration_output(mount: str, axis: str) -> str:
+    """The name of the structure's output that is the acceleration at ``mount`` along
+    ``axis`` (frame brake_backing_plate), m/s^2: what an accelerometer there reads."""
+    return f"{mount}_accel_{axis}_m_s2"
+
+
 def _require(condition: bool, what: str, value: object, allowed: str) -> None:
     if not condition:
         raise ParameterError(f"structure: {what} = {value!r} is invalid: allowed {allowed}")
@@ -166,7 +172,7 @@ class StructureParameters:
     def output_names(self) -> tuple[str, ...]:
         """Output channels of :class:`Structure`, in order: acceleration (m/s^2) then
         displacement (m) at each mount along x and y."""
-        acc = tuple(f"{m}_accel_{a}_m_s2" for m in self.mounts for a in AXES)
+        acc = tuple(acceleration_output(m, a) for m in self.mounts for a in AXES)
         disp = tuple(f"{m}_disp_{a}_m" for m in self.mounts for a in AXES)
         return acc + disp
 

@@ -48,15 +48,13 @@ class BackgroundSink:
     def _drain(self) -> None:
         while True:
             item = self._queue.get()
-            try:
-                if item is _END:
-                    return
-                if self._error is None:  # after a failure: taken, so no writer waits
+            if item is _END:
+                return
+            if self._error is None:  # after a failure: taken, so no writer waits
+                try:
                     self.inner.write(*item)
-            except BaseException as exc:  # raised to the producer by its next call
-                self._error = exc
-            finally:
-                self._queue.task_done()
+                except BaseException as exc:  # raised to the producer by its next call
+                    self._error = exc
 
     def _raise_failure(self) -> None:
         if self._error is not None:
@@ -69,12 +67,6 @@ class BackgroundSink:
             raise RuntimeError(f"{self!r}: write() after close()")
         self._raise_failure()
         self._queue.put((topic, msg, time_ns))
-
-    def flush(self) -> None:
-        """Wait until every message written so far has reached the wrapped sink; raises its
-        failure, if any."""
-        self._queue.join()
-        self._raise_failure()
 
     def close(self) -> None:
         """Hand over what is queued, stop the worker and close the wrapped sink; raises the

@@ -6,11 +6,13 @@ real DDS, and received by raw (CDR bytes) subscriptions in this process.
 
 from __future__ import annotations
 
+import contextlib
 import re
 import subprocess
 import sys
 import time
 from collections import defaultdict
+from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
@@ -130,6 +132,22 @@ def _replay(path: Path, domain: int, *args: str) -> subprocess.Popen:
     )
 
 
+@contextlib.contextmanager
+def _replaying(
+    path: Path, domain: int, topics: dict[str, str], *args: str
+) -> Iterator[tuple[subprocess.Popen, RawListener]]:
+    """A replay of ``path`` on ``domain`` and a listener to ``topics`` there; the replay
+    is killed if still running, and the listener closed, on the way out."""
+    listener = RawListener(domain, topics)
+    proc = _replay(path, domain, *args)
+    try:
+        yield proc, listener
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+        listener.close()
+
+
 def _listen(path: Path, offset: int, *args: str) -> tuple[list, list]:
     recorded = _recorded(path)
     topics = {}
@@ -137,17 +155,10 @@ def _listen(path: Path, offset: int, *args: str) -> tuple[list, list]:
         summary = make_reader(f).get_summary()
         for channel in summary.channels.values():
             topics[channel.topic] = summary.schemas[channel.schema_id].name
-    domain = domain_id_for(offset)
-    listener = RawListener(domain, topics)
-    proc = _replay(path, domain, *args)
-    try:
+    with _replaying(path, domain_id_for(offset), topics, *args) as (proc, listener):
         listener.spin_until(lambda: proc.poll() is not None, 60.0)
         listener.spin_until(lambda: False, 0.3)  # what is still in flight
-    finally:
         out = proc.communicate(timeout=10)[0] if proc.poll() is not None else ""
-        if proc.poll() is None:
-            proc.kill()
-        listener.close()
     assert proc.returncode == 0, out
     return recorded, listener.received
 
@@ -247,17 +258,10 @@ def test_a_damaged_recording_is_refused_and_nothing_is_published(tmp_path: Path,
     broken = tmp_path / "damaged.mcap"
     _damaged_middle_chunk(recording, broken)
     topics = {t.name: t.type_name for t in stream.TOPICS if t.name in dict(_topics(recording))}
-    domain = domain_id_for(4)
-    listener = RawListener(domain, topics)
-    try:
-        proc = _replay(broken, domain)
+    with _replaying(broken, domain_id_for(4), topics) as (proc, listener):
         listener.spin_until(lambda: proc.poll() is not None, 60.0)
         listener.spin_until(lambda: False, 1.0)  # anything published would arrive by now
         out = proc.communicate(timeout=10)[0]
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-        listener.close()
     assert proc.returncode == 1, out
     lines = out.strip().splitlines()
     assert len(lines) == 1 and "Traceback" not in out, out
@@ -278,18 +282,12 @@ def test_a_signal_ends_a_looping_replay_cleanly(recording: Path, signum: int):
     messages and exits 0 with its summary, never a traceback (rclpy's own handlers would
     shut the context down under a publish)."""
     topics = {t.name: t.type_name for t in stream.TOPICS if t.name in dict(_topics(recording))}
-    domain = domain_id_for(5 + signum)
-    listener = RawListener(domain, topics)
-    proc = _replay(recording, domain, "--loop", "--rate", "4")
-    try:
+    replay = _replaying(recording, domain_id_for(5 + signum), topics, "--loop", "--rate", "4")
+    with replay as (proc, listener):
         listener.spin_until(lambda: len(listener.received) > 200, 30.0)
         assert len(listener.received) > 200, "the replay did not start publishing"
         proc.send_signal(signum)
         out = proc.communicate(timeout=10)[0]
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-        listener.close()
     assert proc.returncode == 0, out
     assert "Traceback" not in out and "RCLError" not in out, out
     assert re.search(r"published \d+ messages", out), out
