@@ -64,8 +64,7 @@ from rclpy.parameter import Parameter
 from brake_sim_ros import stream
 from brake_sim_ros.analysis.contact_events import ContactEventDetector
 from brake_sim_ros.errors import BrakeSimError, ParameterError, ScenarioError
-from brake_sim_ros.model.sensors import SensorBank
-from brake_sim_ros.model.trajectory import BrakeSetup, SampleBlock
+from brake_sim_ros.model.run_setup import BrakeSetup, SampleBlock
 from brake_sim_ros.ros import qos
 from brake_sim_ros.ros.budget import measure_publishing, measure_stepping
 from brake_sim_ros.ros.commands import (
@@ -82,6 +81,7 @@ from brake_sim_ros.ros.messages import message_class
 from brake_sim_ros.ros.pacing import Pacer, PacingMode
 from brake_sim_ros.scenarios import Scenario, load_scenario
 from brake_sim_ros.scenarios.requested import allowed_dirs, load_requested_scenario
+from brake_sim_ros.sensing.sensors import SensorBank
 from brake_sim_ros.solvers.fixed_step import FixedStepStepper
 from brake_sim_ros.solvers.realtime import (
     PipelineCosts,

@@ -46,7 +46,7 @@ from brake_sim_ros.model.defects import (
 )
 from brake_sim_ros.model.layout import SIDES
 from brake_sim_ros.model.parameters import PARAMETER_GROUPS, BrakeParameters, unit_of
-from brake_sim_ros.model.trajectory import BrakeSetup
+from brake_sim_ros.model.run_setup import BrakeSetup
 from brake_sim_ros.model.vehicle import (
     DEFAULT_MAX_DRIVE_TORQUE_N_M,
     DEFAULT_SPEED_TIME_CONSTANT_S,
