@@ -10,8 +10,9 @@ A generated block sits between two markers in a page::
 The name after the colon says what fills it: ``brake-sim ARGS`` runs that command (its
 standard output, verbatim), ``catalogue table`` renders the defect catalogue
 (``model/catalogue.py``) as a Markdown table, ``benchmark list`` the registered
-benchmarks (``studies.BENCHMARKS``). ``brake-sim validate`` takes minutes, so it
-is rerun only with ``--all``; the others take seconds.
+benchmarks (``studies.BENCHMARKS``), ``campaign table`` the built-in campaigns' plans.
+``brake-sim validate`` takes minutes, so it is rerun only with ``--all``; the others take
+seconds.
 
 The commands run from the checkout the script is imported from (``PYTHONPATH=.``).
 
@@ -107,17 +108,42 @@ def benchmark_list() -> str:
     return "".join(f"* `brake-sim bench {s.name}`: {s.measures}\n" for s in BENCHMARKS.values())
 
 
+def campaign_table() -> str:
+    """The built-in campaigns as a Markdown table: runs in all and per split (their plans,
+    ``campaigns.loader.plan_runs``), units, run length and sample rate."""
+    from collections import Counter
+
+    from brake_sim_ros.campaigns.loader import builtin_campaigns, load_campaign, plan_runs
+
+    rows = [
+        "| campaign | runs | train | validation | test | units | run | sample rate |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for name in builtin_campaigns():
+        c = load_campaign(name)
+        runs = plan_runs(c)
+        split = Counter(r.split for r in runs)
+        rows.append(
+            f"| `{name}` | {len(runs)} | {split['train']} | {split['validation']} |"
+            f" {split['test']} | {len(c.unit_ids)} | {c.outputs.duration_s:g} s |"
+            f" {c.outputs.sample_rate_hz:g} Hz |"
+        )
+    return "\n".join(rows) + "\n"
+
+
 def source(name: str) -> Callable[[], str]:
     """What fills the block called ``name``; an unknown name is refused."""
     if name == "catalogue table":
         return catalogue_table
     if name == "benchmark list":
         return benchmark_list
+    if name == "campaign table":
+        return campaign_table
     if name.startswith("brake-sim "):
         return lambda: command_output(name)
     raise ValueError(
-        f"generated block {name!r} is unknown: allowed 'catalogue table', 'benchmark list'"
-        " or 'brake-sim ARGS'"
+        f"generated block {name!r} is unknown: allowed 'catalogue table', 'benchmark list',"
+        " 'campaign table' or 'brake-sim ARGS'"
     )
 
 

@@ -155,6 +155,7 @@ def test_generated_blocks_equal_what_their_commands_print():
         "brake-sim scenarios",
         "catalogue table",
         "benchmark list",
+        "campaign table",
     } <= names
     fresh = gen.fresh_outputs(names, include_expensive=False)
     stale = [
