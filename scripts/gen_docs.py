@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import datetime
 import io
 import re
 import shlex
@@ -79,7 +80,11 @@ def command_output(name: str) -> str:
     if args[:1] == ["validate"]:
         with tempfile.TemporaryDirectory() as tmp:
             out = run_cli([*args, "--out", tmp])
-        return text_block(out.replace(tmp, VALIDATE_OUT))
+        # not rerun by the test: the block says when it was printed
+        return (
+            text_block(out.replace(tmp, VALIDATE_OUT))
+            + f"\n*Printed by `{name}` on {datetime.date.today():%Y-%m-%d}.*\n"
+        )
     return text_block(run_cli(args))
 
 
