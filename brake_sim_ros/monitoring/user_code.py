@@ -31,6 +31,14 @@ def describe_code(owner: object) -> str:
     return f"{getattr(cls, '__module__', '?')}.{getattr(cls, '__qualname__', cls.__name__)}"
 
 
+def _ours(owner: object) -> bool:
+    """Whether ``owner`` is one of this package's detectors (not a user's code)."""
+    if isinstance(owner, str):
+        return False
+    cls = owner if isinstance(owner, type) else type(owner)
+    return str(getattr(cls, "__module__", "")).startswith("brake_sim_ros.")
+
+
 def _shown(exc: BaseException) -> str:
     text = " ".join(str(exc).split())
     text = "".join(c if c.isprintable() else "?" for c in text)
@@ -52,15 +60,16 @@ def user_code(
 
     Raises:
         DetectorCodeError: the block raised anything but KeyboardInterrupt, a
-            :class:`DetectorCodeError` (already named) or one of ``passthrough``.
+            :class:`DetectorCodeError` (already named) or one of ``passthrough``; a
+            built-in detector's (this package's) errors go on unchanged.
     """
     try:
         yield
     except (KeyboardInterrupt, DetectorCodeError):
         raise
     except BaseException as exc:
-        if passthrough and isinstance(exc, passthrough):
-            raise
+        if (passthrough and isinstance(exc, passthrough)) or _ours(owner):
+            raise  # the caller's to handle, or a built-in detector's own one-line error
         where = describe_code(owner)
         raise DetectorCodeError(
             f"detector {where}: {method} raised {_shown(exc)}", traceback.format_exc()
