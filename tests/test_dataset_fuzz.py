@@ -234,7 +234,9 @@ def test_damage_is_one_line_from_every_reader(tmp_path, capsys, reference, damag
     special = "FIFO" in damage or "/dev/zero" in damage
     for command, argv in COMMANDS.items():
         args = argv(d, tmp_path)
-        if special:  # a hang or reading until memory runs out: in a process, with a timeout
+        # a hang or reading until memory runs out: first in a process, with a timeout (the
+        # other commands open the directory the same way: in this process once it did not)
+        if special and command == "info":
             result = _run(args)
             code, err = result.returncode, result.stderr
         else:
