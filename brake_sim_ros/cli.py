@@ -583,6 +583,8 @@ def cmd_fit(args: argparse.Namespace) -> int:
         detector = make_detector(args.detector)
         saved.check_savable(detector)  # before the work
         windows = evaluate.fit(detector, dataset, args.fit_split)
+    except BrakeSimError:
+        raise  # one line already (a user detector's keeps its traceback for --debug)
     except (ValueError, RuntimeError) as exc:
         raise BrakeSimError(" ".join(str(exc).split())) from None
     fitted_on = {"dataset": str(args.directory), "split": args.fit_split, "windows": windows}
@@ -633,6 +635,8 @@ def cmd_score(args: argparse.Namespace) -> int:
                 windows = evaluate.fit(detector, dataset, fit_split)
                 fitted = f"fitted on {fit_split} ({windows} windows)"
             score = evaluate.score(detector, dataset, args.split, hold_s=args.hold_s)
+        except BrakeSimError:
+            raise
         except (ValueError, RuntimeError) as exc:  # the detector's, or the dataset's, one line
             raise BrakeSimError(" ".join(str(exc).split())) from None
         scores.append(score)
@@ -852,6 +856,7 @@ def _monitor_parser() -> argparse.ArgumentParser:
         help="fit the detector on a sweep's dataset first (brake-sim sweep ... --out DIR)",
     )
     p.add_argument("--fit-split", default="train", help="split to fit on (default train)")
+    p.add_argument("--debug", action="store_true", help=DEBUG_HELP)
     p.add_argument(
         "--model",
         metavar="MODEL.json",
@@ -877,12 +882,17 @@ def run_monitor(argv: list[str]) -> int:
     """``brake-sim monitor --detector NAME ...``: build (and fit) the detector here, then run
     the node (:mod:`brake_sim_ros.app.monitor`) until interrupted. Bad options (--ros-args
     parameters too), a detector that cannot be made or fitted: one line, exit 2."""
+    from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
     from rclpy.utilities import remove_ros_args
 
     from brake_sim_ros.monitoring.detector import chunk_from_measured
 
     parser = _monitor_parser()
-    args = parser.parse_args(remove_ros_args(["brake-sim monitor", *argv])[1:])
+    try:
+        own = remove_ros_args(["brake-sim monitor", *argv])[1:]
+    except _rclpy.RCLInvalidROSArgsError as exc:  # rcl's message ends with its source lines
+        parser.error(f"--ros-args: {str(exc).split(', at /')[0]}")
+    args = parser.parse_args(own)
     overrides: list[tuple[str, object]] = []  # they override --ros-args -p values
     if args.simulator is not None:
         overrides.append(("simulator", _topic_name(parser, "--simulator", args.simulator)))
@@ -1138,6 +1148,7 @@ def build_parser() -> argparse.ArgumentParser:
         " repeat it to score several",
     )
     p.add_argument("--split", default="test", help="split to score (default test)")
+    p.add_argument("--debug", action="store_true", help=DEBUG_HELP)
     p.add_argument("--fit-split", help="split to fit on (default train; not with --model)")
     p.add_argument(
         "--hold", dest="hold_s", type=float, default=0.2, help="alarm hold, s (default 0.2)"
@@ -1171,6 +1182,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--fit-split", default="train", help="split to fit on (default train)")
     p.add_argument("--out", required=True, metavar="MODEL.json", help="the file to write")
     p.add_argument("--overwrite", action="store_true", help="replace an existing --out")
+    p.add_argument("--debug", action="store_true", help=DEBUG_HELP)
     p.set_defaults(func=cmd_fit)
 
     p = sub.add_parser(
@@ -1207,6 +1219,7 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+DEBUG_HELP = "on a user detector's error, show its traceback too"
 # commands that run the physics kernels (compiled on first use)
 PHYSICS_COMMANDS = (
     "node", "live", "simulate", "resim", "validate", "bench", "severity", "sweep",
@@ -1239,6 +1252,7 @@ def _main(argv: list[str] | None) -> int:
         try:
             return run_monitor(argv[1:])
         except BrakeSimError as exc:
+            _debug_traceback(exc, "--debug" in argv)
             print(f"brake-sim monitor: error: {exc}", file=sys.stderr)
             return EXIT_ERROR
     if argv[:1] == ["live"]:
@@ -1250,11 +1264,19 @@ def _main(argv: list[str] | None) -> int:
     try:
         return int(args.func(args) or 0)
     except BrakeSimError as exc:
+        _debug_traceback(exc, getattr(args, "debug", False))
         print(f"brake-sim: error: {exc}", file=sys.stderr)
         return EXIT_ERROR
     except KeyboardInterrupt:
         print("brake-sim: interrupted", file=sys.stderr)
         return 130
+
+
+def _debug_traceback(exc: BaseException, debug: bool) -> None:
+    """With ``--debug``, the traceback of a user detector's error before its one line."""
+    text = getattr(exc, "traceback_text", "")
+    if debug and text:
+        print(text.rstrip(), file=sys.stderr)
 
 
 if __name__ == "__main__":

@@ -41,7 +41,14 @@ from brake_sim_ros.campaigns.axes import (
     defects_table,
     point_columns,
 )
-from brake_sim_ros.campaigns.splits import SPLITS, HeldOut, assign_units, unit_counts
+from brake_sim_ros.campaigns.splits import (
+    SPLITS,
+    HeldOut,
+    assign_units,
+    held_out_kind_problem,
+    unit_counts,
+    value_kind,
+)
 from brake_sim_ros.campaigns.toml_text import dumps
 from brake_sim_ros.errors import BrakeSimError
 from brake_sim_ros.model.catalogue import KIND_BY_NAME, KINDS
@@ -200,7 +207,11 @@ def load_campaign(name_or_path: str | os.PathLike[str]) -> Campaign:
         CampaignError: one line naming the file and the key.
     """
     text_path = os.fspath(name_or_path)
-    is_path = _is_path(name_or_path)
+    # a built-in's name is the built-in, even beside a file or directory of that name
+    # (give ./NAME for the file)
+    is_path = _is_path(name_or_path) and not (
+        isinstance(name_or_path, str) and name_or_path in builtin_campaigns()
+    )
     try:
         if is_path:
             text = read_scenario_text(name_or_path)
@@ -511,9 +522,17 @@ def _split(
         fractions = {"train": 0.6, "validation": 0.2, "test": 0.2}
     if abs(sum(fractions.values()) - 1.0) > 1e-9:
         raise ctx.fail("split", data, "train + validation + test fractions summing to 1")
-    columns = set()
+    columns: set[str] = set()
+    types: dict[str, set[str]] = {}  # a column's value kinds: "number", "string", "bool"
     for a in axes:
-        columns |= set(DEFECT_COLUMNS) if isinstance(a, DefectAxis) else {a.name}
+        if isinstance(a, DefectAxis):
+            columns |= set(DEFECT_COLUMNS)
+            for c in DEFECT_COLUMNS:
+                types[c] = {"number"} if c == "defect_severity" else {"string"}
+        else:
+            columns.add(a.name)
+            kinds = {"number"} if a.uniform is not None else {value_kind(v) for v in a.values}
+            types.setdefault(a.name, set()).update(kinds)
     rules = data.get("held_out", [])
     if not isinstance(rules, list) or len(rules) > 32:
         raise ctx.fail(
@@ -535,6 +554,12 @@ def _split(
         hi = ctx.number(rule["max"], f"{where}.max") if "max" in rule else None
         if not values and lo is None and hi is None:
             raise ctx.fail(where, rule, "'values', or a range 'min'/'max'")
+        if lo is not None and hi is not None and lo > hi:
+            raise ctx.fail(f"{where}.max", hi, f"a maximum >= the minimum {lo:g}")
+        problem = held_out_kind_problem(values, lo is not None or hi is not None, types[column])
+        if problem is not None:
+            key, value, allowed = problem
+            raise ctx.fail(f"{where}{key}", value, allowed)
         held.append(HeldOut(column, values, lo, hi))
     if held and fractions["test"] == 0.0:
         raise ctx.fail("split.test", 0.0, "a test fraction > 0 when values are held out")

@@ -46,6 +46,27 @@ class HeldOut:
         return lo <= value <= hi
 
 
+def value_kind(value: object) -> str:
+    """``"bool"``, ``"number"`` or ``"string"``: the kinds of value a column takes."""
+    if isinstance(value, bool):
+        return "bool"
+    return "number" if isinstance(value, int | float) else "string"
+
+
+def held_out_kind_problem(
+    values: Sequence[Value], ranged: bool, kinds: set[str]
+) -> tuple[str, object, str] | None:
+    """What makes a held-out rule hold nothing out by its kinds, as ``(key suffix, value,
+    what is allowed)``, or None: a value of a kind the column never takes, a range on a
+    column of no numbers."""
+    for i, value in enumerate(values):
+        if kinds and value_kind(value) not in kinds:
+            return f".values[{i}]", value, f"a value of the column's kind ({sorted(kinds)})"
+    if ranged and kinds and "number" not in kinds:
+        return "", "min/max", f"'values' (the column holds {sorted(kinds)}, no numbers)"
+    return None
+
+
 def _same(a: Value, b: Value) -> bool:
     if isinstance(a, bool) or isinstance(b, bool):
         return a is b

@@ -1,6 +1,9 @@
 """Reading a sweep's dataset: a lazy view over its Parquet files, splits, windows, and the
 checks of ``brake-sim dataset info`` (leakage, damage).
 
+Every file is read through :mod:`.checked`: a run's samples reach the caller only once
+its bytes have the manifest's SHA-256 and its time axis is regular.
+
 Nothing is read until asked: :attr:`SweepDataset.samples` is a :mod:`pyarrow.dataset`
 (hive-partitioned by ``run``) that pandas and polars read lazily too
 (``ds.samples.to_table(filter=...).to_pandas()``, ``polars.scan_pyarrow_dataset``).
@@ -8,7 +11,6 @@ Nothing is read until asked: :attr:`SweepDataset.samples` is a :mod:`pyarrow.dat
 
 from __future__ import annotations
 
-import json
 import os
 from collections import Counter
 from collections.abc import Iterator, Sequence
@@ -19,19 +21,15 @@ from typing import Any
 import numpy as np
 import pyarrow as pa
 import pyarrow.dataset as pads
-import pyarrow.parquet as pq
 
 from brake_sim_ros.campaigns.splits import SPLITS, HeldOut, leaks
-from brake_sim_ros.datasets.sweep import LOCK_NAME, MANIFEST_NAME, SAMPLES_DIR, sha256_file
-from brake_sim_ros.errors import BrakeSimError
+from brake_sim_ros.datasets import checked
+from brake_sim_ros.datasets.checked import DatasetError
+from brake_sim_ros.datasets.sweep import LOCK_NAME, MANIFEST_NAME, SAMPLES_DIR
 from brake_sim_ros.model.catalogue import label_columns
 from brake_sim_ros.recording.mcap_format import describe_path
 
 REQUIRED = ("run_id", "unit_id", "seed", "split", "status", "file", "sha256")
-
-
-class DatasetError(BrakeSimError, ValueError):
-    """A sweep directory that cannot be read, is damaged, or leaks (one line)."""
 
 
 @dataclass(frozen=True)
@@ -63,6 +61,7 @@ class SweepDataset:
         self.manifest = manifest  # one row per run
         self.lock = lock
         self._samples: pads.Dataset | None = None
+        self._by_id: dict[str, dict[str, Any]] | None = None
 
     @property
     def held_out(self) -> tuple[HeldOut, ...]:
@@ -92,8 +91,21 @@ class SweepDataset:
         ]
 
     def run_table(self, run_id: str) -> pa.Table:
-        """One run's samples, read whole."""
-        return pq.read_table(self.root / SAMPLES_DIR / f"run={run_id}")
+        """One finished run's samples, read whole and checked (:func:`.checked.read_run`).
+
+        Raises:
+            DatasetError: not a finished run of the manifest, or its file damaged.
+        """
+        row = self._rows().get(run_id)
+        if row is None or row["status"] != "ok":
+            raise DatasetError(f"{describe_path(self.root)}: no finished run {run_id!r}")
+        return checked.read_run(self.root, row)
+
+    def _rows(self) -> dict[str, dict[str, Any]]:
+        if self._by_id is None:
+            rows = self.manifest.select(list(checked.MANIFEST_TYPES)).to_pylist()
+            self._by_id = {r["run_id"]: r for r in rows}
+        return self._by_id
 
     def split(self, name: str) -> pads.Dataset:
         """The samples of the split ``name`` (lazy)."""
@@ -159,56 +171,45 @@ def open_dataset(directory: str | os.PathLike[str]) -> SweepDataset:
     name = describe_path(root)
     if not root.is_dir():
         raise DatasetError(f"{name}: not a directory: allowed a sweep's output directory")
-    try:
-        lock = json.loads((root / LOCK_NAME).read_text(encoding="utf-8"))
-        if not isinstance(lock, dict) or not isinstance(lock.get("runs"), list):
-            raise ValueError("not a lock")
-    except FileNotFoundError:
-        raise DatasetError(f"{name}: no {LOCK_NAME}: not a sweep's output directory") from None
-    except (OSError, ValueError) as exc:
-        raise DatasetError(f"{name}: {LOCK_NAME} cannot be read ({type(exc).__name__})") from None
-    try:
-        manifest = pq.read_table(root / MANIFEST_NAME)
-    except FileNotFoundError:
+    if not os.path.lexists(root / LOCK_NAME):
+        raise DatasetError(f"{name}: no {LOCK_NAME}: not a sweep's output directory")
+    where = f"{name}: {LOCK_NAME}"
+    lock = checked.parse_lock(
+        checked.read_bytes(root / LOCK_NAME, checked.LOCK_LIMIT_BYTES, where), where
+    )
+    if not os.path.lexists(root / MANIFEST_NAME):
         raise DatasetError(
             f"{name}: no {MANIFEST_NAME}: the sweep did not finish (run it again to resume)"
-        ) from None
-    except (OSError, pa.ArrowException) as exc:
-        raise DatasetError(
-            f"{name}: {MANIFEST_NAME} cannot be read ({type(exc).__name__})"
-        ) from None
-    missing = [c for c in REQUIRED if c not in manifest.column_names]
-    if missing:
-        raise DatasetError(f"{name}: {MANIFEST_NAME} has no column {missing[0]!r}: damaged")
+        )
+    where = f"{name}: {MANIFEST_NAME}"
+    data = checked.read_bytes(root / MANIFEST_NAME, checked.MANIFEST_LIMIT_BYTES, where)
+    manifest = checked.parse_manifest(data, lock, where)
+    _refuse_leaks(root, manifest, lock)  # first: a leak is worse news than damage
+    checked.check_agreement(manifest, lock, where)
     return SweepDataset(root, manifest, lock)
 
 
+def _refuse_leaks(root: Path, manifest: pa.Table, lock: dict[str, Any]) -> None:
+    held = [
+        HeldOut(h["column"], tuple(h["values"]), h.get("minimum"), h.get("maximum"))
+        for h in lock.get("held_out", [])
+    ]
+    problems = leaks(manifest.to_pylist(), held)
+    if problems:
+        more = f" (and {len(problems) - 1} more)" if len(problems) > 1 else ""
+        raise DatasetError(f"{describe_path(root)}: leakage: {problems[0]}{more}")
+
+
 def check(dataset: SweepDataset) -> None:
-    """Leakage (a unit in two splits, a held-out value outside test) and damage (the
-    manifest disagreeing with the lock, a finished run's file missing or changed).
+    """Leakage (a unit in two splits, a held-out value outside test) and damage (a
+    finished run's file missing, changed or not a regular time series).
 
     Raises:
         DatasetError: the first problem, with how many there are.
     """
-    rows = dataset.manifest.to_pylist()
-    problems = leaks(rows, dataset.held_out)
-    if problems:
-        more = f" (and {len(problems) - 1} more)" if len(problems) > 1 else ""
-        raise DatasetError(f"{describe_path(dataset.root)}: leakage: {problems[0]}{more}")
-    locked = {r["run_id"]: r for r in dataset.lock["runs"]}
-    for row in rows:
-        where = f"{describe_path(dataset.root)}: run {row['run_id']}"
-        lock = locked.get(row["run_id"])
-        if lock is None or (lock["unit_id"], lock["split"]) != (row["unit_id"], row["split"]):
-            raise DatasetError(f"{where}: the manifest disagrees with {LOCK_NAME}: damaged")
-        if row["status"] == "ok":
-            path = dataset.root / str(row["file"])
-            if path.is_symlink() or not path.is_file() or sha256_file(path) != row["sha256"]:
-                raise DatasetError(f"{where}: its file is missing or changed: damaged")
-    if len(rows) != len(locked):
-        raise DatasetError(
-            f"{describe_path(dataset.root)}: the manifest and {LOCK_NAME} list different runs"
-        )
+    _refuse_leaks(dataset.root, dataset.manifest, dataset.lock)
+    for run_id in dataset.runs():  # the manifest agrees with the lock (checked on opening)
+        dataset.run_table(run_id)
 
 
 def info_text(dataset: SweepDataset) -> str:

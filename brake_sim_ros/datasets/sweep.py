@@ -32,9 +32,10 @@ from __future__ import annotations
 
 import concurrent.futures
 import contextlib
+import fcntl
+import functools
 import hashlib
 import json
-import multiprocessing
 import os
 import re
 import stat
@@ -46,6 +47,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from brake_sim_ros.datasets import life
+from brake_sim_ros.datasets.executors import ExecutorError, one_line, open_executor, pool_context
+from brake_sim_ros.datasets.orphans import die_with_parent
 from brake_sim_ros.datasets.threads import limit_threads
 from brake_sim_ros.errors import BrakeSimError
 from brake_sim_ros.recording.mcap_format import describe_path
@@ -53,6 +56,7 @@ from brake_sim_ros.recording.output import OutputError, atomic_output
 
 if TYPE_CHECKING:
     from brake_sim_ros.campaigns.loader import Campaign, RunSpec
+    from brake_sim_ros.datasets.executors import Executor
 
 LOCK_NAME = "campaign.lock"
 MANIFEST_NAME = "manifest.parquet"
@@ -128,6 +132,7 @@ def sha256_file(path: Path) -> str:
 def _init_worker() -> None:
     """A pool worker: one thread (the fork server set it), the kernels loaded (by the fork
     server; else from numba's cache here, once)."""
+    die_with_parent()  # the fork server: killed with the sweep, and so this worker with it
     limit_threads()
     import pyarrow
 
@@ -135,16 +140,6 @@ def _init_worker() -> None:
     from brake_sim_ros.solvers.warmup import ensure_compiled
 
     ensure_compiled(say=lambda _line: None)
-
-
-def pool_context() -> multiprocessing.context.BaseContext:
-    """The local pool's process context: workers fork from one server process that
-    imported and warmed the run path once (:mod:`.warm_worker`); none of this process's
-    state is copied. The server starts on first use and serves every later pool of this
-    process (:func:`start_pool_server` starts it ahead)."""
-    context = multiprocessing.get_context("forkserver")
-    context.set_forkserver_preload(["brake_sim_ros.datasets.warm_worker"])
-    return context
 
 
 def start_pool_server() -> None:
@@ -158,11 +153,6 @@ def start_pool_server() -> None:
 def run_file(run_id: str) -> str:
     """A run's file, relative to the output directory."""
     return f"{SAMPLES_DIR}/run={run_id}/{PART_NAME}"
-
-
-def _one_line(exc: BaseException) -> str:
-    text = " ".join(str(exc).split()) or type(exc).__name__
-    return text if len(text) <= 500 else text[:400] + " ... " + text[-60:]
 
 
 def run_task(spec: RunSpec, out_dir: str) -> Outcome:
@@ -199,9 +189,9 @@ def run_task(spec: RunSpec, out_dir: str) -> Outcome:
         return Outcome(spec.run_id, "ok", "", cost, relative, digest, table.num_rows, _rss_mb())
     except Exception as exc:  # recorded for this run; the sweep goes on
         error = (
-            _one_line(exc)
+            one_line(exc)
             if isinstance(exc, BrakeSimError)
-            else (f"{type(exc).__name__}: {_one_line(exc)}")
+            else (f"{type(exc).__name__}: {one_line(exc)}")
         )
         return Outcome(spec.run_id, "failed", error, time.process_time() - start)
 
@@ -214,15 +204,48 @@ def _rss_mb() -> float:
 
 
 # --- the output directory -------------------------------------------------------------------
-def prepare_output(out: Path, lock_text: str) -> None:
-    """Check ``out`` and write its lock: a new directory (made with any missing parents),
-    an empty one, or one holding this campaign's lock (resumed). Refused: a link, a non-directory,
-    a directory with other files or another campaign's lock. Stale temporary files of a
-    killed sweep are removed.
+@contextlib.contextmanager
+def claimed_output(out: Path, lock_text: str) -> Iterator[None]:
+    """``out`` checked and prepared (:func:`prepare_output`) and held by this sweep for the
+    block: a second sweep into it meanwhile is refused (an advisory ``flock`` on the
+    directory, released however this process ends).
 
     Raises:
         SweepError: one line naming the directory.
     """
+    _make_directory(out)
+    try:
+        fd = os.open(out, os.O_RDONLY | os.O_DIRECTORY | os.O_NOFOLLOW)
+    except OSError as exc:
+        raise SweepError(f"--out {describe_path(out)}: cannot open it ({exc.strerror})") from None
+    try:
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            raise SweepError(
+                f"--out {describe_path(out)} is in use by another sweep running now: wait"
+                " for it to end, or give another directory"
+            ) from None
+        prepare_output(out, lock_text)
+        yield
+    finally:
+        os.close(fd)
+
+
+def _write_whole(path: Path, write: Callable[[Path], None]) -> None:
+    """``write`` a temporary file renamed to ``path`` when whole; a full disk or any other
+    write error is one line (the temporary file removed)."""
+    try:
+        with atomic_output(path, overwrite=True, option="--out") as partial:
+            write(partial)
+    except OSError as exc:  # OutputError is a BrakeSimError, not an OSError
+        raise SweepError(
+            f"--out {describe_path(path)}: cannot write it ({exc.strerror or exc})"
+        ) from None
+
+
+def _make_directory(out: Path) -> None:
+    """``out`` made (with its parents) if missing; refused if a link or not a directory."""
     name = describe_path(out)
     try:
         info = os.lstat(out)
@@ -241,6 +264,19 @@ def prepare_output(out: Path, lock_text: str) -> None:
         )
     elif not stat.S_ISDIR(info.st_mode):
         raise SweepError(f"--out {name} exists and is not a directory: allowed a directory")
+
+
+def prepare_output(out: Path, lock_text: str) -> None:
+    """Check ``out`` and write its lock: a new directory (made with any missing parents),
+    an empty one, or one holding this campaign's lock (resumed). Refused: a link, a non-directory,
+    a directory with other files or another campaign's lock. Stale temporary files of a
+    killed sweep are removed.
+
+    Raises:
+        SweepError: one line naming the directory.
+    """
+    _make_directory(out)
+    name = describe_path(out)
     lock = out / LOCK_NAME
     entries = sorted(os.listdir(out))
     if LOCK_NAME in entries:
@@ -252,11 +288,7 @@ def prepare_output(out: Path, lock_text: str) -> None:
                 )
         if not lock.is_file() or lock.stat().st_size > 64 * 1024**2:
             raise SweepError(f"--out {name}: {LOCK_NAME} is not a campaign lock file")
-        if lock.read_bytes() != lock_text.encode():
-            raise SweepError(
-                f"--out {name} holds another campaign (or this one with another version of"
-                f" brake-sim-ros): its {LOCK_NAME} differs; give a new directory"
-            )
+        _same_campaign(lock.read_bytes(), lock_text, name)
         _remove_partials(out)
         return
     if entries:
@@ -264,8 +296,34 @@ def prepare_output(out: Path, lock_text: str) -> None:
             f"--out {name} is not empty and holds no {LOCK_NAME}: allowed a new or empty"
             " directory, or one of this campaign's sweeps (to resume it)"
         )
-    with atomic_output(lock, option="--out") as partial:
-        partial.write_text(lock_text, encoding="utf-8")
+    _write_whole(lock, lambda partial: partial.write_text(lock_text, encoding="utf-8"))
+
+
+def _same_campaign(held: bytes, lock_text: str, name: str) -> None:
+    """Refuse a directory whose lock is not this campaign's: the same bytes, or the same
+    but for the path the campaign was named by (``c.toml``, ``./c.toml``: one file).
+
+    Raises:
+        SweepError: a damaged lock, or another campaign's.
+    """
+    if held == lock_text.encode():
+        return
+    try:
+        old = json.loads(held.decode("utf-8"))
+        if not isinstance(old, dict) or not isinstance(old.get("runs"), list):
+            raise ValueError("not a lock")
+    except (UnicodeDecodeError, ValueError, RecursionError):
+        raise SweepError(
+            f"--out {name}: its {LOCK_NAME} is damaged (truncated, or not a campaign lock):"
+            " give a new directory"
+        ) from None
+    new = json.loads(lock_text)
+    source = "campaign_source"
+    if {**old, source: None} != {**new, source: None}:
+        raise SweepError(
+            f"--out {name} holds another campaign (or this one with another version of"
+            f" brake-sim-ros): its {LOCK_NAME} differs; give a new directory"
+        )
 
 
 def _remove_partials(out: Path) -> None:
@@ -297,8 +355,11 @@ def finished(out: Path, run_id: str) -> Outcome | None:
 
 
 def _record(out: Path, outcome: Outcome) -> None:
-    with atomic_output(out / DONE_DIR / f"{outcome.run_id}.json", overwrite=True) as partial:
-        partial.write_text(json.dumps(asdict(outcome), sort_keys=True), encoding="utf-8")
+    text = json.dumps(asdict(outcome), sort_keys=True)
+    _write_whole(
+        out / DONE_DIR / f"{outcome.run_id}.json",
+        lambda partial: partial.write_text(text, encoding="utf-8"),
+    )
 
 
 def manifest_table(runs: list[RunSpec], outcomes: dict[str, Outcome]) -> Any:
@@ -330,63 +391,69 @@ def manifest_table(runs: list[RunSpec], outcomes: dict[str, Outcome]) -> Any:
 
 
 # --- running --------------------------------------------------------------------------------
-@contextlib.contextmanager
-def _executor(
-    workers: int, scheduler: str | None
-) -> Iterator[Callable[[list[RunSpec], str], Iterator[Outcome]]]:
-    """A function mapping run specs to outcomes as they finish: on a local process pool
-    or on the Dask cluster at ``scheduler``."""
-    if scheduler is None:
-        context = pool_context()
-        pool = concurrent.futures.ProcessPoolExecutor(
-            max_workers=workers, mp_context=context, initializer=_init_worker
-        )
+def task_tag(specs: list[RunSpec], out_dir: str) -> str:
+    """16 hex digits naming these runs of this campaign into ``out_dir`` (an absolute
+    path): the part of a Dask task key that keeps two sweeps on one cluster apart."""
+    digest = hashlib.sha256(out_dir.encode("utf-8", "surrogateescape") + b"\0")
+    for spec in specs:
+        digest.update(spec.run_id.encode() + b"\0" + spec.scenario_text.encode() + b"\0")
+    return digest.hexdigest()[:16]
 
-        def run_local(specs: list[RunSpec], out_dir: str) -> Iterator[Outcome]:
-            futures = [pool.submit(run_task, s, out_dir) for s in specs]
-            try:
-                for future in concurrent.futures.as_completed(futures):
-                    yield future.result()
-            except concurrent.futures.process.BrokenProcessPool:
-                unfinished = sum(not f.done() or f.exception() is not None for f in futures)
-                raise SweepError(
-                    f"a worker process died (killed, or out of memory?) with {unfinished} runs"
-                    " unfinished: the finished ones are kept; run the command again to resume"
-                ) from None
 
-        try:
-            yield run_local
-        except BaseException:  # Ctrl-C or a refusal: queued runs are dropped, not waited for
-            pool.shutdown(wait=False, cancel_futures=True)
-            raise
-        pool.shutdown(wait=True)
-        return
-    try:
-        from distributed import Client, as_completed
-    except ImportError:
+def _checked(outcome: Outcome, todo: dict[str, RunSpec], out: Path) -> Outcome:
+    """A worker's outcome, refused unless it is one of this sweep's runs and, when ok, its
+    file is on disk with the SHA-256 the worker reported (a result that is not this
+    sweep's must never reach the manifest)."""
+    if outcome.run_id not in todo:
         raise SweepError(
-            "--scheduler needs dask.distributed: pip install 'dask[distributed]'"
-        ) from None
-    try:
-        client = Client(scheduler, timeout=10)
-    except (OSError, TimeoutError, ValueError) as exc:
-        raise SweepError(f"--scheduler {scheduler}: cannot connect ({_one_line(exc)})") from None
-    try:
-
-        def run_dask(specs: list[RunSpec], out_dir: str) -> Iterator[Outcome]:
-            futures = client.map(
-                run_task,
-                specs,
-                out_dir=out_dir,
-                pure=False,
-                key=[f"brake-sim-{s.run_id}" for s in specs],
+            f"a worker returned run {outcome.run_id!r}, not one of this sweep's: refused"
+        )
+    if outcome.status == "ok":
+        path = out / run_file(outcome.run_id)
+        if (
+            outcome.file != run_file(outcome.run_id)
+            or not path.is_file()
+            or (sha256_file(path) != outcome.sha256)
+        ):
+            raise SweepError(
+                f"run {outcome.run_id}: the worker's result does not match"
+                f" {describe_path(path)} (another sweep writing there?): the finished runs"
+                " are kept; run the command again to resume"
             )
-            for future in as_completed(futures):
-                yield future.result()
+    return outcome
 
-        yield run_dask
-    finally:
-        client.close()
+
+def run_columns(spec: RunSpec) -> tuple[str, ...]:
+    """The columns a run of ``spec`` writes, from its first few samples (a worker task)."""
+    from brake_sim_ros.datasets.parquet import run_table
+    from brake_sim_ros.scenarios.loader import parse_scenario
+    from brake_sim_ros.stream.run import run_scenario
+
+    scenario = parse_scenario(spec.scenario_text, spec.run_id)
+    short = min(scenario.duration_s, 8.0 / scenario.sample_rate_hz)
+    return tuple(run_table(scenario, run_scenario(scenario, duration_s=short), short).column_names)
+
+
+def _check_columns(executor: Executor, spec: RunSpec) -> None:
+    """Refuse ``outputs.columns`` naming a column the campaign's first run does not write
+    (a few of its samples simulated on a worker); the runs check it again."""
+    try:
+        columns = executor.call(
+            run_columns,
+            spec,
+            "brake-sim-columns-" + hashlib.sha256(spec.scenario_text.encode()).hexdigest()[:16],
+        )
+    except ExecutorError:
+        raise
+    except Exception:  # the run itself fails: recorded as a failed run by the sweep
+        return
+    missing = [c for c in spec.keep if c not in columns]
+    if missing:
+        raise SweepError(
+            f"outputs.columns: {missing[0]!r} is not a column of this campaign's runs"
+            f" ({spec.run_id} writes {len(columns)}: {', '.join(columns[:40])}"
+            f"{' ...' if len(columns) > 40 else ''})"
+        )
 
 
 def sweep(
@@ -410,8 +477,20 @@ def sweep(
     runs = campaign.runs()
     n_workers = workers or os.cpu_count() or 1
     # a scheduler that cannot be reached is refused before DIR is made or written
-    with _executor(n_workers, scheduler) as execute:  # the pool forks as runs need workers
-        prepare_output(out, campaign.lock_text(runs))
+    with open_executor(n_workers, scheduler, _init_worker) as executor:
+        try:
+            return _sweep_on(executor, campaign, runs, out, quiet)
+        except ExecutorError as exc:
+            raise SweepError(str(exc)) from None
+
+
+def _sweep_on(
+    executor: Executor, campaign: Campaign, runs: list[RunSpec], out: Path, quiet: bool
+) -> tuple[SweepSummary, dict[str, Outcome]]:
+    """:func:`sweep` on ``executor``'s workers."""
+    if campaign.outputs.columns and runs:  # a typo found before DIR is made, not after
+        _check_columns(executor, runs[0])
+    with claimed_output(out, campaign.lock_text(runs)):
         start = time.perf_counter()
         outcomes: dict[str, Outcome] = {}
         for spec in runs:
@@ -423,7 +502,15 @@ def sweep(
         failed = 0
         bar = _progress(len(runs), resumed, quiet)
         try:
-            for outcome in execute(todo, str(out.resolve())) if todo else ():
+            by_id = {s.run_id: s for s in todo}
+            out_dir = str(out.resolve())
+            # keys unique to this campaign and directory: a cluster is shared, and a key
+            # another sweep submitted would hand this one that sweep's result
+            tag = task_tag(todo, out_dir)
+            keys = [f"brake-sim-{tag}-{s.run_id}" for s in todo]
+            task = functools.partial(run_task, out_dir=out_dir)
+            for outcome in executor.map(task, todo, keys) if todo else ():
+                outcome = _checked(outcome, by_id, out)
                 outcomes[outcome.run_id] = outcome
                 if outcome.status == "ok":
                     _record(out, outcome)
@@ -431,13 +518,17 @@ def sweep(
                     failed += 1
                 bar.set_postfix(failed=failed, refresh=False)
                 bar.update(1)
+        except ExecutorError:
+            _remove_partials(out)  # what a killed worker left: the directory is this sweep's
+            raise
         finally:
             bar.close()
-    import pyarrow.parquet as pq
+        import pyarrow.parquet as pq
 
-    table = manifest_table(runs, outcomes)
-    with atomic_output(out / MANIFEST_NAME, overwrite=True, option="--out") as partial:
-        pq.write_table(table, partial, compression="zstd")
+        table = manifest_table(runs, outcomes)
+        _write_whole(  # while the directory is still this sweep's
+            out / MANIFEST_NAME, lambda partial: pq.write_table(table, partial, compression="zstd")
+        )
     cpu = sum(outcomes[s.run_id].cost_cpu_s for s in todo)
     simulated = sum(s.duration_s for s in todo if outcomes[s.run_id].status == "ok")
     summary = SweepSummary(

@@ -8,8 +8,10 @@ the kernels themselves.
 
 from __future__ import annotations
 
+from brake_sim_ros.datasets.orphans import die_with_parent
 from brake_sim_ros.datasets.threads import limit_threads
 
+die_with_parent()  # the server is the sweep's child: it ends with it (its workers with it)
 limit_threads()  # before numba, numpy's BLAS or pyarrow start their threads
 
 import pyarrow  # noqa: E402

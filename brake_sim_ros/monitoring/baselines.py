@@ -24,6 +24,7 @@ import numpy as np
 
 from brake_sim_ros.monitoring.detector import Assessment, Detector, TrainingWindow
 from brake_sim_ros.monitoring.features import STATISTICS, crest_factor, kurtosis, rms
+from brake_sim_ros.monitoring.user_code import user_code
 
 DEFAULT_CHANNEL = "backing_plate_accel_y"
 
@@ -115,9 +116,13 @@ def make_detector(name: str) -> Detector:
             f"detector {name!r}: allowed a built-in ({', '.join(sorted(BUILTIN))}) or module:Class"
         )
     try:
-        cls = getattr(importlib.import_module(module), attr)
+        # the module's own code runs here: SyntaxError, SystemExit... are one line
+        with user_code(name, f"importing {module}", passthrough=(ImportError,)):
+            imported = importlib.import_module(module)
+        cls = getattr(imported, attr)
     except (ImportError, AttributeError) as exc:
         raise ValueError(f"detector {name!r}: cannot import it ({type(exc).__name__})") from None
     if not (isinstance(cls, type) and issubclass(cls, Detector)):
         raise ValueError(f"detector {name!r}: not a brake_sim_ros.monitoring Detector subclass")
-    return cls()
+    with user_code(cls, "__init__"):
+        return cls()

@@ -30,6 +30,8 @@ from typing import Any
 
 import numpy as np
 
+from brake_sim_ros.monitoring.user_code import user_code
+
 
 @dataclass(frozen=True)
 class SampleChunk:
@@ -65,6 +67,10 @@ class SampleChunk:
 # larger chunk is a damaged or hostile message, refused before any allocation.
 MAX_CHUNK_SAMPLES = 1 << 22
 MAX_CHUNK_VALUES = 1 << 25
+# the longest window a detector may buffer, samples (82 s at 51.2 kHz): a rate that asks
+# for more is refused, never buffered without end (32 MB per channel at the limit)
+MAX_WINDOW_SAMPLES = 1 << 22
+MAX_WINDOW_S = 60.0  # the longest window a detector may ask for, s
 
 
 def chunk_from_measured(msg: Any) -> SampleChunk:
@@ -226,6 +232,11 @@ class Detector(abc.ABC):
         if self._rate is not None and chunk.sample_rate_hz != self._rate:
             self.reset()  # a new run at another rate
         n = self.window_samples(chunk.sample_rate_hz)
+        if n > MAX_WINDOW_SAMPLES:
+            raise ValueError(
+                f"detector {self.name}: a window of {n} samples at {chunk.sample_rate_hz:g} Hz;"
+                f" allowed at most {MAX_WINDOW_SAMPLES} (the samples a window may buffer)"
+            )
         start = chunk.first_sample_index
         offset = 0
         if self._next_index != start:  # first chunk or a gap: wait for an aligned window
@@ -244,6 +255,10 @@ class Detector(abc.ABC):
             if self._buffered == n:
                 window = {c: np.concatenate(parts) for c, parts in self._buffer.items()}
                 last = start + k - 1
-                out.append(self.assess(window, last, chunk.sample_rate_hz))
+                with user_code(self, "assess"):
+                    verdict = self.assess(window, last, chunk.sample_rate_hz)
+                    if not isinstance(verdict, Assessment):
+                        raise TypeError(f"it returned {type(verdict).__name__}, not an Assessment")
+                out.append(verdict)
                 self._buffer, self._buffered = {c: [] for c in self.channels}, 0
         return out

@@ -52,10 +52,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from brake_sim_ros.datasets.life import RUL_COLUMN
-from brake_sim_ros.datasets.reader import SweepDataset
+from brake_sim_ros.datasets.reader import DatasetError, SweepDataset
 from brake_sim_ros.model.catalogue import KIND_BY_NAME, KINDS, label_column
 from brake_sim_ros.monitoring import metrics
 from brake_sim_ros.monitoring.detector import Assessment, Detector, SampleChunk, TrainingWindow
+from brake_sim_ros.monitoring.user_code import user_code
 
 SCHEMA_VERSION = 4
 HEALTHY = "healthy"  # the class of a healthy window or run in the per-class figures
@@ -183,9 +184,11 @@ def fit(detector: Detector, dataset: SweepDataset, split: str = "train") -> int:
     """Fit ``detector`` on the windows of ``split`` (its window length); the number of
     windows it saw."""
     windows: list[TrainingWindow] = []
+    longest = 0
     for run_id in dataset.runs(split):
         run = read_run(dataset, run_id)
-        n = detector.window_samples(run.sample_rate_hz)
+        n = window_samples(detector, run.sample_rate_hz)
+        longest = max(longest, run.time_s.size)
         for start in range(0, run.time_s.size - n + 1, n):
             windows.append(
                 TrainingWindow(
@@ -198,13 +201,40 @@ def fit(detector: Detector, dataset: SweepDataset, split: str = "train") -> int:
                     unit_id=run.unit_id,
                 )
             )
-    detector.fit(windows)
+    if not windows:
+        _no_window(detector, dataset, split, longest)
+    with user_code(detector, "fit"):
+        detector.fit(windows)
     return len(windows)
 
 
+def window_samples(detector: Detector, sample_rate_hz: float) -> int:
+    """The detector's window length at ``sample_rate_hz``, samples (a user's code: checked).
+
+    Raises:
+        DetectorCodeError: it raised, or gave no whole number >= 1.
+    """
+    with user_code(detector, "window_samples"):
+        n = detector.window_samples(sample_rate_hz)
+        if isinstance(n, bool) or not isinstance(n, int | np.integer) or n < 1:
+            raise ValueError(f"{n!r}: allowed a whole number of samples >= 1")
+    return int(n)
+
+
+def _no_window(detector: Detector, dataset: SweepDataset, split: str, longest: int) -> None:
+    """Refuse a fit or score over no window: nothing would be measured."""
+    if not dataset.runs(split):
+        raise DatasetError(f"split {split}: no finished run: no window to fit or score on")
+    raise DatasetError(
+        f"detector {detector.name}: its window (window_s {detector.window_s!r}) is longer"
+        f" than every run of {split} (the longest: {longest} samples): no window"
+    )
+
+
 def assess_run(detector: Detector, run: RunSamples, chunk_s: float) -> list[Assessment]:
-    detector.reset()
-    return [a for c in chunks(run, chunk_s) for a in detector.feed(c)]
+    with user_code(detector, "feed"):
+        detector.reset()
+        return [a for c in chunks(run, chunk_s) for a in detector.feed(c)]
 
 
 def score(
@@ -223,8 +253,11 @@ def score(
     forecasts: list[tuple[float, float]] = []  # (forecast, true) RUL, s
     window_class: list[str] = []
     run_class: dict[str, list[float | None]] = {}
+    longest = 0
     for run_id in dataset.runs(split):
         run = read_run(dataset, run_id)
+        longest = max(longest, run.time_s.size)
+        window_samples(detector, run.sample_rate_hz)  # checked before any sample is fed
         found = assess_run(detector, run, chunk_s)
         rows = np.array([a.sample_index for a in found], dtype=np.int64)
         times = run.time_s[rows] if rows.size else np.zeros(0)
@@ -277,6 +310,8 @@ def score(
                 "false_alarms": count,
             }
         )
+    if not truth:
+        _no_window(detector, dataset, split, longest)
     y = np.array(truth, dtype=bool)
     h = np.array(index, dtype=np.float64)
     classes = sorted(set(true_class) | set(diagnosed))

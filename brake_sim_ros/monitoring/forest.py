@@ -29,6 +29,10 @@ from dataclasses import dataclass
 import numpy as np
 
 LEAF = -1  # scikit-learn's TREE_LEAF: a node without children
+# the deepest tree fitting makes (learned.py gives it as max_depth; real trees on the
+# reference campaign are far shallower) and so the deepest a saved one may hold: a window's
+# prediction walks at most this many levels, however the file was made
+MAX_TREE_DEPTH = 128
 
 
 @dataclass(frozen=True)
@@ -95,6 +99,13 @@ class ForestArrays:
         for name, child in (("left", self.left), ("right", self.right)):
             if np.any(split & ((child <= local) | (child >= size))):
                 return f"{name}: a child outside its tree or not after its parent"
+        offset = np.arange(n) - local  # each node's tree's first node
+        both = np.concatenate([split, split])
+        children = np.concatenate([self.left + offset, self.right + offset])[both]
+        if children.size != n - counts.size or np.bincount(children, minlength=n).max() > 1:
+            return "left, right: a node with two parents, or one no split leads to"
+        if self._depth() > MAX_TREE_DEPTH:
+            return f"a tree deeper than {MAX_TREE_DEPTH} levels; fitting makes none deeper"
         if np.any(split & ((self.feature < 0) | (self.feature >= self.n_features))):
             return f"feature: allowed 0 to {self.n_features - 1} at a split"
         if not np.all(np.isfinite(self.threshold[split])):
@@ -105,6 +116,18 @@ class ForestArrays:
         if not np.all(np.isfinite(values)):
             return "leaf_values: allowed finite numbers"
         return None
+
+    def _depth(self) -> int:
+        """The deepest tree's depth (a lone leaf: 0), counted up to one past
+        :data:`MAX_TREE_DEPTH` (the trees are checked to be trees first)."""
+        starts, left, right, _, _ = self._walk
+        frontier = starts
+        for depth in range(MAX_TREE_DEPTH + 1):
+            frontier = frontier[left[frontier] >= 0]
+            if frontier.size == 0:
+                return depth
+            frontier = np.concatenate([left[frontier], right[frontier]])
+        return MAX_TREE_DEPTH + 1
 
     @functools.cached_property
     def _walk(self) -> tuple[np.ndarray, ...]:
@@ -130,7 +153,7 @@ class ForestArrays:
         starts, left, right, feature, leaf_row = self._walk
         rows = np.arange(X.shape[0])[:, None]
         node = np.broadcast_to(starts, (X.shape[0], starts.size)).copy()
-        for _ in range(int(self.node_counts.max())):  # each step goes deeper: it ends
+        for _ in range(MAX_TREE_DEPTH + 1):  # each step goes deeper: it ends (check())
             at_split = left[node] >= 0
             if not at_split.any():
                 break

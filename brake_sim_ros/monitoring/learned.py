@@ -52,7 +52,7 @@ from sklearn.pipeline import Pipeline
 
 from brake_sim_ros.monitoring.detector import Assessment, Diagnosis, TrainingWindow
 from brake_sim_ros.monitoring.features import CHANNELS, window_features
-from brake_sim_ros.monitoring.forest import ForestArrays
+from brake_sim_ros.monitoring.forest import MAX_TREE_DEPTH, ForestArrays
 from brake_sim_ros.monitoring.history import HistoryDetector
 
 HEALTHY = "healthy"
@@ -78,7 +78,13 @@ def _pipeline(
             ),
             (
                 "forest",
-                forest(n_estimators=trees, min_samples_leaf=MIN_LEAF, random_state=SEED, n_jobs=1),
+                forest(
+                    n_estimators=trees,
+                    min_samples_leaf=MIN_LEAF,
+                    max_depth=MAX_TREE_DEPTH,  # what a saved detector may hold (forest.py)
+                    random_state=SEED,
+                    n_jobs=1,
+                ),
             ),
         ]
     )

@@ -178,7 +178,7 @@ class _Checker:
             raise self.fail(
                 f"{key}.base64", f"{len(raw)} bytes; its shape {dims} needs {math.prod(dims) * 8}"
             )
-        out = np.frombuffer(raw, dtype=DTYPES[dtype]).reshape(dims).astype(dtype)
+        out = np.frombuffer(raw, dtype=DTYPES[dtype]).reshape(dims).astype(dtype, copy=False)
         if dtype == "float64" and not np.all(np.isfinite(out)):
             raise self.fail(key, "a NaN or infinite value; allowed finite numbers")
         return out

@@ -31,6 +31,7 @@ at another sample rate, is a new run (the simulator was reset): the detector res
 from __future__ import annotations
 
 import math
+import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, Protocol
@@ -62,6 +63,12 @@ NODE_NAME = "brake_monitor"
 _NS_PER_S = 1_000_000_000
 MAX_STAMP_NS = 2**31 * _NS_PER_S  # builtin_interfaces/Time holds int32 seconds
 MAX_ID_CHARS = 128  # run and unit ids longer than this (from the wire) are cut
+# a stamp this much earlier than sample 0's time is float rounding in the publisher's
+# stamp (its time since sample 0 computed in float64), not a malformed message
+STAMP_ROUNDING_NS = 1_000
+FAULT_SUMMARY_S = 10.0  # after a fault's first line, its count at most once per this (wall)
+MAX_WINDOW_SAMPLES = 1 << 22  # monitoring.detector's: the node imports nothing of it
+MAX_WINDOW_S = 60.0
 
 # The monitor wants every sample: a reliable subscription with room for 10 s of the
 # simulator's 10 Hz chunks, so a briefly busy monitor loses nothing (a loss would show as
@@ -155,6 +162,8 @@ class MonitorStats:
     runs: int = 0  # runs seen (a restart at sample 0, or a new rate, begins one)
     detector_failures: int = 0  # chunks whose feed() raised
     diagnoses_refused: int = 0  # diagnoses outside the defect catalogue
+    windows_too_long: int = 0  # messages dropped: a rate whose window exceeds the buffer
+    warning_lines: int = 0  # warning lines logged (one per kind of fault, then counts)
     last_warning: str = ""
 
 
@@ -207,6 +216,7 @@ class MonitorNode(Node):
         to_chunk: MeasuredChunk -> the detector's input chunk; raises ValueError on a
             malformed message (:func:`brake_sim_ros.monitoring.detector.chunk_from_measured`).
         parameter_overrides: values that replace the parameters' defaults.
+        context: the rclpy context (default: the global one).
 
     Raises:
         BrakeSimError: a parameter out of range or a topic name ROS does not accept.
@@ -218,8 +228,9 @@ class MonitorNode(Node):
         to_chunk: Callable[[Any], Any],
         *,
         parameter_overrides: list[Parameter] | None = None,
+        context: Any = None,
     ) -> None:
-        super().__init__(NODE_NAME, parameter_overrides=parameter_overrides or [])
+        super().__init__(NODE_NAME, parameter_overrides=parameter_overrides or [], context=context)
         self.detector = detector
         self._to_chunk = to_chunk
         self.stats = MonitorStats()
@@ -246,6 +257,13 @@ class MonitorNode(Node):
         self._rate: float | None = None
         self._last_stamp_ns = 0
         self._last_assessment: HealthAssessment | None = None
+        self._faults: dict[str, _FaultLog] = {}
+        window_s = getattr(detector, "window_s", None)
+        if isinstance(window_s, int | float) and not 0.0 < window_s <= MAX_WINDOW_S:
+            raise BrakeSimError(
+                f"detector {detector.name}: window_s {window_s!r}; allowed more than 0 up to"
+                f" {MAX_WINDOW_S:g} s (the monitor buffers a window)"
+            )
         try:
             self.create_subscription(
                 MeasuredChunk, self.measured_topic, self._on_measured, qos.profile(MEASURED_QOS)
@@ -277,13 +295,33 @@ class MonitorNode(Node):
         return [p.topic_name for p in (self._health, self._diagnoses, self._diagnostics)]
 
     # -- input ---------------------------------------------------------------------------
-    def _warn(self, text: str, *, throttle_s: float = 0.0) -> None:
+    def _warn(self, kind: str, text: str) -> None:
+        """One fault of ``kind``: its first is logged at once, the next ones are counted
+        and logged as a count at most every :data:`FAULT_SUMMARY_S` (a flood of bad
+        messages gives a few lines, not one per message)."""
         self.stats.last_warning = text
         self._period.warnings += 1
-        if throttle_s:
-            self.get_logger().warning(text, throttle_duration_sec=throttle_s)
-        else:
-            self.get_logger().warning(text)
+        log = self._faults.setdefault(kind, _FaultLog())
+        if log.logged_at is None:
+            log.logged_at = time.monotonic()
+            self._log(f"{text} (more {kind} are counted, one line every {FAULT_SUMMARY_S:g} s)")
+            return
+        log.unreported += 1
+        log.latest = text
+        self._summarise(kind, log)
+
+    def _summarise(self, kind: str, log: _FaultLog, *, now: float | None = None) -> None:
+        now = time.monotonic() if now is None else now
+        if log.unreported and log.logged_at is not None and now - log.logged_at >= FAULT_SUMMARY_S:
+            self._log(
+                f"{log.unreported} more {kind} in the last {now - log.logged_at:.0f} s; the"
+                f" latest: {log.latest}"
+            )
+            log.unreported, log.logged_at = 0, now
+
+    def _log(self, text: str) -> None:
+        self.stats.warning_lines += 1
+        self.get_logger().warning(text)
 
     def _on_defects(self, msg: DefectState) -> None:
         self.run_id = _id_text(msg.run_id)
@@ -298,13 +336,18 @@ class MonitorNode(Node):
             # stamp less the first sample's time since sample 0 (0 for the simulator), and
             # a window's time is its last sample's on that clock, by the simulator's rule.
             epoch_ns = _stamp_ns(msg.header.stamp) - stamp_ns(first, 1.0 / rate)
+            if -STAMP_ROUNDING_NS <= epoch_ns < 0:
+                epoch_ns = 0  # stamped a rounding early: the stream's clock starts at 0
             if not (
                 epoch_ns >= 0 and epoch_ns + stamp_ns(first + len(chunk), 1.0 / rate) < MAX_STAMP_NS
             ):
                 raise ValueError("its stamp and sample index give times outside 0 to 2^31 s")
         except (ValueError, ArithmeticError) as exc:
             self.stats.malformed += 1
-            self._warn(f"dropped a malformed MeasuredChunk on {self.measured_topic}: {exc}")
+            self._warn(
+                "malformed messages",
+                f"dropped a malformed MeasuredChunk on {self.measured_topic}: {exc}",
+            )
             return
         if self._next_index is None or (first == 0 and self._next_index > 0) or rate != self._rate:
             self.stats.runs += 1
@@ -314,18 +357,22 @@ class MonitorNode(Node):
         elif first < self._next_index:
             self.stats.out_of_order += 1
             self._warn(
+                "out-of-order messages",
                 f"dropped a MeasuredChunk out of order: it starts at sample {first}, the next"
-                f" expected is {self._next_index}"
+                f" expected is {self._next_index}",
             )
             return
         elif first > self._next_index:
             self.stats.gaps += 1
             self.stats.samples_lost += first - self._next_index
             self._warn(
+                "gaps",
                 f"samples {self._next_index} to {first - 1} never arrived; the detector"
-                " restarts at its next aligned window"
+                " restarts at its next aligned window",
             )
         self._next_index, self._rate = first + len(chunk), rate
+        if not self._window_fits(rate):
+            return
         try:
             assessments = self.detector.feed(chunk)
         except Exception as exc:  # a user's detector may raise anything: one line, run on
@@ -334,8 +381,8 @@ class MonitorNode(Node):
             # a detector that fails once fails on every chunk (a channel it needs is
             # missing, say): one line every 10 s, the counter counts each
             self._warn(
+                "detector failures",
                 f"detector {self.detector.name} failed on samples from {first}: {text}",
-                throttle_s=10.0,
             )
             return
         self.stats.chunks += 1
@@ -344,6 +391,23 @@ class MonitorNode(Node):
             ns = epoch_ns + stamp_ns(int(a.sample_index), 1.0 / rate)
             self._publish(a, Header(stamp=time_msg(ns), frame_id=msg.header.frame_id), n, rate)
             self._last_stamp_ns = ns
+
+    def _window_fits(self, rate: float) -> bool:
+        """Whether the detector's window at ``rate`` fits the buffer; else the message is
+        dropped and counted (a publisher at 1e12 Hz would have it buffer without end)."""
+        try:
+            n = int(self.detector.window_samples(rate))
+        except (ValueError, ArithmeticError, TypeError, OverflowError):
+            n = MAX_WINDOW_SAMPLES + 1
+        if n <= MAX_WINDOW_SAMPLES:
+            return True
+        self.stats.windows_too_long += 1
+        self._warn(
+            "messages at a rate too high for the window",
+            f"dropped a MeasuredChunk at {rate:g} Hz: detector {self.detector.name}'s window"
+            f" would be {n} samples, more than the {MAX_WINDOW_SAMPLES} the monitor buffers",
+        )
+        return False
 
     # -- output --------------------------------------------------------------------------
     def _diagnosis(self, a: Any, header: Header) -> Diagnosis | None:
@@ -354,9 +418,10 @@ class MonitorNode(Node):
         if kind is None or d.location not in kind.locations:
             self.stats.diagnoses_refused += 1
             self._warn(
+                "diagnoses outside the catalogue",
                 f"detector {self.detector.name} diagnosed kind {str(d.kind)[:60]!r} at"
                 f" {str(d.location)[:60]!r}: not in the defect catalogue (brake-sim defects);"
-                " not published"
+                " not published",
             )
             return None
         return Diagnosis(
@@ -429,3 +494,14 @@ class MonitorNode(Node):
     def _publish_diagnostics(self) -> None:
         self._diagnostics.publish(self.diagnostic_array())
         self._period = PeriodView()
+        for kind, log in self._faults.items():  # counts of a flood that has stopped, too
+            self._summarise(kind, log)
+
+
+@dataclass
+class _FaultLog:
+    """One kind of fault's logging: when its last line was written, how many since."""
+
+    logged_at: float | None = None
+    unreported: int = 0
+    latest: str = ""

@@ -339,7 +339,8 @@ def test_monitor_survives_malformed_and_out_of_order_messages(recording, thresho
     assert _value(last, "malformed") == "3" and _value(last, "chunks") == "4"
     assert _value(last, "out_of_order") == "1"
     warnings = [line for line in output.splitlines() if "[WARN]" in line]
-    assert len([w for w in warnings if "malformed" in w]) == 3, output
+    # a kind of fault is one line, then counted (no line per message under a flood)
+    assert len([w for w in warnings if "malformed" in w]) == 1, output
     assert len([w for w in warnings if "out of order" in w]) == 1, output
     assert len([w for w in warnings if "no channel 'backing_plate_accel_y'" in w]) == 1, output
     assert "Traceback" not in output
