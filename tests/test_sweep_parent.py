@@ -1,5 +1,5 @@
 """The sweeping process's own work per run (what limits a sweep of short runs), the
-memory of a unit's draws that planning uses, and the campaign the sweep benchmark sweeps.
+memory of a unit's draws that planning uses, and the campaigns the benchmarks sweep.
 
 The sweeps here run real worker processes on a small campaign of short runs.
 """
@@ -10,13 +10,19 @@ import dataclasses
 import os
 from pathlib import Path
 
-from brake_sim_ros.campaigns import parse_campaign
+import pytest
+
+from brake_sim_ros.campaigns import load_campaign, parse_campaign
+from brake_sim_ros.campaigns.axes import DefectChoice, condition_points
+from brake_sim_ros.datasets.parquet import measured_column
 from brake_sim_ros.datasets.sweep import DONE_DIR, MANIFEST_NAME, sweep
+from brake_sim_ros.errors import BrakeSimError
 from brake_sim_ros.model.catalogue import KINDS
+from brake_sim_ros.model.sensors import default_sensor_set
 from brake_sim_ros.model.units import unit_parameters, unit_sensors
 from brake_sim_ros.scenarios import load_scenario
 from brake_sim_ros.scenarios.unit_draws import unit_brake, unit_sensor_set
-from brake_sim_ros.studies import sweep_bench
+from brake_sim_ros.studies import fleet_bench, sweep_bench
 
 # 3 units x (2 sides x 1 severity + healthy) = 9 short runs
 CAMPAIGN = """
@@ -74,6 +80,39 @@ def test_a_units_draws_are_remembered_and_the_same_as_drawn_afresh():
     drawn = unit_sensor_set(sensors, "unit-0007", 3)
     assert unit_sensor_set(sensors, "unit-0007", 3) is drawn
     assert repr(drawn) == repr(unit_sensors(sensors, "unit-0007", 3))
+
+
+def test_the_fleet_campaign_is_every_kind_at_three_severities_and_healthy_on_20_units():
+    campaign = load_campaign(fleet_bench.CAMPAIGN_FILE)
+    assert len(campaign.unit_ids) == 20
+    assert (campaign.outputs.duration_s, campaign.outputs.sample_rate_hz) == (1.2, 25600.0)
+    points = condition_points(
+        campaign.axes, campaign.draw_method, campaign.draw_count, campaign.seed
+    )
+    defects = {v for p in points for v in p.values() if isinstance(v, DefectChoice)}
+    for kind in KINDS:
+        for location in kind.locations:
+            severities = {
+                d.severity for d in defects if (d.kind, d.location) == (kind.name, location)
+            }
+            assert len(severities) == 3, (kind.name, location)
+    assert any(d.kind == "healthy" for d in defects)
+    assert fleet_bench.run_count(campaign) == len(points) * 20 >= 10_000
+    measured = {c for c in campaign.outputs.columns if c.startswith("measured:")}
+    channels = default_sensor_set().channels
+    assert {measured_column(c.name, c.unit) for c in channels} <= measured
+    assert all(c.startswith(("measured:", "fault:")) for c in campaign.outputs.columns)
+
+
+def test_the_fleet_slice_keeps_the_runs_settings():
+    campaign = load_campaign(fleet_bench.CAMPAIGN_FILE)
+    part = fleet_bench.sliced(campaign, 8, 1)
+    assert (part.outputs, part.axes, part.seed) == (campaign.outputs, campaign.axes, campaign.seed)
+    assert part.unit_ids == campaign.unit_ids[:8]
+    # one force of eight, on 8 units of 20
+    assert fleet_bench.run_count(part) == fleet_bench.run_count(campaign) // (8 * 20) * 8
+    with pytest.raises(BrakeSimError, match="--units 2: allowed 3 to 20"):
+        fleet_bench.sliced(campaign, 2, 1)
 
 
 def test_the_sweep_benchmarks_short_campaign_is_short_runs_of_every_defect():
