@@ -12,7 +12,8 @@ The output directory ``DIR``:
 * ``manifest.parquet``: one row per run (:data:`MANIFEST_COLUMNS`, the varied values and
   the defect label columns), written when the sweep ends.
 * ``.done/<run_id>.json``: what a finished run wrote (its file's SHA-256, rows, cost),
-  written after the file; a resumed sweep skips a run whose record and file agree.
+  written after the file; a resumed sweep skips a run whose record and file agree. Not
+  synced to disk (the other files are): a record lost or torn by a crash only reruns its run.
 
 Every file is written under a temporary name and renamed when whole, so a killed sweep
 never leaves a partly written file that counts as done; its leftover temporary files are
@@ -105,7 +106,8 @@ class SweepSummary:
 
     Attributes:
         runs, done, failed, resumed: run counts (``resumed``: done by an earlier sweep).
-        wall_s: wall time from the output directory's check to the manifest written, s.
+        wall_s: wall time from the output directory checked and locked to the manifest
+            written, s.
         cpu_s: CPU time of the runs done now, in their workers, s.
         simulated_s: simulated time of the runs done now, s.
         parent_s: wall time this process spent on its own work (planning the runs, the
