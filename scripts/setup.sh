@@ -124,6 +124,13 @@ how_far() {
   if [[ -n "$line" ]]; then printf 'ninja %s targets' "$line"; return; fi
   n="$(grep -c -E '^(Collecting|Requirement already satisfied)' "$log" 2>/dev/null || true)"
   line="$(grep -E '^(Collecting|Downloading|Building|Installing|Successfully|  Preparing|  Getting|Obtaining)' "$log" 2>/dev/null | tail -n 1 | cut -c1-90 || true)"
+  if [[ "$line" == "Installing collected packages"* ]]; then  # pip says no more until done
+    local total have
+    total="$(grep -E '^Installing collected packages' "$log" | tail -n 1 | tr -cd ',' | wc -c)"
+    have="$(find "$VENV"/lib/python*/site-packages -maxdepth 1 -name '*.dist-info' 2>/dev/null | wc -l)"
+    printf 'installing %s packages; .venv holds %s' "$((total + 1))" "$have"
+    return
+  fi
   [[ -n "$line" ]] && printf '%s packages resolved; %s' "${n:-0}" "$line"
 }
 

@@ -44,3 +44,18 @@ def test_pip_says_its_latest_package_and_a_failure_is_its_status(tmp_path):
     assert lines[-1] == "st=3"
     assert any("packages resolved; Collecting" in line for line in lines)
     assert not any("done in" in line for line in lines)
+
+
+def test_while_pip_installs_it_says_how_many_the_venv_holds(tmp_path):
+    site = tmp_path / "venv" / "lib" / "python3.11" / "site-packages"
+    steps = (
+        "echo 'Installing collected packages: a, b, c'; sleep 1.5;"
+        f" mkdir -p {site}/a-1.dist-info {site}/b-1.dist-info; sleep 1.5"
+    )
+    result = _run(
+        tmp_path, f'VENV={tmp_path}/venv\nwith_progress pip {tmp_path}/p.log bash -c "{steps}"'
+    )
+    assert result.returncode == 0, result.stderr
+    lines = [line for line in result.stdout.splitlines() if "so far" in line]
+    assert "installing 3 packages; .venv holds 0" in lines[0]
+    assert "installing 3 packages; .venv holds 2" in lines[-1]
