@@ -131,7 +131,9 @@ how_far() {
     printf 'installing %s packages; .venv holds %s' "$((total + 1))" "$have"
     return
   fi
-  [[ -n "$line" ]] && printf '%s packages resolved; %s' "${n:-0}" "$line"
+  if [[ -n "$line" ]]; then printf '%s packages resolved; %s' "${n:-0}" "$line"; return; fi
+  # anything else (cmake's configure): its latest line
+  tail -n 1 "$log" 2>/dev/null | cut -c1-90 || true
 }
 
 # $1: what it does, $2: its log (appended), then the command. Prints a line every TICK s

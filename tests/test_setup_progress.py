@@ -59,3 +59,11 @@ def test_while_pip_installs_it_says_how_many_the_venv_holds(tmp_path):
     lines = [line for line in result.stdout.splitlines() if "so far" in line]
     assert "installing 3 packages; .venv holds 0" in lines[0]
     assert "installing 3 packages; .venv holds 2" in lines[-1]
+
+
+def test_another_step_says_its_latest_line(tmp_path):
+    steps = "echo '-- Found Python3'; sleep 1.5; echo '-- Configuring done'; sleep 1.5"
+    result = _run(tmp_path, f'with_progress configure {tmp_path}/c.log bash -c "{steps}"')
+    lines = [line for line in result.stdout.splitlines() if "so far" in line]
+    assert lines[0].endswith("s so far; -- Found Python3")
+    assert lines[-1].endswith("s so far; -- Configuring done")
