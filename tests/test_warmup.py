@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import time
+
 import numba
 
 from brake_sim_ros.solvers import warmup
@@ -10,7 +12,7 @@ from brake_sim_ros.solvers import warmup
 def test_compilation_is_announced_once_per_version(tmp_path, monkeypatch):
     monkeypatch.setattr(numba.config, "CACHE_DIR", str(tmp_path / "v1"))
     calls = []
-    monkeypatch.setattr(warmup, "compile_kernels", lambda: calls.append(1) or 1.5)
+    monkeypatch.setattr(warmup, "compile_kernels", lambda _say: calls.append(1) or 1.5)
     said: list[str] = []
     assert not warmup.is_compiled()
     warmup.ensure_compiled(said.append)
@@ -50,3 +52,23 @@ def test_a_failed_child_leaves_its_part_to_this_process(monkeypatch, tmp_path):
 def test_one_core_compiles_both_parts_here(monkeypatch, tmp_path):
     # no child process on one core
     assert _compile(monkeypatch, tmp_path, cores=1) == (["stepping", "rest here"], False)
+
+
+def test_a_long_compile_says_how_far_it_is_while_it_runs(monkeypatch, tmp_path):
+    monkeypatch.setattr(numba.config, "CACHE_DIR", str(tmp_path))
+    (tmp_path / "model_x").mkdir()
+    for name in ("a-1.py311.nbi", "b-2.py311.nbi"):
+        (tmp_path / "model_x" / name).touch()
+    monkeypatch.setattr(warmup, "TICK_S", 0.05)
+    monkeypatch.setattr(warmup.os, "cpu_count", lambda: 1)
+    monkeypatch.setattr(warmup, "_compile_stepping", lambda: time.sleep(0.5))
+    monkeypatch.setattr(warmup, "_compile_the_rest", lambda: time.sleep(0.3))
+    said: list[str] = []
+    warmup.compile_kernels(said.append)
+    assert len(said) >= 4  # at least one line per tick while each part ran
+    assert all("s so far, 2 functions in the cache" in line for line in said)
+    assert "fixed-step kernel: compiling" in said[0]
+    assert "fixed-step kernel: done, reference, regimes and sensors: compiling" in said[-1]
+    count = len(said)
+    time.sleep(0.2)
+    assert len(said) == count  # no line once it is over

@@ -35,8 +35,6 @@ from brake_sim_ros.fleet import conditions as operating
 from brake_sim_ros.fleet.scatter import (
     NOMINAL_UNIT,
     UnitValue,
-    unit_parameters,
-    unit_sensors,
     unit_values,
 )
 from brake_sim_ros.model.actuation import (
@@ -74,6 +72,7 @@ from brake_sim_ros.model.vehicle import DRIVE_LIMITS as VEHICLE_DRIVE_LIMITS
 from brake_sim_ros.model.vehicle import LIMITS as VEHICLE_LIMITS
 from brake_sim_ros.model.vehicle import LOAD_FACTOR_RANGE, Vehicle
 from brake_sim_ros.scenarios.sensors import parse_sensors
+from brake_sim_ros.scenarios.unit_draws import unit_brake, unit_sensor_set
 from brake_sim_ros.sensing.sensors import (
     DEFAULT_PISTON_DIAMETER_M,
     PA_PER_BAR,
@@ -274,14 +273,12 @@ class Scenario:
             setup = operating.apply(
                 dataclasses.replace(self.setup, params=params, actuation=actuation), drawn
             )
-            setup = dataclasses.replace(
-                setup, params=unit_parameters(setup.params, unit_id, fleet_seed)
-            )
+            setup = dataclasses.replace(setup, params=unit_brake(setup.params, unit_id, fleet_seed))
             if setup.cycle is not None:  # the seed keys its per-stop load draws
                 setup = dataclasses.replace(
                     setup, cycle=dataclasses.replace(setup.cycle, seed=seed)
                 )
-            drawn_sensors = unit_sensors(sensors, unit_id, fleet_seed)
+            drawn_sensors = unit_sensor_set(sensors, unit_id, fleet_seed)
             pack_drive(pack(setup.params, setup.defects, setup.options), setup)
         except BrakeSimError as exc:
             raise ScenarioError(f"{self.source}: {exc}") from None

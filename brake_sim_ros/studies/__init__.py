@@ -94,6 +94,12 @@ def _sweep(argv: list[str]) -> int:
     return sweep_bench.main(argv)
 
 
+def _fleet(argv: list[str]) -> int:
+    from brake_sim_ros.studies import fleet_bench
+
+    return fleet_bench.main(argv)
+
+
 def _units(argv: list[str]) -> int:
     from brake_sim_ros.studies import units
 
@@ -145,8 +151,14 @@ BENCHMARKS: dict[str, Study] = {
         Study(
             "sweep",
             "brake-sim sweep: runs per hour and simulated s per wall s on 1 and 2 workers and"
-            " a Dask LocalCluster, peak memory per worker",
+            " a Dask LocalCluster, the parent's work per run, peak memory per worker",
             _sweep,
+        ),
+        Study(
+            "fleet",
+            "the 10,720-run campaign swept and scored with impact (or a slice, extrapolated):"
+            " wall time, runs/s, disk",
+            _fleet,
         ),
         Study(
             "units",
