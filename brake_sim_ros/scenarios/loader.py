@@ -31,6 +31,7 @@ from importlib import resources
 from typing import Any
 
 from brake_sim_ros.errors import BrakeSimError, ScenarioError
+from brake_sim_ros.identifiers import IDENTIFIER_RULE, is_identifier
 from brake_sim_ros.model import conditions as operating
 from brake_sim_ros.model.actuation import (
     NOMINAL_PEAK_ACTUATION_N,
@@ -99,7 +100,6 @@ MAX_STEP_RANGE_S = (MIN_PHYSICS_STEP_S, 1e-2)
 MAX_SCENARIO_BYTES = 1024 * 1024
 MAX_NESTING = 32  # tables and arrays inside one another
 MAX_NAME_CHARS = 255  # a file name's limit on common file systems
-_UNIT_ID = re.compile(r"[A-Za-z0-9_-][A-Za-z0-9_.-]{0,63}")
 # a value or key is quoted in an error message only up to this many characters (its repr);
 # a longer one is described ("a string of 300 characters"): messages never echo the file
 SHOWN_CHARS = 24
@@ -980,11 +980,9 @@ def _name(ctx: _Ctx, value: Any) -> str:
 
 
 def _unit_id(ctx: _Ctx, value: Any) -> str:
-    """A brake unit's id: 1 to 64 of ``A-Z a-z 0-9 _ . -``, not starting with '.'."""
-    if not isinstance(value, str) or not _UNIT_ID.fullmatch(value):
-        raise ctx.fail(
-            "unit_id", value, "1 to 64 characters of A-Z a-z 0-9 _ . -, not starting with '.'"
-        )
+    """A brake unit's id (:mod:`brake_sim_ros.identifiers`)."""
+    if not is_identifier(value):
+        raise ctx.fail("unit_id", value, IDENTIFIER_RULE)
     return value
 
 

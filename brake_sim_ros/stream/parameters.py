@@ -30,11 +30,11 @@ from __future__ import annotations
 
 import dataclasses
 import inspect
-import re
 from dataclasses import dataclass, fields
 from typing import Any
 
 from brake_sim_ros.errors import ParameterError
+from brake_sim_ros.identifiers import IDENTIFIER_RULE, is_identifier
 from brake_sim_ros.model.actuation import MAX_ACTUATION_FORCE_N, NOMINAL_PEAK_ACTUATION_N
 from brake_sim_ros.model.catalogue import (
     KIND_BY_NAME,
@@ -150,20 +150,20 @@ def run_parameter_specs() -> list[ParamSpec]:
             "",
             "Identifier of the run in every ground-truth message (DefectState, ContactEvent), "
             "in /diagnostics and in recordings: empty = a fresh UUID4 (32 hex digits) at "
-            "start and at each ~/reset; otherwise this text (1 to 64 of A-Z a-z 0-9 . _ -), "
+            f"start and at each ~/reset; otherwise this text ({IDENTIFIER_RULE}), "
             "kept across resets. " + fixed,
-            constraints="empty, or 1 to 64 characters of A-Z a-z 0-9 . _ -",
+            constraints=f"empty, or {IDENTIFIER_RULE}",
         ),
         ParamSpec(
             "unit_id",
             "",
             "Brake unit to simulate (its manufacturing scatter, drawn with the scenario's "
             "fleet_seed from the scenario's values): empty = the scenario's unit_id; "
-            "'nominal' = the scenario's brake itself; otherwise 1 to 64 of A-Z a-z 0-9 _ . - "
-            "(not starting with '.'). Applies to every scenario ~/reset loads; the unit is "
+            f"'nominal' = the scenario's brake itself; otherwise {IDENTIFIER_RULE}. "
+            "Applies to every scenario ~/reset loads; the unit is "
             "the same brake whatever the run's seed (a new seed draws new sensor noise and a "
             "scenario's [conditions] again). " + fixed,
-            constraints="empty, 'nominal', or 1 to 64 characters of A-Z a-z 0-9 _ . -",
+            constraints=f"empty, 'nominal', or {IDENTIFIER_RULE}",
         ),
         ParamSpec(
             "duration_s",
@@ -301,18 +301,16 @@ FIXED_AT_START = frozenset(
         "measured_rate_hz",
     }
 )
-_RUN_ID = re.compile(r"[A-Za-z0-9._-]{1,64}")
 
 
 def check_run_id(value: str) -> str:
     """``value`` if it is a valid ``run_id`` parameter (empty included), else ParameterError
     naming what is allowed (the value shown at most 64 characters long)."""
-    if value == "" or _RUN_ID.fullmatch(value):
+    if value == "" or is_identifier(value):
         return value
     shown = value if len(value) <= 64 else value[:64] + "..."
     raise ParameterError(
-        f"run_id={shown!r}: allowed empty (a fresh UUID4 per run) or 1 to 64 characters"
-        " of A-Z a-z 0-9 . _ -"
+        f"run_id={shown!r}: allowed empty (a fresh UUID4 per run) or {IDENTIFIER_RULE}"
     )
 
 
