@@ -11,9 +11,9 @@ import pytest
 
 from brake_sim_ros.errors import ParameterError, ScenarioError
 from brake_sim_ros.model import catalogue
-from brake_sim_ros.model.catalogue import ALL_LEVELS, DefectField, DefectKind, registered
+from brake_sim_ros.model.catalogue import ALL_LEVELS, DefectField, DefectKind
 from brake_sim_ros.model.defects import Defects, ShoeDefect
-from brake_sim_ros.model.kind_check import missing_parts
+from brake_sim_ros.model.kind_check import missing_parts, register, registered
 from brake_sim_ros.scenarios import parse_scenario
 from tests.defect_reach import reaches_everything
 
@@ -119,7 +119,7 @@ def test_an_entry_that_lacks_a_part_is_refused_naming_it(change, part):
     lacking = dataclasses.replace(GLAZING, **change)
     assert any(part in m for m in missing_parts(lacking)), missing_parts(lacking)
     with pytest.raises(ParameterError, match="lacks: .*" + part.replace("(", r"\(")):
-        catalogue.register(lacking)
+        register(lacking)
     assert lacking.name not in catalogue.KIND_BY_NAME
 
 
@@ -130,7 +130,7 @@ def test_a_name_or_key_taken_by_another_kind_is_refused():
         dataclasses.replace(GLAZING, attributes=(catalogue.KIND_BY_NAME["drum_flat"].attributes)),
     ):
         with pytest.raises(ParameterError, match=r"registered already|taken by another kind"):
-            catalogue.register(clash)
+            register(clash)
     assert "lining_glazing" not in catalogue.KIND_BY_NAME
 
 

@@ -10,8 +10,8 @@ node parameter set (:meth:`DefectKind.fields`: the severity's key and any attrib
 model's growth update, the laws it takes, an initial condition, two tied shoes), the
 fidelity levels that represent it and whether it reshapes the actuation. The scenario
 loader, the node's parameters, campaign axes, the label columns and ``brake-sim defects``
-are generated from :data:`KINDS`; :func:`register` adds a kind (checked complete by
-:func:`brake_sim_ros.model.kind_check.missing_parts`).
+are generated from :data:`KINDS`; :func:`brake_sim_ros.model.kind_check.register` adds a
+kind, checked complete there (:func:`~brake_sim_ros.model.kind_check.missing_parts`).
 
 The ground truth of a brake (``Defects.active``, :mod:`.defects`) is a list of
 :class:`ActiveDefect`, one per kind and location in force, so a consumer (the
@@ -23,8 +23,6 @@ Pure data and logic: no files.
 
 from __future__ import annotations
 
-from collections.abc import Iterator
-from contextlib import contextmanager
 from dataclasses import dataclass
 
 from brake_sim_ros.errors import ParameterError
@@ -215,7 +213,7 @@ class DefectKind:
         return set(self.locations) <= set(SIDES)
 
 
-# the registry: every kind, in catalogue order (register() adds one)
+# the registry: every kind, in catalogue order (kind_check.register() adds one)
 KINDS: list[DefectKind] = [
     DefectKind(
         name="pivot_radius_change",
@@ -478,41 +476,6 @@ KINDS: list[DefectKind] = [
     ),
 ]
 KIND_BY_NAME: dict[str, DefectKind] = {k.name: k for k in KINDS}
-
-
-def register(kind: DefectKind) -> None:
-    """Add ``kind`` to the catalogue (after the built-in kinds): the scenario loader, the
-    node's parameters, campaign axes, the label columns and ``brake-sim defects`` take it
-    from here. Refused, in one line: a name, key or field already taken, or an entry that
-    lacks a part (:func:`brake_sim_ros.model.kind_check.missing_parts`)."""
-    from brake_sim_ros.model.kind_check import missing_parts  # it reads the fidelity levels
-
-    if kind.name in KIND_BY_NAME:
-        raise ParameterError(f"defect kind {kind.name!r} is registered already")
-    taken = {f.name for k in KINDS for f in k.fields()} | {k.scenario_key for k in KINDS}
-    clash = sorted(taken & ({f.name for f in kind.fields()} | {kind.scenario_key}))
-    if clash:
-        raise ParameterError(f"defect kind {kind.name!r}: keys {clash} are taken by another kind")
-    missing = missing_parts(kind)
-    if missing:
-        raise ParameterError(f"defect kind {kind.name!r} lacks: {'; '.join(missing)}")
-    KINDS.append(kind)
-    KIND_BY_NAME[kind.name] = kind
-
-
-def unregister(name: str) -> None:
-    """Take the kind ``name`` out of the catalogue (a kind :func:`register` added)."""
-    KINDS.remove(KIND_BY_NAME.pop(name))
-
-
-@contextmanager
-def registered(kind: DefectKind) -> Iterator[DefectKind]:
-    """``kind`` in the catalogue for the ``with`` block (a test's kind)."""
-    register(kind)
-    try:
-        yield kind
-    finally:
-        unregister(kind.name)
 
 
 def kinds_at(location: str) -> tuple[DefectKind, ...]:

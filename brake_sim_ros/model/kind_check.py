@@ -1,7 +1,8 @@
-"""Whether a defect kind's catalogue entry carries every part the product reads from it.
+"""Whether a defect kind's catalogue entry carries every part the product reads from it,
+and adding one to the catalogue.
 
-:func:`missing_parts` lists what an entry lacks (empty: complete); :func:`.catalogue.register`
-refuses an entry that lacks a part, and the completeness test runs it over every entry.
+:func:`missing_parts` lists what an entry lacks (empty: complete); :func:`register` refuses
+an entry that lacks a part, and the completeness test runs it over every entry.
 It reads the fidelity levels, the compiled model's growth ids and the scenario loader's
 one table (the drum's harmonics), so that the catalogue itself stays pure data.
 
@@ -12,12 +13,17 @@ from __future__ import annotations
 
 import math
 import re
+from collections.abc import Iterator
+from contextlib import contextmanager
 
+from brake_sim_ros.errors import ParameterError
 from brake_sim_ros.model import layout as L
 from brake_sim_ros.model.catalogue import (
     ACTUATION_EFFECTS,
     DRUM_KIND,
     GROWTH_LAWS,
+    KIND_BY_NAME,
+    KINDS,
     DefectField,
     DefectKind,
 )
@@ -96,3 +102,36 @@ def missing_parts(kind: DefectKind) -> list[str]:
         out.append("distinct field names")
     out += _behaviour_parts(kind)
     return out
+
+
+def register(kind: DefectKind) -> None:
+    """Add ``kind`` to the catalogue (after the built-in kinds): the scenario loader, the
+    node's parameters, campaign axes, the label columns and ``brake-sim defects`` take it
+    from here. Refused, in one line: a name, key or field already taken, or an entry that
+    lacks a part (:func:`missing_parts`)."""
+    if kind.name in KIND_BY_NAME:
+        raise ParameterError(f"defect kind {kind.name!r} is registered already")
+    taken = {f.name for k in KINDS for f in k.fields()} | {k.scenario_key for k in KINDS}
+    clash = sorted(taken & ({f.name for f in kind.fields()} | {kind.scenario_key}))
+    if clash:
+        raise ParameterError(f"defect kind {kind.name!r}: keys {clash} are taken by another kind")
+    missing = missing_parts(kind)
+    if missing:
+        raise ParameterError(f"defect kind {kind.name!r} lacks: {'; '.join(missing)}")
+    KINDS.append(kind)
+    KIND_BY_NAME[kind.name] = kind
+
+
+def unregister(name: str) -> None:
+    """Take the kind ``name`` out of the catalogue (a kind :func:`register` added)."""
+    KINDS.remove(KIND_BY_NAME.pop(name))
+
+
+@contextmanager
+def registered(kind: DefectKind) -> Iterator[DefectKind]:
+    """``kind`` in the catalogue for the ``with`` block (a test's kind)."""
+    register(kind)
+    try:
+        yield kind
+    finally:
+        unregister(kind.name)

@@ -5,7 +5,8 @@ and what :class:`.sensors.SensorBank` computes for it: its unit, where it may si
 it takes an axis, its transducer presets and default, the faults it can carry, the
 sample-block columns it reads and its true value from them (its model), and its output
 series. The bank dispatches on the entry, so a channel of a kind without an entry is
-refused, never computed as another kind. :func:`register` adds a kind (a test's).
+refused, never computed as another kind. :func:`registered` adds a kind for a block (a
+test's).
 
 The built-in kinds and their figures: :mod:`.sensors`.
 
@@ -18,7 +19,7 @@ import math
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 import numpy as np
 
@@ -32,8 +33,15 @@ from brake_sim_ros.model.transducers import (
     accel,
 )
 
-if TYPE_CHECKING:
-    from brake_sim_ros.model.sensors import SensorChannel
+
+class Channel(Protocol):
+    """What a kind's model reads of its channel (:class:`.sensors.SensorChannel`)."""
+
+    name: str
+    location: str
+    axis: str
+    piston_diameter_m: float
+
 
 LINE_PRESSURE_LOCATION = "wheel_cylinder"
 TONE_RING_LOCATION = "tone_ring"
@@ -74,8 +82,8 @@ class SensorKind:
     presets: dict[str, Transducer]
     default_preset: str
     faults: tuple[str, ...]
-    inputs: Callable[[SensorChannel], tuple[str, ...]]
-    true_value: Callable[[SensorChannel, Columns, np.ndarray | None], np.ndarray]
+    inputs: Callable[[Channel], tuple[str, ...]]
+    true_value: Callable[[Channel, Columns, np.ndarray | None], np.ndarray]
     reads_structure: bool = False
     tone_ring: bool = False
 
@@ -84,16 +92,16 @@ class SensorKind:
         return (name, f"{name}_index") if self.tone_ring else (name,)
 
 
-def _structure(channel: SensorChannel, columns: Columns, structure: np.ndarray | None):
+def _structure(channel: Channel, columns: Columns, structure: np.ndarray | None):
     assert structure is not None  # the bank passes the channel's structure output
     return structure
 
 
-def _load_pin_inputs(channel: SensorChannel) -> tuple[str, ...]:
+def _load_pin_inputs(channel: Channel) -> tuple[str, ...]:
     return (f"{channel.location}_pivot_f{channel.axis}_n",)
 
 
-def _load_pin(channel: SensorChannel, columns: Columns, structure: np.ndarray | None):
+def _load_pin(channel: Channel, columns: Columns, structure: np.ndarray | None):
     # the force on the plate: opposite of the pin's
     return -columns[f"{channel.location}_pivot_f{channel.axis}_n"]
 
@@ -101,14 +109,14 @@ def _load_pin(channel: SensorChannel, columns: Columns, structure: np.ndarray | 
 _ACTUATION = ("left_actuation_force_n", "right_actuation_force_n")
 
 
-def _line_pressure(channel: SensorChannel, columns: Columns, structure: np.ndarray | None):
+def _line_pressure(channel: Channel, columns: Columns, structure: np.ndarray | None):
     # one wheel cylinder pushes both shoes: the mean force over the piston area
     area_m2 = math.pi * channel.piston_diameter_m**2 / 4.0
     mean_force = 0.5 * (columns["left_actuation_force_n"] + columns["right_actuation_force_n"])
     return mean_force / area_m2 / PA_PER_BAR
 
 
-def _drum_angle(channel: SensorChannel, columns: Columns, structure: np.ndarray | None):
+def _drum_angle(channel: Channel, columns: Columns, structure: np.ndarray | None):
     return columns["drum_angle_rad"]
 
 

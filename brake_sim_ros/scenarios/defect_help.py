@@ -38,7 +38,7 @@ def _kind_lines(k: DefectKind) -> list[str]:
     for f in k.attributes:
         low = f"> {f.low:g}" if f.low_open or f.needed else f"{f.low:g}"
         lines.append(
-            f"    attribute {f.name} ({f.low:g} default {f.default:g}; {low} to {f.high:g}"
+            f"    attribute {f.name} (default {f.default:g}; allowed {low} to {f.high:g}"
             f" {f.unit}): {f.description}"
         )
     if k.initial_condition:
