@@ -303,7 +303,12 @@ class Defects:
             if key in seen or (entry_kind.tied and tied in seen):
                 raise ParameterError(
                     f"defect growth of {kind} at {loc} given twice: allowed one entry per"
-                    " defect" + (" (the other shoe's mirrors it)" if entry_kind.tied else "")
+                    " defect"
+                    + (
+                        f" (the other shoe's {entry_kind.scenario_key} mirrors it)"
+                        if entry_kind.tied
+                        else ""
+                    )
                 )
             seen.add(key)
             where = f"{loc} {entry_kind.scenario_key} "
