@@ -469,53 +469,10 @@ def run_severity(argv: list[str]) -> int:
 
 
 def cmd_defects(args: argparse.Namespace) -> int:
+    from brake_sim_ros.scenarios.defect_help import catalogue_text
+
     print(catalogue_text())
     return 0
-
-
-def catalogue_text() -> str:
-    """The defect catalogue: per kind its locations, unit, valid range and why, the
-    scenario key that sets it, and what it changes; a block each."""
-    from brake_sim_ros.model.catalogue import (
-        DEFAULT_WEAR_RATE_MM_PER_MJ,
-        DRUM_KIND,
-        GROWTH_LAWS,
-        KINDS,
-        label_column,
-    )
-
-    lines = [
-        "defect catalogue (ground truth: DefectState.defects; Parquet/NPZ label columns"
-        " defect:<kind>:<location> [<unit>], 0 where absent)"
-    ]
-    for k in KINDS:
-        h = k.healthy_value
-        if k.name == DRUM_KIND:
-            where = "[defects.drum] (no node parameter: the scenario's)"
-        elif k.locations == ("drum",):
-            where = f"[defects.drum] or the node's parameter defects.drum.{k.scenario_key}"
-        else:
-            where = (
-                f"[defects.<location>] or the node's parameter defects.<location>.{k.scenario_key}"
-            )
-        lines += [
-            f"  {k.name} [{k.unit}] at {', '.join(k.locations)}: {k.description}",
-            f"    range {k.minimum:g} to {k.maximum:g} {k.unit} ({k.limit});"
-            f" set by {k.scenario_key} = {h:g} + severity in a scenario's {where};"
-            f" column {label_column(k, k.locations[0])}",
-        ]
-    lines += [
-        f"growth laws: {', '.join(GROWTH_LAWS)}; a key's value is the final severity, or a"
-        " table {value, onset_s, growth, rate_per_s (linear, unit/s), doubling_time_s and"
-        " start (exponential), wear_rate_mm_per_mj (friction_work: lining_wear only, mm of"
-        f" wear per MJ of the shoe's friction work, default {DEFAULT_WEAR_RATE_MM_PER_MJ:g})}}"
-        " ([defects.drum]: the same keys beside harmonics, in um of peak runout; a flat's"
-        " flat_depth_um takes the table itself, beside flat_centre_deg and flat_width_deg);"
-        " without them a defect is in force from t = 0",
-        "initial_angle is an initial condition: only from t = 0; a growing actuation share"
-        " moves the other shoe's the opposite way",
-    ]
-    return "\n".join(lines)
 
 
 # --- sweep and dataset -----------------------------------------------------------------------

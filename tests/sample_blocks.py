@@ -10,8 +10,8 @@ import numpy as np
 from brake_sim_ros.model.run_setup import SampleBlock
 from brake_sim_ros.monitoring.detector import TrainingWindow
 from brake_sim_ros.sensing.faults import SensorFault
+from brake_sim_ros.sensing.kinds import SENSOR_KINDS
 from brake_sim_ros.sensing.sensors import (
-    TRANSDUCER_PRESETS,
     SensorChannel,
     SensorSet,
     accelerometer,
@@ -86,7 +86,7 @@ def faulted_set() -> SensorSet:
                 "load_pin",
                 "left",
                 "x",
-                TRANSDUCER_PRESETS["load_pin"]["strain_gauge_pin"],
+                SENSOR_KINDS["load_pin"].presets["strain_gauge_pin"],
                 faults=(SensorFault("saturation", 0.21, 500.0),),
             ),
         )

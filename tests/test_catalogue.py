@@ -3,39 +3,34 @@ ground truth and the CLI all read."""
 
 from __future__ import annotations
 
-import dataclasses
-
 import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from brake_sim_ros.cli import catalogue_text, main
+from brake_sim_ros.cli import main
 from brake_sim_ros.errors import ParameterError
 from brake_sim_ros.model import catalogue
-from brake_sim_ros.model.defects import Defects, DrumDefect, ShoeDefect
+from brake_sim_ros.model.defects import Defects, ShoeDefect
+from brake_sim_ros.model.kind_check import missing_parts
+from brake_sim_ros.scenarios.defect_help import catalogue_text
 from brake_sim_ros.stream.parameters import _RANGES as RANGES
+from tests.defect_reach import reaches_everything
 
 
-def test_every_kind_is_set_by_a_defect_field_and_a_node_parameter_with_its_range():
-    fields = {f.name for f in dataclasses.fields(ShoeDefect)}
-    drum_kinds = [k for k in catalogue.KINDS if k.locations == ("drum",)]
-    assert {k.name for k in drum_kinds} == {catalogue.DRUM_KIND, catalogue.FLAT_KIND}
-    for drum in drum_kinds:
-        assert drum.scenario_key in {f.name for f in dataclasses.fields(DrumDefect)}
-    # the harmonics have no node parameter; the flat has, with the catalogue's range
-    assert not any(name.startswith("defects.harmonics") for name in RANGES)
+@pytest.mark.parametrize("kind", list(catalogue.KINDS), ids=lambda k: k.name)
+def test_every_entry_is_complete_and_reaches_every_consumer(kind):
+    """The completeness test: each entry carries every part (kind_check.missing_parts)
+    and reaches the loader, the node's parameters, a campaign axis, the labels and the
+    CLI help from its entry alone."""
+    assert missing_parts(kind) == []
+    reaches_everything(kind)
+
+
+def test_the_drum_flat_is_one_entry_its_fields_written_there_once():
     flat = catalogue.KIND_BY_NAME[catalogue.FLAT_KIND]
-    assert RANGES["defects.flat_depth_um"] == (flat.minimum, flat.maximum)
-    for kind in catalogue.KINDS:
-        if kind in drum_kinds:
-            continue
-        assert kind.scenario_key in fields
-        lo, hi = RANGES[f"defects.{kind.scenario_key}"]
-        assert (lo, hi) == (kind.healthy_value + kind.minimum, kind.healthy_value + kind.maximum)
-        assert getattr(ShoeDefect(), kind.scenario_key) == kind.healthy_value
-    assert set(ShoeDefect().severities()) == set(catalogue.KIND_BY_NAME) - {
-        k.name for k in drum_kinds
-    }
+    assert [f.name for f in flat.fields()] == ["flat_depth_um", "flat_centre_deg", "flat_width_deg"]
+    assert [f.name for f in catalogue.fields_at("drum")] == [f.name for f in flat.fields()]
+    assert not any(name.startswith("defects.harmonics") for name in RANGES)
     columns = catalogue.label_columns()
     assert len(set(columns)) == len(columns) == sum(len(k.locations) for k in catalogue.KINDS)
 

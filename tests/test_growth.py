@@ -134,12 +134,13 @@ DRUM = catalogue.DRUM_KIND
         (
             '[defects.left]\ninitial_angle_deg = {value = -2.0, growth = "linear",'
             " rate_per_s = 1.0}",
-            "allowed only a step at 0 s (the starting angle is an initial condition",
+            "allowed only a step at 0 s (an initial condition of the run",
         ),
         (
             "[defects.left]\nactuation_share = {value = 0.55, onset_s = 1.0}\n"
             "[defects.right]\nactuation_share = {value = 0.45, onset_s = 1.0}",
-            "given twice: allowed one entry per defect (the other shoe's share mirrors it)",
+            "given twice: allowed one entry per defect"
+            " (the other shoe's actuation_share mirrors it)",
         ),
         (
             "[defects.left]\npivot_radius_change_pct = {value = 0.0, onset_s = 1.0}",

@@ -19,8 +19,8 @@ from scipy.linalg import (
     solve_discrete_lyapunov,
 )
 
+from brake_sim_ros.sensing.kinds import SENSOR_KINDS
 from brake_sim_ros.sensing.lti import foh_discretise, with_input_noise
-from brake_sim_ros.sensing.sensors import TRANSDUCER_PRESETS
 
 FS = 25_600.0
 LAGS = 64
@@ -80,7 +80,7 @@ def _exact_autocovariance(a, b, c, q, t: np.ndarray, fs: float = FS) -> np.ndarr
     ids=["adxl1002", "adxl1002-loose-mount", "consumer-imu"],
 )
 def test_sampled_noise_has_the_continuous_autocovariance_at_every_lag(preset, resonance_factor, fs):
-    transducer = TRANSDUCER_PRESETS["accelerometer"][preset]
+    transducer = SENSOR_KINDS["accelerometer"].presets[preset]
     a, b, c, d = transducer.continuous(fs, resonance_factor)
     density = transducer.noise_density_per_sqrt_hz
     noisy = with_input_noise(foh_discretise(a, b, c, d, 1.0 / fs), density)
@@ -98,7 +98,7 @@ def test_at_a_slow_rate_the_noise_is_the_continuous_paths():
     T) P C^T`` with ``A P + P A^T + B q B^T = 0`` (solved in balanced coordinates, to
     about 1e-3 of the variance: the solver's own accuracy on this path)."""
     fs = 1000.0
-    transducer = TRANSDUCER_PRESETS["accelerometer"]["adxl1002_class"]
+    transducer = SENSOR_KINDS["accelerometer"].presets["adxl1002_class"]
     a, b, c, d = transducer.continuous(fs, 1.0)
     density = transducer.noise_density_per_sqrt_hz
     noisy = with_input_noise(foh_discretise(a, b, c, d, 1.0 / fs), density)
@@ -119,7 +119,7 @@ def test_a_path_much_faster_than_a_slow_sample_rate_still_gets_its_noise():
     """At 20 Hz the accelerometer's 21 kHz resonance spans a thousand times the sample
     period: the noise increment is still computed (no overflow) and realised with one draw
     per sample, its variance that of the continuous path (``Q_d`` settles to it)."""
-    transducer = TRANSDUCER_PRESETS["accelerometer"]["adxl1002_class"]
+    transducer = SENSOR_KINDS["accelerometer"].presets["adxl1002_class"]
     a, b, c, d = transducer.continuous(20.0, 1.0)
     noisy = with_input_noise(foh_discretise(a, b, c, d, 1.0 / 20.0), 25e-6 * 9.80665)
     assert noisy.g_prev.shape[1] == 2 and np.all(np.isfinite(noisy.g_prev))

@@ -18,14 +18,20 @@ def test_every_core_field_is_a_parameter():
     expected = {
         f"defects.{side}.{f.name}"
         for side in ros_params.SIDES
-        for f in dataclasses.fields(ShoeDefect)
+        for f in ros_params.defect_fields(side)
     }
     expected |= {
         f"{group}.{f.name}"
         for group, cls in PARAMETER_GROUPS.items()
         for f in dataclasses.fields(cls)
     }
-    expected |= {f"defects.drum.{name}" for name in ros_params.DRUM_FIELDS}
+    expected |= {f"defects.drum.{f.name}" for f in ros_params.defect_fields("drum")}
+    # the drum's flat, written once (its catalogue entry), is what the drum takes
+    assert {f.name for f in ros_params.defect_fields("drum")} == {
+        "flat_depth_um",
+        "flat_centre_deg",
+        "flat_width_deg",
+    }
     assert set(names) == expected
     for required in (
         "defects.left.pivot_radius_change_pct",

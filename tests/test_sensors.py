@@ -15,9 +15,9 @@ from brake_sim_ros.model.run_setup import SampleBlock
 from brake_sim_ros.scenarios import load_scenario, parse_scenario
 from brake_sim_ros.sensing import faults as sf
 from brake_sim_ros.sensing.faults import SensorFault
+from brake_sim_ros.sensing.kinds import SENSOR_KINDS
 from brake_sim_ros.sensing.sensors import (
     IDEAL,
-    TRANSDUCER_PRESETS,
     AnalogPath,
     SensorBank,
     SensorChannel,
@@ -89,7 +89,7 @@ def test_noise_floor_of_a_healthy_stop_matches_density_and_bandwidth(stop, prese
 
 def test_clipping_at_the_range_and_quantisation_step():
     transducer = dataclasses.replace(
-        TRANSDUCER_PRESETS["accelerometer"]["adxl1002_class"], adc_bits=10
+        SENSOR_KINDS["accelerometer"].presets["adxl1002_class"], adc_bits=10
     )
     channel = SensorChannel("acc", "accelerometer", "backing_plate", "x", transducer)
     t = np.arange(round(0.05 * FS)) / FS
@@ -111,7 +111,7 @@ def test_the_default_accelerometers_clip_in_the_first_impacts(stop):
     """The published event's first impacts exceed +-50 g at the backing plate (y): the
     default set reports them clipped, at the top code."""
     frame = SensorBank(SensorSet(), FS, seed=0).advance(stop)
-    transducer = TRANSDUCER_PRESETS["accelerometer"]["adxl1002_class"]
+    transducer = SENSOR_KINDS["accelerometer"].presets["adxl1002_class"]
     y = frame["backing_plate_accel_y"].values
     assert y.max() == transducer.range_max - transducer.adc_step or y.min() == transducer.range_min
 
@@ -120,7 +120,7 @@ def test_the_100_g_preset_keeps_the_first_impacts_in_range(stop):
     """The +-100 g part of the same family reports the same stop unclipped, within its
     range, with peaks beyond the 50 g part's."""
     wide = SensorSet(channels=(accelerometer("acc_y", "backing_plate", "y", "adxl1001_class"),))
-    transducer = TRANSDUCER_PRESETS["accelerometer"]["adxl1001_class"]
+    transducer = SENSOR_KINDS["accelerometer"].presets["adxl1001_class"]
     y = SensorBank(wide, FS, seed=0).advance(stop)["acc_y"].values
     assert transducer.range_min < y.min() and y.max() < transducer.range_max - transducer.adc_step
     assert np.abs(y).max() > 50.0 * 9.80665
@@ -277,7 +277,7 @@ def test_saturation_clips_at_its_size():
 
 def test_loose_mount_moves_the_resonance_down_and_raises_the_response_there():
     transducer = dataclasses.replace(
-        TRANSDUCER_PRESETS["accelerometer"]["adxl1002_class"], noise_density_per_sqrt_hz=0.0
+        SENSOR_KINDS["accelerometer"].presets["adxl1002_class"], noise_density_per_sqrt_hz=0.0
     )
     rng = np.random.default_rng(0)
     t = np.arange(round(1.0 * FS)) / FS

@@ -12,15 +12,14 @@ Pure logic: no files, no numerics beyond the draws.
 
 from __future__ import annotations
 
-import dataclasses
 import itertools
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from brake_sim_ros.model.catalogue import KIND_BY_NAME
-from brake_sim_ros.model.defects import Defects, ShoeDefect
+from brake_sim_ros.model.catalogue import KIND_BY_NAME, fields_at, kinds_at
+from brake_sim_ros.model.defects import Defects
 
 DEFECT_AXIS = "defect"
 # the manifest columns a defect axis fills (kind "healthy" and location "" for no defect)
@@ -101,16 +100,15 @@ def defect_choices(
 
 def defects_table(defects: Defects) -> dict[str, Any]:
     """``defects`` as a scenario's ``[defects]`` table (the inverse of the scenario
-    loader's reading): each shoe's fields that differ from a healthy shoe, the drum's
-    harmonics and flat."""
+    loader's reading): each shoe's catalogue fields that differ from a healthy shoe, the
+    drum's harmonics and the fields of each drum defect present (``fields_at``)."""
     table: dict[str, Any] = {}
-    healthy = ShoeDefect()
     for side in ("left", "right"):
         shoe = getattr(defects, side)
         changed = {
             f.name: float(getattr(shoe, f.name))
-            for f in dataclasses.fields(ShoeDefect)
-            if getattr(shoe, f.name) != getattr(healthy, f.name)
+            for f in fields_at(side)
+            if getattr(shoe, f.name) != f.default
         }
         if changed:
             table[side] = changed
@@ -120,9 +118,10 @@ def defects_table(defects: Defects) -> dict[str, Any]:
             {"order": h.order, "amplitude_um": float(h.amplitude_um), "phase_deg": h.phase_deg}
             for h in defects.drum.harmonics
         ]
-    if defects.drum.flat_depth_um:
-        for name in ("flat_depth_um", "flat_centre_deg", "flat_width_deg"):
-            drum[name] = float(getattr(defects.drum, name))
+    for kind in kinds_at("drum"):
+        if defects.drum.severity_of(kind) and not kind.table:
+            for f in kind.fields():
+                drum[f.name] = float(getattr(defects.drum, f.name))
     if drum:
         table["drum"] = drum
     return table

@@ -51,6 +51,7 @@ from brake_sim_ros.campaigns.splits import (
 )
 from brake_sim_ros.campaigns.toml_text import dumps
 from brake_sim_ros.errors import BrakeSimError
+from brake_sim_ros.identifiers import IDENTIFIER_RULE, is_identifier
 from brake_sim_ros.model.catalogue import KIND_BY_NAME, KINDS
 from brake_sim_ros.scenarios.loader import (
     _MISSING,
@@ -73,7 +74,6 @@ MAX_AXIS_VALUES = 10_000
 # samples of one run: the run's history is kept in memory to be written (about 40 float64
 # columns: 2e6 samples is some 650 MB with the table's copy)
 MAX_RUN_SAMPLES = 2_000_000
-_NAME = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.-]{0,63}")
 _COLUMN = re.compile(r"[a-z][a-z0-9_]{0,63}")
 _KEY_PART = re.compile(r"[A-Za-z0-9_]{1,64}")
 # scenario keys no axis sets: the campaign sets them (name, unit) or they are text
@@ -279,10 +279,8 @@ def _parse(data: dict[str, Any], text: str, source: str, directory: Path | None)
     if "name" not in top:
         raise ctx.fail("name", _MISSING, "a campaign name; it is required")
     name = top["name"]
-    if not isinstance(name, str) or not _NAME.fullmatch(name):
-        raise ctx.fail(
-            "name", name, "1 to 64 characters of A-Z a-z 0-9 _ . -, not starting with '.' or '-'"
-        )
+    if not is_identifier(name):
+        raise ctx.fail("name", name, IDENTIFIER_RULE)
     if "base" not in top:
         raise ctx.fail("base", _MISSING, "a base scenario (built-in name or .toml path)")
     base_text = _base_text(ctx, top["base"], directory)
@@ -339,8 +337,8 @@ def _units(ctx: _Ctx, top: dict[str, Any]) -> tuple[str, ...]:
         if not isinstance(ids, list) or not 0 < len(ids) <= MAX_UNITS:
             raise ctx.fail("unit_ids", ids, f"an array of 1 to {MAX_UNITS} unit ids")
         for i, unit in enumerate(ids):
-            if not isinstance(unit, str) or not _NAME.fullmatch(unit):
-                raise ctx.fail(f"unit_ids[{i}]", unit, "1 to 64 characters of A-Z a-z 0-9 _ . -")
+            if not is_identifier(unit):
+                raise ctx.fail(f"unit_ids[{i}]", unit, IDENTIFIER_RULE)
         if len(set(ids)) != len(ids):
             raise ctx.fail("unit_ids", ids, "distinct unit ids")
         return tuple(ids)

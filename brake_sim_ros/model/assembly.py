@@ -12,7 +12,7 @@ from brake_sim_ros.errors import ParameterError
 from brake_sim_ros.model import growth, kernel, thermal
 from brake_sim_ros.model import layout as L
 from brake_sim_ros.model.actuation import RESIDUAL_FORCE_N, RETURN_SPRING_PRELOAD_N
-from brake_sim_ros.model.catalogue import DRUM_KIND, FLAT_KIND, WEAR_KIND
+from brake_sim_ros.model.catalogue import KIND_BY_NAME
 from brake_sim_ros.model.defects import (
     MAX_DRUM_SLOPE,
     SERVICE_RUNOUT_UM,
@@ -197,8 +197,7 @@ def pack(
         p[b + L.S_ACTUATION_LAG] = defect.actuation_lag_ms * 1e-3
         p[b + L.S_PULSATION_AMPLITUDE] = defect.actuation_pulsation_pct / 100.0
         p[b + L.S_PULSATION_FREQUENCY] = defect.actuation_pulsation_hz
-        shaped = defect.actuation_shaped or defect.return_spring_weakening_pct > 0.0
-        p[b + L.S_ACTUATION_SHAPED] = 1.0 if shaped else 0.0
+        p[b + L.S_ACTUATION_SHAPED] = 1.0 if defect.force_shaped else 0.0
         p[b + L.S_SPRING_RELEASE] = (
             defect.return_spring_weakening_pct / 100.0 * RETURN_SPRING_PRELOAD_N
         )
@@ -215,19 +214,6 @@ def pack(
     _pack_growth(params, defects, p)
     thermal.pack_fade(p)
     return p
-
-
-# growing kind -> its id in the compiled model (model/growth.py apply)
-_GROWTH_KIND_IDS = {
-    "pivot_radius_change": L.GK_PIVOT,
-    "actuation_share_change": L.GK_SHARE,
-    "friction_change": L.GK_FRICTION,
-    "actuation_gain_change": L.GK_GAIN,
-    "actuation_pulsation": L.GK_PULSATION,
-    DRUM_KIND: L.GK_DRUM,
-    WEAR_KIND: L.GK_WEAR,
-    FLAT_KIND: L.GK_FLAT,
-}
 
 
 def _pack_growth(params: BrakeParameters, defects: Defects, p: np.ndarray) -> None:
@@ -248,19 +234,16 @@ def _pack_growth(params: BrakeParameters, defects: Defects, p: np.ndarray) -> No
         raise ParameterError(
             f"defects: {len(entries)} change during the run: allowed at most {L.MAX_GROWTH_ENTRIES}"
         )
-    at = {
-        "left": defects.left.severities(),
-        "right": defects.right.severities(),
-        "drum": {DRUM_KIND: defects.drum.peak_runout_um, FLAT_KIND: defects.drum.flat_depth_um},
-    }
+    at = {loc: getattr(defects, loc).severities() for loc in ("left", "right", "drum")}
     for j, (kind, location, law) in enumerate(entries):
-        if kind not in _GROWTH_KIND_IDS:
+        growth_id = KIND_BY_NAME[kind].growth_id  # its id in growth.apply (the catalogue's)
+        if growth_id is None:
             raise ParameterError(
                 f"defect {kind} at {location} cannot change during a run in this model:"
                 " allowed only a step at 0 s"
             )
         b = L.P_GROWTH_BASE + j * L.GROWTH_STRIDE
-        p[b + L.G_KIND] = _GROWTH_KIND_IDS[kind]
+        p[b + L.G_KIND] = growth_id
         p[b + L.G_SHOE] = SIDES.index(location) if location in SIDES else -1
         p[b + L.G_LAW] = law.law_id
         p[b + L.G_ONSET] = law.onset_s

@@ -1,50 +1,49 @@
-"""The defect catalogue: every kind of brake defect the model knows, as data, and the
-ground truth of a brake's condition as a list of active defects.
+"""The defect catalogue: every kind of brake defect the model knows, each entry carrying
+its behaviour, and the ground truth of a brake's condition as a list of active defects.
 
-Each kind has a name, the locations it can sit at, a severity in a physical unit (0 for a
-healthy brake, so a label column reads 0 where the defect is absent), the range the model
-accepts and a line on what it changes. The ground truth of a brake (``Defects.active``,
-:mod:`.defects`) is a list of :class:`ActiveDefect`, one per kind and location in force,
-so a consumer (the ``DefectState`` message, Parquet label columns, file metadata, a
-scorer) needs no change when a kind is added here.
+Each kind (:class:`DefectKind`) has a name, the locations it can sit at, a severity in a
+physical unit (0 for a healthy brake, so a label column reads 0 where the defect is
+absent), the range the model accepts and a line on what it changes; and what the rest of
+the product reads from it instead of a table of its own: the numbers a scenario and a
+node parameter set (:meth:`DefectKind.fields`: the severity's key and any attributes,
+:class:`DefectField`), whether and how it may grow during a run (its id in the compiled
+model's growth update, the laws it takes, an initial condition, two tied shoes), the
+fidelity levels that represent it and whether it reshapes the actuation. The scenario
+loader, the node's parameters, campaign axes, the label columns and ``brake-sim defects``
+are generated from :data:`KINDS`; :func:`brake_sim_ros.model.kind_check.register` adds a
+kind, checked complete there (:func:`~brake_sim_ros.model.kind_check.missing_parts`).
 
-Time: every defect has an onset and a growth law (:class:`Growth`); its severity at a
-simulated time is :func:`severity_at`, the one definition that the compiled model
-(:mod:`.growth`, each physics step), the label columns and the ground-truth messages all
-evaluate. The scenario gives the final severity (the kind's key) and the law:
+The ground truth of a brake (``Defects.active``, :mod:`.defects`) is a list of
+:class:`ActiveDefect`, one per kind and location in force, so a consumer (the
+``DefectState`` message, Parquet label columns, file metadata, a scorer) needs no change
+when a kind is added here. Onsets and growth laws: :mod:`.growth_law`.
 
-* ``step``: 0 before the onset, the final severity from it on (the default, onset 0 s:
-  a defect present from the start);
-* ``linear``: from 0 at the onset, ``rate_per_s`` (the kind's unit per second, > 0) toward
-  the final severity, held there once reached: ``s(t) = sign(s_f) min(r (t - t_0), |s_f|)``;
-* ``exponential``: from ``start`` (same sign as the final severity, smaller) at the onset,
-  doubling every ``doubling_time_s``, held at the final severity once reached:
-  ``s(t) = start 2^((t - t_0) / T_d)`` until ``|s| >= |s_f|``;
-* ``friction_work`` (lining wear only): Archard-like, the wear grows with the shoe's own
-  friction work from the onset, ``ds/dt = k_w P_f`` (``P_f`` the shoe's friction power,
-  ``k_w`` = ``wear_rate_mm_per_mj``, mm per MJ), held at the final severity once reached.
-  It depends on the motion, not on time alone: the compiled model integrates it with the
-  state (layout ``Y_*_WEAR``) and records it (``*_lining_wear_m`` columns), and the labels
-  and ground truth read it from there (:meth:`.defects.Defects.label_series`).
-
-Pure data and logic, plus the compiled severity law: no files.
+Pure data and logic: no files.
 """
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
-import numpy as np
-from numba import njit
-
 from brake_sim_ros.errors import ParameterError
-from brake_sim_ros.model.compiled import JIT
+from brake_sim_ros.model import layout as L
+from brake_sim_ros.model.growth_law import (  # noqa: F401 (re-exported: the catalogue's laws)
+    DEFAULT_WEAR_RATE_MM_PER_MJ,
+    GROWTH_KEYS,
+    GROWTH_LAWS,
+    LAW_EXPONENTIAL,
+    LAW_FRICTION_WORK,
+    LAW_LINEAR,
+    LAW_PARAMETERS,
+    LAW_STEP,
+    MAX_GROWTH_TIME_S,
+    MAX_WEAR_RATE_MM_PER_MJ,
+    Growth,
+    severity_at,
+    severity_series,
+)
 from brake_sim_ros.model.layout import SIDES
 
-# how a severity evolves after its onset; the index is the law's id in the compiled model
-GROWTH_LAWS: tuple[str, ...] = ("step", "linear", "exponential", "friction_work")
-LAW_STEP, LAW_LINEAR, LAW_EXPONENTIAL, LAW_FRICTION_WORK = 0, 1, 2, 3
 DRUM_KIND = "drum_out_of_round"
 WEAR_KIND = "lining_wear"
 FLAT_KIND = "drum_flat"
@@ -54,200 +53,79 @@ LINING_THICKNESS_MM = 5.0
 # Thickness left at the usual replacement limit, mm: 1.6 mm (1/16 in) above the shoe
 # table for bonded linings (a typical workshop figure), so 3.4 mm of wear.
 LINING_MINIMUM_MM = 1.6
-# Default wear per friction work, mm/MJ: a volumetric specific wear of about 0.3 cm^3/MJ
-# (organic friction materials in dynamometer wear tests run about 0.1-0.5 cm^3/MJ: an
-# order of magnitude, not a measured figure for this lining) spread over the lining's
-# rubbing area, 80 deg of arc at 176.5 mm times 45 mm wide = 111 cm^2: 0.027 mm/MJ. A stop
-# from 100 km/h puts about 55 kJ into the leading shoe: 1.5 um of wear.
-DEFAULT_WEAR_RATE_MM_PER_MJ = 0.027
-# Largest wear rate a scenario may state, mm/MJ: an accelerated wear test that wears a
-# lining through in one stop is within it.
-MAX_WEAR_RATE_MM_PER_MJ = 1000.0
-# Longest onset and doubling time a scenario may state, s: a day of simulated braking
-MAX_GROWTH_TIME_S = 86_400.0
-
-
-@njit(**JIT)
-def severity_at(t, law, onset_s, rate, start, final):
-    """Severity at simulated time ``t`` (s) of a defect of final severity ``final``.
-
-    Args:
-        t: simulated time, s.
-        law: the law's id (``LAW_*``, the index in :data:`GROWTH_LAWS`).
-        onset_s: the onset, s: 0 before it.
-        rate: linear: the rate, the kind's unit per second (> 0); exponential: the relative
-            rate ``ln 2 / doubling time``, 1/s; step, friction work: unused.
-        start: exponential: the severity at the onset (same sign as ``final``); else unused.
-        final: the final severity, in the kind's unit.
-
-    Returns:
-        The severity, in the kind's unit; ``final`` once it is reached (never beyond). A
-        friction-work law does not follow time: 0 before the onset, ``final`` after it (the
-        bound; its value is the compiled model's, :mod:`.growth`).
-    """
-    if t < onset_s:
-        return 0.0
-    if law == LAW_LINEAR:
-        grown = rate * (t - onset_s)
-        if grown >= abs(final):
-            return final
-        return grown if final > 0.0 else -grown
-    if law == LAW_EXPONENTIAL:
-        grown = start * math.exp(rate * (t - onset_s))
-        if abs(grown) >= abs(final):
-            return final
-        return grown
-    return final
-
-
-@njit(**JIT)
-def severity_series(times, law, onset_s, rate, start, final):
-    """:func:`severity_at` at each of ``times`` (s, shape (n,)), in the kind's unit."""
-    out = np.empty(times.shape[0])
-    for i in range(times.shape[0]):
-        out[i] = severity_at(times[i], law, onset_s, rate, start, final)
-    return out
-
-
-def _finite(value: object) -> bool:
-    return isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
+# Highest pulsation frequency of an actuation, Hz: a hydraulic line's pressure pulsation
+# (a pump, ABS modulation) stays far below the contact's kHz dynamics.
+MAX_PULSATION_HZ = 1000.0
+# The frequency Defects.single gives a pulsation (a severity sweep), Hz: about the ABS
+# modulation rate of a wheel (10-20 Hz).
+DEFAULT_PULSATION_HZ = 15.0
+# The width a flat gets when a scenario names none (and in a severity sweep), deg: about
+# 16 mm of arc on a 180 mm drum, a short window as a crack's edge or a local flat is.
+DEFAULT_FLAT_WIDTH_DEG = 5.0
+# Widest flat, deg: a wider dip is a low lobe, a harmonic (drum_out_of_round).
+MAX_FLAT_WIDTH_DEG = 90.0
+# the fidelity levels (model/fidelity.py LEVELS), cheapest first
+ALL_LEVELS = frozenset({"contact_regime_rigid", "contact_regime", "rigid", "full"})
+IMPACT_LEVELS = frozenset({"rigid", "full"})
+# what a kind does to a shoe's actuation (DefectKind.actuation): "history" reshapes the
+# commanded force history (a delay, lag or pulsation), "release" acts on the force that
+# reaches the shoe (a weak return spring); both take the kernel's shaped-force path
+ACTUATION_EFFECTS = ("", "history", "release")
 
 
 @dataclass(frozen=True)
-class Growth:
-    """When a defect starts and how its severity grows (see the module doc for the laws).
+class DefectField:
+    """One number a defect kind is set by: its severity's key or an attribute of it.
 
     Attributes:
-        onset_s: simulated time it starts, s (>= 0).
-        law: one of :data:`GROWTH_LAWS`.
-        rate_per_s: linear only: the kind's unit per second toward the final severity (> 0).
-        doubling_time_s: exponential only: the time the severity takes to double, s (> 0).
-        start: exponential only: the severity at the onset, in the kind's unit (same sign
-            as the final severity, smaller in size).
-        wear_rate_mm_per_mj: friction work only: ``k_w``, mm of lining wear per MJ of the
-            shoe's friction work (> 0; scenarios default to
-            :data:`DEFAULT_WEAR_RATE_MM_PER_MJ`).
+        name: the key in a scenario's ``[defects.<location>]``, the field of the shoe or
+            drum (:mod:`.defects`) and the node parameter ``defects.<location>.<name>``;
+            it ends in its unit.
+        unit: its unit.
+        default: its value on a healthy brake (an attribute: when the scenario gives none).
+        low, high: the values allowed, in ``unit`` (``low_open``: ``low`` itself refused).
+        description: what it is, one line (the node parameter's description).
+        attribute: its name in the ground truth's attributes ("" for a severity's key).
+        needed: an attribute that must be above ``low`` when the defect is present (and
+            at ``low`` without it).
+        present_default: the value :meth:`.defects.Defects.single` gives an attribute (a
+            severity sweep), or None: ``default``.
+        limit: why the range stops there (in the refusal).
     """
 
-    onset_s: float = 0.0
-    law: str = "step"
-    rate_per_s: float = 0.0
-    doubling_time_s: float = 0.0
-    start: float = 0.0
-    wear_rate_mm_per_mj: float = 0.0
+    name: str
+    unit: str
+    default: float
+    low: float
+    high: float
+    description: str
+    attribute: str = ""
+    needed: bool = False
+    present_default: float | None = None
+    low_open: bool = False
+    limit: str = ""
 
-    def __post_init__(self) -> None:
-        if self.law not in GROWTH_LAWS:
-            raise ParameterError(
-                f"defect growth {self.law!r} is invalid: allowed one of {list(GROWTH_LAWS)}"
-            )
-        for name in ("onset_s", "rate_per_s", "doubling_time_s", "start", "wear_rate_mm_per_mj"):
-            if not _finite(getattr(self, name)):
-                raise ParameterError(
-                    f"defect {name}={getattr(self, name)!r} is invalid: allowed a finite number"
-                )
-        if not 0.0 <= self.onset_s <= MAX_GROWTH_TIME_S:
-            raise ParameterError(
-                f"defect onset_s={self.onset_s:g} is invalid: allowed 0 to"
-                f" {MAX_GROWTH_TIME_S:g} s (simulated time since the start of the run)"
-            )
-        needs = {
-            "linear": "rate_per_s",
-            "exponential": "doubling_time_s",
-            "friction_work": "wear_rate_mm_per_mj",
-        }.get(self.law)
-        needed_by = {
-            "rate_per_s": "linear",
-            "doubling_time_s": "exponential",
-            "start": "exponential",
-            "wear_rate_mm_per_mj": "friction_work",
-        }
-        for name, law in needed_by.items():
-            value = getattr(self, name)
-            if law != self.law and value != 0.0:
-                raise ParameterError(
-                    f"defect {name}={value:g} with growth {self.law!r} is invalid: allowed"
-                    f" only with growth {law!r}"
-                )
-        if needs is not None and not getattr(self, needs) > 0.0:
-            raise ParameterError(
-                f"defect {needs}={getattr(self, needs):g} with growth {self.law!r} is invalid:"
-                " allowed a number > 0"
-            )
-        if needs == "wear_rate_mm_per_mj" and self.wear_rate_mm_per_mj > MAX_WEAR_RATE_MM_PER_MJ:
-            raise ParameterError(
-                f"defect wear_rate_mm_per_mj={self.wear_rate_mm_per_mj:g} is invalid: allowed"
-                f" > 0 to {MAX_WEAR_RATE_MM_PER_MJ:g} mm/MJ"
-            )
-        if needs == "doubling_time_s" and self.doubling_time_s > MAX_GROWTH_TIME_S:
-            raise ParameterError(
-                f"defect doubling_time_s={self.doubling_time_s:g} is invalid: allowed up to"
-                f" {MAX_GROWTH_TIME_S:g} s"
-            )
-
-    @property
-    def is_static(self) -> bool:
-        """A step at the start of the run: the defect is simply present."""
-        return self.law == "step" and self.onset_s == 0.0
-
-    @property
-    def law_id(self) -> int:
-        return GROWTH_LAWS.index(self.law)
-
-    @property
-    def follows_time(self) -> bool:
-        """The severity is a function of time alone (every law but friction work)."""
-        return self.law != "friction_work"
-
-    @property
-    def rate(self) -> float:
-        """The law's rate as :func:`severity_at` takes it (and the ground truth's
-        ``growth_rate``): linear unit/s, exponential 1/s (``ln 2 / doubling time``), friction
-        work mm/MJ (``k_w``), step 0."""
-        if self.law == "linear":
-            return float(self.rate_per_s)
-        if self.law == "exponential":
-            return math.log(2.0) / self.doubling_time_s
-        if self.law == "friction_work":
-            return float(self.wear_rate_mm_per_mj)
-        return 0.0
-
-    def check(self, final: float, where: str = "", healthy: float = 0.0) -> None:
-        """Refuse a law that cannot reach ``final`` (the final severity, kind's unit;
-        ``healthy``: the healthy value of the key the message names)."""
-        if self.law == "exponential" and not (
-            self.start * final > 0.0 and abs(self.start) < abs(final)
-        ):
-            raise ParameterError(
-                f"defect {where}start={healthy + self.start:g} is invalid: allowed a value"
-                f" between the healthy {healthy:g} and the final {healthy + final:g}"
-                " (exponential growth starts there at the onset)"
-            )
-
-    def severity(self, t: float, final: float) -> float:
-        """Severity at simulated time ``t`` (s) toward ``final`` (:func:`severity_at`)."""
-        return float(severity_at(float(t), self.law_id, self.onset_s, self.rate, self.start, final))
-
-    def series(self, times_s: np.ndarray, final: float) -> np.ndarray:
-        """Severity at each of ``times_s`` (s) toward ``final`` (:func:`severity_series`)."""
-        times = np.ascontiguousarray(times_s, dtype=np.float64)
-        return severity_series(times, self.law_id, self.onset_s, self.rate, self.start, final)
-
-    def reached_s(self, final: float) -> float:
-        """Simulated time the severity reaches ``final``, s (friction work: not known
-        beforehand, ``inf``)."""
-        if self.law == "friction_work":
-            return math.inf
-        if self.law == "linear":
-            return self.onset_s + abs(final) / self.rate_per_s
-        if self.law == "exponential":
-            return self.onset_s + self.doubling_time_s * math.log2(abs(final / self.start))
-        return self.onset_s
+    def check(self, value: float, kind: str, present: bool, where: str = "") -> None:
+        """Refuse ``value`` outside the range (or a needed attribute at ``low`` while the
+        defect ``kind`` is ``present``), in one line naming what is allowed."""
+        low_ok = value > self.low if self.low_open else value >= self.low
+        if self.needed and present and value == self.low:
+            low_ok = False
+        if low_ok and value <= self.high:
+            return
+        low = f"> {self.low:g}" if self.low_open or self.needed else f"{self.low:g}"
+        why = f" ({self.limit})" if self.limit else ""
+        if self.needed:
+            why = f" while {kind} is present ({self.low:g} without it){why}"
+        raise ParameterError(
+            f"defect {where}{self.name}={value:g} is invalid: allowed {low} to"
+            f" {self.high:g} {self.unit}{why}"
+        )
 
 
 @dataclass(frozen=True)
 class DefectKind:
-    """One kind of defect.
+    """One kind of defect, with what the product reads from it.
 
     Attributes:
         name: the kind's name in ground truth, label columns and the CLI.
@@ -258,11 +136,25 @@ class DefectKind:
         limit: why the range stops there.
         description: what it changes in the brake, and the sign convention.
         scenario_key: the key that sets it in a scenario's ``[defects.<location>]`` and
-            the node parameter ``<location>_<key>``.
-        healthy_value: what that key reads on a healthy brake (the value set is
-            ``healthy_value + severity``).
+            the node parameter ``defects.<location>.<key>``.
         service_limit: a size seen in service (shared figures: the study's cases), in
-            ``unit``, signed: where a severity sweep ends.
+            ``unit``, signed: where a severity sweep (a campaign's defect axis) ends.
+        levels: the fidelity levels that represent it (:data:`ALL_LEVELS`; the reason
+            beside the entry).
+        growth_id: its id in the compiled model's growth update (``layout.GK_*``,
+            :func:`brake_sim_ros.model.growth.apply`), or None: it cannot change during a
+            run (only a step at 0 s).
+        healthy_value: what ``scenario_key`` reads on a healthy brake (the value set is
+            ``healthy_value + severity``).
+        attributes: the other numbers that describe it (:class:`DefectField`), e.g. a
+            pulsation's frequency or a flat's width.
+        laws: the growth laws it takes (:data:`GROWTH_LAWS`).
+        initial_condition: it acts only through the state at t = 0: only a step at 0 s.
+        tied: the two shoes' severities are tied (opposite): a scenario states one shoe.
+        actuation: what it does to the shoe's actuation (:data:`ACTUATION_EFFECTS`).
+        speed_dependent: its effect on a shoe follows the drum speed (no one-shoe model).
+        table: its severity is not one number but a table of the scenario (a drum's
+            harmonics): no node parameter, read by :mod:`brake_sim_ros.scenarios.loader`.
     """
 
     name: str
@@ -274,7 +166,16 @@ class DefectKind:
     description: str
     scenario_key: str
     service_limit: float
+    levels: frozenset[str]
+    growth_id: int | None
     healthy_value: float = 0.0
+    attributes: tuple[DefectField, ...] = ()
+    laws: tuple[str, ...] = ("step", "linear", "exponential")
+    initial_condition: bool = False
+    tied: bool = False
+    actuation: str = ""
+    speed_dependent: bool = False
+    table: bool = False
 
     def check(self, severity: float, where: str = "") -> None:
         """Refuse a severity outside the range, in one line naming the limit."""
@@ -285,8 +186,35 @@ class DefectKind:
                 f" {h + self.minimum:g} to {h + self.maximum:g} ({self.limit})"
             )
 
+    @property
+    def severity_field(self) -> DefectField | None:
+        """The number that sets the severity (None for a table, :attr:`table`)."""
+        if self.table:
+            return None
+        h = self.healthy_value
+        return DefectField(
+            self.scenario_key,
+            self.unit,
+            h,
+            h + self.minimum,
+            h + self.maximum,
+            self.description,
+            limit=self.limit,
+        )
 
-KINDS: tuple[DefectKind, ...] = (
+    def fields(self) -> tuple[DefectField, ...]:
+        """Every number that sets it: its severity's key (unless a table), then its
+        attributes."""
+        first = self.severity_field
+        return ((first,) if first is not None else ()) + self.attributes
+
+    @property
+    def on_shoes(self) -> bool:
+        return set(self.locations) <= set(SIDES)
+
+
+# the registry: every kind, in catalogue order (kind_check.register() adds one)
+KINDS: list[DefectKind] = [
     DefectKind(
         name="pivot_radius_change",
         locations=SIDES,
@@ -300,6 +228,8 @@ KINDS: tuple[DefectKind, ...] = (
         ),
         scenario_key="pivot_radius_change_pct",
         service_limit=3.0,  # the study's cases: +-3 %
+        levels=ALL_LEVELS,
+        growth_id=L.GK_PIVOT,
     ),
     DefectKind(
         name="initial_angle",
@@ -314,6 +244,9 @@ KINDS: tuple[DefectKind, ...] = (
         ),
         scenario_key="initial_angle_deg",
         service_limit=-2.0,  # the study's cases: -2 deg
+        levels=ALL_LEVELS,
+        growth_id=None,
+        initial_condition=True,
     ),
     DefectKind(
         name="actuation_share_change",
@@ -329,6 +262,9 @@ KINDS: tuple[DefectKind, ...] = (
         scenario_key="actuation_share",
         service_limit=0.05,  # the study's cases: +-10 % of the share (0.55)
         healthy_value=0.5,
+        levels=ALL_LEVELS,
+        growth_id=L.GK_SHARE,
+        tied=True,
     ),
     DefectKind(
         name="friction_change",
@@ -347,6 +283,8 @@ KINDS: tuple[DefectKind, ...] = (
         ),
         scenario_key="friction_change_pct",
         service_limit=-50.0,  # fade and contamination can halve mu (TESTBED.md)
+        levels=ALL_LEVELS,  # a coefficient per lining: the same shoe balance
+        growth_id=L.GK_FRICTION,
     ),
     DefectKind(
         name="actuation_gain_change",
@@ -361,6 +299,8 @@ KINDS: tuple[DefectKind, ...] = (
         ),
         scenario_key="actuation_gain_change_pct",
         service_limit=-27.0,  # graded efficiency down to 73 % (UCI hydraulic rig, TESTBED.md)
+        levels=ALL_LEVELS,  # a gain, as the share's
+        growth_id=L.GK_GAIN,
     ),
     DefectKind(
         name="actuation_delay",
@@ -372,6 +312,11 @@ KINDS: tuple[DefectKind, ...] = (
         description="dead time between the commanded actuation and the shoe's, in ms",
         scenario_key="actuation_delay_ms",
         service_limit=100.0,  # a whole healthy hydraulic rise (under 0.1 s, TESTBED.md)
+        # a shaped actuation history: the contact-regime levels reuse a balance while the
+        # actuation holds, and a delayed, lagging or pulsating force does not hold
+        levels=IMPACT_LEVELS,
+        growth_id=None,
+        actuation="history",
     ),
     DefectKind(
         name="actuation_lag",
@@ -385,6 +330,9 @@ KINDS: tuple[DefectKind, ...] = (
         ),
         scenario_key="actuation_lag_ms",
         service_limit=120.0,  # 95 % of a step in 0.36 s, a car's response (TESTBED.md)
+        levels=IMPACT_LEVELS,  # a shaped history (actuation_delay)
+        growth_id=None,
+        actuation="history",
     ),
     DefectKind(
         name="actuation_pulsation",
@@ -399,6 +347,22 @@ KINDS: tuple[DefectKind, ...] = (
         ),
         scenario_key="actuation_pulsation_pct",
         service_limit=20.0,  # no service figure in TESTBED.md: a clearly felt pulsation
+        levels=IMPACT_LEVELS,  # a shaped history (actuation_delay)
+        growth_id=L.GK_PULSATION,
+        actuation="history",
+        attributes=(
+            DefectField(
+                "actuation_pulsation_hz",
+                "Hz",
+                0.0,
+                0.0,
+                MAX_PULSATION_HZ,
+                "the pulsation's frequency, Hz (> 0 with a pulsation)",
+                attribute="frequency_hz",
+                needed=True,
+                present_default=DEFAULT_PULSATION_HZ,
+            ),
+        ),
     ),
     DefectKind(
         name="return_spring_weakening",
@@ -413,6 +377,11 @@ KINDS: tuple[DefectKind, ...] = (
         ),
         scenario_key="return_spring_weakening_pct",
         service_limit=100.0,  # a broken spring
+        # the spring acts on the force that reaches the shoe in the kernel: the
+        # contact-regime levels take the commanded history
+        levels=IMPACT_LEVELS,
+        growth_id=None,
+        actuation="release",
     ),
     DefectKind(
         name=DRUM_KIND,
@@ -433,6 +402,10 @@ KINDS: tuple[DefectKind, ...] = (
         ),
         scenario_key="harmonics",
         service_limit=150.0,  # service runouts 50-150 um (about 50 um a common limit)
+        levels=IMPACT_LEVELS,
+        growth_id=L.GK_DRUM,
+        speed_dependent=True,
+        table=True,
     ),
     DefectKind(
         name=WEAR_KIND,
@@ -449,6 +422,11 @@ KINDS: tuple[DefectKind, ...] = (
         scenario_key="lining_wear_mm",
         # replaced at 1.6 mm left of 5 mm (1/16 in above the table: a typical workshop limit)
         service_limit=LINING_THICKNESS_MM - LINING_MINIMUM_MM,
+        # a worn lining is geometry (the lining's radius), as a pivot's place: the same
+        # shoe balance; wear that grows is a growth (fidelity.GROWTH_LEVELS)
+        levels=ALL_LEVELS,
+        growth_id=L.GK_WEAR,
+        laws=("step", "linear", "exponential", "friction_work"),
     ),
     DefectKind(
         name=FLAT_KIND,
@@ -468,9 +446,55 @@ KINDS: tuple[DefectKind, ...] = (
         ),
         scenario_key="flat_depth_um",
         service_limit=100.0,  # no service figure in TESTBED.md: twice the 50 um runout limit
+        # a flat passes the shoe once per revolution: the drum angle and the shoes'
+        # dynamics, as the harmonics
+        levels=IMPACT_LEVELS,
+        growth_id=L.GK_FLAT,
+        speed_dependent=True,
+        attributes=(
+            DefectField(
+                "flat_centre_deg",
+                "deg",
+                0.0,
+                -360.0,
+                360.0,
+                "the flat's centre in the drum's frame, deg",
+                attribute="centre_deg",
+            ),
+            DefectField(
+                "flat_width_deg",
+                "deg",
+                DEFAULT_FLAT_WIDTH_DEG,
+                0.0,
+                MAX_FLAT_WIDTH_DEG,
+                "the flat's whole width, deg",
+                attribute="width_deg",
+                low_open=True,
+                limit="a wider dip is a harmonic, drum_out_of_round",
+            ),
+        ),
     ),
-)
+]
 KIND_BY_NAME: dict[str, DefectKind] = {k.name: k for k in KINDS}
+
+
+def kinds_at(location: str) -> tuple[DefectKind, ...]:
+    """The kinds that can sit at ``location`` (a side or ``drum``), in catalogue order."""
+    return tuple(k for k in KINDS if location in k.locations)
+
+
+def fields_at(location: str) -> tuple[DefectField, ...]:
+    """Every number that sets a defect at ``location``, in catalogue order: the fields
+    of a shoe (``left``/``right``) or of the drum, less its tables (the harmonics)."""
+    return tuple(f for k in kinds_at(location) for f in k.fields())
+
+
+def kind_of_field(location: str, name: str) -> DefectKind:
+    """The kind whose field ``name`` sits at ``location`` (KeyError if none)."""
+    for k in kinds_at(location):
+        if any(f.name == name for f in k.fields()):
+            return k
+    raise KeyError(name)
 
 
 @dataclass(frozen=True)

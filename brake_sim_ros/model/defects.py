@@ -11,165 +11,78 @@ import numpy as np
 from brake_sim_ros.errors import ParameterError
 from brake_sim_ros.model.actuation import shoe_gain
 from brake_sim_ros.model.catalogue import (
+    DEFAULT_FLAT_WIDTH_DEG,  # noqa: F401 (re-exported: the flat's default width)
+    DEFAULT_PULSATION_HZ,  # noqa: F401 (re-exported)
     DRUM_KIND,
-    FLAT_KIND,
     KIND_BY_NAME,
     KINDS,
-    WEAR_KIND,
+    MAX_FLAT_WIDTH_DEG,  # noqa: F401 (re-exported)
+    MAX_PULSATION_HZ,  # noqa: F401 (re-exported)
     ActiveDefect,
+    DefectKind,
     Growth,
+    kinds_at,
     label_column,
 )
+from brake_sim_ros.model.defect_fields import FieldSet as _FieldSet
+from brake_sim_ros.model.defect_fields import present_values, tied_value
 
 # Most harmonics one drum carries: the packed parameter vector has this many slots.
 from brake_sim_ros.model.layout import MAX_DRUM_HARMONICS
 
-# Highest pulsation frequency of an actuation, Hz: a hydraulic line's pressure pulsation
-# (a pump, ABS modulation) stays far below the contact's kHz dynamics.
-MAX_PULSATION_HZ = 1000.0
-# The frequency Defects.single gives a pulsation (a severity sweep), Hz: about the ABS
-# modulation rate of a wheel (10-20 Hz).
-DEFAULT_PULSATION_HZ = 15.0
 
+class ShoeDefect(_FieldSet):
+    """Defects of one shoe: a value for each catalogue field a shoe takes (its kinds'
+    keys and attributes, :func:`.catalogue.fields_at`; the meaning, unit and range of
+    each are the kind's entry, ``brake-sim defects``). The defaults are a healthy shoe,
+    e.g. ``ShoeDefect(actuation_lag_ms=80.0)``.
 
-def _finite(value: object) -> bool:
-    return isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
-
-
-@dataclass(frozen=True)
-class ShoeDefect:
-    """Defects of one shoe. The defaults are a healthy shoe.
-
-    Attributes:
-        pivot_radius_change_pct: change of the pivot's distance from the drum centre, in
-            percent of the nominal radius. Positive moves the pin radially outward, closer
-            to the drum. The shoe stays on its piston at the tip: the pin carries the heel
-            across the tip-pin line, so the shoe turns about its tip (outward for a pin
-            moved outward, inward for one moved inward), and the shoe then turns on the pin
-            at its new place (see :func:`brake_sim_ros.model.assembly.place_shoe`).
-        initial_angle_deg: the shoe's starting angle about its pivot, degrees. Negative
-            tilts the shoe toward the drum centre, away from the drum.
-        actuation_share: this shoe's share of the total actuation force (0.5 healthy).
-            The shoe's actuation force is multiplied by ``2 * actuation_share``.
-        friction_change_pct: change of this shoe's lining friction coefficient, percent of
-            the nominal one (fade when hot, contamination by oil or water: negative; both
-            can halve it, ``TESTBED.md``). The shoe's coefficient is ``mu (1 + pct/100)``.
-        actuation_gain_change_pct: change of the force the shoe's wheel cylinder delivers
-            for the commanded one, percent (low line pressure: negative); the shoe's
-            force is multiplied by ``2 share (1 + pct/100)`` (``actuation.shoe_gain``).
-        actuation_delay_ms: dead time of the shoe's actuation, ms: it follows the
-            commanded history this late.
-        actuation_lag_ms: time constant of a first-order lag of the shoe's actuation, ms
-            (a slow rise: ``tau F' + F = F_commanded``).
-        actuation_pulsation_pct: amplitude of a pulsation of the shoe's actuation force,
-            percent of it (``F (1 + a sin(2 pi f t))``), at ``actuation_pulsation_hz``.
-        actuation_pulsation_hz: the pulsation's frequency, Hz (> 0 with a pulsation).
-        return_spring_weakening_pct: preload the shoe's return spring has lost, percent
-            (100: broken). Past the stop's margin (``actuation.spring_release``: preload
-            60 N against a residual line force of 20 N, so past 67 %) the residual pressure
-            presses the shoe on the drum without actuation: drag.
-        lining_wear_mm: lining thickness lost, mm (0 to 5, the thickness of a new lining,
-            catalogue.LINING_THICKNESS_MM). The lining's
-            surface, an arc about the shoe's lining centre, moves in by as much: the running
-            clearance grows by the wear and the shoe turns further before it touches (an
-            adjuster that takes up wear is not modelled: a brake between adjustments). The
-            contact length of the model's line contact is the lining's width along the drum
-            axis, which wear does not change.
-
-    Delay, lag and pulsation act on the commanded actuation history: the scenario's, or
-    the node's live actuation commands (``~/actuation``), which the stepper keeps as a
-    history for a delayed or lagging shoe (``solvers.fixed_step.CommandHistory``).
+    The physics of the built-in kinds: a pivot moved outward (``pivot_radius_change_pct``)
+    keeps the shoe on its piston at the tip, so the shoe turns about its tip and then on
+    the pin at its new place (:func:`brake_sim_ros.model.assembly.place_shoe`); the
+    actuation force is multiplied by ``2 share (1 + gain change/100)``
+    (``actuation.shoe_gain``); a friction change scales the lining's coefficient
+    ``mu (1 + pct/100)``; delay, lag and pulsation act on the commanded actuation history
+    (the scenario's, or the node's live commands, which the stepper keeps as a history,
+    ``solvers.fixed_step.CommandHistory``): ``tau F' + F = F_commanded`` for a lag,
+    ``F (1 + a sin(2 pi f t))`` for a pulsation; a weak return spring past the stop's
+    margin (``actuation.spring_release``: preload 60 N against a residual line force of
+    20 N, so past 67 %) lets the residual pressure press the shoe on the drum without
+    actuation: drag; a worn lining's surface moves in by the wear, so the running
+    clearance grows (an adjuster that takes up wear is not modelled).
     """
-
-    pivot_radius_change_pct: float = 0.0
-    initial_angle_deg: float = 0.0
-    actuation_share: float = 0.5
-    friction_change_pct: float = 0.0
-    actuation_gain_change_pct: float = 0.0
-    actuation_delay_ms: float = 0.0
-    actuation_lag_ms: float = 0.0
-    actuation_pulsation_pct: float = 0.0
-    actuation_pulsation_hz: float = 0.0
-    return_spring_weakening_pct: float = 0.0
-    lining_wear_mm: float = 0.0
-
-    def __post_init__(self) -> None:
-        for name in (
-            "pivot_radius_change_pct",
-            "initial_angle_deg",
-            "actuation_share",
-            "friction_change_pct",
-            "actuation_gain_change_pct",
-            "actuation_delay_ms",
-            "actuation_lag_ms",
-            "actuation_pulsation_pct",
-            "actuation_pulsation_hz",
-            "return_spring_weakening_pct",
-            "lining_wear_mm",
-        ):
-            value = getattr(self, name)
-            if not isinstance(value, int | float) or not math.isfinite(value):
-                raise ParameterError(f"defect {name}={value!r} is invalid: allowed a finite number")
-        for kind, severity in self.severities().items():
-            KIND_BY_NAME[kind].check(severity)
-        hz = self.actuation_pulsation_hz
-        if not 0.0 <= hz <= MAX_PULSATION_HZ or (self.actuation_pulsation_pct and hz == 0.0):
-            raise ParameterError(
-                f"defect actuation_pulsation_hz={hz:g} is invalid: allowed > 0 to"
-                f" {MAX_PULSATION_HZ:g} Hz with a pulsation (0 without one)"
-            )
-
-    def severities(self) -> dict[str, float]:
-        """The severity of each catalogue kind a shoe can carry (0: absent), in the kind's
-        unit (:mod:`.catalogue`)."""
-        return {
-            "pivot_radius_change": float(self.pivot_radius_change_pct),
-            "initial_angle": float(self.initial_angle_deg),
-            "actuation_share_change": float(self.actuation_share) - 0.5,
-            "friction_change": float(self.friction_change_pct),
-            "actuation_gain_change": float(self.actuation_gain_change_pct),
-            "actuation_delay": float(self.actuation_delay_ms),
-            "actuation_lag": float(self.actuation_lag_ms),
-            "actuation_pulsation": float(self.actuation_pulsation_pct),
-            "return_spring_weakening": float(self.return_spring_weakening_pct),
-            WEAR_KIND: float(self.lining_wear_mm),
-        }
 
     @classmethod
     def from_severities(cls, severities: dict[str, float]) -> ShoeDefect:
-        """The shoe carrying these catalogue severities (absent kinds healthy): the
-        inverse of :meth:`severities`."""
-        return cls(
-            pivot_radius_change_pct=severities.get("pivot_radius_change", 0.0),
-            initial_angle_deg=severities.get("initial_angle", 0.0),
-            actuation_share=0.5 + severities.get("actuation_share_change", 0.0),
-            friction_change_pct=severities.get("friction_change", 0.0),
-            actuation_gain_change_pct=severities.get("actuation_gain_change", 0.0),
-            actuation_delay_ms=severities.get("actuation_delay", 0.0),
-            actuation_lag_ms=severities.get("actuation_lag", 0.0),
-            actuation_pulsation_pct=severities.get("actuation_pulsation", 0.0),
-            return_spring_weakening_pct=severities.get("return_spring_weakening", 0.0),
-            lining_wear_mm=severities.get(WEAR_KIND, 0.0),
-            actuation_pulsation_hz=(
-                DEFAULT_PULSATION_HZ if severities.get("actuation_pulsation") else 0.0
-            ),
-        )
-
-    @property
-    def is_healthy(self) -> bool:
-        return not any(self.severities().values())
+        """The shoe carrying these catalogue severities (absent kinds healthy; a present
+        kind's attributes at their :attr:`DefectField.present_default`): the inverse of
+        :meth:`severities`."""
+        values: dict[str, float] = {}
+        for kind in kinds_at(cls._LOCATION):
+            severity = severities.get(kind.name, 0.0)
+            if severity:
+                values.update(present_values(kind, severity))
+        return cls(**values)
 
     @property
     def actuation_gain(self) -> float:
         """Multiplier on this shoe's actuation force, ``2 share (1 + gain change/100)``."""
         return float(shoe_gain.py_func(self.actuation_share, self.actuation_gain_change_pct))
 
+    def _shaping(self, effects: tuple[str, ...]) -> bool:
+        return any(self.severity_of(k) for k in kinds_at(self._LOCATION) if k.actuation in effects)
+
     @property
     def actuation_shaped(self) -> bool:
-        """The shoe's actuation is delayed, lagged or pulsating."""
-        return bool(
-            self.actuation_delay_ms or self.actuation_lag_ms or self.actuation_pulsation_pct
-        )
+        """The shoe's commanded actuation history is reshaped (delayed, lagged or
+        pulsating: a kind whose ``actuation`` is ``history``)."""
+        return self._shaping(("history",))
+
+    @property
+    def force_shaped(self) -> bool:
+        """The force that reaches the shoe takes the kernel's shaped path: a reshaped
+        history or a weak return spring (any kind with an ``actuation`` effect)."""
+        return self._shaping(("history", "release"))
 
 
 # Largest order of a drum-radius harmonic (cycles per revolution): the service range of
@@ -182,11 +95,6 @@ MAX_DRUM_SLOPE = 0.05
 # Service figures, for the documentation of the range (``TESTBED.md``): drum runout of
 # 50-150 um in service, about 50 um a common service limit, judder from 10-20 um.
 SERVICE_RUNOUT_UM = 150.0
-# The width a flat gets when a scenario names none (and in a severity sweep), deg: about
-# 16 mm of arc on a 180 mm drum, a short window as a crack's edge or a local flat is.
-DEFAULT_FLAT_WIDTH_DEG = 5.0
-# Widest flat, deg: a wider dip is a low lobe, a harmonic (drum_out_of_round).
-MAX_FLAT_WIDTH_DEG = 90.0
 
 
 @dataclass(frozen=True)
@@ -233,8 +141,7 @@ class DrumHarmonic:
             )
 
 
-@dataclass(frozen=True)
-class DrumDefect:
+class DrumDefect(_FieldSet):
     """Out-of-roundness and waviness of the drum. The default is a round drum.
 
     The drum's radius at the angle ``psi`` measured in the drum's own frame (the polar
@@ -263,68 +170,58 @@ class DrumDefect:
     above :data:`MAX_DRUM_SLOPE` of ``R0``. A flat only lowers the surface: it never
     touches a retracted shoe. Once per revolution it passes each shoe.
 
-    Attributes:
-        harmonics: the radius harmonics, in any order; empty for a round drum.
-        flat_depth_um: the flat's depth ``d``, um (0: none; the catalogue's ``drum_flat``).
-        flat_centre_deg: its centre ``c`` in the drum's frame, deg.
-        flat_width_deg: its whole width ``2 w``, deg (> 0 to 90).
+    Built as ``DrumDefect(harmonics, **fields)``: the radius harmonics (in any order;
+    empty for a round drum) and the catalogue's drum fields (:func:`.catalogue.fields_at`
+    ``("drum")``): the flat's depth ``d`` (``flat_depth_um``, um; 0: none), its centre
+    ``c`` in the drum's frame (``flat_centre_deg``) and whole width ``2 w``
+    (``flat_width_deg``, deg).
     """
 
-    harmonics: tuple[DrumHarmonic, ...] = ()
-    flat_depth_um: float = 0.0
-    flat_centre_deg: float = 0.0
-    flat_width_deg: float = DEFAULT_FLAT_WIDTH_DEG
+    _LOCATION = "drum"
+    _WHAT = "drum"
 
-    def __post_init__(self) -> None:
-        if not isinstance(self.harmonics, tuple) or not all(
-            isinstance(h, DrumHarmonic) for h in self.harmonics
+    def __init__(self, harmonics: tuple[DrumHarmonic, ...] = (), **values: float) -> None:
+        if not isinstance(harmonics, tuple) or not all(
+            isinstance(h, DrumHarmonic) for h in harmonics
         ):
             raise ParameterError(
-                f"drum harmonics={self.harmonics!r} is invalid: allowed a tuple of DrumHarmonic"
+                f"drum harmonics={harmonics!r} is invalid: allowed a tuple of DrumHarmonic"
             )
-        if len(self.harmonics) > MAX_DRUM_HARMONICS:
+        if len(harmonics) > MAX_DRUM_HARMONICS:
             raise ParameterError(
-                f"drum harmonics: {len(self.harmonics)} given: allowed at most {MAX_DRUM_HARMONICS}"
+                f"drum harmonics: {len(harmonics)} given: allowed at most {MAX_DRUM_HARMONICS}"
             )
-        orders = [h.order for h in self.harmonics]
+        orders = [h.order for h in harmonics]
         if len(set(orders)) != len(orders):
             raise ParameterError(f"drum harmonic orders {orders}: allowed each order at most once")
-        for name in ("flat_depth_um", "flat_centre_deg", "flat_width_deg"):
-            value = getattr(self, name)
-            if not _finite(value):
-                raise ParameterError(f"drum {name}={value!r} is invalid: allowed a finite number")
-        KIND_BY_NAME[FLAT_KIND].check(self.flat_depth_um)
-        if not 0.0 < self.flat_width_deg <= MAX_FLAT_WIDTH_DEG:
-            raise ParameterError(
-                f"drum flat_width_deg={self.flat_width_deg:g} is invalid: allowed > 0 to"
-                f" {MAX_FLAT_WIDTH_DEG:g} deg (a wider dip is a harmonic, drum_out_of_round)"
-            )
-        if not -360.0 <= self.flat_centre_deg <= 360.0:
-            raise ParameterError(
-                f"drum flat_centre_deg={self.flat_centre_deg:g} is invalid: allowed -360 to 360 deg"
-            )
+        object.__setattr__(self, "harmonics", harmonics)
+        super().__init__(**values)
+
+    def _extra(self) -> dict[str, object]:
+        return {"harmonics": self.harmonics}
+
+    def severity_of(self, kind: DefectKind) -> float:
+        """The severity of ``kind`` on the drum: the harmonics' peak runout for a drum out
+        of round (a table), else its key's value."""
+        if kind.name == DRUM_KIND:
+            return self.peak_runout_um
+        return super().severity_of(kind)
+
+    def attributes_of(self, kind: DefectKind) -> tuple[tuple[str, float], ...]:
+        """``kind``'s attributes (a drum out of round: each harmonic's, :meth:`attributes`)."""
+        if kind.name == DRUM_KIND:
+            return self.attributes()
+        return super().attributes_of(kind)
 
     @classmethod
     def from_orders(cls, *orders: tuple[int, float, float]) -> DrumDefect:
         """A drum from ``(order, amplitude_um, phase_deg)`` triples."""
         return cls(tuple(DrumHarmonic(k, a, ph) for k, a, ph in orders))
 
-    @property
-    def is_healthy(self) -> bool:
-        """Round: no harmonic of non-zero amplitude, no flat."""
-        return all(h.amplitude_um == 0.0 for h in self.harmonics) and not self.flat_depth_um
-
     def flat_slope(self, drum_radius_m: float) -> float:
         """Largest surface slope of the flat ``|dr/dpsi| / R0``: ``pi d / (2 w R0)``, rad."""
         half = math.radians(0.5 * self.flat_width_deg)
         return math.pi * self.flat_depth_um * 1e-6 / (2.0 * half * drum_radius_m)
-
-    def flat_attributes(self) -> tuple[tuple[str, float], ...]:
-        """The flat's centre and width (deg), by name, for the ground truth."""
-        return (
-            ("centre_deg", float(self.flat_centre_deg)),
-            ("width_deg", float(self.flat_width_deg)),
-        )
 
     @property
     def peak_runout_um(self) -> float:
@@ -345,14 +242,6 @@ class DrumDefect:
                     (f"order_{h.order}_phase_deg", float(h.phase_deg)),
                 ]
         return tuple(out)
-
-
-# Kinds that act only through the state at t = 0 (the shoe's starting angle): they can
-# only be present from the start, a step at 0 s.
-INITIAL_CONDITION_KINDS = frozenset({"initial_angle"})
-# Kinds whose two shoes are tied (the shares sum to 1): a growth on one shoe moves the
-# other's severity by the opposite amount, so only one shoe states it.
-TIED_KINDS = frozenset({"actuation_share_change"})
 
 
 def _attribute(name: str, unit: str) -> str:
@@ -408,29 +297,34 @@ class Defects:
                     f"defect growth of {kind!r} at {loc!r} is invalid: allowed a catalogue kind"
                     " at one of its locations (brake-sim defects)"
                 )
+            entry_kind = KIND_BY_NAME[kind]
             key = (kind, loc)
             tied = (kind, "right" if loc == "left" else "left")
-            if key in seen or (kind in TIED_KINDS and tied in seen):
+            if key in seen or (entry_kind.tied and tied in seen):
                 raise ParameterError(
                     f"defect growth of {kind} at {loc} given twice: allowed one entry per"
                     " defect"
-                    + (" (the other shoe's share mirrors it)" if kind in TIED_KINDS else "")
+                    + (
+                        f" (the other shoe's {entry_kind.scenario_key} mirrors it)"
+                        if entry_kind.tied
+                        else ""
+                    )
                 )
             seen.add(key)
-            where = f"{loc} {KIND_BY_NAME[kind].scenario_key} "
-            if growth.law == "friction_work" and kind != WEAR_KIND:
+            where = f"{loc} {entry_kind.scenario_key} "
+            if growth.law not in entry_kind.laws:
+                takes = [k.scenario_key for k in KINDS if growth.law in k.laws]
                 raise ParameterError(
-                    f"defect {where}growth 'friction_work' is invalid: allowed only for"
-                    f" {KIND_BY_NAME[WEAR_KIND].scenario_key} (a lining wears with its friction"
-                    " work)"
+                    f"defect {where}growth {growth.law!r} is invalid: allowed only for"
+                    f" {', '.join(takes)} (the laws {list(entry_kind.laws)} for this key)"
                 )
             if growth.is_static:
                 continue
-            if kind in INITIAL_CONDITION_KINDS:
+            if entry_kind.initial_condition:
                 raise ParameterError(
                     f"defect {where}onset {growth.onset_s:g} s, growth {growth.law!r} is"
-                    " invalid: allowed only a step at 0 s (the starting angle is an initial"
-                    " condition of the run)"
+                    " invalid: allowed only a step at 0 s (an initial condition of the run:"
+                    " it acts through the state at t = 0)"
                 )
             final = at[loc][kind]
             if final == 0.0:
@@ -474,33 +368,22 @@ class Defects:
         for k, loc, growth in self.growth:
             if k == kind and loc == location:
                 return growth
-            if k == kind and kind in TIED_KINDS and loc != location:
+            if k == kind and KIND_BY_NAME[kind].tied and loc != location:
                 return dataclasses.replace(growth, start=-growth.start)
         return Growth()
 
     def _by_location(self) -> dict[str, dict[str, float]]:
-        return {
-            "left": self.left.severities(),
-            "right": self.right.severities(),
-            "drum": {
-                DRUM_KIND: self.drum.peak_runout_um,
-                FLAT_KIND: float(self.drum.flat_depth_um),
-            },
-        }
+        return {loc: getattr(self, loc).severities() for loc in ("left", "right", "drum")}
 
     def _attributes(self, kind: str, location: str, fraction: float) -> tuple:
         """Attributes of a defect in force: a drum's harmonics (amplitudes at ``fraction``
         of the final ones); a defect that changes in time adds its final severity (and an
         exponential its start)."""
+        entry = KIND_BY_NAME[kind]
         attributes = []
-        if kind == DRUM_KIND:
-            for name, value in self.drum.attributes():
-                attributes.append((name, value * fraction if "amplitude" in name else value))
-        if kind == FLAT_KIND:
-            attributes.extend(self.drum.flat_attributes())
-        if kind == "actuation_pulsation":
-            shoe = getattr(self, location)
-            attributes.append(("frequency_hz", float(shoe.actuation_pulsation_hz)))
+        for name, value in getattr(self, location).attributes_of(entry):
+            scaled = value * fraction if kind == DRUM_KIND and "amplitude" in name else value
+            attributes.append((name, scaled))
         growth = self.growth_of(kind, location)
         if not growth.is_static:
             unit = KIND_BY_NAME[kind].unit
@@ -633,13 +516,14 @@ class Defects:
             )
         if kind == DRUM_KIND:
             return cls(drum=DrumDefect.from_orders((2, severity, 0.0)))
-        if kind == FLAT_KIND:
-            return cls(drum=DrumDefect(flat_depth_um=severity))
+        entry = KIND_BY_NAME[kind]
+        if location == "drum":
+            return cls(drum=DrumDefect(**present_values(entry, severity)))
         shoes = {side: ShoeDefect() for side in ("left", "right")}
         shoes[location] = ShoeDefect.from_severities({kind: severity})
-        if kind == "actuation_share_change":
+        if entry.tied:  # the other shoe mirrors it (the shares sum to 1)
             other = "right" if location == "left" else "left"
-            shoes[other] = ShoeDefect(actuation_share=1.0 - shoes[location].actuation_share)
+            shoes[other] = ShoeDefect(**tied_value(entry, shoes[location]))
         return cls(**shoes)
 
     def labels(self) -> list[str]:

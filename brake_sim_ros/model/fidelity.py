@@ -63,7 +63,7 @@ from dataclasses import dataclass
 
 from brake_sim_ros.errors import FidelityError
 from brake_sim_ros.model import layout as L
-from brake_sim_ros.model.catalogue import DRUM_KIND, FLAT_KIND, KIND_BY_NAME, WEAR_KIND
+from brake_sim_ros.model.catalogue import KIND_BY_NAME, WEAR_KIND
 
 SIDES = L.SIDES
 # the solver presets by name (their schemes and steps: solvers/presets.py)
@@ -92,30 +92,8 @@ OUTPUTS: dict[str, str] = {
         " (m/s^2), load pins (N), line pressure (bar), wheel speed (pulse and index, 1)"
     ),
 }
-# defect kind (model/catalogue.py) -> levels that represent it (see module doc)
-_ALL_LEVELS = frozenset({"contact_regime_rigid", "contact_regime", "rigid", "full"})
-DEFECT_LEVELS: dict[str, frozenset[str]] = {
-    "pivot_radius_change": _ALL_LEVELS,
-    "initial_angle": _ALL_LEVELS,
-    "actuation_share_change": _ALL_LEVELS,
-    "friction_change": _ALL_LEVELS,  # a coefficient per lining: the same shoe balance
-    "actuation_gain_change": _ALL_LEVELS,  # a gain, as the share's
-    # a shaped actuation history: the contact-regime levels reuse a balance while the
-    # actuation holds, and a delayed, lagging or pulsating force does not hold
-    "actuation_delay": frozenset({"rigid", "full"}),
-    "actuation_lag": frozenset({"rigid", "full"}),
-    "actuation_pulsation": frozenset({"rigid", "full"}),
-    # the spring acts on the force that reaches the shoe in the kernel: the contact-regime
-    # levels take the commanded history
-    "return_spring_weakening": frozenset({"rigid", "full"}),
-    DRUM_KIND: frozenset({"rigid", "full"}),
-    # a worn lining is geometry (the lining's radius), as a pivot's place: the same shoe
-    # balance; wear that grows is a growth (GROWTH_LEVELS)
-    WEAR_KIND: _ALL_LEVELS,
-    # a flat passes the shoe once per revolution: the drum angle and the shoes' dynamics,
-    # as the harmonics
-    FLAT_KIND: frozenset({"rigid", "full"}),
-}
+# the levels that represent a defect kind are its catalogue entry's
+# (catalogue.DefectKind.levels, the reason beside each): defect_levels(kind)
 # levels that represent a defect changing during the run (an onset after 0 s or a growth
 # law): the impact levels step the compiled kernel, which sets each severity at every
 # step (model/growth.py); the contact-regime levels reuse a shoe balance while the
@@ -129,8 +107,21 @@ GROWTH_LEVELS = frozenset({"rigid", "full"})
 DRIVEN_LEVELS = frozenset({"full"})
 # outputs that belong to one shoe and do not depend on the other shoe (see module doc)
 SHOE_LOCAL_OUTPUTS = frozenset({"impacts", "contact_regime_forces"})
-# defects whose effect on a shoe follows the drum speed: no one-shoe model (see module doc)
-SPEED_DEPENDENT_DEFECTS = frozenset({DRUM_KIND, FLAT_KIND})
+
+
+def defect_levels(kind: str) -> frozenset[str]:
+    """The levels that represent the defect ``kind`` (its catalogue entry's; none for a
+    name the catalogue does not hold)."""
+    entry = KIND_BY_NAME.get(kind)
+    return entry.levels if entry is not None else frozenset()
+
+
+def speed_dependent(kinds: tuple[str, ...]) -> list[str]:
+    """The kinds of ``kinds`` whose effect on a shoe follows the drum speed (no one-shoe
+    model, see module doc), sorted."""
+    return sorted(k for k in kinds if k in KIND_BY_NAME and KIND_BY_NAME[k].speed_dependent)
+
+
 # columns a plan keeps whatever it is asked when the defect changes during the run: a
 # lining's wear may follow its friction work, and its labels are read from these
 WEAR_COLUMNS: tuple[str, ...] = tuple(f"{s}_lining_wear_m" for s in SIDES)
@@ -197,7 +188,7 @@ class Needs:
         shoes: shoes whose signals are wanted (a subset of ``("left", "right")``).
         accuracy: solver accuracy preset name (passed through to the solver), or None.
         level: a forced level name, or None to let the planner choose.
-        defects: kinds of the scenario's defects (:data:`DEFECT_LEVELS` keys): the level
+        defects: kinds of the scenario's defects (catalogue kinds): the level
             must represent them (the scenario loader fills them in from ``[defects]``).
         growing: those of ``defects`` that change during the run: the level must be one
             of :data:`GROWTH_LEVELS`.
@@ -238,11 +229,11 @@ class Needs:
             )
         if self.level is not None and self.level not in LEVEL_BY_NAME:
             raise FidelityError(f"needs level {self.level!r}: allowed one of {list(LEVEL_BY_NAME)}")
-        unknown = [d for d in self.defects if d not in DEFECT_LEVELS]
+        unknown = [d for d in self.defects if d not in KIND_BY_NAME]
         if unknown:
             raise FidelityError(
                 f"needs defects {list(self.defects)!r}: allowed names from"
-                f" {list(DEFECT_LEVELS)} (unknown: {unknown})"
+                f" {list(KIND_BY_NAME)} (unknown: {unknown})"
             )
 
 
@@ -364,17 +355,52 @@ def levels_serving(output: str) -> list[str]:
 
 def levels_representing(defect: str) -> list[str]:
     """Names of the levels that represent the defect kind ``defect``, cheapest first."""
-    return [lv.name for lv in LEVELS if lv.name in DEFECT_LEVELS[defect]]
+    return [lv.name for lv in LEVELS if lv.name in defect_levels(defect)]
 
 
 def _represents(
     level: Level, defects: tuple[str, ...], growing: tuple[str, ...] = (), driven: bool = False
 ) -> bool:
     return (
-        all(level.name in DEFECT_LEVELS[d] for d in defects)
+        all(level.name in defect_levels(d) for d in defects)
         and (not growing or level.name in GROWTH_LEVELS)
         and (not driven or level.name in DRIVEN_LEVELS)
     )
+
+
+def _check_forced(level: Level, needs: Needs) -> None:
+    """Refuse a level the scenario forces that cannot deliver or represent its needs."""
+    lacking = [o for o in needs.outputs if o not in level.outputs]
+    if lacking:
+        out = lacking[0]
+        raise FidelityError(
+            f"needs level {level.name!r} cannot deliver the output {out!r} ({OUTPUTS[out]}):"
+            f" allowed levels for it: {levels_serving(out)}"
+        )
+    for defect in needs.defects:
+        if level.name not in defect_levels(defect):
+            raise FidelityError(
+                f"needs level {level.name!r} cannot represent the defect {defect!r}"
+                f" ({KIND_BY_NAME[defect].description}): allowed levels for it:"
+                f" {levels_representing(defect)}"
+            )
+    if needs.growing and level.name not in GROWTH_LEVELS:
+        raise FidelityError(
+            f"needs level {level.name!r} cannot represent the defect {needs.growing[0]!r}"
+            " changing during the run (an onset after 0 s or a growth law): allowed"
+            f" levels for it: {sorted(GROWTH_LEVELS, key=list(LEVEL_BY_NAME).index)}"
+        )
+    if needs.thermal and level.name not in DRIVEN_LEVELS:
+        raise FidelityError(
+            f"needs level {level.name!r} cannot carry the brake's thermal state"
+            f" ([thermal]): allowed levels for it: {sorted(DRIVEN_LEVELS)}"
+        )
+    if needs.driven and level.name not in DRIVEN_LEVELS:
+        raise FidelityError(
+            f"needs level {level.name!r} cannot represent the vehicle's road load and"
+            " drive on the flywheel ([vehicle], [cycle]): allowed levels for it:"
+            f" {sorted(DRIVEN_LEVELS)}"
+        )
 
 
 def plan(needs: Needs | None, *, model_shoes: tuple[str, ...] = SIDES) -> Plan:
@@ -403,37 +429,7 @@ def plan(needs: Needs | None, *, model_shoes: tuple[str, ...] = SIDES) -> Plan:
     asked = set(needs.outputs)
     if needs.level is not None:
         level = LEVEL_BY_NAME[needs.level]
-        lacking = [o for o in needs.outputs if o not in level.outputs]
-        if lacking:
-            out = lacking[0]
-            raise FidelityError(
-                f"needs level {level.name!r} cannot deliver the output {out!r} ({OUTPUTS[out]}):"
-                f" allowed levels for it: {levels_serving(out)}"
-            )
-        for defect in needs.defects:
-            if level.name not in DEFECT_LEVELS[defect]:
-                raise FidelityError(
-                    f"needs level {level.name!r} cannot represent the defect {defect!r}"
-                    f" ({KIND_BY_NAME[defect].description}): allowed levels for it:"
-                    f" {levels_representing(defect)}"
-                )
-        if needs.growing and level.name not in GROWTH_LEVELS:
-            raise FidelityError(
-                f"needs level {level.name!r} cannot represent the defect {needs.growing[0]!r}"
-                " changing during the run (an onset after 0 s or a growth law): allowed"
-                f" levels for it: {sorted(GROWTH_LEVELS, key=list(LEVEL_BY_NAME).index)}"
-            )
-        if needs.thermal and level.name not in DRIVEN_LEVELS:
-            raise FidelityError(
-                f"needs level {level.name!r} cannot carry the brake's thermal state"
-                f" ([thermal]): allowed levels for it: {sorted(DRIVEN_LEVELS)}"
-            )
-        if needs.driven and level.name not in DRIVEN_LEVELS:
-            raise FidelityError(
-                f"needs level {level.name!r} cannot represent the vehicle's road load and"
-                " drive on the flywheel ([vehicle], [cycle]): allowed levels for it:"
-                f" {sorted(DRIVEN_LEVELS)}"
-            )
+        _check_forced(level, needs)
         reason = f"level {level.name!r} forced by the scenario's [needs]"
     else:
         level = next(
@@ -448,7 +444,7 @@ def plan(needs: Needs | None, *, model_shoes: tuple[str, ...] = SIDES) -> Plan:
             def lack(lv: Level) -> str:
                 if not asked <= lv.outputs:
                     return f"{lv.name} lacks {sorted(asked - lv.outputs)[0]}"
-                defect = next((d for d in needs.defects if lv.name not in DEFECT_LEVELS[d]), None)
+                defect = next((d for d in needs.defects if lv.name not in defect_levels(d)), None)
                 if needs.driven and lv.name not in DRIVEN_LEVELS:
                     return f"{lv.name} cannot represent the vehicle ([vehicle], [cycle])"
                 if needs.thermal and lv.name not in DRIVEN_LEVELS:
@@ -462,7 +458,7 @@ def plan(needs: Needs | None, *, model_shoes: tuple[str, ...] = SIDES) -> Plan:
         else:
             reason = f"the cheapest level; it delivers {sorted(asked)}"
     shoes = model_shoes
-    speed_bound = sorted(SPEED_DEPENDENT_DEFECTS.intersection(needs.defects))
+    speed_bound = speed_dependent(tuple(needs.defects))
     if len(needs.shoes) < len(model_shoes) and asked <= SHOE_LOCAL_OUTPUTS and speed_bound:
         reason += (
             f"; both shoes are modelled: the {speed_bound[0]} defect reaches a shoe at the"

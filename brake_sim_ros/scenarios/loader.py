@@ -32,11 +32,8 @@ from typing import Any
 
 from brake_sim_ros.errors import BrakeSimError, ScenarioError
 from brake_sim_ros.fleet import conditions as operating
-from brake_sim_ros.fleet.scatter import (
-    NOMINAL_UNIT,
-    UnitValue,
-    unit_values,
-)
+from brake_sim_ros.fleet.scatter import NOMINAL_UNIT, UnitValue, unit_values
+from brake_sim_ros.identifiers import IDENTIFIER_RULE, is_identifier
 from brake_sim_ros.model.actuation import (
     NOMINAL_PEAK_ACTUATION_N,
     Actuation,
@@ -44,14 +41,15 @@ from brake_sim_ros.model.actuation import (
 )
 from brake_sim_ros.model.assembly import SIDES, ModelOptions, pack
 from brake_sim_ros.model.catalogue import (
-    DEFAULT_WEAR_RATE_MM_PER_MJ,
     DRUM_KIND,
-    FLAT_KIND,
+    GROWTH_KEYS,
     GROWTH_LAWS,
-    KINDS,
+    LAW_PARAMETERS,
     MAX_GROWTH_TIME_S,
-    MAX_WEAR_RATE_MM_PER_MJ,
+    DefectKind,
     Growth,
+    fields_at,
+    kinds_at,
 )
 from brake_sim_ros.model.cycle import LIMITS as CYCLE_LIMITS
 from brake_sim_ros.model.cycle import Cycle, Segment, pack_drive
@@ -97,7 +95,6 @@ MAX_STEP_RANGE_S = (MIN_PHYSICS_STEP_S, 1e-2)
 MAX_SCENARIO_BYTES = 1024 * 1024
 MAX_NESTING = 32  # tables and arrays inside one another
 MAX_NAME_CHARS = 255  # a file name's limit on common file systems
-_UNIT_ID = re.compile(r"[A-Za-z0-9_-][A-Za-z0-9_.-]{0,63}")
 # a value or key is quoted in an error message only up to this many characters (its repr);
 # a longer one is described ("a string of 300 characters"): messages never echo the file
 SHOWN_CHARS = 24
@@ -489,83 +486,72 @@ def _actuation(ctx: _Ctx, data: Any) -> Actuation:
     )
 
 
-# the keys that state when a defect starts and how it grows (catalogue.Growth), beside its
-# final value: in a shoe key's table, or in [defects.drum] itself
-GROWTH_KEYS = ("onset_s", "growth", "rate_per_s", "doubling_time_s", "start", "wear_rate_mm_per_mj")
-
-
 def _growth(ctx: _Ctx, data: dict[str, Any], key: str, healthy: float) -> Growth:
-    """The onset and growth law stated in ``data`` (keys :data:`GROWTH_KEYS`, all optional:
-    a step at 0 s); ``start`` is a value of the key itself, so ``healthy`` (the key's
-    healthy value) is taken off to give a severity. ``wear_rate_mm_per_mj`` (growth
-    ``friction_work``, mm of wear per MJ of the shoe's friction work) defaults to
-    :data:`~brake_sim_ros.model.catalogue.DEFAULT_WEAR_RATE_MM_PER_MJ`."""
+    """The onset and growth law stated in ``data`` (keys :data:`.catalogue.GROWTH_KEYS`,
+    all optional: a step at 0 s); the parameters each law takes, their limits and
+    defaults are the catalogue's (:data:`.catalogue.LAW_PARAMETERS`). ``start`` is a value
+    of the key itself, so ``healthy`` (the key's healthy value) is taken off to give a
+    severity."""
     law = ctx.string(data.get("growth", "step"), f"{key}.growth", GROWTH_LAWS)
     onset = ctx.number(data.get("onset_s", 0.0), f"{key}.onset_s", 0.0, MAX_GROWTH_TIME_S)
-    values = {"onset_s": onset, "law": law}
-    if "wear_rate_mm_per_mj" in data and law != "friction_work":
-        raise ctx.fail(
-            f"{key}.wear_rate_mm_per_mj",
-            data["wear_rate_mm_per_mj"],
-            'a value only with growth = "friction_work"',
-        )
-    if law == "friction_work":
-        values["wear_rate_mm_per_mj"] = ctx.number(
-            data.get("wear_rate_mm_per_mj", DEFAULT_WEAR_RATE_MM_PER_MJ),
-            f"{key}.wear_rate_mm_per_mj",
-            0.0,
-            MAX_WEAR_RATE_MM_PER_MJ,
-            lo_open=True,
-        )
-    for name, needed_by in (
-        ("rate_per_s", "linear"),
-        ("doubling_time_s", "exponential"),
-        ("start", "exponential"),
-    ):
-        if name in data and law != needed_by:
-            raise ctx.fail(f"{key}.{name}", data[name], f'a value only with growth = "{needed_by}"')
-        if law == needed_by:
-            if name not in data:
-                raise ctx.fail(f"{key}.{name}", _MISSING, f'a number with growth = "{needed_by}"')
-            if name == "start":
-                values[name] = ctx.number(data[name], f"{key}.{name}") - healthy
-            else:
-                hi = MAX_GROWTH_TIME_S if name == "doubling_time_s" else math.inf
-                values[name] = ctx.number(data[name], f"{key}.{name}", 0.0, hi, lo_open=True)
+    values: dict[str, Any] = {"onset_s": onset, "law": law}
+    for param in LAW_PARAMETERS:
+        name = param.name
+        if name in data and law != param.law:
+            raise ctx.fail(f"{key}.{name}", data[name], f'a value only with growth = "{param.law}"')
+        if law != param.law:
+            continue
+        if name not in data and param.default is None:
+            raise ctx.fail(f"{key}.{name}", _MISSING, f'a number with growth = "{law}"')
+        value = data.get(name, param.default)
+        if param.high is None:
+            values[name] = ctx.number(value, f"{key}.{name}") - healthy
+        else:
+            values[name] = ctx.number(value, f"{key}.{name}", 0.0, param.high, lo_open=True)
     try:
         return Growth(**values)
     except BrakeSimError as exc:
         raise ScenarioError(f"{ctx.source}: [{key}]: {exc}") from exc
 
 
-def _drum(ctx: _Ctx, data: Any) -> tuple[DrumDefect, Growth, Growth]:
-    """``[defects.drum]``: ``harmonics``, an array of tables ``{order, amplitude_um,
-    phase_deg}`` (phase optional, 0 deg); the amplitudes are the final ones and the
-    :data:`GROWTH_KEYS` say when the drum goes out of round and how (``rate_per_s`` and
-    ``start`` in um of peak runout, the sum of the amplitudes; every harmonic grows in
-    proportion). A flat: ``flat_depth_um`` (a number, or a table ``{value, onset_s, growth,
-    ...}`` as a shoe's keys), ``flat_centre_deg`` (default 0) and ``flat_width_deg``
-    (default :data:`~brake_sim_ros.model.defects.DEFAULT_FLAT_WIDTH_DEG`). Returns the drum,
-    the harmonics' growth and the flat's."""
-    flat_keys = {"flat_depth_um", "flat_centre_deg", "flat_width_deg"}
-    data = ctx.table(data, "defects.drum", {"harmonics", *GROWTH_KEYS, *flat_keys})
-    growth = _growth(ctx, data, "defects.drum", 0.0)
-    flat: dict[str, float] = {}
-    flat_growth = Growth()
-    depth = data.get("flat_depth_um", 0.0)
-    if isinstance(depth, dict):
-        depth = ctx.table(depth, "defects.drum.flat_depth_um", {"value", *GROWTH_KEYS})
-        if "value" not in depth:
-            raise ctx.fail(
-                "defects.drum.flat_depth_um.value", _MISSING, "a number (the final value)"
-            )
-        flat_growth = _growth(ctx, depth, "defects.drum.flat_depth_um", 0.0)
-        depth = depth["value"]
-    flat["flat_depth_um"] = ctx.number(depth, "defects.drum.flat_depth_um")
-    for name in ("flat_centre_deg", "flat_width_deg"):
-        if name in data:
-            flat[name] = ctx.number(data[name], f"defects.drum.{name}")
-    rows = data.get("harmonics", [])
+def _value_or_growth(
+    ctx: _Ctx, value: Any, key: str, kind: DefectKind
+) -> tuple[float, Growth | None]:
+    """A defect key's value: a number (the final value, present from the start), or a
+    table ``{value, onset_s, growth, ...}`` (:data:`.catalogue.GROWTH_KEYS`): the final
+    value and its growth."""
+    growth = None
+    if isinstance(value, dict):
+        value = ctx.table(value, key, {"value", *GROWTH_KEYS})
+        if "value" not in value:
+            raise ctx.fail(f"{key}.value", _MISSING, "a number (the final value)")
+        growth = _growth(ctx, value, key, kind.healthy_value)
+        value = value["value"]
+    return ctx.number(value, key), growth
+
+
+def _location_values(
+    ctx: _Ctx, data: dict[str, Any], location: str, growth: list[tuple[str, str, Growth]]
+) -> dict[str, float]:
+    """The numbers of ``[defects.<location>]``: each catalogue field there given (its
+    kind's key may carry a growth table, added to ``growth``)."""
+    values = {}
+    for kind in kinds_at(location):
+        for f in kind.fields():
+            if f.name not in data:
+                continue
+            key = f"defects.{location}.{f.name}"
+            if f.name == kind.scenario_key:
+                values[f.name], law = _value_or_growth(ctx, data[f.name], key, kind)
+                if law is not None:
+                    growth.append((kind.name, location, law))
+            else:
+                values[f.name] = ctx.number(data[f.name], key)
+    return values
+
+
+def _harmonics(ctx: _Ctx, rows: Any) -> tuple[DrumHarmonic, ...]:
+    """``[[defects.drum.harmonics]]``: tables ``{order, amplitude_um, phase_deg}``."""
     if not isinstance(rows, list):
         raise ctx.fail(
             "defects.drum.harmonics", rows, "an array of tables {order, amplitude_um, phase_deg}"
@@ -588,50 +574,57 @@ def _drum(ctx: _Ctx, data: Any) -> tuple[DrumDefect, Growth, Growth]:
             harmonics.append(DrumHarmonic(order, amplitude, phase))
         except BrakeSimError as exc:
             raise ScenarioError(f"{ctx.source}: [{key}]: {exc}") from exc
+    return tuple(harmonics)
+
+
+def _drum(ctx: _Ctx, data: Any, growth: list[tuple[str, str, Growth]]) -> DrumDefect:
+    """``[defects.drum]``: ``harmonics``, an array of tables ``{order, amplitude_um,
+    phase_deg}`` (phase optional, 0 deg); the amplitudes are the final ones and the
+    growth keys (:data:`.catalogue.GROWTH_KEYS`) in the table itself say when the drum
+    goes out of round and how (``rate_per_s`` and ``start`` in um of peak runout, the sum
+    of the amplitudes; every harmonic grows in proportion). Every other drum field is
+    the catalogue's (``fields_at("drum")``, e.g. a flat's ``flat_depth_um``, a number or
+    a table ``{value, onset_s, growth, ...}`` as a shoe's keys, and its attributes)."""
+    numbers = {f.name for f in fields_at("drum")}
+    data = ctx.table(data, "defects.drum", {"harmonics", *GROWTH_KEYS, *numbers})
+    growth.append((DRUM_KIND, "drum", _growth(ctx, data, "defects.drum", 0.0)))
+    values = _location_values(ctx, data, "drum", growth)
+    harmonics = _harmonics(ctx, data.get("harmonics", []))
     try:
-        return DrumDefect(tuple(harmonics), **flat), growth, flat_growth
+        return DrumDefect(harmonics, **values)
     except BrakeSimError as exc:
         raise ScenarioError(f"{ctx.source}: [defects.drum]: {exc}") from exc
 
 
 def _defects(ctx: _Ctx, data: Any) -> Defects:
-    """``[defects.left]``, ``[defects.right]``: each key a number (the final value, present
-    from the start) or a table ``{value, onset_s, growth, rate_per_s, doubling_time_s,
-    start}`` (:data:`GROWTH_KEYS`: when it starts and how it grows toward ``value``;
-    ``start`` and ``rate_per_s`` in the key's unit, e.g. 0.52 and 0.05 for a share);
-    ``[defects.drum]``: :func:`_drum`."""
+    """``[defects.left]``, ``[defects.right]``: each key a catalogue field of a shoe
+    (``brake-sim defects``): a kind's key is a number (the final value, present from the
+    start) or a table ``{value, onset_s, growth, rate_per_s, doubling_time_s, start}``
+    (:data:`.catalogue.GROWTH_KEYS`: when it starts and how it grows toward ``value``;
+    ``start`` and ``rate_per_s`` in the key's unit, e.g. 0.52 and 0.05 for a share); a
+    tied kind's key given for one shoe only implies the other's (the actuation shares sum
+    to 1); ``[defects.drum]``: :func:`_drum`."""
     data = ctx.table(data, "defects", {*SIDES, "drum"})
+    growth: list[tuple[str, str, Growth]] = []
     shoes = {}
-    names = {f.name for f in dataclasses.fields(ShoeDefect)}
-    kind_of = {k.scenario_key: k for k in KINDS if k.name != DRUM_KIND}
-    growth = []
     for side in SIDES:
+        names = {f.name for f in fields_at(side)}
         d = ctx.table(data.get(side, {}), f"defects.{side}", names)
-        values = {}
-        for k, v in d.items():
-            key = f"defects.{side}.{k}"
-            if isinstance(v, dict):
-                v = ctx.table(v, key, {"value", *GROWTH_KEYS})
-                if "value" not in v:
-                    raise ctx.fail(f"{key}.value", _MISSING, "a number (the final value)")
-                kind = kind_of[k]
-                growth.append((kind.name, side, _growth(ctx, v, key, kind.healthy_value)))
-                v = v["value"]
-            values[k] = ctx.number(v, key)
-        shoes[side] = values
-    # an actuation share given for one shoe only implies the other's (the sum is kept)
-    for side, other in (("left", "right"), ("right", "left")):
-        if "actuation_share" in shoes[side] and "actuation_share" not in shoes[other]:
-            shoes[other]["actuation_share"] = 1.0 - shoes[side]["actuation_share"]
+        shoes[side] = _location_values(ctx, d, side, growth)
+    for kind in kinds_at(SIDES[0]):
+        if not kind.tied:
+            continue
+        key = kind.scenario_key
+        for side, other in (("left", "right"), ("right", "left")):
+            if key in shoes[side] and key not in shoes[other]:
+                shoes[other][key] = 2.0 * kind.healthy_value - shoes[side][key]
     built = {}
     for side in SIDES:  # each shoe's own checks name the shoe's table
         try:
             built[side] = ShoeDefect(**shoes[side])
         except BrakeSimError as exc:
             raise ScenarioError(f"{ctx.source}: [defects.{side}]: {exc}") from exc
-    drum, drum_growth, flat_growth = _drum(ctx, data.get("drum", {}))
-    growth.append((DRUM_KIND, "drum", drum_growth))
-    growth.append((FLAT_KIND, "drum", flat_growth))
+    drum = _drum(ctx, data.get("drum", {}), growth)
     try:
         return Defects(**built, drum=drum, growth=tuple(growth))
     except BrakeSimError as exc:
@@ -980,11 +973,9 @@ def _name(ctx: _Ctx, value: Any) -> str:
 
 
 def _unit_id(ctx: _Ctx, value: Any) -> str:
-    """A brake unit's id: 1 to 64 of ``A-Z a-z 0-9 _ . -``, not starting with '.'."""
-    if not isinstance(value, str) or not _UNIT_ID.fullmatch(value):
-        raise ctx.fail(
-            "unit_id", value, "1 to 64 characters of A-Z a-z 0-9 _ . -, not starting with '.'"
-        )
+    """A brake unit's id (:mod:`brake_sim_ros.identifiers`)."""
+    if not is_identifier(value):
+        raise ctx.fail("unit_id", value, IDENTIFIER_RULE)
     return value
 
 
@@ -1096,7 +1087,7 @@ def _check_cycle_setup(ctx: _Ctx, top: dict[str, Any], setup: BrakeSetup) -> Non
     that set it per stop (which would the factor be over?)."""
     for side in SIDES:
         defect = getattr(setup.defects, side)
-        if defect.actuation_shaped or defect.return_spring_weakening_pct:
+        if defect.force_shaped:
             raise ScenarioError(
                 f"{ctx.source}: [defects.{side}]: an actuation delay, lag, pulsation or weak"
                 " return spring with a [cycle]: not represented (the cycle's brake ramp is not"

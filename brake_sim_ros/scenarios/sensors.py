@@ -42,10 +42,8 @@ from typing import Any, Protocol
 
 from brake_sim_ros.errors import BrakeSimError, ScenarioError
 from brake_sim_ros.sensing.faults import FAULT_KINDS, SensorFault
+from brake_sim_ros.sensing.kinds import SENSOR_KINDS
 from brake_sim_ros.sensing.sensors import (
-    DEFAULT_PRESET,
-    KINDS,
-    TRANSDUCER_PRESETS,
     SensorChannel,
     SensorSet,
     Transducer,
@@ -165,9 +163,11 @@ def _channel(ctx: Checker, data: Any, key: str) -> SensorChannel:
     for required in ("name", "kind", "location"):
         if required not in data:
             raise ctx.fail(f"{key}.{required}", None, "a value (required)")
-    kind = ctx.string(data["kind"], f"{key}.kind", KINDS)
-    presets = tuple(TRANSDUCER_PRESETS[kind])
-    preset = ctx.string(data.get("preset", DEFAULT_PRESET[kind]), f"{key}.preset", presets)
+    kind = ctx.string(data["kind"], f"{key}.kind", tuple(SENSOR_KINDS))
+    entry = SENSOR_KINDS[kind]
+    preset = ctx.string(
+        data.get("preset", entry.default_preset), f"{key}.preset", tuple(entry.presets)
+    )
     changes: dict[str, Any] = {}
     for name in sorted(_TRANSDUCER_KEYS & set(data)):
         where = f"{key}.{name}"
@@ -197,7 +197,7 @@ def _channel(ctx: Checker, data: Any, key: str) -> SensorChannel:
         for i, f in enumerate(_array(ctx, data.get("faults", []), f"{key}.faults"))
     )
     try:
-        transducer = dataclasses.replace(TRANSDUCER_PRESETS[kind][preset], **changes)
+        transducer = dataclasses.replace(entry.presets[preset], **changes)
         return SensorChannel(
             name=ctx.string(data["name"], f"{key}.name"),
             kind=kind,

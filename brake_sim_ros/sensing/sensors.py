@@ -44,7 +44,8 @@ scenario rate, in sample order, block after block. So: one seed gives the same b
 seeds, or two channels, independent noise; a stream in blocks the same bits as one block;
 adding or reordering channels does not change another channel's noise.
 
-**Preset classes** (:data:`TRANSDUCER_PRESETS`, figures from TESTBED.md where it gives them):
+**Preset classes** (each kind's ``presets``, :mod:`.sensor_kinds`; figures from TESTBED.md
+where it gives them):
 
 * accelerometer ``adxl1002_class`` (industrial MEMS, ADXL1002 datasheet): 25 ug/sqrt(Hz),
   +-50 g, 3 dB bandwidth 11 kHz, mounted resonance 21 kHz; damping ratio of the resonance
@@ -83,13 +84,23 @@ import math
 from dataclasses import dataclass, field, replace
 
 import numpy as np
-from scipy import signal
 
 from brake_sim_ros.errors import ParameterError
-from brake_sim_ros.model.layout import SIDES
 from brake_sim_ros.model.run_setup import SampleBlock
 from brake_sim_ros.sensing import faults as sf
 from brake_sim_ros.sensing.faults import SensorFault
+from brake_sim_ros.sensing.kinds import (  # noqa: F401 (re-exported: the kinds' figures)
+    DEFAULT_PISTON_DIAMETER_M,
+    DEFAULT_TONE_RING_TEETH,
+    LINE_PRESSURE_LOCATION,
+    ON_STRUCTURE,
+    PA_PER_BAR,
+    SENSOR_KINDS,
+    STANDARD_GRAVITY_M_S2,
+    TONE_RING_LOCATION,
+    SensorKind,
+    sensor_kind,
+)
 from brake_sim_ros.sensing.lti import SampledLti, foh_discretise, size_token, with_input_noise
 from brake_sim_ros.sensing.paths import (
     PathState,
@@ -108,185 +119,8 @@ from brake_sim_ros.sensing.structure import (
     StructureParameters,
     acceleration_output,
 )
-
-STANDARD_GRAVITY_M_S2 = 9.80665
-KINDS: tuple[str, ...] = ("accelerometer", "load_pin", "line_pressure", "wheel_speed")
-UNITS: dict[str, str] = {
-    "accelerometer": "m/s^2",
-    "load_pin": "N",
-    "line_pressure": "bar",
-    "wheel_speed": "1",
-}
-LINE_PRESSURE_LOCATION = "wheel_cylinder"
-TONE_RING_LOCATION = "tone_ring"
-PA_PER_BAR = 1e5
-# the faults each kind can carry (an ideal transducer has no resonance to loosen)
-FAULTS_OF_KIND: dict[str, tuple[str, ...]] = {
-    "accelerometer": sf.FAULT_KINDS,
-    "load_pin": tuple(k for k in sf.FAULT_KINDS if k != "loose_mount"),
-    "line_pressure": tuple(k for k in sf.FAULT_KINDS if k != "loose_mount"),
-    "wheel_speed": ("dropout", "stuck"),
-}
-
-
-def _bad(channel: str, what: str, value: object, allowed: str) -> ParameterError:
-    return ParameterError(f"sensor {channel!r}: {what} = {value!r} is invalid: allowed {allowed}")
-
-
-@dataclass(frozen=True)
-class Transducer:
-    """The signal path of an analog channel, in the channel's unit (m/s^2, N, bar).
-
-    Attributes:
-        name: the preset class it came from (informative).
-        noise_density_per_sqrt_hz: input-referred white noise, channel unit / sqrt(Hz).
-        bandwidth_hz: 3 dB frequency of a 2nd-order Butterworth low-pass, Hz (None: none).
-        resonance_hz: mounted resonance, Hz (None: none).
-        resonance_damping_ratio: its damping ratio (dimensionless).
-        range_min, range_max: the output saturates outside, channel unit (+-inf: never).
-        adc_bits: quantisation over the range (None: none; needs a finite range).
-        antialias_fraction: the DAQ's anti-alias filter, a 4th-order Butterworth low-pass
-            at this fraction of the channel's output rate (None: none).
-    """
-
-    name: str = "ideal"
-    noise_density_per_sqrt_hz: float = 0.0
-    bandwidth_hz: float | None = None
-    resonance_hz: float | None = None
-    resonance_damping_ratio: float = 0.05
-    range_min: float = -math.inf
-    range_max: float = math.inf
-    adc_bits: int | None = None
-    antialias_fraction: float | None = None
-
-    def check(self, channel: str) -> None:
-        if not (
-            math.isfinite(self.noise_density_per_sqrt_hz) and self.noise_density_per_sqrt_hz >= 0
-        ):
-            raise _bad(channel, "noise density", self.noise_density_per_sqrt_hz, "a number >= 0")
-        for what in ("bandwidth_hz", "resonance_hz"):
-            value = getattr(self, what)
-            if value is not None and not (math.isfinite(value) and value > 0):
-                raise _bad(channel, what, value, "a frequency > 0 Hz, or none")
-        if self.antialias_fraction is not None and not 0.0 < self.antialias_fraction < 0.5:
-            raise _bad(
-                channel, "antialias_fraction", self.antialias_fraction, "> 0 and < 0.5, or none"
-            )
-        if not 0.0 < self.resonance_damping_ratio < 1.0:
-            raise _bad(
-                channel, "resonance_damping_ratio", self.resonance_damping_ratio, "> 0 and < 1"
-            )
-        if not self.range_min < self.range_max or math.isnan(self.range_min):
-            raise _bad(channel, "range", (self.range_min, self.range_max), "min < max")
-        if self.adc_bits is not None:
-            if not 1 <= self.adc_bits <= 32:
-                raise _bad(channel, "adc_bits", self.adc_bits, "1 to 32 bits, or none")
-            if not (math.isfinite(self.range_min) and math.isfinite(self.range_max)):
-                raise _bad(channel, "adc_bits", self.adc_bits, "none with an unbounded range")
-
-    @property
-    def adc_step(self) -> float:
-        """The quantisation step, channel unit (0: no ADC)."""
-        if self.adc_bits is None:
-            return 0.0
-        return (self.range_max - self.range_min) / 2.0**self.adc_bits
-
-    def continuous(
-        self, rate_hz: float, resonance_factor: float = 1.0
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None:
-        """``(A, B, C, D)`` of resonance, low-pass and anti-alias filter (for an output
-        rate ``rate_hz``), single input and output; None when the path has none.
-        ``resonance_factor`` scales the resonance frequency (a loose mount). The
-        resonance's states are physical (``[z, z']``, ``z'' = wr^2 (u - z) - 2 zeta wr z'``),
-        so a loose mount can change its frequency with the state kept."""
-        stages = []
-        if self.resonance_hz is not None:
-            wr = 2.0 * math.pi * self.resonance_hz * resonance_factor
-            zr = self.resonance_damping_ratio
-            stages.append(
-                (
-                    np.array([[0.0, 1.0], [-(wr**2), -2.0 * zr * wr]]),
-                    np.array([[0.0], [wr**2]]),
-                    np.array([[1.0, 0.0]]),
-                    np.zeros((1, 1)),
-                )
-            )
-        if self.bandwidth_hz is not None:
-            num, den = signal.butter(2, 2.0 * math.pi * self.bandwidth_hz, analog=True)
-            stages.append(signal.tf2ss(num, den))
-        if self.antialias_fraction is not None:
-            cutoff = 2.0 * math.pi * self.antialias_fraction * rate_hz
-            stages.append(signal.zpk2ss(*signal.butter(4, cutoff, analog=True, output="zpk")))
-        if not stages:
-            return None
-        a, b, c, d = (np.atleast_2d(np.asarray(m, dtype=float)) for m in stages[0])
-        for a2, b2, c2, d2 in stages[1:]:  # series: stage 2 driven by stage 1's output
-            a2, b2, c2, d2 = (np.atleast_2d(np.asarray(m, dtype=float)) for m in (a2, b2, c2, d2))
-            n1, n2 = a.shape[0], a2.shape[0]
-            big = np.zeros((n1 + n2, n1 + n2))
-            big[:n1, :n1] = a
-            big[n1:, :n1] = b2 @ c
-            big[n1:, n1:] = a2
-            a, b, c, d = (
-                big,
-                np.vstack([b, b2 @ d]),
-                np.hstack([d2 @ c, c2]),
-                d2 @ d,
-            )
-        return a, b, c, d
-
-
-def _accel(
-    name: str,
-    noise_ug: float,
-    bw: float | None,
-    res: float | None,
-    fs_g: float,
-    bits: int,
-    antialias: float | None,
-) -> Transducer:
-    return Transducer(
-        name=name,
-        noise_density_per_sqrt_hz=noise_ug * 1e-6 * STANDARD_GRAVITY_M_S2,
-        bandwidth_hz=bw,
-        resonance_hz=res,
-        range_min=-fs_g * STANDARD_GRAVITY_M_S2,
-        range_max=fs_g * STANDARD_GRAVITY_M_S2,
-        adc_bits=bits,
-        antialias_fraction=antialias,
-    )
-
-
-IDEAL = Transducer()
-TRANSDUCER_PRESETS: dict[str, dict[str, Transducer]] = {
-    "accelerometer": {
-        "adxl1002_class": _accel("adxl1002_class", 25.0, 11_000.0, 21_000.0, 50.0, 24, 0.45),
-        "adxl1001_class": _accel("adxl1001_class", 30.0, 11_000.0, 21_000.0, 100.0, 24, 0.45),
-        "consumer_imu_class": _accel("consumer_imu_class", 300.0, 1_000.0, None, 16.0, 16, None),
-        "ideal": IDEAL,
-    },
-    "load_pin": {
-        "strain_gauge_pin": Transducer(
-            "strain_gauge_pin", 0.2, 2_000.0, None, 0.05, -20_000.0, 20_000.0, 16
-        ),
-        "ideal": IDEAL,
-    },
-    "line_pressure": {
-        "pressure_transducer": Transducer(
-            "pressure_transducer", 0.003, 1_000.0, None, 0.05, 0.0, 250.0, 16
-        ),
-        "ideal": IDEAL,
-    },
-    "wheel_speed": {"abs_tone_ring": IDEAL, "ideal": IDEAL},
-}
-DEFAULT_PRESET: dict[str, str] = {
-    "accelerometer": "adxl1002_class",
-    "load_pin": "strain_gauge_pin",
-    "line_pressure": "pressure_transducer",
-    "wheel_speed": "abs_tone_ring",
-}
-DEFAULT_TONE_RING_TEETH = 48
-DEFAULT_PISTON_DIAMETER_M = 0.01905
+from brake_sim_ros.sensing.transducers import IDEAL, Transducer
+from brake_sim_ros.sensing.transducers import bad as _bad
 
 
 @dataclass(frozen=True)
@@ -299,7 +133,7 @@ class SensorChannel:
         location: a mount point of the structure (accelerometer), a side (load pin),
             ``wheel_cylinder`` (line pressure) or ``tone_ring`` (wheel speed).
         axis: x or y (accelerometer, load pin), frame brake_backing_plate; "" otherwise.
-        transducer: the signal path (a preset from :data:`TRANSDUCER_PRESETS`, possibly
+        transducer: the signal path (a preset of its kind, :mod:`.sensor_kinds`, possibly
             with fields changed).
         rate_hz: output rate, Hz; a whole fraction of the scenario's (None: the scenario's).
         sensitivity_ratio: reported per true value (1.0: calibrated), dimensionless.
@@ -323,18 +157,16 @@ class SensorChannel:
         name = self.name
         if not name or not isinstance(name, str):
             raise _bad(name, "name", name, "a non-empty string")
-        if self.kind not in KINDS:
-            raise _bad(name, "kind", self.kind, f"one of {list(KINDS)}")
-        if self.kind in ("accelerometer", "load_pin"):
+        kind = sensor_kind(self.kind, name)
+        if kind.axis:
             if self.axis not in AXES:
                 raise _bad(name, "axis", self.axis, f"one of {list(AXES)}")
         elif self.axis:
             raise _bad(name, "axis", self.axis, f"none for a {self.kind} channel")
-        if self.kind == "load_pin" and self.location not in SIDES:
-            raise _bad(name, "location", self.location, f"one of {list(SIDES)}")
-        fixed = {"line_pressure": LINE_PRESSURE_LOCATION, "wheel_speed": TONE_RING_LOCATION}
-        if self.kind in fixed and self.location != fixed[self.kind]:
-            raise _bad(name, "location", self.location, f"{fixed[self.kind]!r}")
+        if kind.locations != ON_STRUCTURE and self.location not in kind.locations:
+            one = len(kind.locations) == 1
+            allowed = repr(kind.locations[0]) if one else f"one of {list(kind.locations)}"
+            raise _bad(name, "location", self.location, allowed)
         self.transducer.check(name)
         if self.rate_hz is not None and not (math.isfinite(self.rate_hz) and self.rate_hz > 0):
             raise _bad(name, "rate_hz", self.rate_hz, "a rate > 0 Hz, or none")
@@ -345,8 +177,8 @@ class SensorChannel:
         if not (math.isfinite(self.piston_diameter_m) and 1e-3 <= self.piston_diameter_m <= 0.1):
             raise _bad(name, "piston_diameter_m", self.piston_diameter_m, "1 mm to 100 mm")
         for fault in self.faults:
-            if fault.kind not in FAULTS_OF_KIND[self.kind]:
-                raise _bad(name, "fault", fault.kind, f"one of {list(FAULTS_OF_KIND[self.kind])}")
+            if fault.kind not in kind.faults:
+                raise _bad(name, "fault", fault.kind, f"one of {list(kind.faults)}")
             if fault.kind == "loose_mount" and self.transducer.resonance_hz is None:
                 raise _bad(name, "fault", fault.kind, "a transducer with a mounted resonance")
         if len(sf.of_kind(self.faults, "loose_mount")) > 1:
@@ -354,12 +186,12 @@ class SensorChannel:
 
     @property
     def unit(self) -> str:
-        return UNITS[self.kind]
+        return sensor_kind(self.kind, self.name).unit
 
     @property
     def output_names(self) -> tuple[str, ...]:
         """The sampled series this channel gives (a wheel speed also its index)."""
-        return (self.name, f"{self.name}_index") if self.kind == "wheel_speed" else (self.name,)
+        return sensor_kind(self.kind, self.name).output_names(self.name)
 
     def decimation(self, sample_rate_hz: float) -> int:
         """Scenario samples per output sample; refuses a rate that does not divide it."""
@@ -385,7 +217,7 @@ def accelerometer(
 ) -> SensorChannel:
     """An accelerometer channel from a preset class (``changes``: SensorChannel fields)."""
     return SensorChannel(
-        name, "accelerometer", mount, axis, TRANSDUCER_PRESETS["accelerometer"][preset], **changes
+        name, "accelerometer", mount, axis, SENSOR_KINDS["accelerometer"].presets[preset], **changes
     )
 
 
@@ -398,7 +230,7 @@ def default_channels() -> tuple[SensorChannel, ...]:
             "line_pressure",
             "line_pressure",
             LINE_PRESSURE_LOCATION,
-            transducer=TRANSDUCER_PRESETS["line_pressure"]["pressure_transducer"],
+            transducer=SENSOR_KINDS["line_pressure"].presets["pressure_transducer"],
         ),
     )
 
@@ -416,14 +248,15 @@ class SensorSet:
         if dup:
             raise ParameterError(f"sensor names {dup} are used twice: allowed distinct names")
         for c in self.channels:
-            if c.kind == "accelerometer" and c.location not in self.structure.mounts:
+            on_structure = SENSOR_KINDS[c.kind].locations == ON_STRUCTURE
+            if on_structure and c.location not in self.structure.mounts:
                 raise _bad(
                     c.name, "location", c.location, f"a mount point {list(self.structure.mounts)}"
                 )
 
     @property
     def needs_structure(self) -> bool:
-        return any(c.kind == "accelerometer" for c in self.channels)
+        return any(sensor_kind(c.kind, c.name).reads_structure for c in self.channels)
 
 
 def default_sensor_set() -> SensorSet:
@@ -623,12 +456,14 @@ class SensorBank:
         self.sensors = sensors
         self.sample_rate_hz = float(sample_rate_hz)
         self.sample_period_s = 1.0 / self.sample_rate_hz
+        # each channel's kind: its model (a kind without an entry is refused here)
+        self.kinds = {c.name: sensor_kind(c.kind, c.name) for c in sensors.channels}
         self.decimation = {c.name: c.decimation(self.sample_rate_hz) for c in sensors.channels}
         # the structure computes what the accelerometers read (each mount and axis once)
         reads = {
             c.name: acceleration_output(c.location, c.axis)
             for c in sensors.channels
-            if c.kind == "accelerometer"
+            if self.kinds[c.name].reads_structure
         }
         outputs = tuple(dict.fromkeys(reads.values()))
         self.structure = (
@@ -641,7 +476,7 @@ class SensorBank:
         for c in sensors.channels:
             self.paths[c.name] = (
                 ToneRing(c)
-                if c.kind == "wheel_speed"
+                if self.kinds[c.name].tone_ring
                 else AnalogPath(c, self.sample_period_s, seed)
             )
         # Scenario samples per sample of each output series (a wheel speed's index series
@@ -653,21 +488,9 @@ class SensorBank:
         # the block's columns the channels read, gathered once per block (time first)
         read = ["time_s"]
         for c in sensors.channels:
-            read.extend(n for n in self._inputs_of(c) if n not in read)
+            read.extend(n for n in self.kinds[c.name].inputs(c) if n not in read)
         self._read_columns = tuple(read)
         self._gather_plans: dict[tuple[str, ...], tuple[np.ndarray, np.ndarray]] = {}
-
-    @staticmethod
-    def _inputs_of(channel: SensorChannel) -> tuple[str, ...]:
-        """The sample-block columns :meth:`true_value` reads for ``channel`` (none for an
-        accelerometer: it reads the structure)."""
-        if channel.kind == "wheel_speed":
-            return ("drum_angle_rad",)
-        if channel.kind == "load_pin":
-            return (f"{channel.location}_pivot_f{channel.axis}_n",)
-        if channel.kind == "line_pressure":
-            return ("left_actuation_force_n", "right_actuation_force_n")
-        return ()
 
     def _gather(self, block: SampleBlock) -> tuple[np.ndarray, dict[str, np.ndarray]]:
         """The structure's pivot forces (n, 4), N (n, 0 without a structure), and each
@@ -691,21 +514,17 @@ class SensorBank:
         self, channel: SensorChannel, block: SampleBlock, structure: np.ndarray
     ) -> np.ndarray:
         """What the channel measures, before its signal path, channel unit."""
-        columns = {name: block[name] for name in self._inputs_of(channel)}
+        columns = {name: block[name] for name in self.kinds[channel.name].inputs(channel)}
         return self._true_value(channel, columns, structure)
 
     def _true_value(
         self, channel: SensorChannel, columns: dict[str, np.ndarray], structure: np.ndarray
     ) -> np.ndarray:
-        """:meth:`true_value` from the block's columns it reads (:meth:`_inputs_of`), by
-        name."""
-        if channel.kind == "accelerometer":
-            return structure[:, self._structure_column[channel.name]]
-        if channel.kind == "load_pin":  # the force on the plate: opposite of the pin's
-            return -columns[f"{channel.location}_pivot_f{channel.axis}_n"]
-        area_m2 = math.pi * channel.piston_diameter_m**2 / 4.0
-        mean_force = 0.5 * (columns["left_actuation_force_n"] + columns["right_actuation_force_n"])
-        return mean_force / area_m2 / PA_PER_BAR
+        """:meth:`true_value` from the block's columns it reads (its kind's ``inputs``), by
+        name: its kind's model (:class:`.sensor_kinds.SensorKind`)."""
+        kind = self.kinds[channel.name]
+        own = structure[:, self._structure_column[channel.name]] if kind.reads_structure else None
+        return kind.true_value(channel, columns, own)
 
     def advance(self, block: SampleBlock) -> SensorFrame:
         forces_n, columns = self._gather(block)

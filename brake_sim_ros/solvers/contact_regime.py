@@ -13,7 +13,7 @@ from brake_sim_ros.model import layout as L
 from brake_sim_ros.model import quasi_static as Q
 from brake_sim_ros.model.assembly import indentation_at, pack
 from brake_sim_ros.model.catalogue import KIND_BY_NAME
-from brake_sim_ros.model.fidelity import DEFECT_LEVELS, GROWTH_LEVELS, levels_representing
+from brake_sim_ros.model.fidelity import GROWTH_LEVELS, defect_levels, levels_representing
 from brake_sim_ros.model.run_setup import BrakeSetup, SampleBlock
 
 SAMPLE_COLUMNS: tuple[str, ...] = (*L.COLUMNS, "braking_torque_n_m")
@@ -79,10 +79,10 @@ def run_contact_regime(
 
     Raises:
         FidelityError: ``setup`` has a defect the contact-regime levels cannot represent
-            (an out-of-round drum: :data:`brake_sim_ros.model.fidelity.DEFECT_LEVELS`).
+            (an out-of-round drum: :attr:`brake_sim_ros.model.catalogue.DefectKind.levels`).
     """
     for defect in setup.defects.kinds:
-        if "contact_regime" not in DEFECT_LEVELS[defect]:
+        if "contact_regime" not in defect_levels(defect):
             raise FidelityError(
                 f"the contact-regime model cannot represent the defect {defect!r}"
                 f" ({KIND_BY_NAME[defect].description}): allowed levels for it:"

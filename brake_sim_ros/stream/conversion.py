@@ -292,8 +292,8 @@ def defect_state(
             (:func:`~brake_sim_ros.stream.ground_truth.recorded_wear`): the severity of a
             lining wearing with its friction work (default unworn: the start of a run).
     """
-    left = dataclasses.replace(defects.left, initial_angle_deg=initial_angles_deg[0])
-    right = dataclasses.replace(defects.right, initial_angle_deg=initial_angles_deg[1])
+    left = defects.left.replace(initial_angle_deg=initial_angles_deg[0])
+    right = defects.right.replace(initial_angle_deg=initial_angles_deg[1])
     at = ns * 1e-9 if time_s is None else time_s
     if wear_m is None:
         wear_m = {"left": 0.0, "right": 0.0}

@@ -1,16 +1,16 @@
 """ROS parameters of the node: run control, and the model parameters generated from the core.
 
 Model parameters are not a second source of truth. Their names, types and default values
-come from the core's frozen dataclasses (``BrakeParameters``'s groups in
-``model/parameters.py``, ``ShoeDefect`` and the drum's flat in ``model/defects.py``), read
-from the loaded
-scenario, and a new value is validated by building the core objects again and handing
-them to the stepper: the core's ``ParameterError`` message (or ``StepSizeError``, for a
-pathological step limit) is the refusal reason. A change that needs a smaller physics step
+come from the core: ``BrakeParameters``'s groups in ``model/parameters.py`` and the defect
+catalogue's fields (``model/catalogue.py``: each kind's key and attributes, with their
+ranges and descriptions), read from the loaded scenario, and a new value is validated by
+building the core objects again and handing them to the stepper: the core's
+``ParameterError`` message (or ``StepSizeError``, for a pathological step limit) is the
+refusal reason. A change that needs a smaller physics step
 is not refused: the stepper re-picks its substeps per sample. Names are
 ``<group>.<field>`` (``friction.coefficient``, ``shoe.running_clearance_m``),
-``defects.<side>.<field>`` and ``defects.drum.<field>`` for the drum's flat
-(:data:`DRUM_FIELDS`; the drum's harmonics are the scenario's and have no parameter).
+``defects.<side>.<field>`` and ``defects.drum.<field>`` (:func:`defect_fields`: the
+catalogue's fields there; the drum's harmonics are the scenario's and have no parameter).
 
 The ``FloatingPointRange`` of each descriptor is an envelope for tools such as
 rqt_reconfigure; where the core has fixed bounds (defects, friction, drum radius, ...)
@@ -30,20 +30,21 @@ from __future__ import annotations
 
 import dataclasses
 import inspect
-import re
 from dataclasses import dataclass, fields
 from typing import Any
 
 from brake_sim_ros.errors import ParameterError
+from brake_sim_ros.identifiers import IDENTIFIER_RULE, is_identifier
 from brake_sim_ros.model.actuation import MAX_ACTUATION_FORCE_N, NOMINAL_PEAK_ACTUATION_N
-from brake_sim_ros.model.catalogue import DRUM_KIND, KIND_BY_NAME, KINDS, label_column
-from brake_sim_ros.model.defects import (
-    MAX_FLAT_WIDTH_DEG,
-    MAX_PULSATION_HZ,
-    Defects,
-    DrumDefect,
-    ShoeDefect,
+from brake_sim_ros.model.catalogue import (
+    KIND_BY_NAME,
+    KINDS,
+    DefectField,
+    fields_at,
+    kind_of_field,
+    label_column,
 )
+from brake_sim_ros.model.defects import Defects, DrumDefect, ShoeDefect
 from brake_sim_ros.model.layout import SIDES
 from brake_sim_ros.model.parameters import PARAMETER_GROUPS, BrakeParameters, unit_of
 from brake_sim_ros.model.run_setup import BrakeSetup
@@ -94,18 +95,13 @@ _RANGES: dict[str, tuple[float, float]] = {
     "contact.damping_n_s_per_m": (0.0, 1e6),
     "friction.coefficient": (0.0, 1.0),  # [core]
     "friction.smoothing_speed_m_s": (1e-5, 1.0),  # [core]
-    # the defects' ranges are the catalogue's (model/catalogue.py), in scenario terms
-    **{
-        f"defects.{k.scenario_key}": (k.healthy_value + k.minimum, k.healthy_value + k.maximum)
-        for k in KINDS
-        if k.name != DRUM_KIND  # the harmonics have no node parameter
-    },
-    "defects.actuation_pulsation_hz": (0.0, MAX_PULSATION_HZ),  # a pulsation's attribute
-    "defects.flat_centre_deg": (-360.0, 360.0),  # [core] a flat's attributes
-    "defects.flat_width_deg": (0.0, MAX_FLAT_WIDTH_DEG),  # [core] (0 itself refused)
 }
-# the drum's fields that are node parameters (defects.drum.<field>): its flat
-DRUM_FIELDS = ("flat_depth_um", "flat_centre_deg", "flat_width_deg")
+# the defects' ranges are their catalogue fields' (model/catalogue.py), in scenario terms
+
+
+def defect_fields(location: str) -> tuple[DefectField, ...]:
+    """The catalogue fields that are node parameters ``defects.<location>.<name>``."""
+    return fields_at(location)
 
 
 @dataclass(frozen=True)
@@ -154,20 +150,20 @@ def run_parameter_specs() -> list[ParamSpec]:
             "",
             "Identifier of the run in every ground-truth message (DefectState, ContactEvent), "
             "in /diagnostics and in recordings: empty = a fresh UUID4 (32 hex digits) at "
-            "start and at each ~/reset; otherwise this text (1 to 64 of A-Z a-z 0-9 . _ -), "
+            f"start and at each ~/reset; otherwise this text ({IDENTIFIER_RULE}), "
             "kept across resets. " + fixed,
-            constraints="empty, or 1 to 64 characters of A-Z a-z 0-9 . _ -",
+            constraints=f"empty, or {IDENTIFIER_RULE}",
         ),
         ParamSpec(
             "unit_id",
             "",
             "Brake unit to simulate (its manufacturing scatter, drawn with the scenario's "
             "fleet_seed from the scenario's values): empty = the scenario's unit_id; "
-            "'nominal' = the scenario's brake itself; otherwise 1 to 64 of A-Z a-z 0-9 _ . - "
-            "(not starting with '.'). Applies to every scenario ~/reset loads; the unit is "
+            f"'nominal' = the scenario's brake itself; otherwise {IDENTIFIER_RULE}. "
+            "Applies to every scenario ~/reset loads; the unit is "
             "the same brake whatever the run's seed (a new seed draws new sensor noise and a "
             "scenario's [conditions] again). " + fixed,
-            constraints="empty, 'nominal', or 1 to 64 characters of A-Z a-z 0-9 _ . -",
+            constraints=f"empty, 'nominal', or {IDENTIFIER_RULE}",
         ),
         ParamSpec(
             "duration_s",
@@ -305,18 +301,16 @@ FIXED_AT_START = frozenset(
         "measured_rate_hz",
     }
 )
-_RUN_ID = re.compile(r"[A-Za-z0-9._-]{1,64}")
 
 
 def check_run_id(value: str) -> str:
     """``value`` if it is a valid ``run_id`` parameter (empty included), else ParameterError
     naming what is allowed (the value shown at most 64 characters long)."""
-    if value == "" or _RUN_ID.fullmatch(value):
+    if value == "" or is_identifier(value):
         return value
     shown = value if len(value) <= 64 else value[:64] + "..."
     raise ParameterError(
-        f"run_id={shown!r}: allowed empty (a fresh UUID4 per run) or 1 to 64 characters"
-        " of A-Z a-z 0-9 . _ -"
+        f"run_id={shown!r}: allowed empty (a fresh UUID4 per run) or {IDENTIFIER_RULE}"
     )
 
 
@@ -352,10 +346,10 @@ def model_values(params: BrakeParameters, defects: Defects) -> dict[str, Any]:
     values: dict[str, Any] = {}
     for side in SIDES:
         shoe = getattr(defects, side)
-        for f in fields(ShoeDefect):
+        for f in defect_fields(side):
             values[f"defects.{side}.{f.name}"] = getattr(shoe, f.name)
-    for name in DRUM_FIELDS:
-        values[f"defects.drum.{name}"] = float(getattr(defects.drum, name))
+    for f in defect_fields("drum"):
+        values[f"defects.drum.{f.name}"] = float(getattr(defects.drum, f.name))
     for group in PARAMETER_GROUPS:
         obj = getattr(params, group)
         for f in fields(obj):
@@ -369,26 +363,23 @@ def model_parameter_specs(params: BrakeParameters, defects: Defects) -> list[Par
     for name, value in model_values(params, defects).items():
         parts = name.split(".")
         field_name = parts[-1]
-        if parts[0] == "defects" and parts[1] == "drum":
-            what = f"Drum defect, {field_name}"
-            doc = _attribute_doc(DrumDefect, field_name)
-            range_key = f"defects.{field_name}"
-        elif parts[0] == "defects":
-            what = f"{parts[1].capitalize()} shoe defect, {field_name}"
-            doc = _attribute_doc(ShoeDefect, field_name)
-            range_key = f"defects.{field_name}"
+        spec_range = _RANGES.get(name)
+        if parts[0] == "defects":
+            where = "Drum" if parts[1] == "drum" else f"{parts[1].capitalize()} shoe"
+            kind = kind_of_field(parts[1], field_name)
+            f = next(f for f in kind.fields() if f.name == field_name)
+            text = f"{where} defect {kind.name}, {field_name} ({f.unit}): {f.description}."
+            spec_range = (f.low, f.high)
         else:
             cls = PARAMETER_GROUPS[parts[0]]
-            what = f"{field_name}"
             doc = _attribute_doc(cls, field_name) or _first_line(cls.__doc__)
-            range_key = name
-        text = f"{what} ({unit_of(field_name)}): {doc}."
+            text = f"{field_name} ({unit_of(field_name)}): {doc}."
         if name in INITIAL_CONDITIONS:
             text += " Initial condition: a change applies at the next ~/reset."
-        if name.endswith("actuation_share"):
-            text += " Left + right = 1: setting one side alone sets the other side to 1 - value."
+        if parts[0] == "defects" and kind_of_field(parts[1], field_name).tied:
+            text += " Tied: setting one side alone sets the other side's mirror image."
         text += " Validated by the physics core; invalid values are refused with its reason."
-        specs.append(ParamSpec(name, _ros_value(value), text, _RANGES.get(range_key)))
+        specs.append(ParamSpec(name, _ros_value(value), text, spec_range))
     return specs
 
 
@@ -413,10 +404,10 @@ def build_model(
     """
     shoes = {}
     for side in SIDES:
-        kwargs = {f.name: values[f"defects.{side}.{f.name}"] for f in fields(ShoeDefect)}
+        kwargs = {f.name: values[f"defects.{side}.{f.name}"] for f in defect_fields(side)}
         shoes[side] = ShoeDefect(**kwargs)
-    flat = {name: values[f"defects.drum.{name}"] for name in DRUM_FIELDS}
-    drum = dataclasses.replace(drum or DrumDefect(), **flat)
+    numbers = {f.name: values[f"defects.drum.{f.name}"] for f in defect_fields("drum")}
+    drum = (drum or DrumDefect()).replace(**numbers)
     defects = Defects(left=shoes["left"], right=shoes["right"], drum=drum)
     groups = {}
     for group, cls in PARAMETER_GROUPS.items():
@@ -425,21 +416,27 @@ def build_model(
 
 
 def complete_actuation_share(changes: dict[str, Any]) -> dict[str, Any]:
-    """When one shoe's actuation share changes alone, add the other's as ``1 - value``.
+    """When one shoe's key of a tied kind (the actuation share: catalogue
+    ``DefectKind.tied``) changes alone, add the other's mirror image ``2 healthy - value``
+    (``1 - value`` for the share).
 
     The core requires left + right = 1 (the total actuation force is kept), so a lone
     change could never be valid; completing it keeps ``ros2 param set`` usable.
     """
     out = dict(changes)
-    for side, other in (("left", "right"), ("right", "left")):
-        name, other_name = (f"defects.{side}.actuation_share", f"defects.{other}.actuation_share")
-        value = changes.get(name)
-        if (
-            other_name not in changes
-            and isinstance(value, float | int)
-            and not isinstance(value, bool)
-        ):
-            out[other_name] = 1.0 - float(value)
+    for kind in KINDS:
+        if not kind.tied:
+            continue
+        for side, other in (("left", "right"), ("right", "left")):
+            name = f"defects.{side}.{kind.scenario_key}"
+            other_name = f"defects.{other}.{kind.scenario_key}"
+            value = changes.get(name)
+            if (
+                other_name not in changes
+                and isinstance(value, float | int)
+                and not isinstance(value, bool)
+            ):
+                out[other_name] = 2.0 * kind.healthy_value - float(value)
     return out
 
 
