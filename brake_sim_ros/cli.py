@@ -222,8 +222,8 @@ def write_simulation(job: SimulateJob, result: RunResult) -> list[str]:
 
 
 def _write_history(job: SimulateJob, result: RunResult) -> None:
+    from brake_sim_ros.recording.mcap_format import describe_path
     from brake_sim_ros.recording.output import OutputError
-    from brake_sim_ros.recording.records import describe_path
 
     path, scenario = job.outputs["--out"], job.scenario
     columns = result.samples.as_dict()
@@ -558,7 +558,7 @@ def _figure(value: float | None) -> str:
 
 def _model_where(path: str) -> str:
     """How a --model file is named in messages."""
-    from brake_sim_ros.recording.records import describe_path
+    from brake_sim_ros.recording.mcap_format import describe_path
 
     return f"--model {describe_path(path)}"
 
@@ -683,7 +683,7 @@ def cmd_score(args: argparse.Namespace) -> int:
 
 def _check_report_directory(directory: str) -> None:
     """Refuse a report directory that is a link or not a directory, before any work."""
-    from brake_sim_ros.recording.records import describe_path
+    from brake_sim_ros.recording.mcap_format import describe_path
 
     out = Path(directory)
     if out.is_symlink():
@@ -716,7 +716,7 @@ def unit_text(scenario: Scenario, *, sources: bool = False) -> str:
     """A scenario's brake unit against the scenario's own values: per scattered parameter
     its nominal value, the unit's, the change and the tolerance, with units; with
     ``sources``, where each distribution comes from."""
-    from brake_sim_ros.model.units import NOMINAL_UNIT
+    from brake_sim_ros.fleet.scatter import NOMINAL_UNIT
 
     values = scenario.unit_values()
     lines = [

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from brake_sim_ros.model.trajectory import SampleBlock
+from brake_sim_ros.model.run_setup import SampleBlock
 from brake_sim_ros.scenarios import load_scenario
 from brake_sim_ros.stream.run import RunResult, run_scenario
 

@@ -7,16 +7,16 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from brake_sim_ros.model.sensor_faults import SensorFault
-from brake_sim_ros.model.sensors import (
+from brake_sim_ros.model.run_setup import SampleBlock
+from brake_sim_ros.monitoring.detector import TrainingWindow
+from brake_sim_ros.sensing.faults import SensorFault
+from brake_sim_ros.sensing.sensors import (
     TRANSDUCER_PRESETS,
     SensorChannel,
     SensorSet,
     accelerometer,
     default_channels,
 )
-from brake_sim_ros.model.trajectory import SampleBlock
-from brake_sim_ros.monitoring.detector import TrainingWindow
 
 
 def cut(block: SampleBlock, sizes: list[int]) -> list[SampleBlock]:

@@ -318,7 +318,7 @@ def test_simulate_parquet_labels_every_sample_with_the_defects_ground_truth(tmp_
 def test_a_slower_channel_is_null_between_its_samples():
     pytest.importorskip("pyarrow")
     from brake_sim_ros.datasets.parquet import history_table
-    from brake_sim_ros.model.sensors import SensorBank, SensorSet, accelerometer
+    from brake_sim_ros.sensing.sensors import SensorBank, SensorSet, accelerometer
 
     scenario = load_scenario("symmetric")
     run = run_scenario(scenario, duration_s=0.05)

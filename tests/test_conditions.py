@@ -1,4 +1,4 @@
-"""Operating conditions drawn per run (model/conditions.py, a scenario's [conditions])."""
+"""Operating conditions drawn per run (fleet/conditions.py, a scenario's [conditions])."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ import pytest
 from scipy import stats
 
 from brake_sim_ros.errors import ScenarioError
-from brake_sim_ros.model import conditions
+from brake_sim_ros.fleet import conditions
 from brake_sim_ros.model.actuation import NOMINAL_PEAK_ACTUATION_N
 from brake_sim_ros.model.parameters import BrakeParameters
 from brake_sim_ros.scenarios import load_scenario, parse_scenario

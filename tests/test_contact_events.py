@@ -12,7 +12,7 @@ import pytest
 from brake_sim_ros.analysis import contact_events as ce
 from brake_sim_ros.analysis.contact_events import ContactEventDetector
 from brake_sim_ros.model import layout as L
-from brake_sim_ros.model.trajectory import SampleBlock
+from brake_sim_ros.model.run_setup import SampleBlock
 from brake_sim_ros.stream.run import RunResult
 from tests.sample_blocks import cut
 

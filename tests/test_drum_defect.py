@@ -25,7 +25,7 @@ from brake_sim_ros.model.assembly import pack
 from brake_sim_ros.model.defects import Defects, DrumDefect, DrumHarmonic
 from brake_sim_ros.model.fidelity import Needs, plan
 from brake_sim_ros.model.parameters import BrakeParameters
-from brake_sim_ros.model.trajectory import BrakeSetup, SampleBlock
+from brake_sim_ros.model.run_setup import BrakeSetup, SampleBlock
 from brake_sim_ros.scenarios.loader import parse_scenario
 from brake_sim_ros.solvers.contact_regime import run_contact_regime
 from brake_sim_ros.solvers.fixed_step import FixedStepStepper

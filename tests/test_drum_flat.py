@@ -21,7 +21,7 @@ from brake_sim_ros.model.assembly import pack
 from brake_sim_ros.model.catalogue import FLAT_KIND, Growth
 from brake_sim_ros.model.defects import DEFAULT_FLAT_WIDTH_DEG, Defects, DrumDefect
 from brake_sim_ros.model.parameters import BrakeParameters
-from brake_sim_ros.model.trajectory import BrakeSetup, SampleBlock
+from brake_sim_ros.model.run_setup import BrakeSetup, SampleBlock
 from brake_sim_ros.scenarios.loader import parse_scenario
 from brake_sim_ros.solvers.fixed_step import FixedStepStepper
 

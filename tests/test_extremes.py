@@ -24,7 +24,7 @@ from brake_sim_ros.model.actuation import MAX_ACTUATION_FORCE_N, Actuation, Forc
 from brake_sim_ros.model.assembly import contact_arms, pack
 from brake_sim_ros.model.defects import Defects, ShoeDefect
 from brake_sim_ros.model.parameters import BrakeParameters, ContactParameters, ShoeGeometry
-from brake_sim_ros.model.trajectory import BrakeSetup
+from brake_sim_ros.model.run_setup import BrakeSetup
 from brake_sim_ros.solvers.fixed_step import FixedStepStepper
 from brake_sim_ros.solvers.stability import step_limit
 

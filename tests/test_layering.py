@@ -1,5 +1,5 @@
-"""The package graph points one way: model <- solvers <- scenarios <- stream <- (ros,
-recording, viz), with app, studies and the CLI on top.
+"""The package graph points one way: model <- sensing <- analysis <- solvers <- (fleet,
+scenarios) <- stream <- (ros, recording, viz), with app, studies and the CLI on top.
 
 Every ``import`` of every module counts, also those inside functions (lazy imports) and
 under ``if TYPE_CHECKING:``: a dependency deferred is still a dependency.
@@ -17,20 +17,23 @@ ROOT = Path(__file__).resolve().parents[1] / PACKAGE
 
 _BASE = {"errors", "__init__"}  # brake_sim_ros/errors.py and the package's own __init__
 _CORE = _BASE | {"model"}
-_SOLVERS = _CORE | {"analysis", "solvers"}
-_LIBRARY = _SOLVERS | {"scenarios"}
+_SOLVERS = _CORE | {"analysis", "sensing", "solvers"}
+_LIBRARY = _SOLVERS | {"fleet", "scenarios"}
 _STREAM = _LIBRARY | {"stream"}
 _ADAPTERS = {"ros", "recording", "viz"}
 
 # Which top-level units of the package each one may import (itself always allowed):
-# model <- (analysis, solvers) <- scenarios <- stream <- (ros, recording, viz) <- the top.
+# model <- sensing <- analysis <- solvers <- (fleet, scenarios) <- stream <- (ros, recording,
+# viz) <- the top.
 ALLOWED: dict[str, set[str]] = {
     "__init__": set(),
     "errors": set(),
     "model": _BASE,
-    "analysis": _CORE,
-    "solvers": _CORE | {"analysis"},
-    "scenarios": _SOLVERS,  # a scenario names its solver preset and method
+    "sensing": _CORE,  # what sensors measure of the physics' sample blocks
+    "analysis": _CORE | {"sensing"},  # features of measured channels too
+    "solvers": _CORE | {"analysis", "sensing"},  # warmup compiles the sensors' paths too
+    "fleet": _CORE | {"sensing"},  # unit scatter draws sensor calibration as well
+    "scenarios": _SOLVERS | {"fleet"},  # a scenario names its solver preset and method
     "stream": _LIBRARY,
     "ros": _STREAM,  # never recording or viz: the node is a leaf adapter
     "recording": _STREAM,

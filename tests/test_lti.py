@@ -19,8 +19,8 @@ from scipy.linalg import (
     solve_discrete_lyapunov,
 )
 
-from brake_sim_ros.model.lti import foh_discretise, with_input_noise
-from brake_sim_ros.model.sensors import TRANSDUCER_PRESETS
+from brake_sim_ros.sensing.lti import foh_discretise, with_input_noise
+from brake_sim_ros.sensing.sensors import TRANSDUCER_PRESETS
 
 FS = 25_600.0
 LAGS = 64

@@ -17,7 +17,7 @@ from brake_sim_ros.analysis.onsets import (
     in_contact,
 )
 from brake_sim_ros.model import layout as L
-from brake_sim_ros.model.trajectory import SampleBlock
+from brake_sim_ros.model.run_setup import SampleBlock
 from tests.sample_blocks import cut
 
 

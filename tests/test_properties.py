@@ -25,7 +25,7 @@ from brake_sim_ros.errors import ParameterError
 from brake_sim_ros.model.actuation import Actuation, ForceProfile
 from brake_sim_ros.model.defects import Defects, ShoeDefect
 from brake_sim_ros.model.parameters import BrakeParameters
-from brake_sim_ros.model.trajectory import BrakeSetup
+from brake_sim_ros.model.run_setup import BrakeSetup
 from brake_sim_ros.solvers.fixed_step import FixedStepStepper
 from brake_sim_ros.solvers.stability import step_limit
 

@@ -7,7 +7,7 @@ import math
 
 import pytest
 
-from brake_sim_ros.model.trajectory import BrakeSetup
+from brake_sim_ros.model.run_setup import BrakeSetup
 from brake_sim_ros.solvers.fixed_step import FixedStepStepper
 from brake_sim_ros.solvers.realtime import (
     MIN_CALIBRATION_CHUNKS,

@@ -553,7 +553,7 @@ def test_non_files_are_refused_without_waiting(tmp_path, capfd):
 
 
 def test_limits_refuse_before_reading(bags, tmp_path):
-    from brake_sim_ros.recording.records import Limits
+    from brake_sim_ros.recording.mcap_format import Limits
 
     with pytest.raises(RecordingReadError, match="over the 1000-byte limit"):
         open_recording(bags["zstd"].path, limits=Limits(max_file_bytes=1000))

@@ -311,8 +311,8 @@ def test_measured_channels_are_plotted_with_their_sensor_faults(tmp_path: Path):
     quarter of the rate too), and an event where a sensor fault starts and ends."""
     import dataclasses
 
-    from brake_sim_ros.model.sensor_faults import SensorFault
-    from brake_sim_ros.model.sensors import SensorSet, accelerometer, default_channels
+    from brake_sim_ros.sensing.faults import SensorFault
+    from brake_sim_ros.sensing.sensors import SensorSet, accelerometer, default_channels
 
     slow = accelerometer("slow_x", "backing_plate", "x", rate_hz=SAMPLE_RATE_HZ / 4)
     pressure = next(c for c in default_channels() if c.kind == "line_pressure")

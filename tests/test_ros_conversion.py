@@ -18,7 +18,7 @@ pytest.importorskip("brake_sim_msgs", reason="brake_sim_msgs not built (run scri
 from brake_sim_ros import stream
 from brake_sim_ros.model.defects import Defects, ShoeDefect
 from brake_sim_ros.model.layout import COL, N_COLUMNS
-from brake_sim_ros.model.trajectory import SampleBlock
+from brake_sim_ros.model.run_setup import SampleBlock
 from brake_sim_ros.ros.diagnostics import (
     RunStats,
     RunView,

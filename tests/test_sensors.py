@@ -11,9 +11,11 @@ import pytest
 from scipy import signal
 
 from brake_sim_ros.errors import ParameterError, ScenarioError
-from brake_sim_ros.model import sensor_faults as sf
-from brake_sim_ros.model.sensor_faults import SensorFault
-from brake_sim_ros.model.sensors import (
+from brake_sim_ros.model.run_setup import SampleBlock
+from brake_sim_ros.scenarios import load_scenario, parse_scenario
+from brake_sim_ros.sensing import faults as sf
+from brake_sim_ros.sensing.faults import SensorFault
+from brake_sim_ros.sensing.sensors import (
     IDEAL,
     TRANSDUCER_PRESETS,
     AnalogPath,
@@ -24,9 +26,7 @@ from brake_sim_ros.model.sensors import (
     accelerometer,
     default_channels,
 )
-from brake_sim_ros.model.structure import Mode
-from brake_sim_ros.model.trajectory import SampleBlock
-from brake_sim_ros.scenarios import load_scenario, parse_scenario
+from brake_sim_ros.sensing.structure import Mode
 from tests.conftest import IMPACTING_S
 from tests.sample_blocks import faulted_set
 

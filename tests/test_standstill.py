@@ -12,7 +12,7 @@ from brake_sim_ros.analysis.energy import energy_balance
 from brake_sim_ros.model import layout as L
 from brake_sim_ros.model.actuation import Actuation, ForceProfile
 from brake_sim_ros.model.parameters import BrakeParameters
-from brake_sim_ros.model.trajectory import BrakeSetup
+from brake_sim_ros.model.run_setup import BrakeSetup
 from brake_sim_ros.solvers.contact_regime import run_contact_regime
 from brake_sim_ros.solvers.fixed_step import FixedStepStepper
 from brake_sim_ros.solvers.reference import run_reference

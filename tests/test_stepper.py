@@ -13,7 +13,7 @@ from brake_sim_ros.model import layout as L
 from brake_sim_ros.model.actuation import Actuation, ForceProfile
 from brake_sim_ros.model.defects import Defects, ShoeDefect
 from brake_sim_ros.model.parameters import BrakeParameters
-from brake_sim_ros.model.trajectory import BrakeSetup
+from brake_sim_ros.model.run_setup import BrakeSetup
 from brake_sim_ros.scenarios import load_scenario
 from brake_sim_ros.solvers.fixed_step import (
     MIN_PHYSICS_STEP_S,

@@ -10,14 +10,14 @@ import pytest
 from scipy import signal
 
 from brake_sim_ros.errors import ParameterError
-from brake_sim_ros.model.structure import (
+from brake_sim_ros.model.run_setup import SampleBlock
+from brake_sim_ros.sensing.structure import (
     AXES,
     FORCE_COLUMNS,
     Mode,
     Structure,
     StructureParameters,
 )
-from brake_sim_ros.model.trajectory import SampleBlock
 from tests.conftest import IMPACTING_S
 
 PARAMS = StructureParameters()

@@ -9,11 +9,11 @@ import numpy as np
 import pytest
 
 from brake_sim_ros.errors import BrakeSimError
+from brake_sim_ros.fleet.conditions import apply as apply_conditions
 from brake_sim_ros.model import layout as L
 from brake_sim_ros.model.actuation import Actuation, ForceProfile
-from brake_sim_ros.model.conditions import apply as apply_conditions
+from brake_sim_ros.model.run_setup import BrakeSetup
 from brake_sim_ros.model.thermal import FADE, Thermal
-from brake_sim_ros.model.trajectory import BrakeSetup
 from brake_sim_ros.scenarios import load_scenario, parse_scenario
 from brake_sim_ros.solvers.fixed_step import FixedStepStepper
 from brake_sim_ros.stream.build import stepper_for

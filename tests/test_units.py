@@ -1,4 +1,4 @@
-"""Unit-to-unit variability (model/units.py): draws, distributions, validity, wiring into
+"""Unit-to-unit variability (fleet/scatter.py): draws, distributions, validity, wiring into
 scenarios, ground truth and recordings, and the spread it gives a fleet."""
 
 from __future__ import annotations
@@ -16,11 +16,11 @@ import pytest
 from scipy import stats
 
 from brake_sim_ros.errors import ParameterError, ScenarioError
-from brake_sim_ros.model import units
+from brake_sim_ros.fleet import scatter
 from brake_sim_ros.model.assembly import pack
 from brake_sim_ros.model.parameters import BrakeParameters
-from brake_sim_ros.model.sensors import default_sensor_set
 from brake_sim_ros.scenarios import builtin_names, load_scenario, parse_scenario
+from brake_sim_ros.sensing.sensors import default_sensor_set
 from brake_sim_ros.studies import units as fleet_study
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -29,9 +29,9 @@ SENSORS = default_sensor_set()
 
 def _bits(unit_id: str, seed: int) -> list[str]:
     """Every drawn value of a unit, as exact hex floats."""
-    p = units.unit_parameters(BrakeParameters(), unit_id, seed)
-    s = units.unit_sensors(SENSORS, unit_id, seed)
-    return [v.value.hex() for v in units.unit_values(BrakeParameters(), p, SENSORS, s)]
+    p = scatter.unit_parameters(BrakeParameters(), unit_id, seed)
+    s = scatter.unit_sensors(SENSORS, unit_id, seed)
+    return [v.value.hex() for v in scatter.unit_values(BrakeParameters(), p, SENSORS, s)]
 
 
 def test_same_unit_and_seed_give_identical_bits_in_another_process():
@@ -49,19 +49,19 @@ def test_same_unit_and_seed_give_identical_bits_in_another_process():
 
 
 def test_the_fleet_seed_and_the_unit_id_each_change_the_draw():
-    base = units.deviations("VIN-0042", 7)
-    assert units.deviations("VIN-0042", 8) != base
-    assert units.deviations("VIN-0043", 7) != base
+    base = scatter.deviations("VIN-0042", 7)
+    assert scatter.deviations("VIN-0042", 8) != base
+    assert scatter.deviations("VIN-0043", 7) != base
 
 
 def test_nominal_is_the_scenarios_brake_bit_for_bit():
     params = BrakeParameters()
-    assert units.unit_parameters(params, units.NOMINAL_UNIT, 5) is params
-    assert units.unit_sensors(SENSORS, units.NOMINAL_UNIT, 5) is SENSORS
-    assert set(units.deviations(units.NOMINAL_UNIT, 5).values()) == {0.0}
+    assert scatter.unit_parameters(params, scatter.NOMINAL_UNIT, 5) is params
+    assert scatter.unit_sensors(SENSORS, scatter.NOMINAL_UNIT, 5) is SENSORS
+    assert set(scatter.deviations(scatter.NOMINAL_UNIT, 5).values()) == {0.0}
     for name in builtin_names():  # every shipped scenario is unit "nominal"
         scenario = load_scenario(name)
-        assert scenario.unit_id == units.NOMINAL_UNIT
+        assert scenario.unit_id == scatter.NOMINAL_UNIT
         assert scenario.setup.params is scenario.drawing_params
         assert scenario.sensors is scenario.drawing_sensors
     symmetric = load_scenario("symmetric")
@@ -76,12 +76,13 @@ def test_units_differ_and_stay_within_their_limits_and_valid():
     seen = set()
     for i in range(200):
         unit_id = f"unit-{i}"
-        drawn = units.deviations(unit_id, 0)
+        drawn = scatter.deviations(unit_id, 0)
         seen.add(tuple(drawn.values()))
-        for s in units.SCATTER:
+        for s in scatter.SCATTER:
             assert abs(drawn[s.key]) <= s.limit
-        unit = units.unit_parameters(params, unit_id, 0)
-        for v in units.unit_values(params, unit, SENSORS, units.unit_sensors(SENSORS, unit_id, 0)):
+        unit = scatter.unit_parameters(params, unit_id, 0)
+        sensors = scatter.unit_sensors(SENSORS, unit_id, 0)
+        for v in scatter.unit_values(params, unit, SENSORS, sensors):
             if v.scatter.mode == "relative":
                 assert abs(v.value / v.nominal - 1.0) <= v.scatter.limit * (1 + 1e-12), v.key
             else:
@@ -98,11 +99,11 @@ def test_each_deviation_follows_its_truncated_normal():
     untruncated normal fails one of these)."""
     n = 2000
     ids = [f"fleet-{i}" for i in range(n)]
-    draws = {s.key: [] for s in units.SCATTER}
+    draws = {s.key: [] for s in scatter.SCATTER}
     for unit_id in ids:
-        for key, d in units.deviations(unit_id, 3).items():
+        for key, d in scatter.deviations(unit_id, 3).items():
             draws[key].append(d)
-    for s in units.SCATTER:
+    for s in scatter.SCATTER:
         d = np.array(draws[s.key])
         c = s.truncation
         assert stats.kstest(d / s.sigma, stats.truncnorm(-c, c).cdf).pvalue > 1e-3, s.key
@@ -110,16 +111,16 @@ def test_each_deviation_follows_its_truncated_normal():
         assert abs(d.std(ddof=1) - s.std) < 4 * s.std / math.sqrt(2 * n), s.key
         assert np.abs(d).max() <= s.limit and np.any(np.abs(d) > 2.5 * s.sigma), s.key
     # and independent: no two parameters' deviations correlate beyond chance
-    matrix = np.corrcoef(np.array([draws[s.key] for s in units.SCATTER]))
-    off = matrix[~np.eye(len(units.SCATTER), dtype=bool)]
+    matrix = np.corrcoef(np.array([draws[s.key] for s in scatter.SCATTER]))
+    off = matrix[~np.eye(len(scatter.SCATTER), dtype=bool)]
     assert np.abs(off).max() < 4 / math.sqrt(n)
 
 
 def test_a_parameter_draws_the_same_whatever_else_the_table_holds(monkeypatch):
-    before = units.deviations("VIN-7", 1)
-    extra = units.Scatter("shoe.mass_centre_x_m", "absolute", 1e-4, 3e-4, "test")
-    monkeypatch.setattr(units, "SCATTER", (extra, *reversed(units.SCATTER)))
-    after = units.deviations("VIN-7", 1)
+    before = scatter.deviations("VIN-7", 1)
+    extra = scatter.Scatter("shoe.mass_centre_x_m", "absolute", 1e-4, 3e-4, "test")
+    monkeypatch.setattr(scatter, "SCATTER", (extra, *reversed(scatter.SCATTER)))
+    after = scatter.deviations("VIN-7", 1)
     assert {k: after[k] for k in before} == before
 
 
@@ -127,11 +128,11 @@ def test_the_corners_of_the_tolerance_box_are_valid_brakes():
     """Truncation keeps every unit valid: the shoe geometry at every corner of its
     tolerances (the parameters the core's geometric checks see) packs, for the defects of
     every shipped scenario."""
-    geometry = [s for s in units.SCATTER if s.key.startswith("shoe.")]
+    geometry = [s for s in scatter.SCATTER if s.key.startswith("shoe.")]
     scenarios = [load_scenario(name) for name in builtin_names()]
     for signs in itertools.product((-1.0, 1.0), repeat=len(geometry)):
         drawn = {s.key: sign * s.limit for s, sign in zip(geometry, signs, strict=True)}
-        params = units.with_deviations(BrakeParameters(), drawn)
+        params = scatter.with_deviations(BrakeParameters(), drawn)
         for scenario in scenarios:
             pack(params, scenario.setup.defects, scenario.setup.options)
 
@@ -142,10 +143,10 @@ def test_scatter_applies_around_the_scenarios_own_values():
         "coefficient = 0.40\n"
     )
     scenario = parse_scenario(text)
-    d = units.deviations("VIN-9", 4)["friction.coefficient"]
+    d = scatter.deviations("VIN-9", 4)["friction.coefficient"]
     assert scenario.drawing_params.friction.coefficient == 0.40
     assert scenario.setup.params.friction.coefficient == 0.40 * (1.0 + d)
-    back = scenario.with_unit(units.NOMINAL_UNIT)
+    back = scenario.with_unit(scatter.NOMINAL_UNIT)
     assert back.setup.params == scenario.drawing_params and back.sensors == SENSORS
     # the same unit from the default file: the same deviation
     plain = parse_scenario('name = "mine"\nunit_id = "VIN-9"\nfleet_seed = 4\n')
@@ -187,7 +188,7 @@ def test_a_bad_unit_id_is_refused_in_one_line(unit_id):
         load_scenario("symmetric").with_unit(unit_id)
     assert "\n" not in str(info.value)
     with pytest.raises(ParameterError):
-        units.deviations("u", -1)
+        scatter.deviations("u", -1)
 
 
 def test_the_unit_command_prints_the_unit_against_nominal():
@@ -281,7 +282,7 @@ def test_fifty_units_spread_stop_time_and_first_impact_as_the_scatter_predicts()
     time are smooth but not linear over +-3 sigma). Spread must be nonzero, and the stop
     time must fall with the friction coefficient (the braking torque rises with it).
     """
-    scenario = parse_scenario(SHORT_STOP).with_unit(units.NOMINAL_UNIT, fleet_seed=2)
+    scenario = parse_scenario(SHORT_STOP).with_unit(scatter.NOMINAL_UNIT, fleet_seed=2)
     predicted, parts = fleet_study.linear_spread(scenario, duration_s=4.0)
     ids = fleet_study.fleet_unit_ids(50)
     rows = fleet_study.fleet(scenario, ids, duration_s=4.0)
@@ -291,6 +292,6 @@ def test_fifty_units_spread_stop_time_and_first_impact_as_the_scatter_predicts()
     assert np.std(stop) > 0 and np.std(peak) > 0
     assert 0.6 <= np.std(stop, ddof=1) / predicted.stop_time_s <= 1.6
     assert 0.6 <= np.std(peak, ddof=1) / predicted.first_impact_n <= 1.6
-    mu = np.array([units.deviations(u, 2)["friction.coefficient"] for u in ids])
+    mu = np.array([scatter.deviations(u, 2)["friction.coefficient"] for u in ids])
     assert parts["friction.coefficient"].stop_time_s < 0
     assert np.corrcoef(mu, stop)[0, 1] < -0.5

@@ -27,7 +27,7 @@ import math
 from brake_sim_ros.model import layout as L
 from brake_sim_ros.model.assembly import contact_arms, pack
 from brake_sim_ros.model.layout import SIDES
-from brake_sim_ros.model.trajectory import BrakeSetup
+from brake_sim_ros.model.run_setup import BrakeSetup
 
 # Relative allowance for the change of the moment arms between first contact and the
 # deepest indentation. For the nominal geometry and pivot shifts of +-3 %, d and h change

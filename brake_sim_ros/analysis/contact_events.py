@@ -24,7 +24,7 @@ import numpy as np
 
 from brake_sim_ros.analysis.onsets import contact_changes, in_contact
 from brake_sim_ros.model.layout import SIDES
-from brake_sim_ros.model.trajectory import SampleBlock
+from brake_sim_ros.model.run_setup import SampleBlock
 
 SHOE_LEFT = 0
 SHOE_RIGHT = 1

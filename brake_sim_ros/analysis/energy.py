@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 from brake_sim_ros.model.assembly import SIDES
 from brake_sim_ros.model.parameters import BrakeParameters
-from brake_sim_ros.model.trajectory import SampleBlock
+from brake_sim_ros.model.run_setup import SampleBlock
 
 _LOSSES = ("friction_work_j", "coupling_damper_loss_j", "contact_loss_j", "lock_loss_j")
 # a vehicle's (model/vehicle.py): the drive's work in, the road load's out; read when kept

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from brake_sim_ros.analysis.onsets import contact_changes, crossing_times, in_contact
-from brake_sim_ros.model.trajectory import SampleBlock
+from brake_sim_ros.model.run_setup import SampleBlock
 
 CONTACT_WINDOW_S = (1.0, 6.0)
 SETTLE_S = 0.05

@@ -37,8 +37,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import signal
 
-from brake_sim_ros.model.sensors import SensorBank, SensorFrame, SensorSet
-from brake_sim_ros.model.trajectory import SampleBlock
+from brake_sim_ros.model.run_setup import SampleBlock
+from brake_sim_ros.sensing.sensors import SensorBank, SensorFrame, SensorSet
 
 NOISE_BAND_HZ = (850.0, 4600.0)  # drum-brake noise band (shared/TESTBED.md), Hz
 IMPACT_WINDOW_S = (0.2, 0.4)  # the impacts of every built-in case fall inside, s

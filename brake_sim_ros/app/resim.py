@@ -40,11 +40,11 @@ import numpy as np
 
 from brake_sim_ros import stream
 from brake_sim_ros.errors import BrakeSimError, SimulationError
-from brake_sim_ros.model.trajectory import SampleBlock
+from brake_sim_ros.model.run_setup import SampleBlock
 from brake_sim_ros.recording import cdr, metadata
+from brake_sim_ros.recording.mcap_format import describe_path
 from brake_sim_ros.recording.output import atomic_output, check_outputs
 from brake_sim_ros.recording.reader import Recording, open_recording
-from brake_sim_ros.recording.records import describe_path
 from brake_sim_ros.recording.writer import McapRecorder, RecordingOptions
 from brake_sim_ros.scenarios import Scenario
 from brake_sim_ros.scenarios.loader import parse_scenario

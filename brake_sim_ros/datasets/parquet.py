@@ -9,7 +9,7 @@ One row per sample of the scenario's rate. Columns, units in the names:
   :func:`~brake_sim_ros.stream.build.sensor_bank_for` as the node's ``~/measured`` does,
   the same bits): ``measured:<name> [<unit>]`` (float64; NaN where a dropout silenced
   the sensor; null on rows a slower channel does not sample) and ``fault:<name>``
-  (uint8, OR of ``sensor_faults.FAULT_BIT``; 0 = no sensor fault; null likewise). None
+  (uint8, OR of ``faults.FAULT_BIT``; 0 = no sensor fault; null likewise). None
   when the scenario's fidelity plan builds no sensors (``[needs]`` without
   ``measured_signals``; ``simulate`` then records ``"sensors": false`` in the metadata).
 
@@ -44,9 +44,9 @@ one object per defect of the run with kind, location, final severity, unit, onse
 growth and growth_rate, as the DefectState message), ``unit_id`` (the scenario's brake unit,
 "nominal" for the drawing's brake) and ``unit_parameters`` (the unit's ground truth: a
 list of ``{key, unit, nominal, value}``, every scattered parameter as the scenario gives it
-and as the unit has it, :mod:`brake_sim_ros.model.units`) and ``conditions`` (the run's
+and as the unit has it, :mod:`brake_sim_ros.fleet.scatter`) and ``conditions`` (the run's
 operating conditions drawn from the scenario's ranges: per name ``{value, unit, range}``,
-:mod:`brake_sim_ros.model.conditions`; ``{}`` without them) and ``life`` (the failure the
+:mod:`brake_sim_ros.fleet.conditions`; ``{}`` without them) and ``life`` (the failure the
 ``rul`` column counts down to: ``time_s``, ``kind``, ``location``, ``service_limit``,
 ``unit``, ``source`` "run", "law" or "censored"; :class:`.life.Failure`).
 """
@@ -63,12 +63,12 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from brake_sim_ros.datasets import life
+from brake_sim_ros.fleet.scatter import UnitValue
 from brake_sim_ros.model.cycle import Cycle
 from brake_sim_ros.model.defects import Defects
-from brake_sim_ros.model.sensor_faults import FAULT_BIT
-from brake_sim_ros.model.sensors import SensorBank
-from brake_sim_ros.model.trajectory import SampleBlock
-from brake_sim_ros.model.units import UnitValue
+from brake_sim_ros.model.run_setup import SampleBlock
+from brake_sim_ros.sensing.faults import FAULT_BIT
+from brake_sim_ros.sensing.sensors import SensorBank
 from brake_sim_ros.stream.ground_truth import recorded_wear
 
 if TYPE_CHECKING:

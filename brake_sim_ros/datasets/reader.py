@@ -25,7 +25,7 @@ from brake_sim_ros.campaigns.splits import SPLITS, HeldOut, leaks
 from brake_sim_ros.datasets.sweep import LOCK_NAME, MANIFEST_NAME, SAMPLES_DIR, sha256_file
 from brake_sim_ros.errors import BrakeSimError
 from brake_sim_ros.model.catalogue import label_columns
-from brake_sim_ros.recording.records import describe_path
+from brake_sim_ros.recording.mcap_format import describe_path
 
 REQUIRED = ("run_id", "unit_id", "seed", "split", "status", "file", "sha256")
 

@@ -48,8 +48,8 @@ from typing import TYPE_CHECKING, Any
 from brake_sim_ros.datasets import life
 from brake_sim_ros.datasets.threads import limit_threads
 from brake_sim_ros.errors import BrakeSimError
+from brake_sim_ros.recording.mcap_format import describe_path
 from brake_sim_ros.recording.output import OutputError, atomic_output
-from brake_sim_ros.recording.records import describe_path
 
 if TYPE_CHECKING:
     from brake_sim_ros.campaigns.loader import Campaign, RunSpec

@@ -1,9 +1,10 @@
 """The physics core: parameters, geometry, contact, standstill and the compiled kernels.
 
 Importing this package points numba's on-disk kernel cache at a directory keyed by a hash
-of the package's sources. numba checks only the file of each cached function, not the files
-of the functions it inlines, so after a change to ``contact.py`` alone the kernels in
-``kernel.py`` would otherwise be loaded stale from the cache. ``NUMBA_CACHE_DIR`` (numba's
+of the compiled folders' sources (:data:`COMPILED_ROOMS`). numba checks only the file of
+each cached function, not the files of the functions it inlines, so after a change to
+``contact.py`` alone the kernels in ``kernel.py`` would otherwise be loaded stale from the
+cache. ``NUMBA_CACHE_DIR`` (numba's
 own setting) or ``BRAKE_SIM_CACHE_DIR`` override the location.
 """
 
@@ -15,12 +16,18 @@ from pathlib import Path
 
 import numba
 
+# The package's folders that hold compiled (numba) functions: the physics here, the sensors'
+# signal paths in sensing/ (which inline this folder's functions too).
+COMPILED_ROOMS = ("model", "sensing")
+
 
 def _kernel_cache_dir() -> Path:
     digest = hashlib.sha256()
-    for source in sorted(Path(__file__).parent.glob("*.py")):
-        digest.update(source.name.encode())
-        digest.update(source.read_bytes())
+    package = Path(__file__).parent.parent
+    for room in COMPILED_ROOMS:
+        for source in sorted((package / room).glob("*.py")):
+            digest.update(f"{room}/{source.name}".encode())
+            digest.update(source.read_bytes())
     base = os.environ.get("BRAKE_SIM_CACHE_DIR")
     if not base:
         base = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "brake-sim"

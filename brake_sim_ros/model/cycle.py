@@ -20,7 +20,7 @@ After the last segment the cycle has ended (phase ``end``): no drive, the brake 
 kept. The brake force ramps linearly to each segment's over ``brake_rise_s`` (a hydraulic
 rise, TESTBED: under 0.1 s for the hydraulics, 0.36 s for the whole brake response);
 pressure becomes force on the default wheel-cylinder piston of the line-pressure sensor
-(:data:`~brake_sim_ros.model.sensors.DEFAULT_PISTON_DIAMETER_M`, 19.05 mm: 46 bar is the
+(:data:`~brake_sim_ros.sensing.sensors.DEFAULT_PISTON_DIAMETER_M`, 19.05 mm: 46 bar is the
 published 1300 N; the scenario loader converts), the force each shoe gets before its
 actuation gain, as the ``[actuation]`` profile's.
 

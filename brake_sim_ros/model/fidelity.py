@@ -327,7 +327,7 @@ _EVENT_COLUMNS: dict[str, tuple[str, ...]] = {
         "drum_speed_rad_s",
     ),
     "impacts": ("regime",),
-    # what the sensor bank reads (model/sensors.py): both pivot forces (the structure sums
+    # what the sensor bank reads (sensing/sensors.py): both pivot forces (the structure sums
     # them; load pins), both actuation forces (line pressure), the drum angle (tone ring)
     "measured_signals": (
         "drum_angle_rad",

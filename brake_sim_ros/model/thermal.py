@@ -33,7 +33,7 @@ is its own (the SAE J866 edge code rates its "hot" friction over 204-343 deg C, 
 deg F); this one keeps the friction up to 250 deg C and falls linearly to half at
 350 deg C (organic binders start to decompose near 290-340 deg C, 550-650 deg F, in fleet
 brake-temperature guides), half above. The rule is :func:`fade_ratio`, written once: the
-compiled step and the per-run conditions (model/conditions.py) both use it.
+compiled step and the per-run conditions (fleet/conditions.py) both use it.
 
 Pure: no files, no transport.
 """

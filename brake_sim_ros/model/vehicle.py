@@ -49,7 +49,7 @@ ROLLING_SMOOTHING_SPEED_M_S = 0.01
 # pair is kept, so that km/h and rad/s agree with MODEL.md).
 DEFAULT_WHEEL_RADIUS_M = (100.0 / 3.6) / 103.5
 # The vehicle load factor's range (a half-empty to a three-times-laden vehicle): the limits
-# of a drawn condition (model/conditions.py) and of a cycle's per-stop load (model/cycle.py).
+# of a drawn condition (fleet/conditions.py) and of a cycle's per-stop load (model/cycle.py).
 LOAD_FACTOR_RANGE = (0.5, 3.0)
 
 # The speed controller's settings by default (a [cycle]'s, and a live drive's): this

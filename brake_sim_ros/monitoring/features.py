@@ -39,7 +39,7 @@ from collections.abc import Callable, Mapping
 import numpy as np
 
 from brake_sim_ros.analysis.orders import TREND_DEGREE, order_spectrum
-from brake_sim_ros.model.sensors import DEFAULT_TONE_RING_TEETH
+from brake_sim_ros.sensing.sensors import DEFAULT_TONE_RING_TEETH
 
 ACCEL_CHANNELS = ("backing_plate_accel_x", "backing_plate_accel_y")
 PULSE_CHANNEL = "wheel_speed"

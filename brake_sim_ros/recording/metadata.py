@@ -28,7 +28,7 @@ Metadata records (MCAP ``Metadata``; every value a string):
     ``model_note``; a live run adds its node name and ``real_time_factor``; values are
     ``repr()`` of the Python value except strings, which are given as they are.
 ``brake_sim_unit``
-    which brake unit was run (:mod:`brake_sim_ros.model.units`): ``unit_id`` and
+    which brake unit was run (:mod:`brake_sim_ros.fleet.scatter`): ``unit_id`` and
     ``fleet_seed`` (what draws the unit's scatter: the same brake in every run), ``seed``
     (the run's at the start of the recording: its noise and conditions) and
     ``unit_parameters``,
@@ -36,7 +36,7 @@ Metadata records (MCAP ``Metadata``; every value a string):
     and its sensors as the scenario gives it (``nominal``) and as the unit has it
     (``value``); all equal for unit ``nominal``; and ``conditions``, JSON: the run's
     operating conditions drawn from the scenario's ``[conditions]`` ranges
-    (:mod:`brake_sim_ros.model.conditions`), per name ``{value, unit, range}`` (``{}``
+    (:mod:`brake_sim_ros.fleet.conditions`), per name ``{value, unit, range}`` (``{}``
     without them). ``brake_sim_model`` holds the drawn
     values too (with any ROS parameter overrides of a live run on top). The conditions at
     the start of the recording: a live ~/reset with a new seed draws them again, and its

@@ -33,7 +33,7 @@ from collections.abc import Callable, Iterator, Mapping, Sequence
 from pathlib import Path
 
 from brake_sim_ros.errors import BrakeSimError
-from brake_sim_ros.recording.records import describe_path
+from brake_sim_ros.recording.mcap_format import describe_path
 
 
 class OutputError(BrakeSimError, ValueError):

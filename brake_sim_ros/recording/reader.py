@@ -27,7 +27,7 @@ checked first (header, every chunk, every message, the summary against what the 
 section holds, the footer and its CRC) and any fault refuses the whole file with one
 :class:`RecordingReadError` line naming the file, the offset, the chunk or message and
 what is allowed, and pointing to ``brake-sim recover``. Nothing of a damaged file is
-published or shown. The format layer underneath (:mod:`.records`: framing, record
+published or shown. The format layer underneath (:mod:`.mcap_format`: framing, record
 parsers, chunk checks) is shared with :mod:`.recover`, which keeps what is intact instead
 of refusing.
 """
@@ -44,7 +44,7 @@ from dataclasses import dataclass, field
 import yaml
 
 from brake_sim_ros.recording import cdr
-from brake_sim_ros.recording.records import (
+from brake_sim_ros.recording.mcap_format import (
     DEFAULT_LIMITS,
     FOOTER_BYTES,
     FRAME_BYTES,

@@ -2,7 +2,7 @@
 
 A recording cut short (SIGKILL, power loss, full disk) has no summary and may end inside a
 record; a damaged one (a bad sector, a bad copy) has chunks whose bytes changed anywhere.
-:func:`recover` walks the file record by record (:mod:`.records`) and keeps
+:func:`recover` walks the file record by record (:mod:`.mcap_format`) and keeps
 
 * every chunk whose CRC matches and whose records all parse, before *and after* any
   damage: after a record that does not frame or a chunk that does not verify, it scans
@@ -41,9 +41,7 @@ from mcap.writer import CompressionType, Writer
 from brake_sim_ros import __version__
 from brake_sim_ros.errors import BrakeSimError
 from brake_sim_ros.recording import cdr, metadata, schemas
-from brake_sim_ros.recording.output import atomic_output, check_output
-from brake_sim_ros.recording.reader import offered_qos
-from brake_sim_ros.recording.records import (
+from brake_sim_ros.recording.mcap_format import (
     DEFAULT_LIMITS,
     FOOTER_BYTES,
     FRAME_BYTES,
@@ -74,6 +72,8 @@ from brake_sim_ros.recording.records import (
     read_frame,
     verify_chunk,
 )
+from brake_sim_ros.recording.output import atomic_output, check_output
+from brake_sim_ros.recording.reader import offered_qos
 from brake_sim_ros.stream.topics import TOPIC_BY_TYPE
 
 RECOVERY = "brake_sim_recovery"

@@ -18,10 +18,10 @@ import time
 from brake_sim_ros import stream
 from brake_sim_ros.analysis.contact_events import ContactEventDetector
 from brake_sim_ros.errors import BrakeSimError
-from brake_sim_ros.model.sensors import SensorBank
-from brake_sim_ros.model.trajectory import SampleBlock
+from brake_sim_ros.model.run_setup import SampleBlock
 from brake_sim_ros.ros import qos
 from brake_sim_ros.ros.messages import message_class
+from brake_sim_ros.sensing.sensors import SensorBank
 from brake_sim_ros.solvers.fixed_step import FixedStepStepper
 from brake_sim_ros.solvers.realtime import (
     MAX_CHUNK_WALL_S,

@@ -61,7 +61,7 @@ from rclpy.node import Node
 
 from brake_sim_ros import stream
 from brake_sim_ros.errors import BrakeSimError, ParameterError, ScenarioError, SimulationError
-from brake_sim_ros.model.trajectory import SampleBlock
+from brake_sim_ros.model.run_setup import SampleBlock
 from brake_sim_ros.ros import qos
 from brake_sim_ros.ros.budget import Budget
 from brake_sim_ros.ros.diagnostics import RunStats, summary

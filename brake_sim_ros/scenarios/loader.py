@@ -5,8 +5,8 @@ output sample rate, the solver (a preset, or a method and a largest physics step
 optionally what it needs (``[needs]``: outputs, shoes, accuracy,
 forced level; see :mod:`brake_sim_ros.model.fidelity`), which brake unit it is (``unit_id``:
 the manufacturing scatter drawn with ``fleet_seed`` around the file's values, see
-:mod:`brake_sim_ros.model.units`) and ranges of operating conditions drawn per run
-(``[conditions]``, :mod:`brake_sim_ros.model.conditions`). Loading is strict: an unknown key,
+:mod:`brake_sim_ros.fleet.scatter`) and ranges of operating conditions drawn per run
+(``[conditions]``, :mod:`brake_sim_ros.fleet.conditions`). Loading is strict: an unknown key,
 a wrong type, or a non-finite or out-of-range value is an error that names the file, the
 key, the value and what is allowed. See ``builtin/symmetric.toml`` for a commented example.
 
@@ -31,7 +31,14 @@ from importlib import resources
 from typing import Any
 
 from brake_sim_ros.errors import BrakeSimError, ScenarioError
-from brake_sim_ros.model import conditions as operating
+from brake_sim_ros.fleet import conditions as operating
+from brake_sim_ros.fleet.scatter import (
+    NOMINAL_UNIT,
+    UnitValue,
+    unit_parameters,
+    unit_sensors,
+    unit_values,
+)
 from brake_sim_ros.model.actuation import (
     NOMINAL_PEAK_ACTUATION_N,
     Actuation,
@@ -60,26 +67,19 @@ from brake_sim_ros.model.defects import (
 )
 from brake_sim_ros.model.fidelity import ACCURACY_PRESETS, LEVEL_BY_NAME, OUTPUTS, Needs, plan
 from brake_sim_ros.model.parameters import PARAMETER_GROUPS, BrakeParameters
-from brake_sim_ros.model.sensors import (
+from brake_sim_ros.model.run_setup import BrakeSetup
+from brake_sim_ros.model.thermal import LIMITS as THERMAL_LIMITS
+from brake_sim_ros.model.thermal import Thermal
+from brake_sim_ros.model.vehicle import DRIVE_LIMITS as VEHICLE_DRIVE_LIMITS
+from brake_sim_ros.model.vehicle import LIMITS as VEHICLE_LIMITS
+from brake_sim_ros.model.vehicle import LOAD_FACTOR_RANGE, Vehicle
+from brake_sim_ros.scenarios.sensors import parse_sensors
+from brake_sim_ros.sensing.sensors import (
     DEFAULT_PISTON_DIAMETER_M,
     PA_PER_BAR,
     SensorSet,
     default_sensor_set,
 )
-from brake_sim_ros.model.thermal import LIMITS as THERMAL_LIMITS
-from brake_sim_ros.model.thermal import Thermal
-from brake_sim_ros.model.trajectory import BrakeSetup
-from brake_sim_ros.model.units import (
-    NOMINAL_UNIT,
-    UnitValue,
-    unit_parameters,
-    unit_sensors,
-    unit_values,
-)
-from brake_sim_ros.model.vehicle import DRIVE_LIMITS as VEHICLE_DRIVE_LIMITS
-from brake_sim_ros.model.vehicle import LIMITS as VEHICLE_LIMITS
-from brake_sim_ros.model.vehicle import LOAD_FACTOR_RANGE, Vehicle
-from brake_sim_ros.scenarios.sensors import parse_sensors
 from brake_sim_ros.solvers.fixed_step import MIN_PHYSICS_STEP_S
 from brake_sim_ros.solvers.methods import FIXED_STEP_METHODS, SOLVER_METHODS
 from brake_sim_ros.solvers.presets import DEFAULT_PRESET, PRESETS
@@ -180,7 +180,7 @@ class Scenario:
     duration_s: float = 7.5
     seed: int = 0  # the run's: its sensor noise and its drawn [conditions]
     # which brake of a fleet; "nominal": the drawing's brake. ``setup.params`` and
-    # ``sensors`` are that unit's (model/units.py), drawn from the scenario's values (kept
+    # ``sensors`` are that unit's (fleet/scatter.py), drawn from the scenario's values (kept
     # in ``nominal_params`` / ``nominal_sensors``) with ``unit_id`` and ``fleet_seed``: a
     # unit is the same brake in every run, whatever the run's seed
     unit_id: str = NOMINAL_UNIT
@@ -193,7 +193,7 @@ class Scenario:
     sensors: SensorSet = field(default_factory=default_sensor_set)  # [structure], [[sensors]]
     nominal_params: BrakeParameters | None = None  # the scenario's own; None: setup.params
     nominal_sensors: SensorSet | None = None  # the scenario's own; None: sensors
-    # [conditions]: (name, low, high) ranges drawn per run from the seed (model/conditions.py),
+    # [conditions]: (name, low, high) ranges drawn per run from the seed (fleet/conditions.py),
     # and the values drawn for this run, (name, value), applied to setup
     condition_ranges: tuple[tuple[str, float, float], ...] = ()
     conditions: tuple[tuple[str, float], ...] = ()
@@ -245,10 +245,10 @@ class Scenario:
     ) -> Scenario:
         """This scenario as brake unit ``unit_id`` of the fleet ``fleet_seed``, run with
         ``seed`` (None keeps each): the scenario's own parameters and sensors with the
-        unit's manufacturing scatter (:mod:`brake_sim_ros.model.units`, drawn from the unit
+        unit's manufacturing scatter (:mod:`brake_sim_ros.fleet.scatter`, drawn from the unit
         id and the fleet seed: the same brake in every run); unit "nominal" is the
         scenario's brake itself. The run's seed draws its operating conditions from the
-        scenario's ``[conditions]`` ranges (:mod:`brake_sim_ros.model.conditions`),
+        scenario's ``[conditions]`` ranges (:mod:`brake_sim_ros.fleet.conditions`),
         applied to the scenario's own values before the unit's scatter, and seeds the
         sensor noise. Defects and model options are kept as they are.
 
@@ -685,7 +685,7 @@ _SEGMENT_KEYS: dict[str, tuple[set[str], set[str]]] = {
 
 def force_from_pressure_n(pressure_bar: float) -> float:
     """Force of one wheel-cylinder piston at ``pressure_bar``, N: the line-pressure
-    sensor's relation (model/sensors.py) inverted, on its default piston."""
+    sensor's relation (sensing/sensors.py) inverted, on its default piston."""
     return pressure_bar * PA_PER_BAR * math.pi * DEFAULT_PISTON_DIAMETER_M**2 / 4.0
 
 

@@ -1,7 +1,7 @@
 """The scenario's ``[structure]`` and ``[[sensors]]`` tables, loaded strictly.
 
-Absent tables give the defaults (:class:`~brake_sim_ros.model.structure.StructureParameters`,
-:func:`~brake_sim_ros.model.sensors.default_channels`); ``sensors = []`` measures nothing.
+Absent tables give the defaults (:class:`~brake_sim_ros.sensing.structure.StructureParameters`,
+:func:`~brake_sim_ros.sensing.sensors.default_channels`); ``sensors = []`` measures nothing.
 An unknown key, a wrong type or a value out of range is an error naming the file, the table
 and key, the value and what is allowed, like the rest of the loader (whose checker, ``ctx``,
 this module uses). Example::
@@ -20,14 +20,14 @@ this module uses). Example::
     [[sensors]]                        # optional; the list replaces the default set
     name = "plate_x"
     kind = "accelerometer"             # accelerometer, load_pin, line_pressure, wheel_speed
-    preset = "adxl1002_class"          # the kind's presets (model/sensors.py); then overrides:
+    preset = "adxl1002_class"          # the kind's presets (sensing/sensors.py); then overrides:
     location = "backing_plate"         # a mount, a side, "wheel_cylinder" or "tone_ring"
     axis = "x"
     # rate_hz, sensitivity_ratio, noise_density_per_sqrt_hz, bandwidth_hz, resonance_hz,
     # resonance_damping_ratio, range_min, range_max, adc_bits, antialias_fraction,
     # tone_ring_teeth, piston_diameter_m  (0 for bandwidth_hz, resonance_hz, adc_bits,
     # antialias_fraction: none)
-    [[sensors.faults]]                 # faults of the sensor above (model/sensor_faults.py)
+    [[sensors.faults]]                 # faults of the sensor above (sensing/faults.py)
     kind = "bias_drift"
     onset_s = 2.0
     size = 0.5
@@ -41,8 +41,8 @@ import math
 from typing import Any, Protocol
 
 from brake_sim_ros.errors import BrakeSimError, ScenarioError
-from brake_sim_ros.model.sensor_faults import FAULT_KINDS, SensorFault
-from brake_sim_ros.model.sensors import (
+from brake_sim_ros.sensing.faults import FAULT_KINDS, SensorFault
+from brake_sim_ros.sensing.sensors import (
     DEFAULT_PRESET,
     KINDS,
     TRANSDUCER_PRESETS,
@@ -51,7 +51,7 @@ from brake_sim_ros.model.sensors import (
     Transducer,
     default_channels,
 )
-from brake_sim_ros.model.structure import AXES, Mode, StructureParameters
+from brake_sim_ros.sensing.structure import AXES, Mode, StructureParameters
 
 
 class Checker(Protocol):

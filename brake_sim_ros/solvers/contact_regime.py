@@ -14,7 +14,7 @@ from brake_sim_ros.model import quasi_static as Q
 from brake_sim_ros.model.assembly import indentation_at, pack
 from brake_sim_ros.model.catalogue import KIND_BY_NAME
 from brake_sim_ros.model.fidelity import DEFECT_LEVELS, GROWTH_LEVELS, levels_representing
-from brake_sim_ros.model.trajectory import BrakeSetup, SampleBlock
+from brake_sim_ros.model.run_setup import BrakeSetup, SampleBlock
 
 SAMPLE_COLUMNS: tuple[str, ...] = (*L.COLUMNS, "braking_torque_n_m")
 # Macro step of the contact-regime model. With the torsional coupling: this many steps per

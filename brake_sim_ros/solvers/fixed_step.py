@@ -43,8 +43,8 @@ from brake_sim_ros.model import layout as L
 from brake_sim_ros.model.actuation import MAX_ACTUATION_FORCE_N
 from brake_sim_ros.model.assembly import initial_state, pack
 from brake_sim_ros.model.cycle import LiveDrive, pack_drive, pack_live_drive, torque_refusal
+from brake_sim_ros.model.run_setup import BrakeSetup, SampleBlock
 from brake_sim_ros.model.thermal import pack_thermal
-from brake_sim_ros.model.trajectory import BrakeSetup, SampleBlock
 from brake_sim_ros.solvers.stability import StepLimit, step_limit
 
 # A shoe counts as riding on the drum after this long in unbroken contact; a shoe out of

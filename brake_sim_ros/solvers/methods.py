@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from brake_sim_ros.model.trajectory import BrakeSetup, SampleBlock
+from brake_sim_ros.model.run_setup import BrakeSetup, SampleBlock
 from brake_sim_ros.solvers.contact_regime import run_contact_regime
 from brake_sim_ros.solvers.fixed_step import FIXED_STEP_SCHEMES, FixedStepStepper
 from brake_sim_ros.solvers.reference import run_reference

@@ -23,8 +23,8 @@ from brake_sim_ros.model import kernel, standstill
 from brake_sim_ros.model import layout as L
 from brake_sim_ros.model.assembly import indentation_at, initial_state, pack
 from brake_sim_ros.model.layout import SIDES
+from brake_sim_ros.model.run_setup import BrakeSetup, SampleBlock
 from brake_sim_ros.model.thermal import pack_thermal
-from brake_sim_ros.model.trajectory import BrakeSetup, SampleBlock
 
 SHOE_BASES = (L.P_SHOE_BASE, L.P_SHOE_BASE + L.SHOE_STRIDE)
 # A shoe in contact is declared separated only once the lining is this far off the drum.

@@ -40,7 +40,7 @@ def is_compiled() -> bool:
 
 def _compile_stepping() -> None:
     """The fixed-step kernel, every scheme: the longest compile by far."""
-    from brake_sim_ros.model.trajectory import BrakeSetup
+    from brake_sim_ros.model.run_setup import BrakeSetup
     from brake_sim_ros.solvers.fixed_step import FIXED_STEP_SCHEMES, FixedStepStepper
 
     setup = BrakeSetup()
@@ -54,8 +54,8 @@ def _compile_the_rest() -> None:
     import numpy as np
 
     from brake_sim_ros.model.layout import COLUMNS
-    from brake_sim_ros.model.sensors import SensorBank, default_sensor_set
-    from brake_sim_ros.model.trajectory import BrakeSetup, SampleBlock
+    from brake_sim_ros.model.run_setup import BrakeSetup, SampleBlock
+    from brake_sim_ros.sensing.sensors import SensorBank, default_sensor_set
     from brake_sim_ros.solvers.contact_regime import run_contact_regime
     from brake_sim_ros.solvers.reference import run_reference
 

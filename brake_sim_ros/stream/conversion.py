@@ -32,8 +32,8 @@ from std_msgs.msg import Header
 from brake_sim_ros.analysis import contact_events
 from brake_sim_ros.analysis.onsets import in_contact
 from brake_sim_ros.model.defects import Defects
-from brake_sim_ros.model.sensors import SensorBank, SensorFrame
-from brake_sim_ros.model.trajectory import SampleBlock
+from brake_sim_ros.model.run_setup import SampleBlock
+from brake_sim_ros.sensing.sensors import SensorBank, SensorFrame
 
 FRAME_ID = "brake_backing_plate"
 JOINT_NAMES = ("flywheel", "drum", "left_shoe", "right_shoe")
@@ -286,7 +286,7 @@ def defect_state(
         run_id: the run's id (:func:`new_run_id`, or the node's ``run_id`` parameter).
         seed: the run's seed.
         unit_id: the brake unit's id (the scenario's ``unit_id``; "nominal" for the
-            drawing's brake, :mod:`brake_sim_ros.model.units`).
+            drawing's brake, :mod:`brake_sim_ros.fleet.scatter`).
         time_s: the simulated time of the severities, s (the sample's; default ``ns``).
         wear_m: the linings' wear the model recorded at that sample, m, by shoe
             (:func:`~brake_sim_ros.stream.ground_truth.recorded_wear`): the severity of a

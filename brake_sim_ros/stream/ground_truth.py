@@ -27,7 +27,7 @@ import numpy as np
 from brake_sim_ros.model.catalogue import KINDS
 from brake_sim_ros.model.defects import Defects
 from brake_sim_ros.model.layout import N_STATE_WEAR, SIDES, Y_LEFT_WEAR
-from brake_sim_ros.model.trajectory import SampleBlock
+from brake_sim_ros.model.run_setup import SampleBlock
 
 PUBLISH_FRACTION = 0.05  # of the kind's service limit
 PUBLISH_PERIOD_S = 1.0  # longest silence while a severity changes, simulated s

@@ -45,7 +45,7 @@ from brake_sim_ros.model.defects import (
 )
 from brake_sim_ros.model.layout import SIDES
 from brake_sim_ros.model.parameters import PARAMETER_GROUPS, BrakeParameters, unit_of
-from brake_sim_ros.model.trajectory import BrakeSetup
+from brake_sim_ros.model.run_setup import BrakeSetup
 from brake_sim_ros.model.vehicle import DRIVE_LIMITS, Vehicle
 from brake_sim_ros.stream import run_parameters
 from brake_sim_ros.stream.run_parameters import (  # noqa: F401 (re-exported)

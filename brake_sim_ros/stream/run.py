@@ -17,7 +17,7 @@ from brake_sim_ros.analysis.impacts import EventMetrics, contact_only_metrics, s
 from brake_sim_ros.errors import FidelityError
 from brake_sim_ros.model.assembly import SIDES, ModelOptions
 from brake_sim_ros.model.fidelity import Plan, plan
-from brake_sim_ros.model.trajectory import BrakeSetup, SampleBlock
+from brake_sim_ros.model.run_setup import BrakeSetup, SampleBlock
 from brake_sim_ros.scenarios.loader import Scenario
 from brake_sim_ros.solvers.methods import METHODS, MethodOptions
 

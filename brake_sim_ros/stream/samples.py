@@ -14,8 +14,8 @@ from collections.abc import Iterable, Iterator, Sequence
 from typing import Any, Protocol
 
 from brake_sim_ros.analysis.contact_events import ContactEventDetector
-from brake_sim_ros.model.sensors import SensorBank
-from brake_sim_ros.model.trajectory import SampleBlock
+from brake_sim_ros.model.run_setup import SampleBlock
+from brake_sim_ros.sensing.sensors import SensorBank
 from brake_sim_ros.stream import conversion
 from brake_sim_ros.stream.topics import (
     CLOCK,

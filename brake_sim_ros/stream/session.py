@@ -26,9 +26,9 @@ from brake_sim_ros import stream
 from brake_sim_ros.analysis.contact_events import ContactEventDetector
 from brake_sim_ros.errors import BrakeSimError, ParameterError, SimulationError
 from brake_sim_ros.model.cycle import LiveDrive
-from brake_sim_ros.model.sensors import SensorBank
-from brake_sim_ros.model.trajectory import BrakeSetup, SampleBlock
+from brake_sim_ros.model.run_setup import BrakeSetup, SampleBlock
 from brake_sim_ros.scenarios import Scenario
+from brake_sim_ros.sensing.sensors import SensorBank
 from brake_sim_ros.solvers.fixed_step import FixedStepStepper
 from brake_sim_ros.solvers.realtime import check_chunk_work
 from brake_sim_ros.stream import conversion, run_parameters

@@ -26,7 +26,7 @@ import time
 import numpy as np
 
 from brake_sim_ros.analysis.energy import energy_balance
-from brake_sim_ros.model.trajectory import SampleBlock
+from brake_sim_ros.model.run_setup import SampleBlock
 from brake_sim_ros.scenarios import load_scenario, parse_scenario
 from brake_sim_ros.stream.build import sensor_bank_for, stepper_for
 

@@ -18,7 +18,7 @@ import numpy as np
 from brake_sim_ros.analysis.orders import order_amplitude
 from brake_sim_ros.model.defects import Defects, DrumDefect
 from brake_sim_ros.model.layout import SIDES
-from brake_sim_ros.model.trajectory import BrakeSetup
+from brake_sim_ros.model.run_setup import BrakeSetup
 from brake_sim_ros.solvers.fixed_step import FixedStepStepper
 
 SEVERITIES_UM = (0.0, 10.0, 25.0, 50.0, 100.0, 150.0)

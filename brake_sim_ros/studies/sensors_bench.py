@@ -27,10 +27,10 @@ from __future__ import annotations
 import argparse
 
 from brake_sim_ros.analysis import measured_features as mf
-from brake_sim_ros.model.sensors import SensorBank
-from brake_sim_ros.model.structure import Structure
-from brake_sim_ros.model.trajectory import SampleBlock
+from brake_sim_ros.model.run_setup import SampleBlock
 from brake_sim_ros.scenarios import builtin_names, load_scenario
+from brake_sim_ros.sensing.sensors import SensorBank
+from brake_sim_ros.sensing.structure import Structure
 from brake_sim_ros.stream.run import run_scenario
 from brake_sim_ros.studies.core_bench import _best_cpu
 

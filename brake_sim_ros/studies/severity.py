@@ -43,9 +43,9 @@ from brake_sim_ros.model import catalogue
 from brake_sim_ros.model.catalogue import DefectKind
 from brake_sim_ros.model.defects import Defects
 from brake_sim_ros.model.layout import SIDES
-from brake_sim_ros.model.sensors import SensorBank, SensorSet
 from brake_sim_ros.recording.output import check_output, replace_output
 from brake_sim_ros.scenarios import load_scenario
+from brake_sim_ros.sensing.sensors import SensorBank, SensorSet
 from brake_sim_ros.stream.run import run_scenario
 
 STEPS = (0.0, 0.2, 0.4, 0.6, 0.8, 1.0)  # fractions of the service limit

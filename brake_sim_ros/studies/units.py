@@ -4,7 +4,7 @@
 scenario (default the published event, fast preset) for units ``unit-0000`` ... of one
 seed and prints mean, standard deviation, minimum and maximum of the stop time and of the
 leading (left) shoe's first-impact peak pivot force, beside what a linear model of the
-scatter predicts: each parameter of :data:`~brake_sim_ros.model.units.SCATTER` moved by one
+scatter predicts: each parameter of :data:`~brake_sim_ros.fleet.scatter.SCATTER` moved by one
 standard deviation alone, the predicted standard deviation the root sum of squares of the
 effects times each truncated distribution's standard deviation over its sigma.
 """
@@ -19,7 +19,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from brake_sim_ros.model.units import NOMINAL_UNIT, SCATTER, Scatter, with_deviations
+from brake_sim_ros.fleet.scatter import NOMINAL_UNIT, SCATTER, Scatter, with_deviations
 from brake_sim_ros.scenarios import Scenario, load_scenario
 from brake_sim_ros.stream.run import run_scenario
 

@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 import rerun as rr
 
-from brake_sim_ros.model.sensor_faults import FAULT_BIT
+from brake_sim_ros.sensing.faults import FAULT_BIT
 from brake_sim_ros.viz import entities as E
 from brake_sim_ros.viz.series import envelope_positions
 from brake_sim_ros.viz.timeline import NS_PER_S, log_event, send_scalar_columns, stamp_ns

@@ -167,7 +167,7 @@ def test_regime_constants():
 
 
 def test_measured_fault_bits_are_the_core_s():
-    from brake_sim_ros.model.sensor_faults import FAULT_BIT
+    from brake_sim_ros.sensing.faults import FAULT_BIT
 
     assert {k: getattr(MeasuredChunk, f"FAULT_{k.upper()}") for k in FAULT_BIT} == FAULT_BIT
 

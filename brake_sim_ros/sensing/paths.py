@@ -1,7 +1,7 @@
 """The sensors' per-sample loops, compiled: one call per channel and block.
 
 The rules are those of :mod:`.sensors` (the analog signal path, the tone ring) and
-:mod:`.sensor_faults` (what each fault kind does, its label bit); this module is where
+:mod:`.faults` (what each fault kind does, its label bit); this module is where
 they are carried out, sample by sample, so that a live node pays one compiled call per
 channel and block instead of dozens of small array operations. Carried state lives in
 small arrays the caller keeps between blocks (:class:`PathState`), so a stream in blocks
@@ -9,7 +9,7 @@ gives the same bits as one block: every sample goes through the same operations 
 same order whatever the block boundaries.
 
 Faults come as a table (:func:`fault_table`): per fault its kind code (index in
-``sensor_faults.FAULT_KINDS``), onset, end (onset + duration) and size, all in seconds
+``faults.FAULT_KINDS``), onset, end (onset + duration) and size, all in seconds
 of simulated time and the channel's unit. A fault is active at ``t`` when
 ``onset <= t < end``.
 """
@@ -21,9 +21,9 @@ import math
 import numpy as np
 from numba import njit
 
-from brake_sim_ros.model import sensor_faults as sf
 from brake_sim_ros.model.compiled import JIT
-from brake_sim_ros.model.lti import SampledLti, transposed
+from brake_sim_ros.sensing import faults as sf
+from brake_sim_ros.sensing.lti import SampledLti, transposed
 
 KIND_CODE: dict[str, int] = {kind: i for i, kind in enumerate(sf.FAULT_KINDS)}
 BIAS_DRIFT, GAIN_ERROR, DROPOUT, STUCK, SATURATION, LOOSE_MOUNT = (
@@ -103,7 +103,7 @@ def _hold(value, stuck, dropped, hold):  # pragma: no cover - compiled
 @njit(inline="always", **JIT)
 def _faults_at(t, f_kind, f_onset, f_end, f_size):  # pragma: no cover - compiled
     """What the active faults do at time ``t``: (label bits, gain factor, bias, saturation
-    limit, loose mount 0/1, stuck, dropped) (``sensor_faults`` module docstring)."""
+    limit, loose mount 0/1, stuck, dropped) (``faults`` module docstring)."""
     gain = 1.0
     bias = 0.0
     limit = np.inf

@@ -56,7 +56,7 @@ from scipy import special
 
 from brake_sim_ros.errors import ParameterError
 from brake_sim_ros.model.parameters import BrakeParameters, unit_of
-from brake_sim_ros.model.sensors import IDEAL, SensorChannel, SensorSet
+from brake_sim_ros.sensing.sensors import IDEAL, SensorChannel, SensorSet
 
 NOMINAL_UNIT = "nominal"  # the drawing's brake: no scatter
 

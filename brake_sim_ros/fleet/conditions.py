@@ -2,7 +2,7 @@
 
 A scenario may give, in ``[conditions]``, a range ``[low, high]`` for any of the
 conditions in :data:`CONDITIONS`; each run draws each uniformly within its range from its
-seed (its own generator: :func:`~brake_sim_ros.model.units.keyed_uniform` of the seed,
+seed (its own generator: :func:`~brake_sim_ros.fleet.scatter.keyed_uniform` of the seed,
 ``brake_sim_ros operating conditions`` and the condition's name, so a condition's draw
 does not depend on which others the scenario gives). A condition without a range keeps the
 scenario's value. What each one sets:
@@ -43,10 +43,10 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 
 from brake_sim_ros.errors import ParameterError
+from brake_sim_ros.fleet.scatter import keyed_uniform
 from brake_sim_ros.model.actuation import MAX_ACTUATION_FORCE_N, Actuation, ForceProfile
+from brake_sim_ros.model.run_setup import BrakeSetup
 from brake_sim_ros.model.thermal import FADE
-from brake_sim_ros.model.trajectory import BrakeSetup
-from brake_sim_ros.model.units import keyed_uniform
 from brake_sim_ros.model.vehicle import LOAD_FACTOR_RANGE
 
 DOMAIN = "brake_sim_ros operating conditions"

@@ -305,7 +305,7 @@ def size_token(n: int) -> tuple[int, ...]:
 
 def transposed(*matrices: np.ndarray) -> tuple[np.ndarray, ...]:
     """Each matrix transposed on its last two axes, C-contiguous: the layout
-    :func:`lti_advance` and :func:`brake_sim_ros.model.sensor_paths.analog_advance` read."""
+    :func:`lti_advance` and :func:`brake_sim_ros.sensing.paths.analog_advance` read."""
     return tuple(np.ascontiguousarray(np.swapaxes(m, -1, -2)) for m in matrices)
 
 

@@ -86,11 +86,12 @@ import numpy as np
 from scipy import signal
 
 from brake_sim_ros.errors import ParameterError
-from brake_sim_ros.model import sensor_faults as sf
 from brake_sim_ros.model.layout import SIDES
-from brake_sim_ros.model.lti import SampledLti, foh_discretise, size_token, with_input_noise
-from brake_sim_ros.model.sensor_faults import SensorFault
-from brake_sim_ros.model.sensor_paths import (
+from brake_sim_ros.model.run_setup import SampleBlock
+from brake_sim_ros.sensing import faults as sf
+from brake_sim_ros.sensing.faults import SensorFault
+from brake_sim_ros.sensing.lti import SampledLti, foh_discretise, size_token, with_input_noise
+from brake_sim_ros.sensing.paths import (
     PathState,
     analog_advance,
     fault_table,
@@ -100,14 +101,13 @@ from brake_sim_ros.model.sensor_paths import (
     tone_ring_advance,
     unit_equilibria,
 )
-from brake_sim_ros.model.structure import (
+from brake_sim_ros.sensing.structure import (
     AXES,
     FORCE_COLUMNS,
     Structure,
     StructureParameters,
     acceleration_output,
 )
-from brake_sim_ros.model.trajectory import SampleBlock
 
 STANDARD_GRAVITY_M_S2 = 9.80665
 KINDS: tuple[str, ...] = ("accelerometer", "load_pin", "line_pressure", "wheel_speed")
@@ -445,7 +445,7 @@ class ChannelSamples:
         name, unit: the series' name and unit.
         time_s: sample times (simulated), s, shape (k,).
         values: measured values, shape (k,); NaN where the channel dropped out.
-        fault_label: per-sample OR of ``sensor_faults.FAULT_BIT`` (0: healthy), uint8.
+        fault_label: per-sample OR of ``faults.FAULT_BIT`` (0: healthy), uint8.
     """
 
     name: str
@@ -497,7 +497,7 @@ class SensorFrame:
 class AnalogPath:
     """The analog signal path of one channel (module docstring) with its carried state:
     the dynamics' state, the noise generator, the stuck-value hold. The per-sample work is
-    one compiled call (:func:`.sensor_paths.analog_advance`)."""
+    one compiled call (:func:`.paths.analog_advance`)."""
 
     def __init__(
         self, channel: SensorChannel, sample_period_s: float, seed: int, decimation: int = 1
@@ -537,7 +537,7 @@ class AnalogPath:
         return self.measure(time_s, true)[0]
 
     def measure(self, time_s: np.ndarray, true: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Measured values and per-sample fault labels (``sensor_faults.FAULT_BIT``) for
+        """Measured values and per-sample fault labels (``faults.FAULT_BIT``) for
         the true values ``true`` (channel unit) at ``time_s``."""
         ch, t, state = self.channel, self.channel.transducer, self.state
         k = time_s.shape[0]

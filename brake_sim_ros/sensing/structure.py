@@ -44,8 +44,8 @@ import numpy as np
 
 from brake_sim_ros.errors import ParameterError
 from brake_sim_ros.model.layout import SIDES
-from brake_sim_ros.model.lti import LtiState, SampledLti, foh_discretise
-from brake_sim_ros.model.trajectory import SampleBlock
+from brake_sim_ros.model.run_setup import SampleBlock
+from brake_sim_ros.sensing.lti import LtiState, SampledLti, foh_discretise
 
 AXES = ("x", "y")
 # the load, in input order: the pivot forces (frame brake_backing_plate), sign-flipped

@@ -23,7 +23,7 @@ Kinds, and what ``size`` means:
   with a mounted resonance only.
 
 This module holds what a fault is; the per-sample loops that apply faults and labels are
-compiled with the signal paths in :mod:`.sensor_paths`.
+compiled with the signal paths in :mod:`.paths`.
 """
 
 from __future__ import annotations

@@ -26,7 +26,7 @@ class BrakeSetup:
     vehicle. ``thermal``: the brake's temperature as a state, heated by friction and acting
     on it through the fade law (model/thermal.py); None: the brake is held at
     ``held_temperature_c`` (deg C; the run's conditions set it, and with it the friction,
-    model/conditions.py), which is recorded.
+    fleet/conditions.py), which is recorded.
     """
 
     params: BrakeParameters = field(default_factory=BrakeParameters)
