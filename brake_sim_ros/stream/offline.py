@@ -81,7 +81,9 @@ def offline_messages(
             Give the node's to reproduce its stream byte for byte.
         changes: parameter changes (run or model parameters) at their samples, in
             order, applied as a node applies them (:meth:`RunSession.apply`); a chunk
-            ends where a change takes effect, as a node's does.
+            ends where a change takes effect, as a node's does. The run still ends at
+            ``duration_s`` (a change of ``duration_s`` or ``continuous`` is recorded
+            and kept in the session's settings, not followed).
         session: the session to drive (default :func:`offline_session` of the above).
 
     Raises:
