@@ -20,6 +20,7 @@ import numpy as np
 
 from brake_sim_ros import __version__
 from brake_sim_ros.errors import BrakeSimError
+from brake_sim_ros.identifiers import IDENTIFIER_RULE
 from brake_sim_ros.model.layout import SIDES
 from brake_sim_ros.solvers.methods import METHODS, SOLVER_METHODS
 from brake_sim_ros.solvers.presets import PRESETS
@@ -1040,7 +1041,7 @@ def build_parser() -> argparse.ArgumentParser:
         " from its id and the fleet seed (the same brake in every run); 'nominal' is the"
         " scenario's brake itself. The run's seed draws the scenario's [conditions].",
     )
-    p.add_argument("unit_id", help="the unit's id: 1 to 64 of A-Z a-z 0-9 _ . -, or nominal")
+    p.add_argument("unit_id", help=f"the unit's id: {IDENTIFIER_RULE}; or nominal")
     p.add_argument(
         "--fleet-seed",
         type=int,

@@ -7,14 +7,14 @@ import math
 import numpy as np
 import pytest
 
-from brake_sim_ros.ros.commands import (
+from brake_sim_ros.scenarios import load_scenario
+from brake_sim_ros.stream.build import stepper_for
+from brake_sim_ros.stream.commands import (
     ActuationPlanner,
     CommandPolicy,
     TimeoutBehaviour,
     check_command,
 )
-from brake_sim_ros.scenarios import load_scenario
-from brake_sim_ros.stream.build import stepper_for
 
 DT = 4e-5
 TIMEOUT_STEPS = 5000  # 0.2 s

@@ -164,7 +164,7 @@ def test_pure_ros_modules_do_not_import_rclpy():
     import sys
 
     code = (
-        "import sys, brake_sim_ros.ros, brake_sim_ros.ros.pacing, brake_sim_ros.ros.commands,"
+        "import sys, brake_sim_ros.ros, brake_sim_ros.ros.pacing, brake_sim_ros.stream.commands,"
         " brake_sim_ros.stream.parameters\n"
         "try:\n    import brake_sim_ros.stream.conversion, brake_sim_ros.ros.diagnostics\n"
         "except ImportError:\n    pass  # message packages not installed\n"

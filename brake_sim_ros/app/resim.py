@@ -8,9 +8,9 @@ at (:meth:`brake_sim_ros.ros.node.BrakeSimNode._record_command`), and every para
 change the node accepted while it ran (``brake_sim_parameter_change`` records, at their
 samples). :func:`resimulate` rebuilds the run from the recording alone (no other file is
 read), steps it offline with the same commands and changes at the same samples through
-the node's own rules (the command timeout of
-:class:`~brake_sim_ros.ros.commands.ActuationPlanner`, the stepper's live drive,
-:func:`~brake_sim_ros.stream.parameters.changed_setup`), cut into the recording's own
+the node's own run session (:class:`~brake_sim_ros.stream.session.RunSession`: the
+command timeout, the live drive, a change of any run parameter of the table
+:mod:`~brake_sim_ros.stream.run_parameters` or of the model), cut into the recording's own
 chunks, and writes the node's stream (minus /diagnostics) to a new MCAP file with the same
 metadata (``brake_sim_run`` mode ``resim``). With the same preset, the samples equal the
 recording's bit for bit; the recorded samples are compared as they are re-simulated and
@@ -20,7 +20,8 @@ What it refuses, in one line, leaving nothing written: a file the checked reader
 refuses (missing, not MCAP, damaged: :func:`~brake_sim_ros.recording.reader.
 open_recording`), a recording without the simulator's metadata, one of several runs (a
 ``~/reset``), a command not stamped at a sample, a parameter change it does not
-re-simulate, a scenario or model the core refuses.
+re-simulate (one of a run parameter fixed at start, which a node refuses, or of an
+unknown name), a scenario or model the core refuses.
 The output follows :mod:`brake_sim_ros.recording.output` (never an input, never through a
 link, written whole or not at all).
 """
@@ -38,27 +39,20 @@ from typing import Any
 import numpy as np
 
 from brake_sim_ros import stream
-from brake_sim_ros.analysis.contact_events import ContactEventDetector
-from brake_sim_ros.errors import BrakeSimError
+from brake_sim_ros.errors import BrakeSimError, SimulationError
 from brake_sim_ros.model.run_setup import SampleBlock
 from brake_sim_ros.recording import cdr, metadata
 from brake_sim_ros.recording.mcap_format import describe_path
 from brake_sim_ros.recording.output import atomic_output, check_outputs
 from brake_sim_ros.recording.reader import Recording, open_recording
 from brake_sim_ros.recording.writer import McapRecorder, RecordingOptions
-from brake_sim_ros.ros.commands import (
-    ActuationPlanner,
-    CommandPolicy,
-    TimeoutBehaviour,
-    drive_command,
-)
 from brake_sim_ros.scenarios import Scenario
 from brake_sim_ros.scenarios.loader import parse_scenario
-from brake_sim_ros.solvers.fixed_step import FixedStepStepper
-from brake_sim_ros.stream import Topic, conversion
-from brake_sim_ros.stream import parameters as ros_params
-from brake_sim_ros.stream.build import require_measured, sensor_bank_for, stepper_for
-from brake_sim_ros.stream.ground_truth import TruthUpdates, recorded_wear, state_wear
+from brake_sim_ros.stream import Topic, conversion, run_parameters
+from brake_sim_ros.stream.build import require_measured
+from brake_sim_ros.stream.commands import drive_command
+from brake_sim_ros.stream.run_parameters import Change
+from brake_sim_ros.stream.session import RunSession
 
 _PIVOT = stream.PIVOT_FORCES.type_name
 _ACTUATION = stream.ACTUATION.type_name
@@ -98,10 +92,9 @@ class RecordedRun:
     Attributes:
         scenario: the scenario from the recorded text, as the recorded unit and seed.
         setup_values: the recorded model (flat ROS values), for a live run.
-        drive_limits: the live drive's settings in force (``brake_sim_run``), or {}.
+        start: the run parameters at the start (:func:`.run_parameters.start_values`).
         run: the ``brake_sim_run`` record; ``records``: the scenario, unit, run, model
             and (live) ROS parameter records, as read.
-        policy: the command timeout policy (the node's parameters at the start).
         chunks: ``(first sample, samples)`` of every recorded PivotForceChunk, in order,
             contiguous from sample 0.
         commands: the recorded commands in log-time order (file order within a time).
@@ -114,10 +107,9 @@ class RecordedRun:
 
     scenario: Scenario
     setup_values: dict[str, Any] | None
-    drive_limits: dict[str, float]
+    start: dict[str, Any]
     run: dict[str, str]
     records: dict[str, dict[str, str]]
-    policy: CommandPolicy
     chunks: list[tuple[int, int]] = field(default_factory=list)
     commands: list[RecordedCommand] = field(default_factory=list)
     changes: list[RecordedChange] = field(default_factory=list)
@@ -147,36 +139,25 @@ def _run_value(run: dict[str, str], key: str, name: str, kinds: tuple[type, ...]
     return value
 
 
-def _policy(parameters: dict[str, str] | None, name: str) -> CommandPolicy:
-    """The node's command timeout policy at the start (its defaults for an offline run)."""
-    if parameters is None:
-        return CommandPolicy()
-    values = {}
-    for key in ("command_timeout_s", "on_command_timeout", "command_ramp_rate_n_per_s"):
-        if key not in parameters:
-            raise ResimError(f"{name}: its {metadata.ROS_PARAMETERS} record has no {key!r}")
-        values[key] = _literal(parameters[key], f"{name}: parameter {key}")
+def _start_values(records: dict[str, dict[str, str]], name: str) -> dict[str, Any]:
+    """The run parameters at the start (:func:`.run_parameters.start_values`): the run
+    record's (strings as they are, the rest Python literals), a live node's parameters."""
+    table = run_parameters.by_name()
+    run = {
+        k: v if isinstance(table[k].default, str) else _literal(v, f"{name}: {metadata.RUN} {k}")
+        for k, v in records[metadata.RUN].items()
+        if k in table
+    }
+    recorded = records.get(metadata.ROS_PARAMETERS)
+    parameters = None
+    if recorded is not None:
+        parameters = {
+            k: _literal(v, f"{name}: parameter {k}") for k, v in recorded.items() if k in table
+        }
     try:
-        return _command_policy(values)
-    except ValueError as exc:
-        raise ResimError(f"{name}: recorded {exc}") from None
-
-
-def _command_policy(values: dict[str, Any]) -> CommandPolicy:
-    """The command timeout policy of the node's parameter values (by name, as recorded).
-
-    Raises:
-        ValueError: a value of the wrong type, or one the policy refuses (one line).
-    """
-    for key in ("command_timeout_s", "command_ramp_rate_n_per_s"):
-        value = values[key]
-        if isinstance(value, bool) or not isinstance(value, int | float):
-            raise ValueError(f"{key}={value!r}: allowed a number")
-    return CommandPolicy(
-        timeout_s=float(values["command_timeout_s"]),
-        behaviour=TimeoutBehaviour.parse(str(values["on_command_timeout"])),
-        ramp_rate_n_per_s=float(values["command_ramp_rate_n_per_s"]),
-    )
+        return run_parameters.start_values(run, parameters, name)
+    except BrakeSimError as exc:
+        raise ResimError(str(exc)) from None
 
 
 def _scenario(records: dict[str, dict[str, str]], name: str) -> Scenario:
@@ -240,11 +221,6 @@ def read_run(recording: Recording) -> RecordedRun:
     if _run_value(run, "sample_period_s", name, (float,)) != period:
         raise ResimError(f"{name}: the recorded sample period differs from its scenario's")
     run_id = run.get("run_id", "")
-    drive_limits = {
-        key: float(_run_value(run, key, name, (float, int)))
-        for key in ros_params.DRIVE_LIMIT_NAMES
-        if key in run
-    }
     setup_values = None
     if mode == "live":  # the node's model: its parameters at the start
         setup_values = {
@@ -254,10 +230,9 @@ def read_run(recording: Recording) -> RecordedRun:
     out = RecordedRun(
         scenario=scenario,
         setup_values=setup_values,
-        drive_limits=drive_limits,
+        start=_start_values(records, name),
         run=run,
         records=records,
-        policy=_policy(records.get(metadata.ROS_PARAMETERS), name),
         name=name,
         mode=mode,
     )
@@ -368,148 +343,58 @@ class Resimulation:
         )
 
 
-def _stepper(run: RecordedRun, scenario: Scenario) -> FixedStepStepper:
-    setup = scenario.setup
-    if run.setup_values is not None:
-        setup = ros_params.node_setup(setup, run.setup_values, run.drive_limits)
+def _change(session: RunSession, run: RecordedRun, change: RecordedChange) -> list:
+    """Apply a recorded parameter change through the session; refused in one line when a
+    node could not have made it (a run parameter fixed at start, an unknown name)."""
+    table = run_parameters.by_name()
+    for key in change.values:
+        if (key in table and table[key].changes is Change.ANY_TIME) or key in session.model:
+            continue
+        why = "fixed at start-up, a node refuses it" if key in table else "unknown"
+        raise ResimError(
+            f"{run.name}: parameter {key[:64]!r} set at sample {change.sample}: not"
+            f" re-simulated ({why}; allowed: the model's and the run parameters a node may"
+            " change while it runs)"
+        )
+    return session.apply(change.values)
+
+
+def _command(session: RunSession, command: RecordedCommand) -> tuple:
+    msg = command.msg
+    if command.topic.type_name == _ACTUATION:
+        session.planner.command((float(msg.left_force_n), float(msg.right_force_n)), command.sample)
+        topic = stream.ACTUATION
     else:
-        setup = ros_params.with_drive_limits(setup, run.drive_limits)
-    stepper = stepper_for(scenario, setup=setup)
-    stepper.advance(0)  # as the node's (loads the compiled kernel)
-    return stepper
+        drive, reason = drive_command(msg.mode, msg.drive_torque_n_m, msg.target_speed_m_s)
+        if drive is None:
+            raise ValueError(f"recorded drive command refused: {reason}")
+        session.drive(drive)
+        topic = stream.DRIVE
+    return topic, msg, command.log_time_ns  # the decoded message encodes as it was
 
 
-# parameters whose change leaves the samples and the stream as they were (pacing, the
-# end of the run, the chunking: resim cuts the recording's own chunks)
-_NEUTRAL = frozenset(
-    {"paused", "real_time_factor", "diagnostics_period_s", "chunk_rate_hz", "duration_s",
-     "continuous"}
-)  # fmt: skip
-_POLICY = ("command_timeout_s", "on_command_timeout", "command_ramp_rate_n_per_s")
-
-
-class _Replay:
-    """The node's run state re-simulated: the stepper, the command planner and the
-    settings changed while the node ran, each event applied as the node applied it."""
-
-    def __init__(self, run: RecordedRun, scenario: Scenario, stepper: FixedStepStepper) -> None:
-        self.run, self.scenario, self.stepper = run, scenario, stepper
-        self.period = stepper.sample_period_s
-        self.run_id = run.run.get("run_id", "")
-        defects = stepper.setup.defects
-        self.angles = (defects.left.initial_angle_deg, defects.right.initial_angle_deg)
-        self.publish_clock = bool(_run_value(run.run, "publish_clock", run.name, (bool,)))
-        self.stride = stream.samples_per(
-            float(_run_value(run.run, "state_rate_hz", run.name, (float, int))), self.period
-        )
-        self.policy = {
-            "command_timeout_s": run.policy.timeout_s,
-            "on_command_timeout": run.policy.behaviour.value,
-            "command_ramp_rate_n_per_s": run.policy.ramp_rate_n_per_s,
-        }
-        self.planner = ActuationPlanner(self.period, run.policy)
-        self.model = dict(run.setup_values or {})
-        self.updates = TruthUpdates(defects)
-
-    def truth(self, index: int, wear_m: dict[str, float] | None = None) -> tuple:
-        """The ground truth at ``index`` (DefectState), as the node publishes it."""
-        if wear_m is None:
-            wear_m = state_wear(self.stepper.state)
-        msg = conversion.defect_state(
-            scenario=self.scenario.name,
-            defects=self.stepper.setup.defects,
-            initial_angles_deg=self.angles,
-            ns=conversion.stamp_ns(index, self.period),
-            run_id=self.run_id,
-            seed=self.scenario.seed,
-            unit_id=self.scenario.unit_id,
-            time_s=index * self.period,
-            wear_m=wear_m,
-        )
-        return stream.DEFECTS, msg, conversion.stamp_ns(index, self.period)
-
-    def apply(self, event: RecordedCommand | RecordedChange) -> Iterator[tuple]:
-        """Apply one recorded event from its sample on; the messages it makes."""
-        try:
-            if isinstance(event, RecordedChange):
-                yield from self._change(event)
-            else:
-                yield self._command(event)
-        except ResimError:
-            raise
-        except (BrakeSimError, ValueError, TypeError, ArithmeticError) as exc:
-            raise ResimError(f"{self.run.name}: at sample {event.sample}: {exc}") from None
-
-    def _command(self, command: RecordedCommand) -> tuple:
-        msg = command.msg
-        if command.topic.type_name == _ACTUATION:
-            forces = (float(msg.left_force_n), float(msg.right_force_n))
-            self.planner.command(forces, command.sample)
-            topic = stream.ACTUATION
-        else:
-            drive, reason = drive_command(msg.mode, msg.drive_torque_n_m, msg.target_speed_m_s)
-            if drive is None:
-                raise ValueError(f"recorded drive command refused: {reason}")
-            self.stepper.drive(drive)
-            topic = stream.DRIVE
-        return topic, msg, command.log_time_ns  # the decoded message encodes as it was
-
-    def _change(self, change: RecordedChange) -> Iterator[tuple]:
-        model = {}
-        for name, value in change.values.items():
-            if name in _NEUTRAL:
-                continue
-            if name in _POLICY:
-                self.policy[name] = value
-            elif name == "state_rate_hz":
-                self.stride = stream.samples_per(float(value), self.period)
-            elif name == "publish_clock":
-                self.publish_clock = bool(value)
-            elif name in self.model:
-                model[name] = value
-            else:
-                raise ResimError(
-                    f"{self.run.name}: parameter {name[:64]!r} set at sample {change.sample}:"
-                    " not re-simulated (allowed: the model's, the command timeout's, the"
-                    " stream's and the pacing's)"
-                )
-        self.planner.policy = _command_policy(self.policy)
-        if model:
-            self.model.update(model)
-            setup = ros_params.changed_setup(self.stepper.setup, self.model)
-            self.stepper.replace_setup(setup)
-            message = self.truth(self.stepper.sample_index)
-            self.updates.published(
-                setup.defects,
-                self.stepper.sample_index * self.period,
-                state_wear(self.stepper.state),
-            )
-            yield message
+def _apply(session: RunSession, run: RecordedRun, event: RecordedCommand | RecordedChange) -> list:
+    """Apply one recorded event from its sample on; the messages it makes."""
+    try:
+        if isinstance(event, RecordedChange):
+            return _change(session, run, event)
+        return [_command(session, event)]
+    except ResimError:
+        raise
+    except (BrakeSimError, ValueError, TypeError, ArithmeticError) as exc:
+        raise ResimError(f"{run.name}: at sample {event.sample}: {exc}") from None
 
 
 def _messages(
     run: RecordedRun,
-    scenario: Scenario,
-    stepper: FixedStepStepper,
+    session: RunSession,
     *,
-    publish_measured: bool,
     recorded_chunks: Iterator[Any],
     comparison: Comparison,
 ) -> Iterator[tuple[Topic, Any, int]]:
     """The node's stream for ``run``: its commands and parameter changes applied at their
     samples, the samples cut into the recording's chunks."""
-    replay = _Replay(run, scenario, stepper)
-    period = replay.period
-    yield replay.truth(0)
-    replay.updates.published(stepper.setup.defects, 0.0, state_wear(stepper.state))
-    if replay.publish_clock:
-        yield stream.CLOCK, conversion.clock(0), 0
-    measured = None
-    if publish_measured:
-        rate = float(_run_value(run.run, "measured_rate_hz", run.name, (float, int)))
-        bank = sensor_bank_for(scenario, seed=scenario.seed)
-        measured = stream.MeasuredStream(bank, stream.samples_per(rate, period))
-    detector = ContactEventDetector()
+    yield from session.start()
     events: list[RecordedCommand | RecordedChange] = sorted(
         [*run.commands, *run.changes], key=lambda e: e.sample
     )
@@ -517,33 +402,24 @@ def _messages(
     for first, n in run.chunks:
         end = first + n
         blocks = []
-        while stepper.sample_index < end:
-            at = stepper.sample_index
+        while session.sample_index < end:
+            at = session.sample_index
             while k < len(events) and events[k].sample <= at:
-                yield from replay.apply(events[k])
+                yield from _apply(session, run, events[k])
                 k += 1
             stop = events[k].sample if k < len(events) else end
-            count = min(stop, end) - at
-            for steps, forces in replay.planner.segments(at, count):
-                blocks.append(stepper.advance(steps, actuation_n=forces))
+            try:
+                blocks.append(session.advance(min(stop, end) - at))
+            except SimulationError:
+                raise ResimError(
+                    f"non-finite or missing samples between samples {first} and {end}"
+                ) from None
         block = blocks[0] if len(blocks) == 1 else SampleBlock.concatenate(blocks)
-        if len(block) != n or not conversion.all_finite(block):
-            raise ResimError(f"non-finite or missing samples between samples {first} and {end}")
         comparison.check(next(recorded_chunks), block)
-        for row in replay.updates.due_rows(block.time_s, recorded_wear(block)):
-            yield replay.truth(block.first_index + row, recorded_wear(block, row))
-        yield from stream.block_messages(
-            block,
-            replay.stride,
-            with_clock=replay.publish_clock,
-            contact_events=detector,
-            run_id=replay.run_id,
-            measured=measured,
-        )
+        yield from session.messages(block)
     for event in events[k:]:  # after the last sample: recorded, nothing to step
-        yield from replay.apply(event)
-    if measured is not None:
-        yield from measured.flush()
+        yield from _apply(session, run, event)
+    yield from session.flush()
 
 
 def resimulate(
@@ -573,39 +449,24 @@ def resimulate(
         scenario = run.scenario
         if preset is not None:
             scenario = scenario.with_solver(preset=preset)
-        publish_measured = (
-            bool(_run_value(run.run, "publish_measured", recording.name, (bool,)))
-            if measured is None
-            else measured
-        )
-        if publish_measured:
+        settings = dict(run.start)
+        if measured is not None:
+            settings["publish_measured"] = measured
+        if settings["publish_measured"]:
             require_measured(scenario, "--measured")
-        stepper = _stepper(run, scenario)
+        session = RunSession(
+            scenario,
+            settings=settings,
+            model=run.setup_values,
+            run_id=run.run.get("run_id", ""),
+        )
+        session.settings["duration_s"] = run.samples * session.period_s
         records = dict(run.records)
         records[metadata.RUN] = metadata.run_record(
+            session,
             mode="resim",
-            run_id=run.run.get("run_id", ""),
-            seed=scenario.seed,
-            scenario=scenario,
-            stepper=stepper,
-            duration_s=run.samples * stepper.sample_period_s,
-            chunk_rate_hz=float(_run_value(run.run, "chunk_rate_hz", recording.name, (float,))),
-            state_rate_hz=float(_run_value(run.run, "state_rate_hz", recording.name, (float,))),
-            publish_clock=bool(_run_value(run.run, "publish_clock", recording.name, (bool,))),
-            publish_measured=publish_measured,
-            measured_rate_hz=float(
-                _run_value(run.run, "measured_rate_hz", recording.name, (float,))
-            ),
             extra={"resimulated_from": describe_path(source), "recorded_mode": run.mode},
         )
-        custom = {
-            "brake_sim_run_id": run.run.get("run_id", ""),
-            "brake_sim_scenario": scenario.name,
-            "brake_sim_unit_id": scenario.unit_id,
-            "brake_sim_seed": str(scenario.seed),
-            "brake_sim_mode": "resim",
-            "brake_sim_version": metadata.software_version(),
-        }
         decode = cdr.decoder(_PIVOT)
         recorded_chunks = (decode(m.data) for m in recording.messages(topics=[run.pivot_topic]))
         comparison = Comparison()
@@ -616,22 +477,17 @@ def resimulate(
                 partial,
                 records=records,
                 options=RecordingOptions(compression=compression, durable=False),
-                custom_data=custom,
+                custom_data=metadata.custom_data(session, "resim"),
             )
             try:
                 for change in run.changes:  # for a re-simulation of this one
                     recorder.parameter_change(
                         change.values,
                         change.sample,
-                        conversion.stamp_ns(change.sample, stepper.sample_period_s),
+                        conversion.stamp_ns(change.sample, session.period_s),
                     )
                 for topic, msg, ns in _messages(
-                    run,
-                    scenario,
-                    stepper,
-                    publish_measured=publish_measured,
-                    recorded_chunks=recorded_chunks,
-                    comparison=comparison,
+                    run, session, recorded_chunks=recorded_chunks, comparison=comparison
                 ):
                     recorder.write(topic, msg, ns)
             finally:
@@ -642,5 +498,5 @@ def resimulate(
         commands=len(run.commands),
         comparison=comparison,
         cpu_s=time.process_time() - cpu0,
-        sim_s=run.samples * stepper.sample_period_s,
+        sim_s=run.samples * session.period_s,
     )

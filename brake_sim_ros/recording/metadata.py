@@ -18,14 +18,14 @@ Metadata records (MCAP ``Metadata``; every value a string):
     ``physics_step_s``, ``substeps_per_sample``, ``step_limit_s``; a live run may re-pick
     the substeps later, which its /diagnostics and log say), ``mode`` (``live``,
     ``offline``, or ``resim``: re-simulated from a recording by ``brake-sim resim``,
-    which adds ``resimulated_from`` and ``recorded_mode``), ``duration_s``, the stream
-    settings (``chunk_rate_hz``,
-    ``state_rate_hz``, ``publish_clock``, ``publish_measured``, ``measured_rate_hz``),
-    ``time_base`` and
-    ``model_note``; a run that takes live drive commands (a ``[vehicle]`` and no
-    ``[cycle]``) adds the drive's settings in force, ``max_drive_torque_n_m`` and
-    ``speed_time_constant_s`` (the scenario's, or the node's parameters); a live run
-    adds its node name and ``real_time_factor``; values are
+    which adds ``resimulated_from`` and ``recorded_mode``), the run parameters in force at
+    the start under their names (every entry of ``stream.run_parameters.RUN_PARAMETERS``
+    but what runs and the pacing: ``duration_s``, ``continuous``, ``chunk_rate_hz``,
+    ``state_rate_hz``, ``publish_clock``, ``publish_measured``, ``measured_rate_hz``,
+    ``max_actuation_force_n``, the command timeout's, ...; a live drive's settings,
+    ``max_drive_torque_n_m`` and ``speed_time_constant_s``, only for a run that takes
+    live drive commands, a ``[vehicle]`` and no ``[cycle]``), ``time_base`` and
+    ``model_note``; a live run adds its node name and ``real_time_factor``; values are
     ``repr()`` of the Python value except strings, which are given as they are.
 ``brake_sim_unit``
     which brake unit was run (:mod:`brake_sim_ros.fleet.scatter`): ``unit_id`` and
@@ -72,8 +72,8 @@ from brake_sim_ros import __version__
 from brake_sim_ros.model.defects import Defects
 from brake_sim_ros.model.parameters import BrakeParameters
 from brake_sim_ros.scenarios import Scenario
-from brake_sim_ros.solvers.fixed_step import FixedStepStepper
 from brake_sim_ros.stream import parameters as ros_params
+from brake_sim_ros.stream.session import RunSession
 from brake_sim_ros.stream.topics import QosSpec
 
 MODEL = "brake_sim_model"
@@ -150,27 +150,17 @@ def parameter_change_record(changes: Mapping[str, Any], sample_index: int) -> di
 
 
 def run_record(
-    *,
-    mode: str,
-    run_id: str,
-    seed: int,
-    scenario: Scenario,
-    stepper: FixedStepStepper,
-    duration_s: float,
-    chunk_rate_hz: float,
-    state_rate_hz: float,
-    publish_clock: bool,
-    publish_measured: bool,
-    measured_rate_hz: float,
-    extra: Mapping[str, Any] | None = None,
+    session: RunSession, *, mode: str, extra: Mapping[str, Any] | None = None
 ) -> dict[str, str]:
-    """The ``brake_sim_run`` record (see the module doc); ``stepper`` as it is now."""
+    """The ``brake_sim_run`` record (see the module doc) of ``session`` as it is now: its
+    stepper, and the run parameters the table records (:meth:`RunSession.record_values`)."""
     if mode not in ("live", "offline", "resim"):
         raise ValueError(f"mode={mode!r}: allowed 'live', 'offline' or 'resim'")
+    stepper, scenario = session.stepper, session.scenario
     values: dict[str, Any] = {
         "mode": mode,
-        "run_id": run_id,
-        "seed": seed,
+        "run_id": session.run_id,
+        "seed": session.seed,
         "software_version": software_version(),
         "sample_rate_hz": scenario.sample_rate_hz,
         "sample_period_s": stepper.sample_period_s,
@@ -179,12 +169,7 @@ def run_record(
         "physics_step_s": stepper.physics_step_s,
         "substeps_per_sample": stepper.substeps,
         "step_limit_s": stepper.limit.max_step_s,
-        "duration_s": duration_s,
-        "chunk_rate_hz": chunk_rate_hz,
-        "state_rate_hz": state_rate_hz,
-        "publish_clock": publish_clock,
-        "publish_measured": publish_measured,
-        "measured_rate_hz": measured_rate_hz,
+        **session.record_values(),
         "time_base": TIME_BASE,
         "model_note": (
             "brake_sim_model holds the model at the start of the recording; changes made"
@@ -193,10 +178,32 @@ def run_record(
         ),
         **(extra or {}),
     }
-    if stepper.drive_refusal() is None:  # a live drive's settings, as the stepper has them
-        for name in ros_params.DRIVE_LIMIT_NAMES:
-            values[name] = float(getattr(stepper.setup.vehicle, name))
     return {k: v if isinstance(v, str) else repr(v) for k, v in values.items()}
+
+
+def run_records(
+    session: RunSession, *, mode: str, extra: Mapping[str, Any] | None = None
+) -> dict[str, dict[str, str]]:
+    """The model, scenario, unit and run records of ``session``'s recording (a live
+    node's, an offline run's or a re-simulation's: one builder for all)."""
+    return {
+        MODEL: {k: repr(v) for k, v in session.model.items()},
+        SCENARIO: scenario_record(session.scenario),
+        UNIT: unit_record(session.scenario),
+        RUN: run_record(session, mode=mode, extra=extra),
+    }
+
+
+def custom_data(session: RunSession, mode: str) -> dict[str, str]:
+    """The MCAP header's custom data of ``session``'s recording (``mode`` as recorded)."""
+    return {
+        "brake_sim_run_id": session.run_id,
+        "brake_sim_scenario": session.scenario.name,
+        "brake_sim_unit_id": session.scenario.unit_id,
+        "brake_sim_seed": str(session.seed),
+        "brake_sim_mode": mode,
+        "brake_sim_version": software_version(),
+    }
 
 
 # -- rosbag2's YAML ---------------------------------------------------------------------------

@@ -18,9 +18,13 @@ from brake_sim_ros.recording import metadata
 from brake_sim_ros.recording.writer import McapRecorder, RecordingOptions
 from brake_sim_ros.scenarios import Scenario
 from brake_sim_ros.stream import MessageSink, conversion
-from brake_sim_ros.stream import parameters as ros_params
-from brake_sim_ros.stream.build import require_measured, stepper_for
-from brake_sim_ros.stream.offline import StreamSettings, offline_messages
+from brake_sim_ros.stream.offline import (
+    Change,
+    StreamSettings,
+    offline_messages,
+    offline_session,
+)
+from brake_sim_ros.stream.session import RunSession
 
 
 class RecordedNode(Protocol):
@@ -31,27 +35,11 @@ class RecordedNode(Protocol):
     """
 
     @property
-    def scenario(self) -> Scenario: ...
-
-    @property
-    def stepper(self) -> Any: ...
-
-    def run_view(self) -> Any: ...
+    def session(self) -> RunSession: ...
 
     def get_parameters_by_prefix(self, prefix: str) -> dict[str, Any]: ...
 
     def get_fully_qualified_name(self) -> str: ...
-
-
-def _custom_data(scenario: Scenario, seed: int, mode: str, run_id: str) -> dict[str, str]:
-    return {
-        "brake_sim_run_id": run_id,
-        "brake_sim_scenario": scenario.name,
-        "brake_sim_unit_id": scenario.unit_id,
-        "brake_sim_seed": str(seed),
-        "brake_sim_mode": mode,
-        "brake_sim_version": metadata.software_version(),
-    }
 
 
 @dataclass(frozen=True)
@@ -85,13 +73,16 @@ def record_offline(
     settings: StreamSettings | None = None,
     also: Sequence[MessageSink] = (),
     run_id: str | None = None,
+    changes: Sequence[Change] = (),
 ) -> OfflineRecording:
     """Write the node's stream for ``scenario`` (minus /diagnostics) to ``path``, as fast as
     the CPU goes.
 
     ``run_id`` is the id in the ground-truth messages and the ``brake_sim_run`` record:
     default a fresh one; give a live run's (its recording's ``brake_sim_run`` record says
-    it) to write the same bytes as that run.
+    it) to write the same bytes as that run. ``changes``: parameter changes at their
+    samples (:func:`~brake_sim_ros.stream.offline.offline_messages`), recorded as a
+    node records those it accepts.
 
     Raises:
         RecordingError: the file cannot be written (nothing else is left half done: the
@@ -100,31 +91,8 @@ def record_offline(
             no sensors (refused before the file is opened).
     """
     settings = settings or StreamSettings()
-    if settings.publish_measured:  # before the file is opened
-        require_measured(scenario, "publish_measured")
-    run_id = conversion.new_run_id() if run_id is None else run_id
-    duration = scenario.duration_s if duration_s is None else duration_s
-    stepper = stepper_for(scenario)
-    dt = stepper.sample_period_s
-    params, defects = scenario.setup.params, scenario.setup.defects
-    records = {
-        metadata.MODEL: metadata.model_record(params, defects),
-        metadata.SCENARIO: metadata.scenario_record(scenario),
-        metadata.UNIT: metadata.unit_record(scenario),
-        metadata.RUN: metadata.run_record(
-            mode="offline",
-            run_id=run_id,
-            seed=scenario.seed,
-            scenario=scenario,
-            stepper=stepper,
-            duration_s=duration,
-            chunk_rate_hz=settings.chunk_rate_hz,
-            state_rate_hz=settings.state_rate_hz,
-            publish_clock=settings.publish_clock,
-            publish_measured=settings.publish_measured,
-            measured_rate_hz=settings.measured_rate_hz,
-        ),
-    }
+    session = offline_session(scenario, duration_s=duration_s, settings=settings, run_id=run_id)
+    dt = session.period_s
     live_only = (stream.DIAGNOSTICS, stream.ACTUATION, stream.DRIVE)
     off = () if settings.publish_measured else (stream.MEASURED,)
     topics = [t for t in stream.TOPICS if t not in live_only + off]
@@ -132,15 +100,15 @@ def record_offline(
     samples = 0
     recorder = McapRecorder(
         path,
-        records=records,
+        records=metadata.run_records(session, mode="offline"),
         options=options or RecordingOptions(durable=False),
         topics=topics,
-        custom_data=_custom_data(scenario, scenario.seed, "offline", run_id),
+        custom_data=metadata.custom_data(session, "offline"),
     )
     try:
-        messages = offline_messages(
-            scenario, duration_s=duration, settings=settings, stepper=stepper, run_id=run_id
-        )
+        for sample, values in changes:  # for a re-simulation of this one
+            recorder.parameter_change(values, sample, conversion.stamp_ns(sample, dt))
+        messages = offline_messages(scenario, changes=changes, session=session)
         for topic, msg, ns in messages:
             recorder.write(topic, msg, ns)
             for sink in also:  # e.g. Rerun: one simulation feeds every output
@@ -170,46 +138,26 @@ def node_recorder(
 ) -> McapRecorder:
     """A recorder for ``node``'s stream, its metadata taken from the node as it is now.
 
-    The model comes from the node's ROS parameters (the scenario's values with any
-    overrides: the node keeps them equal to what it steps), the run settings likewise.
+    The model and the run parameters come from the node's session (which the node keeps
+    equal to its ROS parameters).
 
     Raises:
         RecordingError: the file cannot be created or written.
     """
     values = {name: p.value for name, p in node.get_parameters_by_prefix("").items()}
-    scenario = node.scenario
-    names = ros_params.model_values(scenario.setup.params, scenario.setup.defects)
-    params, defects = ros_params.build_model({k: values[k] for k in names})
-    view = node.run_view()
-    records = {
-        metadata.MODEL: metadata.model_record(params, defects),
-        metadata.SCENARIO: metadata.scenario_record(scenario),
-        metadata.UNIT: metadata.unit_record(scenario),
-        metadata.RUN: metadata.run_record(
-            mode="live",
-            run_id=view.run_id,
-            seed=view.seed,
-            scenario=scenario,
-            stepper=node.stepper,
-            duration_s=view.duration_s,
-            chunk_rate_hz=values["chunk_rate_hz"],
-            state_rate_hz=values["state_rate_hz"],
-            publish_clock=values["publish_clock"],
-            publish_measured=values["publish_measured"],
-            measured_rate_hz=values["measured_rate_hz"],
-            extra={
-                "node": node.get_fully_qualified_name(),
-                "real_time_factor": values["real_time_factor"],
-                "paused_at_start": values["paused"],
-            },
-        ),
-        metadata.ROS_PARAMETERS: {k: repr(v) for k, v in sorted(values.items())},
+    session = node.session
+    extra = {
+        "node": node.get_fully_qualified_name(),
+        "real_time_factor": values["real_time_factor"],
+        "paused_at_start": values["paused"],
     }
+    records = metadata.run_records(session, mode="live", extra=extra)
+    records[metadata.ROS_PARAMETERS] = {k: repr(v) for k, v in sorted(values.items())}
     return recorder_class(
         path,
         records=records,
         options=options,
-        custom_data=_custom_data(scenario, view.seed, "live", view.run_id),
+        custom_data=metadata.custom_data(session, "live"),
     )
 
 

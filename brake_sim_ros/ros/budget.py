@@ -149,3 +149,67 @@ def measure_publishing(
         chunk_per_sample_s=per_sample,
         state_row_s=state_row,
     )
+
+
+def step_costs(
+    node,
+    stepper: FixedStepStepper,
+    *,
+    label: str,
+    chunk_samples: int,
+    force_n: float,
+    sensors: SensorBank | None,
+    publishing: PipelineCosts | None = None,
+) -> PipelineCosts:
+    """Calibrate ``stepper`` (a fresh copy, at ``force_n`` N); publishing measured on
+    ``node`` too (with ``sensors``) unless ``publishing`` is given, whose figures are kept.
+
+    Raises:
+        BrakeSimError: chunks too large for one callback, named with ``label``.
+    """
+    try:
+        per_sample, block = measure_stepping(stepper.fresh(), chunk_samples, force_n=force_n)
+    except BrakeSimError as exc:
+        raise BrakeSimError(f"{label}: {exc}") from None
+    if publishing is None:
+        return measure_publishing(node, block, per_sample, sensors)
+    return dataclasses.replace(publishing, step_per_sample_s=per_sample)
+
+
+class Budget:
+    """A node's wall-clock budget: the costs measured at start (or a scenario switch) and
+    what whole chunks have cost since (moving average), for the real-time checks and the
+    size of a ``~/step`` call.
+
+    Args:
+        costs: the measured costs (:func:`step_costs`).
+        step_call_wall_s: wall time one ~/step call may hold the executor, s.
+        max_step_request_s: simulated time one ~/step call may advance, s.
+    """
+
+    def __init__(
+        self, costs: PipelineCosts, *, step_call_wall_s: float, max_step_request_s: float
+    ) -> None:
+        self.costs = costs
+        self.observed_sample_cost_s = 0.0  # moving average over whole chunks, s
+        self.step_call_wall_s = step_call_wall_s
+        self.max_step_request_s = max_step_request_s
+
+    def observe(self, cost_per_sample_s: float) -> None:
+        """A whole chunk cost this much per sample (wall s), stepped and published."""
+        previous = self.observed_sample_cost_s or cost_per_sample_s
+        self.observed_sample_cost_s = 0.8 * previous + 0.2 * cost_per_sample_s
+
+    def sample_cost_s(self, chunk_samples: int, state_stride: int) -> float:
+        """Wall cost of one sample, stepped and published: the larger of the start-up
+        estimate (no subscriber) and what whole chunks have cost so far (with the real
+        subscribers, contact events and sinks)."""
+        estimate = self.costs.per_sample_s(chunk_samples, state_stride)
+        return max(estimate, self.observed_sample_cost_s)
+
+    def max_step_samples(self, chunk_samples: int, state_stride: int, period_s: float) -> int:
+        """Most samples one ~/step call may advance: ``step_call_wall_s`` of measured
+        work (at least one chunk), at most ``max_step_request_s`` of simulated time."""
+        per_sample = self.sample_cost_s(chunk_samples, state_stride)
+        by_wall = max(chunk_samples, int(self.step_call_wall_s / per_sample))
+        return min(by_wall, math.floor(self.max_step_request_s / period_s))

@@ -34,7 +34,6 @@ from dataclasses import dataclass, fields
 from typing import Any
 
 from brake_sim_ros.errors import ParameterError
-from brake_sim_ros.identifiers import IDENTIFIER_RULE, is_identifier
 from brake_sim_ros.model.actuation import MAX_ACTUATION_FORCE_N, NOMINAL_PEAK_ACTUATION_N
 from brake_sim_ros.model.catalogue import (
     KIND_BY_NAME,
@@ -48,16 +47,15 @@ from brake_sim_ros.model.defects import Defects, DrumDefect, ShoeDefect
 from brake_sim_ros.model.layout import SIDES
 from brake_sim_ros.model.parameters import PARAMETER_GROUPS, BrakeParameters, unit_of
 from brake_sim_ros.model.run_setup import BrakeSetup
-from brake_sim_ros.model.vehicle import (
-    DEFAULT_MAX_DRIVE_TORQUE_N_M,
-    DEFAULT_SPEED_TIME_CONSTANT_S,
-    DRIVE_LIMITS,
-    Vehicle,
+from brake_sim_ros.model.vehicle import DRIVE_LIMITS, Vehicle
+from brake_sim_ros.stream import run_parameters
+from brake_sim_ros.stream.run_parameters import (  # noqa: F401 (re-exported)
+    DEFAULT_SCENARIO,
+    RunParameter,
+    check_run_id,
 )
 
 DRIVE_LIMIT_RANGES = {name: (lo, hi) for name, lo, hi in DRIVE_LIMITS}
-
-DEFAULT_SCENARIO = "symmetric"
 
 # Fields that are initial conditions: a change applies at the next reset.
 INITIAL_CONDITIONS = frozenset(
@@ -123,195 +121,18 @@ class ParamSpec:
     constraints: str = ""
 
 
-# -- run control ---------------------------------------------------------------------------
-def run_parameter_specs() -> list[ParamSpec]:
-    """Parameters that control the run, not the physics.
+# -- run control: the table in run_parameters ---------------------------------------------
+def run_parameter_specs() -> list[RunParameter]:
+    """Parameters that control the run, not the physics: :data:`.run_parameters.
+    RUN_PARAMETERS` (read at each call).
 
     ``duration_s`` and ``max_actuation_force_n`` default to 0 = "from the scenario"; the
     node replaces that by the effective value once the scenario is loaded.
     """
-    fixed = "Fixed at start-up: a change is refused."
-    return [
-        ParamSpec(
-            "scenario",
-            DEFAULT_SCENARIO,
-            "Scenario loaded at start-up: a built-in name or a path to a .toml file. "
-            "Switch it with the ~/reset service (its 'scenario' field). " + fixed,
-        ),
-        ParamSpec(
-            "scenario_dirs",
-            "",
-            "Directories (separated by ':') from which ~/reset requests may load .toml "
-            "scenario files; empty = none, a request may only name a built-in scenario. "
-            "Symlinks and '..' are resolved before the check. " + fixed,
-        ),
-        ParamSpec(
-            "run_id",
-            "",
-            "Identifier of the run in every ground-truth message (DefectState, ContactEvent), "
-            "in /diagnostics and in recordings: empty = a fresh UUID4 (32 hex digits) at "
-            f"start and at each ~/reset; otherwise this text ({IDENTIFIER_RULE}), "
-            "kept across resets. " + fixed,
-            constraints=f"empty, or {IDENTIFIER_RULE}",
-        ),
-        ParamSpec(
-            "unit_id",
-            "",
-            "Brake unit to simulate (its manufacturing scatter, drawn with the scenario's "
-            "fleet_seed from the scenario's values): empty = the scenario's unit_id; "
-            f"'nominal' = the scenario's brake itself; otherwise {IDENTIFIER_RULE}. "
-            "Applies to every scenario ~/reset loads; the unit is "
-            "the same brake whatever the run's seed (a new seed draws new sensor noise and a "
-            "scenario's [conditions] again). " + fixed,
-            constraints=f"empty, 'nominal', or {IDENTIFIER_RULE}",
-        ),
-        ParamSpec(
-            "duration_s",
-            0.0,
-            "Simulated time after which the free run ends (s); 0 at start-up = the "
-            "scenario's duration. At the end the node idles, or exits with exit_at_end.",
-            (0.0, 86_400.0),
-        ),
-        ParamSpec(
-            "continuous",
-            False,
-            "Run without end: duration_s is ignored, and the run stops only when asked "
-            "(pause, shutdown, or ~/reset, which starts a new run). For long runs that "
-            "follow live commands or a scenario's cycle; memory stays bounded. Turned off "
-            "at run time, duration_s applies again (the run ends at once if it is past).",
-        ),
-        ParamSpec(
-            "exit_at_end",
-            False,
-            "Print a summary and exit 0 when duration_s is reached (CLI --exit-at-end). " + fixed,
-        ),
-        ParamSpec(
-            "real_time_factor",
-            1.0,
-            "Simulated seconds per wall second; 0 = as fast as possible.",
-            (0.0, 1000.0),
-        ),
-        ParamSpec(
-            "paused", False, "Stop stepping; ~/step then advances the simulation on request."
-        ),
-        ParamSpec(
-            "chunk_rate_hz",
-            100.0,
-            "Pivot-force chunks per simulated second (Hz); each chunk carries "
-            "round(sample rate / chunk_rate_hz) samples.",
-            (1.0, 1000.0),
-        ),
-        ParamSpec(
-            "state_rate_hz",
-            100.0,
-            "BrakeState and JointState messages per simulated second (Hz), taken at "
-            "sample indices that are multiples of round(sample rate / state_rate_hz).",
-            (1.0, 10_000.0),
-        ),
-        ParamSpec("publish_clock", True, "Publish simulated time on /clock (rosgraph_msgs/Clock)."),
-        ParamSpec(
-            "publish_measured",
-            False,
-            "Run the scenario's sensors (noise, dynamics, faults; seeded from the run's seed) "
-            "and publish what they measure on ~/measured (MeasuredChunk), measured_rate_hz "
-            "chunks per simulated second. Off by default. " + fixed,
-        ),
-        ParamSpec(
-            "measured_rate_hz",
-            10.0,
-            "MeasuredChunk messages per simulated second (Hz) with publish_measured: a "
-            "chunk is due once round(sample rate / measured_rate_hz) samples are pending, "
-            "and what is pending is also published when the run ends, pauses, at each "
-            "~/step and at ~/reset. Fewer, longer chunks cost the sensors less CPU; the "
-            "samples are the same bits at any rate. " + fixed,
-            (1.0, 1000.0),
-        ),
-        ParamSpec(
-            "diagnostics_period_s", 1.0, "Wall-time period of /diagnostics (s).", (0.05, 60.0)
-        ),
-        ParamSpec(
-            "max_actuation_force_n",
-            0.0,
-            "Largest accepted actuation command per shoe (N); larger commands are "
-            "rejected. The physics step follows any accepted force (more substeps per "
-            "sample). 0 at start-up = 2 x the scenario's peak force. " + fixed,
-            (0.0, MAX_ACTUATION_FORCE_N),
-        ),
-        *(
-            ParamSpec(
-                name,
-                0.0,
-                f"{what} of a live drive (~/drive; a scenario with a [vehicle] and no "
-                f"[cycle]), {unit}: 0 at start-up = the scenario's [vehicle] {name} "
-                f"(default {default:g}); applies to every scenario ~/reset loads. " + fixed,
-                (0.0, hi),
-            )
-            for name, what, unit, default, hi in (
-                (
-                    "max_drive_torque_n_m",
-                    "Largest drive torque on the flywheel (a larger torque command is "
-                    "refused; the speed controller is clamped to it)",
-                    "N m",
-                    DEFAULT_MAX_DRIVE_TORQUE_N_M,
-                    DRIVE_LIMIT_RANGES["max_drive_torque_n_m"][1],
-                ),
-                (
-                    "speed_time_constant_s",
-                    "Time constant of the speed controller's approach to a target speed",
-                    "s",
-                    DEFAULT_SPEED_TIME_CONSTANT_S,
-                    DRIVE_LIMIT_RANGES["speed_time_constant_s"][1],
-                ),
-            )
-        ),
-        ParamSpec(
-            "command_timeout_s",
-            0.2,
-            "Simulated time a command stays in force without a newer one (s).",
-            (0.001, 3600.0),
-        ),
-        ParamSpec(
-            "on_command_timeout",
-            "profile",
-            "What happens when commands stop: 'profile' (the scenario's force profile "
-            "resumes at the current time), 'hold' (keep the last command), "
-            "'ramp_to_zero' (fall linearly at command_ramp_rate_n_per_s, then 0).",
-            constraints="one of: profile, hold, ramp_to_zero",
-        ),
-        ParamSpec(
-            "command_ramp_rate_n_per_s",
-            5000.0,
-            "Force decrease rate of on_command_timeout = 'ramp_to_zero' (N/s).",
-            (1.0, 1e7),
-        ),
-    ]
+    return list(run_parameters.RUN_PARAMETERS)
 
 
-FIXED_AT_START = frozenset(
-    {
-        "scenario",
-        "scenario_dirs",
-        "exit_at_end",
-        "max_actuation_force_n",
-        "max_drive_torque_n_m",
-        "speed_time_constant_s",
-        "run_id",
-        "unit_id",
-        "publish_measured",
-        "measured_rate_hz",
-    }
-)
-
-
-def check_run_id(value: str) -> str:
-    """``value`` if it is a valid ``run_id`` parameter (empty included), else ParameterError
-    naming what is allowed (the value shown at most 64 characters long)."""
-    if value == "" or is_identifier(value):
-        return value
-    shown = value if len(value) <= 64 else value[:64] + "..."
-    raise ParameterError(
-        f"run_id={shown!r}: allowed empty (a fresh UUID4 per run) or {IDENTIFIER_RULE}"
-    )
+FIXED_AT_START = run_parameters.fixed_at_start()
 
 
 # -- model parameters ---------------------------------------------------------------------------

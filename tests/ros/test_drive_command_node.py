@@ -220,6 +220,6 @@ def test_accepted_drive_commands_are_recorded_at_their_sample(tmp_path):
 
 
 def test_the_message_modes_are_the_cores_in_order():
-    """DriveCommand's MODE_* numbers index the core's modes (ros.commands.drive_command)."""
+    """DriveCommand's MODE_* numbers index the core's modes (stream.commands.drive_command)."""
     numbers = [getattr(DriveCommand, f"MODE_{mode.upper()}") for mode in DRIVE_MODES]
     assert numbers == list(range(len(DRIVE_MODES)))
