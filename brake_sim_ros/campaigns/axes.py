@@ -23,8 +23,13 @@ from brake_sim_ros.model.catalogue import KIND_BY_NAME
 from brake_sim_ros.model.defects import Defects, ShoeDefect
 
 DEFECT_AXIS = "defect"
-# the manifest columns a defect axis fills (kind "healthy" and location "" for no defect)
-DEFECT_COLUMNS = ("defect_kind", "defect_location", "defect_severity")
+# the manifest columns a defect axis fills (kind "healthy" and location "" for no defect):
+# ``defect_severity`` in the kind's unit (``brake-sim defects``), signed as its service
+# limit; ``defect_severity_fraction`` that severity over the kind's service limit (the
+# value of the axis's ``severities``, 0 when healthy)
+DEFECT_COLUMNS = ("defect_kind", "defect_location", "defect_severity", "defect_severity_fraction")
+# a column derived from the others: not part of a run's identity (its seed)
+DERIVED_COLUMNS = ("defect_severity_fraction",)
 HEALTHY = "healthy"
 DRAW_METHODS = ("random", "lhs")
 # spawn keys of the campaign seed's streams (run seeds use the run's identity instead)
@@ -42,11 +47,13 @@ class DefectChoice:
         kind: a catalogue kind name, or ``"healthy"``.
         location: one of the kind's locations ("" when healthy).
         severity: in the kind's unit (0 when healthy).
+        fraction: ``severity`` over the kind's service limit (0 when healthy).
     """
 
     kind: str
     location: str
     severity: float
+    fraction: float = 0.0
 
     def defects(self) -> Defects:
         if self.kind == HEALTHY:
@@ -54,7 +61,8 @@ class DefectChoice:
         return Defects.single(self.kind, self.location, self.severity)
 
     def columns(self) -> dict[str, Value]:
-        return dict(zip(DEFECT_COLUMNS, (self.kind, self.location, self.severity), strict=True))
+        values = (self.kind, self.location, self.severity, self.fraction)
+        return dict(zip(DEFECT_COLUMNS, values, strict=True))
 
 
 @dataclass(frozen=True)
@@ -95,7 +103,7 @@ def defect_choices(
     for name in kinds:
         kind = KIND_BY_NAME[name]
         for location in kind.locations:
-            out += [DefectChoice(name, location, f * kind.service_limit) for f in fractions]
+            out += [DefectChoice(name, location, f * kind.service_limit, f) for f in fractions]
     return tuple(out)
 
 

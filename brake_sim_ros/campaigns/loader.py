@@ -30,6 +30,7 @@ from brake_sim_ros import __version__
 from brake_sim_ros.campaigns.axes import (
     DEFECT_AXIS,
     DEFECT_COLUMNS,
+    DERIVED_COLUMNS,
     DRAW_METHODS,
     AnyAxis,
     Axis,
@@ -41,7 +42,7 @@ from brake_sim_ros.campaigns.axes import (
     defects_table,
     point_columns,
 )
-from brake_sim_ros.campaigns.splits import SPLITS, HeldOut, assign_units, unit_counts
+from brake_sim_ros.campaigns.splits import SPLITS, HeldOut, assign_units, idle_rule, unit_counts
 from brake_sim_ros.campaigns.toml_text import dumps
 from brake_sim_ros.errors import BrakeSimError
 from brake_sim_ros.model.catalogue import KIND_BY_NAME, KINDS
@@ -315,7 +316,20 @@ def _parse(data: dict[str, Any], text: str, source: str, directory: Path | None)
             f"at most {MAX_RUNS} runs (units x conditions); this campaign has"
             f" {len(unit_ids)} x {n_points}",
         )
+    _refuse_idle_rules(ctx, campaign)
     return campaign
+
+
+def _refuse_idle_rules(ctx: _Ctx, campaign: Campaign) -> None:
+    """Refuse a held-out rule that matches no condition of the campaign (it would hold
+    nothing out), in one line."""
+    if campaign.held_out:
+        points = condition_points(
+            campaign.axes, campaign.draw_method, campaign.draw_count, campaign.seed
+        )
+        problem = idle_rule([point_columns(p) for p in points], campaign.held_out)
+        if problem is not None:
+            raise CampaignError(f"{ctx.source}: key 'split.held_out[{problem[0]}]': {problem[1]}")
 
 
 def _units(ctx: _Ctx, top: dict[str, Any]) -> tuple[str, ...]:
@@ -603,7 +617,8 @@ def plan_runs(campaign: Campaign) -> list[RunSpec]:
             if campaign.outputs.sample_rate_hz is not None:
                 data["sample_rate_hz"] = campaign.outputs.sample_rate_hz
             seeded = any(isinstance(a, Axis) and a.key == "seed" for a in campaign.axes)
-            seed = data.get("seed", 0) if seeded else run_seed(campaign.seed, unit, columns)
+            identity = {k: v for k, v in columns.items() if k not in DERIVED_COLUMNS}
+            seed = data.get("seed", 0) if seeded else run_seed(campaign.seed, unit, identity)
             # the units are one fleet: each the same brake in all its runs (its scatter is
             # drawn from the unit id and the fleet seed), each run its own noise and draws
             data.setdefault("fleet_seed", campaign.seed)
