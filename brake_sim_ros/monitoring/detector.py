@@ -26,9 +26,16 @@ import abc
 import math
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
+from types import MappingProxyType
 from typing import Any
 
 import numpy as np
+
+from brake_sim_ros.errors import BrakeSimError
+
+
+class RateMismatchError(BrakeSimError, ValueError):
+    """Samples at another rate than the detector was fitted at (one line, both rates)."""
 
 
 @dataclass(frozen=True)
@@ -190,6 +197,13 @@ class Detector(abc.ABC):
     name: str = "detector"
     channels: tuple[str, ...] = ()
     window_s: float = 0.1
+    # What fitting saw (``evaluate.fit`` records it; a saved detector keeps it): the
+    # sample rate, Hz (None: not recorded), and each channel read with its unit. What a
+    # detector learns (a threshold on an RMS) belongs to that rate: feeding samples at
+    # another rate is refused, unless the detector declares that it resamples.
+    fitted_rate_hz: float | None = None
+    fitted_channels: Mapping[str, str] = MappingProxyType({})
+    resamples: bool = False
 
     def __init__(self) -> None:
         self._rate: float | None = None
@@ -208,6 +222,19 @@ class Detector(abc.ABC):
         """The verdict on one window (``window_samples`` values per channel)."""
 
     # -- the streaming part -------------------------------------------------------------
+    def rate_refusal(self, sample_rate_hz: float) -> str | None:
+        """Why samples at ``sample_rate_hz`` (Hz) cannot be judged, in one line naming both
+        rates; None when they can (the fitted rate, not recorded, or a resampling
+        detector)."""
+        fitted = self.fitted_rate_hz
+        if self.resamples or fitted is None or sample_rate_hz == fitted:
+            return None
+        return (
+            f"detector {self.name} was fitted at {fitted:g} Hz and the samples are at"
+            f" {sample_rate_hz:g} Hz: allowed {fitted:g} Hz (fit it on runs at"
+            f" {sample_rate_hz:g} Hz, or stream at {fitted:g} Hz)"
+        )
+
     def window_samples(self, sample_rate_hz: float) -> int:
         return max(1, round(self.window_s * sample_rate_hz))
 
@@ -216,7 +243,15 @@ class Detector(abc.ABC):
         self._buffer, self._buffered, self._next_index, self._rate = {}, 0, None, None
 
     def feed(self, chunk: SampleChunk) -> list[Assessment]:
-        """The assessments of every window that ``chunk`` completes, in order."""
+        """The assessments of every window that ``chunk`` completes, in order.
+
+        Raises:
+            RateMismatchError: samples at another rate than the fitted one.
+            ValueError: a channel the detector reads is missing.
+        """
+        refusal = self.rate_refusal(chunk.sample_rate_hz)
+        if refusal is not None:
+            raise RateMismatchError(refusal)
         missing = [c for c in self.channels if c not in chunk.channels]
         if missing:
             raise ValueError(

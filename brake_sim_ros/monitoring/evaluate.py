@@ -47,7 +47,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -76,6 +76,7 @@ class RunSamples:
     label_names: tuple[str, ...]  # "kind:location"
     labels: np.ndarray  # (n, len(label_names)) severities, 0 where absent
     rul_s: np.ndarray | None = None  # (n,) the ``rul [s]`` label (NaN: censored); None: none
+    units: dict[str, str] = field(default_factory=dict)  # channel name -> its unit
 
     def active(self, row: int) -> tuple[tuple[str, str], ...]:
         """``(kind, location)`` of the defects active at sample ``row``."""
@@ -100,6 +101,12 @@ def _channel_name(column: str) -> str:
     return column[len(MEASURED_PREFIX) :].rsplit(" [", 1)[0]
 
 
+def _channel_unit(column: str) -> str:
+    """``measured:<name> [<unit>]`` -> ``<unit>`` ("" without one)."""
+    _head, sep, unit = column.rpartition(" [")
+    return unit[:-1] if sep and unit.endswith("]") else ""
+
+
 def read_run(dataset: SweepDataset, run_id: str) -> RunSamples:
     table = dataset.run_table(run_id)
     names = table.column_names
@@ -108,6 +115,11 @@ def read_run(dataset: SweepDataset, run_id: str) -> RunSamples:
         raise ValueError(f"run {run_id}: {time_s.size} samples; a detector needs 2 or more")
     channels = {
         _channel_name(c): table[c].to_numpy(zero_copy_only=False).astype(np.float64)
+        for c in names
+        if c.startswith(MEASURED_PREFIX) and not c.endswith("_edge_time [s]")
+    }
+    units = {
+        _channel_name(c): _channel_unit(c)
         for c in names
         if c.startswith(MEASURED_PREFIX) and not c.endswith("_edge_time [s]")
     }
@@ -128,6 +140,7 @@ def read_run(dataset: SweepDataset, run_id: str) -> RunSamples:
         label_names=tuple(LABELS[c] for c in label_cols),
         labels=labels,
         rul_s=rul,
+        units=units,
     )
 
 
@@ -181,10 +194,24 @@ def chunks(run: RunSamples, chunk_s: float) -> Iterator[SampleChunk]:
 
 def fit(detector: Detector, dataset: SweepDataset, split: str = "train") -> int:
     """Fit ``detector`` on the windows of ``split`` (its window length); the number of
-    windows it saw."""
+    windows it saw. Records on the detector the sample rate and the units of the channels
+    it read (:attr:`Detector.fitted_rate_hz`, :attr:`Detector.fitted_channels`).
+
+    Raises:
+        ValueError: the split's runs are at several sample rates (one line).
+    """
     windows: list[TrainingWindow] = []
+    rates: set[float] = set()
+    units: dict[str, str] = {}
     for run_id in dataset.runs(split):
         run = read_run(dataset, run_id)
+        rates.add(run.sample_rate_hz)
+        units.update(run.units)
+        if len(rates) > 1:
+            shown = ", ".join(f"{r:g}" for r in sorted(rates))
+            raise ValueError(
+                f"split {split}: runs at {shown} Hz; allowed one sample rate to fit a detector on"
+            )
         n = detector.window_samples(run.sample_rate_hz)
         for start in range(0, run.time_s.size - n + 1, n):
             windows.append(
@@ -199,10 +226,34 @@ def fit(detector: Detector, dataset: SweepDataset, split: str = "train") -> int:
                 )
             )
     detector.fit(windows)
+    if rates:
+        detector.fitted_rate_hz = rates.pop()
+        detector.fitted_channels = {c: units[c] for c in detector.channels if c in units}
     return len(windows)
 
 
+def unit_refusal(detector: Detector, run: RunSamples) -> str | None:
+    """Why ``run``'s channels cannot be judged by ``detector``: a channel in another unit
+    than it was fitted on (one line); None when they match or nothing was recorded."""
+    for name, unit in detector.fitted_channels.items():
+        if name in run.units and run.units[name] != unit:
+            return (
+                f"detector {detector.name} was fitted on {name} in [{unit}]; run {run.run_id}"
+                f" gives it in [{run.units[name]}]: allowed [{unit}]"
+            )
+    return None
+
+
 def assess_run(detector: Detector, run: RunSamples, chunk_s: float) -> list[Assessment]:
+    """The detector's assessments over ``run`` fed in chunks of ``chunk_s``.
+
+    Raises:
+        ValueError: the run's rate or a channel's unit is not what the detector was fitted
+            on (one line; :class:`~.detector.RateMismatchError` for the rate).
+    """
+    refusal = detector.rate_refusal(run.sample_rate_hz) or unit_refusal(detector, run)
+    if refusal is not None:
+        raise ValueError(refusal)
     detector.reset()
     return [a for c in chunks(run, chunk_s) for a in detector.feed(c)]
 

@@ -11,13 +11,15 @@ trees' arrays (:mod:`.forest` says why, and checks every index). :func:`dumps` g
 file's text; the CLI writes it (whole, never through a link or over an input:
 :mod:`brake_sim_ros.recording.output`, an adapter this layer does not import).
 
-The file (:data:`SCHEMA_VERSION` 1), one JSON object::
+The file (:data:`SCHEMA_VERSION` 2), one JSON object::
 
     format          "brake-sim detector"
-    schema_version  1
+    schema_version  2 (version 1 did not record the rate: refused, fit it again)
     detector        the detector's name: rms, kurtosis, crest, orders, impact, learned
     software        brake_sim_ros version that wrote it (informative)
     fitted_on       {"dataset": path, "split": name, "windows": count} (informative)
+    fitted_at       {"sample_rate_hz": Hz or null (not recorded), "channels": {name: unit}}
+                    what it was fitted on; samples at another rate are refused
     parameters      the constructor's arguments (below)
     state           what fitting learned (below)
 
@@ -75,7 +77,7 @@ from brake_sim_ros.monitoring.learned import HEALTHY, LearnedClassifier
 from brake_sim_ros.monitoring.order_analysis import OrderAnalysis
 
 FORMAT = "brake-sim detector"
-SCHEMA_VERSION = 1
+SCHEMA_VERSION = 2
 # The largest file the loader reads: 256 MiB. The reference campaign's learned detector
 # (100 trees on 14 040 windows, 18 severity forests) takes 61 MB: a campaign four times
 # its size fits; a larger file is refused before it is read.
@@ -87,6 +89,7 @@ TOP_KEYS = (
     "detector",
     "software",
     "fitted_on",
+    "fitted_at",
     "parameters",
     "state",
 )
@@ -468,6 +471,10 @@ def document(detector: Detector, *, fitted_on: Mapping[str, Any]) -> dict[str, A
         "detector": detector.name,
         "software": f"brake_sim_ros {__version__}",
         "fitted_on": dict(fitted_on),
+        "fitted_at": {
+            "sample_rate_hz": detector.fitted_rate_hz,
+            "channels": dict(detector.fitted_channels),
+        },
         "parameters": parameters,
         "state": state,
     }
@@ -557,7 +564,9 @@ def load(
     if doc["format"] != FORMAT:
         raise c.fail("format", f"not a saved detector; allowed {FORMAT!r}")
     if doc["schema_version"] != SCHEMA_VERSION or isinstance(doc["schema_version"], bool):
-        raise c.fail("schema_version", f"not one this version reads; allowed {SCHEMA_VERSION}")
+        old = " (version 1 did not record the rate: fit it again)"
+        allowed = f"allowed {SCHEMA_VERSION}" + (old if doc["schema_version"] == 1 else "")
+        raise c.fail("schema_version", f"not one this version reads; {allowed}")
     detector = c.string(doc["detector"], "detector", SAVED)
     if name is not None and detector != name:
         raise c.fail(
@@ -568,4 +577,22 @@ def load(
     c.string(fitted["dataset"], "fitted_on.dataset")
     c.string(fitted["split"], "fitted_on.split")
     c.integer(fitted["windows"], "fitted_on.windows", 0, 2**62)
-    return _LOADERS[detector](detector, doc["parameters"], doc["state"], c)
+    rate, channels = _fitted_at(doc["fitted_at"], c)
+    loaded = _LOADERS[detector](detector, doc["parameters"], doc["state"], c)
+    loaded.fitted_rate_hz, loaded.fitted_channels = rate, channels
+    return loaded
+
+
+def _fitted_at(value: object, c: _Checker) -> tuple[float | None, dict[str, str]]:
+    """``fitted_at``: the rate (None: not recorded) and each channel's unit."""
+    at = c.obj(value, "fitted_at", ("sample_rate_hz", "channels"))
+    rate = at["sample_rate_hz"]
+    rate = None if rate is None else c.positive(rate, "fitted_at.sample_rate_hz", 1e7)
+    channels = at["channels"]
+    if not (isinstance(channels, dict) and len(channels) <= 64):
+        raise c.fail("fitted_at.channels", "allowed an object of at most 64 channel: unit")
+    for name, unit in channels.items():
+        c.channel(name, "fitted_at.channels")
+        if not (isinstance(unit, str) and len(unit) <= 32 and unit.isprintable()):
+            raise c.fail("fitted_at.channels", "allowed units of at most 32 printable characters")
+    return rate, dict(channels)
