@@ -173,6 +173,7 @@ class BrakeSimNode(Node):
         )
         self._stepper = self._make_stepper(setup, self.scenario, self._param("chunk_rate_hz"))
         self._publish_measured = bool(self._param("publish_measured"))
+        self._awaited_subscribers = self._measured_subscribers()
         if self._publish_measured:  # asked for what the scenario's plan does not build
             require_measured(self.scenario, "publish_measured true refused")
         # the sensors, their state carried between blocks; new at each reset
@@ -267,6 +268,11 @@ class BrakeSimNode(Node):
             f" {self._stepper.describe_step()}; max_actuation_force_n"
             f" {self._param('max_actuation_force_n'):g} N, duration {self._duration_s():g} s,"
             f" {self._chunk_samples} samples per chunk"
+            + (
+                f"; waiting for {self._awaited_subscribers} ~/measured subscriber(s)"
+                if self._awaited_subscribers
+                else ""
+            )
         )
 
     @property
@@ -739,8 +745,32 @@ class BrakeSimNode(Node):
         self._to_sinks(topic, msg, ns)
 
     # -- stepping and publishing --------------------------------------------------------------
+    def _measured_subscribers(self) -> int:
+        """The ``measured_subscribers`` parameter, checked (ParameterError otherwise)."""
+        n = int(self._param("measured_subscribers"))
+        if not 0 <= n <= 64:
+            raise ParameterError(f"measured_subscribers={n}: allowed 0 to 64 subscribers")
+        if n and not self._publish_measured:
+            raise ParameterError(
+                f"measured_subscribers={n} without publish_measured: allowed 0 (there is no"
+                " ~/measured to wait for), or set publish_measured:=true"
+            )
+        return n
+
+    def _waiting_for_subscribers(self) -> bool:
+        """True while ~/measured has fewer subscribers than ``measured_subscribers``: the
+        first sample waits, so no subscriber misses the run's start."""
+        if not self._awaited_subscribers:
+            return False
+        count = self._outputs[stream.MEASURED][0].get_subscription_count()
+        if count < self._awaited_subscribers:
+            return True
+        self.get_logger().info(f"~/measured has {count} subscriber(s): the run starts")
+        self._awaited_subscribers = 0
+        return False
+
     def _on_tick(self) -> None:
-        if self._failure or self._finished:
+        if self._failure or self._finished or self._waiting_for_subscribers():
             return
         now = self._wall()
         if not self._ticking:  # pace from the first tick: start-up costs are not lateness

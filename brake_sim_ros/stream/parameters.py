@@ -221,6 +221,13 @@ def run_parameter_specs() -> list[ParamSpec]:
             "chunks per simulated second. Off by default. " + fixed,
         ),
         ParamSpec(
+            "measured_subscribers",
+            0,
+            "With publish_measured: hold the first sample until ~/measured has this many "
+            "subscribers (0 to 64), so that a monitor started first assesses the run from "
+            "sample 0; 0 = start at once. " + fixed,
+        ),
+        ParamSpec(
             "measured_rate_hz",
             10.0,
             "MeasuredChunk messages per simulated second (Hz) with publish_measured: a "
@@ -302,6 +309,7 @@ FIXED_AT_START = frozenset(
         "run_id",
         "unit_id",
         "publish_measured",
+        "measured_subscribers",
         "measured_rate_hz",
     }
 )
