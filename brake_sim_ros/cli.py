@@ -563,6 +563,16 @@ def _model_where(path: str) -> str:
     return f"--model {describe_path(path)}"
 
 
+def _load_model(path: str, name: str | None) -> Detector:
+    """The detector saved in ``path`` (``--model``): a built-in, or a user's whose class
+    ``name`` names (``module:Class`` or ``path/to/file.py:Class``; the file never does)."""
+    from brake_sim_ros.monitoring import saved
+    from brake_sim_ros.monitoring.baselines import BUILTIN, make_detector
+
+    user = make_detector(name) if name is not None and name not in BUILTIN else None
+    return saved.load(path, None if user else name, where=_model_where(path), user=user)
+
+
 def cmd_fit(args: argparse.Namespace) -> int:
     """``brake-sim fit DIR --detector NAME --out MODEL.json``: fit a detector on one split
     and save it (``monitoring.saved``), for ``score --model`` and ``monitor --model``."""
@@ -601,7 +611,7 @@ def cmd_score(args: argparse.Namespace) -> int:
     import json
 
     from brake_sim_ros.datasets.reader import open_dataset
-    from brake_sim_ros.monitoring import evaluate, saved
+    from brake_sim_ros.monitoring import evaluate
     from brake_sim_ros.monitoring.baselines import make_detector
     from brake_sim_ros.recording.output import check_output, replace_output
 
@@ -625,7 +635,7 @@ def cmd_score(args: argparse.Namespace) -> int:
     for name in names:
         try:
             if args.model:
-                detector = saved.load(args.model, name, where=_model_where(args.model))
+                detector = _load_model(args.model, name)
                 fitted = f"loaded from {args.model}"
             else:
                 detector = make_detector(name or "rms")
@@ -905,11 +915,9 @@ def _monitor_detector(parser: argparse.ArgumentParser, args: argparse.Namespace)
     if args.model is not None:
         if args.fit is not None:
             parser.error("--model and --fit: allowed one (a saved detector, or a dataset)")
-        from brake_sim_ros.monitoring import saved
-
         try:
-            detector = saved.load(args.model, args.detector, where=_model_where(args.model))
-        except saved.ModelFileError as exc:
+            detector = _load_model(args.model, args.detector)
+        except ValueError as exc:  # ModelFileError too
             parser.error(str(exc))
         print(f"brake-sim monitor: {detector.name} loaded from {args.model}")
         return detector

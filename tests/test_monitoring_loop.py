@@ -14,7 +14,13 @@ import pytest
 
 from brake_sim_ros import cli
 from brake_sim_ros.campaigns import load_campaign
+from brake_sim_ros.datasets.reader import open_dataset
 from brake_sim_ros.datasets.sweep import sweep
+from brake_sim_ros.monitoring import evaluate, saved
+from brake_sim_ros.monitoring.baselines import make_detector
+
+EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "peak_detector.py"
+EXAMPLE_SPEC = f"{EXAMPLE}:PeakAcceleration"
 
 CAMPAIGN = """
 name = "loop"
@@ -75,3 +81,60 @@ def test_a_detector_fitted_at_5120_hz_is_refused_at_25600_hz_by_score(slow, fast
     # fitted and scored at one rate, it scores
     assert cli.main(["score", str(fast), "--detector", "rms"]) == 0
     assert cli.main(["score", str(slow), "--model", str(model)]) == 0
+
+
+def test_a_detector_named_by_its_file_loads_without_the_python_path(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)  # nowhere near the example, and not on sys.path
+    detector = make_detector(EXAMPLE_SPEC)
+    assert detector.name == "peak_acceleration"
+    relative = tmp_path / "mine" / "peak.py"
+    relative.parent.mkdir()
+    relative.write_text(EXAMPLE.read_text())
+    assert make_detector("mine/peak.py:PeakAcceleration").name == "peak_acceleration"
+    with pytest.raises(ValueError, match=r"no file 'mine/none\.py'"):
+        make_detector("mine/none.py:PeakAcceleration")
+    with pytest.raises(ValueError, match="has no 'Nope'"):
+        make_detector("mine/peak.py:Nope")
+
+
+def test_an_import_error_inside_the_users_module_names_the_missing_module(tmp_path, monkeypatch):
+    user = tmp_path / "user_detector_29.py"
+    user.write_text("import numpy\nimport no_such_module_29\n")
+    with pytest.raises(ValueError) as by_file:
+        make_detector(f"{user}:Mine")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    with pytest.raises(ValueError) as by_module:
+        make_detector("user_detector_29:Mine")
+    for caught in (by_file, by_module):
+        message = str(caught.value)
+        assert "\n" not in message
+        assert "ModuleNotFoundError" in message and "no_such_module_29" in message, message
+        assert f"{user}, line 2" in message, message
+    with pytest.raises(ValueError, match="no module 'absent_module_29' on the Python path"):
+        make_detector("absent_module_29:Mine")
+    (tmp_path / "broken_29.py").write_text("def f(:\n")
+    with pytest.raises(ValueError, match=r"SyntaxError.*broken_29\.py, line 1"):
+        make_detector(f"{tmp_path / 'broken_29.py'}:Mine")
+
+
+def test_the_example_detector_is_fitted_saved_loaded_and_scored(slow, tmp_path, capsys):
+    model = tmp_path / "peak.json"
+    assert cli.main(["fit", str(slow), "--detector", EXAMPLE_SPEC, "--out", str(model)]) == 0
+    doc = json.loads(model.read_text())
+    assert doc["detector"] == "peak_acceleration" and doc["parameters"] == {}
+    assert str(EXAMPLE) not in model.read_text()  # data, never a name of code to run
+    out = tmp_path / "score.json"
+    argv = ["score", str(slow), "--detector", EXAMPLE_SPEC, "--model", str(model)]
+    assert cli.main([*argv, "--out", str(out)]) == 0
+    scored = json.loads(out.read_text())
+    assert scored["detector"] == "peak_acceleration" and scored["windows"] > 0
+    # the loaded detector is the fitted one: the same verdicts, bit for bit
+    dataset = open_dataset(slow)
+    fitted = make_detector(EXAMPLE_SPEC)
+    evaluate.fit(fitted, dataset, "train")
+    loaded = saved.load(model, user=make_detector(EXAMPLE_SPEC))
+    assert loaded.threshold == fitted.threshold and loaded.fitted_rate_hz == 5120.0
+    assert evaluate.score(loaded, dataset) == evaluate.score(fitted, dataset) == scored
+    # without its class named, the file is refused (it never names code to import)
+    assert cli.main(["score", str(slow), "--model", str(model)]) == cli.EXIT_ERROR
+    assert "allowed rms" in capsys.readouterr().err

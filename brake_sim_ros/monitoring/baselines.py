@@ -17,7 +17,6 @@ All of them read their features through :mod:`.features`.
 
 from __future__ import annotations
 
-import importlib
 from collections.abc import Callable, Iterable, Mapping
 
 import numpy as np
@@ -105,19 +104,16 @@ __all__ = ["BUILTIN", "STATISTICS", "VibrationThreshold", "crest_factor", "kurto
 
 
 def make_detector(name: str) -> Detector:
-    """A built-in detector by name (:data:`BUILTIN`), or a user's as ``module:Class`` (a
-    :class:`Detector` subclass built without arguments)."""
+    """A built-in detector by name (:data:`BUILTIN`), or a user's as ``module:Class`` or
+    ``path/to/file.py:Class`` (a :class:`Detector` subclass built without arguments:
+    :mod:`.user_class`)."""
     if name in BUILTIN:
         return BUILTIN[name]()
-    module, sep, attr = name.partition(":")
-    if not sep or not module or not attr:
+    if ":" not in name:
         raise ValueError(
-            f"detector {name!r}: allowed a built-in ({', '.join(sorted(BUILTIN))}) or module:Class"
+            f"detector {name!r}: allowed a built-in ({', '.join(sorted(BUILTIN))}),"
+            " module:Class or path/to/file.py:Class"
         )
-    try:
-        cls = getattr(importlib.import_module(module), attr)
-    except (ImportError, AttributeError) as exc:
-        raise ValueError(f"detector {name!r}: cannot import it ({type(exc).__name__})") from None
-    if not (isinstance(cls, type) and issubclass(cls, Detector)):
-        raise ValueError(f"detector {name!r}: not a brake_sim_ros.monitoring Detector subclass")
-    return cls()
+    from brake_sim_ros.monitoring.user_class import load_class
+
+    return load_class(name)()

@@ -221,6 +221,18 @@ class Detector(abc.ABC):
     ) -> Assessment:
         """The verdict on one window (``window_samples`` values per channel)."""
 
+    # -- the saved form (``brake-sim fit``; the built-ins' is in :mod:`.saved`) -----------
+    def saved_state(self) -> Mapping[str, Any] | None:
+        """What fitting learned, for a saved file: a mapping of JSON values (finite
+        numbers, strings, booleans, null, lists, string-keyed objects) and float64 or
+        int64 numpy arrays, restored bit for bit. None (the default): no saved form."""
+        return None
+
+    def load_state(self, state: Mapping[str, Any]) -> None:
+        """Take back what :meth:`saved_state` gave, on an instance built without
+        arguments; raise ValueError (one line) on a state it cannot take."""
+        raise NotImplementedError(f"detector {self.name}: no saved form")
+
     # -- the streaming part -------------------------------------------------------------
     def rate_refusal(self, sample_rate_hz: float) -> str | None:
         """Why samples at ``sample_rate_hz`` (Hz) cannot be judged, in one line naming both
