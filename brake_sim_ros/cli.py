@@ -622,6 +622,10 @@ def cmd_score(args: argparse.Namespace) -> int:
     names: list[str | None] = args.detector or ([None] if args.model else ["rms"])
     if args.out and len(names) > 1:
         raise BrakeSimError("--out with several --detector: allowed one detector (or --report)")
+    if args.windows and len(names) > 1:
+        raise BrakeSimError("--windows with several --detector: allowed one detector")
+    if args.windows and not args.windows.endswith(".parquet"):
+        raise BrakeSimError(f"--windows {args.windows!r}: allowed a FILE.parquet path")
     if args.model and len(names) > 1:
         raise BrakeSimError("--model with several --detector: allowed one detector")
     if args.model and args.fit_split is not None:
@@ -629,6 +633,12 @@ def cmd_score(args: argparse.Namespace) -> int:
     inputs = [args.model] if args.model else []
     if args.out:
         check_output(args.out, inputs=inputs, overwrite=True, option="--out")  # before the work
+    if args.windows:
+        samples = os.path.realpath(Path(args.directory) / "samples")
+        if os.path.commonpath([samples, os.path.realpath(Path(args.windows).parent)]) == samples:
+            raise BrakeSimError(f"--windows {args.windows}: inside the dataset's samples")
+        check_output(args.windows, inputs=inputs, overwrite=True, option="--windows")
+    window_rows: list[dict] = []
     if args.report:
         _check_report_directory(args.report)
     scores = []
@@ -642,7 +652,9 @@ def cmd_score(args: argparse.Namespace) -> int:
                 fit_split = args.fit_split or "train"
                 windows = evaluate.fit(detector, dataset, fit_split)
                 fitted = f"fitted on {fit_split} ({windows} windows)"
-            score = evaluate.score(detector, dataset, args.split, hold_s=args.hold_s)
+            score = evaluate.score(
+                detector, dataset, args.split, hold_s=args.hold_s, windows=window_rows
+            )
         except (ValueError, RuntimeError) as exc:  # the detector's, or the dataset's, one line
             raise BrakeSimError(" ".join(str(exc).split())) from None
         scores.append(score)
@@ -675,6 +687,8 @@ def cmd_score(args: argparse.Namespace) -> int:
         text = json.dumps(scores[0], indent=1, sort_keys=True)
         replace_output(args.out, lambda tmp: tmp.write_text(text + "\n"))
         print(f"JSON: {args.out}")
+    if args.windows:
+        _write_windows(args.windows, window_rows)
     if args.report:
         from brake_sim_ros.monitoring.report import report_files
 
@@ -689,6 +703,18 @@ def cmd_score(args: argparse.Namespace) -> int:
             )
         print(f"report: {', '.join(files)} in {args.report}")
     return 0
+
+
+def _write_windows(path: str, rows: list[dict]) -> None:
+    """``score --windows``: every assessed window as Parquet, written whole."""
+    import pyarrow.parquet as pq
+
+    from brake_sim_ros.monitoring.windows import windows_table
+    from brake_sim_ros.recording.output import replace_output
+
+    table = windows_table(rows)
+    replace_output(path, lambda tmp: pq.write_table(table, tmp), option="--windows")
+    print(f"windows: {table.num_rows} in {path}")
 
 
 def _check_report_directory(directory: str) -> None:
@@ -1151,6 +1177,12 @@ def build_parser() -> argparse.ArgumentParser:
         "--hold", dest="hold_s", type=float, default=0.2, help="alarm hold, s (default 0.2)"
     )
     p.add_argument("--out", help="write the score as JSON here (one detector)")
+    p.add_argument(
+        "--windows",
+        metavar="FILE.parquet",
+        help="write every assessed window (run, time, health index, alarm, diagnosis, truth,"
+        " class) here, to compute any metric (one detector)",
+    )
     p.add_argument(
         "--model",
         metavar="MODEL.json",

@@ -88,7 +88,7 @@ def test_bad_detectors_and_samples_are_refused_in_one_line():
         VibrationThreshold("median")
     with pytest.raises(ValueError, match="module:Class"):
         make_detector("nonsense")
-    with pytest.raises(ValueError, match="no module .no_such_module_xyz. on the Python path"):
+    with pytest.raises(ValueError, match=r"no module .no_such_module_xyz. on the Python path"):
         make_detector("no_such_module_xyz:Thing")
     with pytest.raises(ValueError, match=r"not a .* Detector subclass"):
         make_detector("numpy:ndarray")

@@ -138,3 +138,40 @@ def test_the_example_detector_is_fitted_saved_loaded_and_scored(slow, tmp_path, 
     # without its class named, the file is refused (it never names code to import)
     assert cli.main(["score", str(slow), "--model", str(model)]) == cli.EXIT_ERROR
     assert "allowed rms" in capsys.readouterr().err
+
+
+def test_the_windows_file_gives_the_scores_auroc_and_the_held_out_figures(slow, tmp_path):
+    import numpy as np
+    import pyarrow.parquet as pq
+    from sklearn.metrics import average_precision_score, roc_auc_score
+
+    out, windows = tmp_path / "score.json", tmp_path / "windows.parquet"
+    argv = ["score", str(slow), "--detector", "kurtosis", "--out", str(out)]
+    assert cli.main([*argv, "--windows", str(windows)]) == 0
+    score = json.loads(out.read_text())
+    table = pq.read_table(windows).to_pydict()
+    run_ids = np.array(table["run_id"])
+    y, h = np.array(table["defective"]), np.array(table["health_index"])
+    assert y.size == score["windows"] and len(set(run_ids)) == score["runs"]
+    assert roc_auc_score(y, h) == score["health_index"]["auroc"]
+    assert average_precision_score(y, h) == score["health_index"]["auprc"]
+    classes = np.array(table["class"])
+    assert set(classes) == {"healthy", "pivot_radius_change:left", "pivot_radius_change:right"}
+    assert ((classes == "healthy") == ~y).all()
+    # the held-out rule's runs (half the service limit) apart from the rest of the split
+    manifest = pq.read_table(slow / "manifest.parquet").to_pydict()
+    held_ids = {
+        r
+        for r, f in zip(manifest["run_id"], manifest["defect_severity_fraction"], strict=True)
+        if f == 0.5
+    }
+    (rule,) = score["held_out"]
+    assert rule["rule"]["column"] == "defect_severity_fraction"
+    assert rule["held_out"]["runs"] == len(held_ids & set(run_ids)) > 0
+    assert rule["held_out"]["runs"] + rule["rest"]["runs"] == score["runs"]
+    inside = np.isin(run_ids, sorted(held_ids))
+    for part, mask in (("held_out", inside), ("rest", ~inside)):
+        assert rule[part]["windows"] == int(mask.sum())
+        expected = roc_auc_score(y[mask], h[mask]) if len(set(y[mask])) == 2 else None
+        assert rule[part]["health_index"]["auroc"] == expected
+    assert cli.main([*argv, "--windows", str(slow / "samples" / "w.parquet")]) == cli.EXIT_ERROR

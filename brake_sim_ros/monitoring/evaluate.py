@@ -40,7 +40,14 @@ The score (:func:`score`, written as JSON by ``brake-sim score``; :data:`SCHEMA_
     forecast costs more than an early one by as much); null when it gives no finite
     forecast there (new in version 4)
 ``per_run``: one object per run: ``run_id``, ``unit_id``, ``defects`` (kind:location
-    labels active at the end), ``onset_s``, ``delay_s``, ``false_alarms``
+    labels active at the end), ``onset_s``, ``delay_s``, ``false_alarms``, ``healthy_s``
+    (s of healthy operation; new in version 5)
+``held_out``: one object per held-out rule of the dataset (``[[split.held_out]]``):
+    ``rule`` (``column``, ``values``, ``minimum``, ``maximum``), and ``held_out`` and
+    ``rest``, the figures over the runs it matches and over the split's other runs:
+    ``runs``, ``windows``, ``detection`` (``defective_runs``, ``detected``, ``missed``,
+    ``median_delay_s``), ``false_alarms`` (``count``, ``healthy_hours``, ``per_hour``),
+    ``health_index`` (``auroc``, ``auprc``) (new in version 5; :mod:`.windows`)
 """
 
 from __future__ import annotations
@@ -56,8 +63,9 @@ from brake_sim_ros.datasets.reader import SweepDataset
 from brake_sim_ros.model.catalogue import KIND_BY_NAME, KINDS, label_column
 from brake_sim_ros.monitoring import metrics
 from brake_sim_ros.monitoring.detector import Assessment, Detector, SampleChunk, TrainingWindow
+from brake_sim_ros.monitoring.windows import held_out_figures, window_rows
 
-SCHEMA_VERSION = 4
+SCHEMA_VERSION = 5
 HEALTHY = "healthy"  # the class of a healthy window or run in the per-class figures
 MEASURED_PREFIX = "measured:"
 # label column -> "kind:location", the catalogue's (``brake-sim defects``)
@@ -265,8 +273,12 @@ def score(
     *,
     hold_s: float = 0.2,
     chunk_s: float = 0.1,
+    windows: list[dict] | None = None,
 ) -> dict:
-    """Run ``detector`` (fitted) over ``split`` and score it (module docstring)."""
+    """Run ``detector`` (fitted) over ``split`` and score it (module docstring);
+    ``windows``, when given, receives every assessed window's row
+    (:func:`~.windows.window_rows`)."""
+    rows_out: list[dict] = [] if windows is None else windows
     per_run, delays, missed = [], [], 0
     fa_count, fa_hours = 0, 0.0
     truth, index, true_class, diagnosed = [], [], [], []
@@ -283,10 +295,13 @@ def score(
         defective = np.any(run.labels[rows] != 0.0, axis=1) if rows.size else np.zeros(0, bool)
         truth.extend(defective.tolist())
         index.extend(a.health_index for a in found)
-        window_class.extend(
+        classes = [
             ":".join(run.active(int(row))[0]) if bad else HEALTHY
             for row, bad in zip(rows, defective, strict=True)
-        )
+        ]
+        window_class.extend(classes)
+        actives = [[":".join(x) for x in run.active(int(row))] for row in rows]
+        rows_out.extend(window_rows(run.run_id, run.unit_id, found, times, actives, classes))
         if run.rul_s is not None:
             for a, row in zip(found, rows, strict=True):
                 if math.isfinite(a.rul_s) and math.isfinite(run.rul_s[row]):
@@ -294,11 +309,10 @@ def score(
         onset = run.onset_index
         onset_s = None if onset is None else float(run.time_s[onset])
         delay = None
+        count, hours = 0, 0.0
         if rows.size:
             count, hours = metrics.false_alarms_per_hour(alarm, times, ~defective, hold_s)
             fa_count, fa_hours = fa_count + count, fa_hours + hours
-        else:
-            count = 0
         if onset_s is not None:
             delay = metrics.detection_delay(alarm, times, onset_s, hold_s) if rows.size else None
             if delay is None:
@@ -326,6 +340,7 @@ def score(
                 "onset_s": onset_s,
                 "delay_s": delay,
                 "false_alarms": count,
+                "healthy_s": hours * 3600.0,
             }
         )
     y = np.array(truth, dtype=bool)
@@ -387,4 +402,10 @@ def score(
         "severity": _severity_figures(severities) if severities else None,
         "forecast": _forecast_figures(forecasts) if forecasts else None,
         "per_run": per_run,
+        "held_out": held_out_figures(
+            dataset.held_out,
+            {r["run_id"]: r for r in dataset.manifest.to_pylist()},
+            per_run,
+            rows_out,
+        ),
     }
