@@ -728,6 +728,26 @@ def _check_report_directory(directory: str) -> None:
         raise BrakeSimError(f"--report {describe_path(out)}: not a directory")
 
 
+def cmd_plot(args: argparse.Namespace) -> int:
+    """``brake-sim plot SOURCE --out FILE.png``: one run drawn headless
+    (:mod:`brake_sim_ros.monitoring.plot`)."""
+    from brake_sim_ros.monitoring import plot
+    from brake_sim_ros.recording.output import atomic_output, probe_output
+
+    if not args.out.endswith(".png"):
+        raise BrakeSimError(f"--out {args.out!r}: allowed a FILE.png path")
+    probe_output(args.out, inputs=[args.source], overwrite=args.overwrite, option="--out")
+    try:
+        columns, name = plot.read_run(args.source, args.run)
+        windows = None if args.windows is None else plot.read_windows(args.windows, name)
+        with atomic_output(args.out, overwrite=args.overwrite, option="--out") as tmp:
+            plot.draw(columns, tmp, title=name, windows=windows)
+    except ValueError as exc:
+        raise BrakeSimError(" ".join(str(exc).split())) from None
+    print(f"plot: {args.out}")
+    return 0
+
+
 # --- unit ----------------------------------------------------------------------------
 def cmd_unit(args: argparse.Namespace) -> int:
     from brake_sim_ros.scenarios import load_scenario
@@ -1212,6 +1232,20 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", required=True, metavar="MODEL.json", help="the file to write")
     p.add_argument("--overwrite", action="store_true", help="replace an existing --out")
     p.set_defaults(func=cmd_fit)
+
+    p = sub.add_parser(
+        "plot",
+        help="draw one run to a PNG: measured channels with defect labels and drive phases,"
+        " a spectrogram, the tone ring's orders, a detector's health index",
+    )
+    p.add_argument("source", help="a simulate --out file (.parquet, .npz) or a dataset directory")
+    p.add_argument("--run", metavar="RUN_ID", help="the dataset's run to draw")
+    p.add_argument(
+        "--windows", metavar="FILE.parquet", help="a score --windows file: draw its health index"
+    )
+    p.add_argument("--out", required=True, metavar="FILE.png", help="the PNG to write")
+    p.add_argument("--overwrite", action="store_true", help="replace an existing --out")
+    p.set_defaults(func=cmd_plot)
 
     p = sub.add_parser(
         "bench",

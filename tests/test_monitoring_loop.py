@@ -175,3 +175,42 @@ def test_the_windows_file_gives_the_scores_auroc_and_the_held_out_figures(slow, 
         expected = roc_auc_score(y[mask], h[mask]) if len(set(y[mask])) == 2 else None
         assert rule[part]["health_index"]["auroc"] == expected
     assert cli.main([*argv, "--windows", str(slow / "samples" / "w.parquet")]) == cli.EXIT_ERROR
+
+
+def _png_size(path: Path) -> tuple[int, int]:
+    data = path.read_bytes()
+    assert data[:8] == b"\x89PNG\r\n\x1a\n"  # a PNG, whole
+    return int.from_bytes(data[16:20], "big"), int.from_bytes(data[20:24], "big")
+
+
+def test_plot_writes_a_png_for_a_run_of_each_kind_of_source(slow, tmp_path, capsys):
+    import matplotlib.image
+
+    run = tmp_path / "run.parquet"
+    argv = ["simulate", "case5_left_tilted", "--duration", "0.4", "--quiet"]
+    assert cli.main([*argv, "--sample-rate", "5120", "--out", str(run)]) == 0
+    npz = tmp_path / "run.npz"
+    assert cli.main([*argv, "--sample-rate", "5120", "--out", str(npz)]) == 0
+    windows = tmp_path / "windows.parquet"
+    assert cli.main(["score", str(slow), "--windows", str(windows)]) == 0
+    test_run = open_dataset(slow).runs("test")[0]
+    cases = {
+        "file.png": [str(run)],
+        "npz.png": [str(npz)],
+        "dataset.png": [str(slow), "--run", test_run, "--windows", str(windows)],
+    }
+    sizes = {}
+    for name, source in cases.items():
+        out = tmp_path / name
+        assert cli.main(["plot", *source, "--out", str(out)]) == 0, capsys.readouterr().err
+        sizes[name] = _png_size(out)
+        pixels = matplotlib.image.imread(out)
+        assert pixels.std() > 0.05  # drawn, not blank
+    assert sizes["dataset.png"][1] > sizes["file.png"][1]  # the health-index panel
+    # bad sources: one line each, nothing written
+    for bad in ([str(slow), "--out", str(tmp_path / "a.png")],
+                [str(slow), "--run", "run-99999", "--out", str(tmp_path / "b.png")],
+                [str(run), "--out", str(tmp_path / "c.txt")]):  # fmt: skip
+        assert cli.main(["plot", *bad]) == cli.EXIT_ERROR
+        assert capsys.readouterr().err.count("\n") == 1
+    assert not list(tmp_path.glob("[abc].*"))
