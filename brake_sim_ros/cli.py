@@ -21,6 +21,8 @@ import numpy as np
 from brake_sim_ros import __version__
 from brake_sim_ros.errors import BrakeSimError
 from brake_sim_ros.model.layout import SIDES
+from brake_sim_ros.monitoring.registry import help_text as detector_help
+from brake_sim_ros.monitoring.registry import names as detector_names
 from brake_sim_ros.solvers.methods import METHODS, SOLVER_METHODS
 from brake_sim_ros.solvers.presets import PRESETS
 from brake_sim_ros.studies import BENCHMARKS
@@ -567,7 +569,7 @@ def _load_model(path: str, name: str | None) -> Detector:
     """The detector saved in ``path`` (``--model``): a built-in, or a user's whose class
     ``name`` names (``module:Class`` or ``path/to/file.py:Class``; the file never does)."""
     from brake_sim_ros.monitoring import saved
-    from brake_sim_ros.monitoring.baselines import BUILTIN, make_detector
+    from brake_sim_ros.monitoring.registry import BUILTIN, make_detector
 
     user = make_detector(name) if name is not None and name not in BUILTIN else None
     return saved.load(path, None if user else name, where=_model_where(path), user=user)
@@ -578,7 +580,7 @@ def cmd_fit(args: argparse.Namespace) -> int:
     and save it (``monitoring.saved``), for ``score --model`` and ``monitor --model``."""
     from brake_sim_ros.datasets.reader import open_dataset
     from brake_sim_ros.monitoring import evaluate, saved
-    from brake_sim_ros.monitoring.baselines import make_detector
+    from brake_sim_ros.monitoring.registry import make_detector
     from brake_sim_ros.recording.output import atomic_output, probe_output
 
     dataset = open_dataset(args.directory)
@@ -612,7 +614,7 @@ def cmd_score(args: argparse.Namespace) -> int:
 
     from brake_sim_ros.datasets.reader import open_dataset
     from brake_sim_ros.monitoring import evaluate
-    from brake_sim_ros.monitoring.baselines import make_detector
+    from brake_sim_ros.monitoring.registry import make_detector
     from brake_sim_ros.recording.output import check_output, replace_output
 
     dataset = open_dataset(args.directory)
@@ -890,9 +892,7 @@ def _monitor_parser() -> argparse.ArgumentParser:
         " (/brake_monitor/diagnoses) and /diagnostics status. ROS options go after"
         " --ros-args.",
     )
-    p.add_argument(
-        "--detector", required=True, help="rms, kurtosis, crest, or module:Class (as score)"
-    )
+    p.add_argument("--detector", required=True, help=detector_help())
     p.add_argument(
         "--simulator",
         metavar="NODE",
@@ -955,8 +955,7 @@ def run_monitor(argv: list[str]) -> int:
 
 def _monitor_detector(parser: argparse.ArgumentParser, args: argparse.Namespace) -> Detector:
     """The monitor's detector: loaded (``--model``), or made and fitted (``--fit``)."""
-    from brake_sim_ros.monitoring.baselines import BUILTIN, make_detector
-    from brake_sim_ros.monitoring.detector import Detector
+    from brake_sim_ros.monitoring.registry import REGISTRY, make_detector
 
     if args.model is not None:
         if args.fit is not None:
@@ -972,8 +971,8 @@ def _monitor_detector(parser: argparse.ArgumentParser, args: argparse.Namespace)
     except ValueError as exc:
         parser.error(str(exc))
     # a built-in that learns cannot assess unfitted; a user's class may come ready-made
-    learns = type(detector).fit is not Detector.fit
-    if learns and args.fit is None and args.detector in BUILTIN:
+    entry = REGISTRY.get(args.detector)
+    if entry is not None and entry.learns and args.fit is None:
         parser.error(
             f"detector {detector.name} learns from data: give --fit DIR, a sweep's dataset"
             " (brake-sim sweep) to fit it on, or --model MODEL.json (brake-sim fit)"
@@ -1002,6 +1001,7 @@ class _Parser(argparse.ArgumentParser):
 
 
 def build_parser() -> argparse.ArgumentParser:
+    """Every command's parser (but node, live, monitor, replay and severity: their own)."""
     parser = _Parser(prog="brake-sim", description=__doc__.splitlines()[0])
     parser.add_argument("--version", action="version", version=f"brake-sim-ros {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
@@ -1188,8 +1188,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--detector",
         action="append",
-        help="rms, kurtosis, crest, orders, impact, learned, or module:Class (default rms);"
-        " repeat it to score several",
+        help=detector_help() + " (default rms); repeat it to score several",
     )
     p.add_argument("--split", default="test", help="split to score (default test)")
     p.add_argument("--fit-split", help="split to fit on (default train; not with --model)")
@@ -1221,13 +1220,12 @@ def build_parser() -> argparse.ArgumentParser:
         help="fit a detector on a dataset's train split and save it as JSON",
         description="Fit a detector on one split of a sweep's dataset and save it, fitted,"
         " as a JSON file (brake_sim_ros.monitoring.saved documents it) that score --model"
-        " and monitor --model load instead of refitting. Saved forms: rms, kurtosis, crest,"
-        " orders, impact, learned.",
+        " and monitor --model load instead of refitting. Saved forms: "
+        + ", ".join(detector_names(saved_only=True))
+        + ", and your Detector's with saved_state and load_state.",
     )
     p.add_argument("directory", help="a sweep's output directory")
-    p.add_argument(
-        "--detector", required=True, help="rms, kurtosis, crest, orders, impact or learned"
-    )
+    p.add_argument("--detector", required=True, help=detector_help(saved_only=True))
     p.add_argument("--fit-split", default="train", help="split to fit on (default train)")
     p.add_argument("--out", required=True, metavar="MODEL.json", help="the file to write")
     p.add_argument("--overwrite", action="store_true", help="replace an existing --out")

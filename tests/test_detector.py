@@ -10,10 +10,10 @@ from brake_sim_ros.monitoring.baselines import (
     VibrationThreshold,
     crest_factor,
     kurtosis,
-    make_detector,
     rms,
 )
 from brake_sim_ros.monitoring.detector import SampleChunk, TrainingWindow
+from brake_sim_ros.monitoring.registry import make_detector
 
 FS = 1000.0
 CH = "accel"

@@ -17,7 +17,7 @@ from brake_sim_ros.campaigns import load_campaign
 from brake_sim_ros.datasets.reader import open_dataset
 from brake_sim_ros.datasets.sweep import sweep
 from brake_sim_ros.monitoring import evaluate, saved
-from brake_sim_ros.monitoring.baselines import make_detector
+from brake_sim_ros.monitoring.registry import make_detector
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "peak_detector.py"
 EXAMPLE_SPEC = f"{EXAMPLE}:PeakAcceleration"

@@ -1,4 +1,5 @@
-"""Baseline detectors a reader can follow, and the registry that names detectors.
+"""Baseline detectors a reader can follow (the registry that names every built-in
+detector is :mod:`.registry`).
 
 * :class:`VibrationThreshold` (``rms``, ``kurtosis``, ``crest``): one statistic of one
   measured channel per window (default 0.1 s of the backing plate's y acceleration);
@@ -17,7 +18,7 @@ All of them read their features through :mod:`.features`.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Iterable, Mapping
 
 import numpy as np
 
@@ -76,44 +77,4 @@ class VibrationThreshold(Detector):
         )
 
 
-def _orders() -> Detector:
-    from brake_sim_ros.monitoring.order_analysis import OrderAnalysis
-
-    return OrderAnalysis()
-
-
-def _impact() -> Detector:
-    from brake_sim_ros.monitoring.impact import ImpactDetector
-
-    return ImpactDetector()
-
-
-def _learned() -> Detector:
-    from brake_sim_ros.monitoring.learned import LearnedClassifier
-
-    return LearnedClassifier()
-
-
-BUILTIN: dict[str, Callable[[], Detector]] = {
-    **{name: (lambda name=name: VibrationThreshold(name)) for name in STATISTICS},
-    "orders": _orders,
-    "impact": _impact,
-    "learned": _learned,
-}
-__all__ = ["BUILTIN", "STATISTICS", "VibrationThreshold", "crest_factor", "kurtosis", "rms"]
-
-
-def make_detector(name: str) -> Detector:
-    """A built-in detector by name (:data:`BUILTIN`), or a user's as ``module:Class`` or
-    ``path/to/file.py:Class`` (a :class:`Detector` subclass built without arguments:
-    :mod:`.user_class`)."""
-    if name in BUILTIN:
-        return BUILTIN[name]()
-    if ":" not in name:
-        raise ValueError(
-            f"detector {name!r}: allowed a built-in ({', '.join(sorted(BUILTIN))}),"
-            " module:Class or path/to/file.py:Class"
-        )
-    from brake_sim_ros.monitoring.user_class import load_class
-
-    return load_class(name)()
+__all__ = ["STATISTICS", "VibrationThreshold", "crest_factor", "kurtosis", "rms"]

@@ -68,6 +68,7 @@ import numpy as np
 from brake_sim_ros import __version__
 from brake_sim_ros.errors import BrakeSimError
 from brake_sim_ros.model.catalogue import KINDS
+from brake_sim_ros.monitoring import registry
 from brake_sim_ros.monitoring.baselines import STATISTICS, VibrationThreshold
 from brake_sim_ros.monitoring.detector import Detector
 from brake_sim_ros.monitoring.features import ORDERS, feature_names
@@ -91,7 +92,7 @@ SCHEMA_VERSION = 2
 # (100 trees on 14 040 windows, 18 severity forests) takes 61 MB: a campaign four times
 # its size fits; a larger file is refused before it is read.
 MAX_MODEL_BYTES = 256 * 1024**2
-SAVED = (*STATISTICS, "orders", "impact", "learned")  # the detectors that have a saved form
+SAVED = registry.names(saved_only=True)  # the detectors that have a saved form
 TOP_KEYS = (
     "format",
     "schema_version",
