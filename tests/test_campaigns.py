@@ -63,25 +63,46 @@ def test_builtin_campaigns_are_leak_free(name):
     assert not campaign.held_out or held  # a held-out rule that matches nothing tests nothing
 
 
-def test_demo_has_every_catalogue_defect_at_two_severities_on_three_units():
-    runs = load_campaign("demo").runs()
-    assert len({r.unit_id for r in runs}) == 3
-    kinds = {(r.columns["defect_kind"], r.columns["defect_location"]) for r in runs}
-    assert kinds >= {(k.name, loc) for k in KINDS for loc in k.locations}
-    for kind in KINDS:
-        severities = {
-            r.columns["defect_severity"] for r in runs if r.columns["defect_kind"] == kind.name
+def test_the_demo_can_fit_and_score_every_baseline():
+    """Every catalogue defect at its limit in every split (half of it on test only),
+    several units per split (impact needs healthy stops of three train units), minutes of
+    healthy operation on test, and runs longer than the 1.5 s the orders baseline needs."""
+    campaign = load_campaign("demo")
+    runs = campaign.runs()
+    every = {(k.name, loc) for k in KINDS for loc in k.locations}
+    for split, units in (("train", 5), ("validation", 2), ("test", 2)):
+        mine = [r for r in runs if r.split == split]
+        assert len({r.unit_id for r in mine}) == units
+        at_limit = {
+            (r.columns["defect_kind"], r.columns["defect_location"])
+            for r in mine
+            if r.columns["defect_severity_fraction"] == 1.0
         }
-        assert severities == {0.5 * kind.service_limit, kind.service_limit}
-        # the label column of the run carries the severity the axis asked for (a share
-        # change is stored as the share, 0.5 + severity: equal to rounding)
-        for r in runs:
-            if r.columns["defect_kind"] == kind.name:
-                label = f"defect:{kind.name}:{r.columns['defect_location']} [{kind.unit}]"
-                assert r.labels[label] == pytest.approx(r.columns["defect_severity"], abs=1e-12)
-                assert sum(v != 0.0 for v in r.labels.values()) == 1 + (
-                    kind.name == "actuation_share_change"
-                )
+        assert at_limit == every
+        healthy = [r for r in mine if r.columns["defect_kind"] == "healthy"]
+        assert len({r.unit_id for r in healthy}) == units
+        assert len({r.seed for r in healthy}) == len(healthy)  # each its own run
+        if split == "test":
+            assert sum(r.duration_s for r in healthy) >= 120.0
+    halves = {r.split for r in runs if r.columns["defect_severity_fraction"] == 0.5}
+    assert halves == {"test"}
+    assert min(r.duration_s for r in runs) > 1.5
+    assert campaign.outputs.sample_rate_hz == 5120.0
+
+
+def test_healthy_counts_make_that_many_healthy_runs_each_its_own():
+    text = TINY.replace("severities = [0.5, 1.0]", "severities = [0.5, 1.0]\nhealthy = 3")
+    runs = parse_campaign(text, "t.toml").runs()
+    healthy = [r for r in runs if r.columns["defect_kind"] == "healthy"]
+    per_unit = {r.unit_id for r in healthy}
+    assert len(healthy) == 3 * 2 * len(per_unit)  # three per force on each unit
+    assert sorted({r.columns["defect_repeat"] for r in healthy}) == [0, 1, 2]
+    assert len({r.seed for r in healthy}) == len(healthy)
+    defective = [r for r in runs if r.columns["defect_kind"] != "healthy"]
+    assert {r.columns["defect_repeat"] for r in defective} == {0}
+    for bad in ("-1", "1001", "1.5", "'all'"):
+        with pytest.raises(CampaignError, match=r"axes\[0\]\.healthy"):
+            parse_campaign(text.replace("healthy = 3", f"healthy = {bad}"), "t.toml")
 
 
 def test_plan_crosses_units_and_axes_and_holds_values_out():
@@ -370,5 +391,9 @@ def test_the_fraction_column_leaves_every_run_seed_as_it_was():
     # a derived column is no part of a run's identity: datasets keep their seeds
     campaign = load_campaign("demo")
     for r in campaign.runs():
-        identity = {k: v for k, v in r.columns.items() if k != "defect_severity_fraction"}
+        identity = {
+            k: v
+            for k, v in r.columns.items()
+            if k != "defect_severity_fraction" and not (k == "defect_repeat" and v == 0)
+        }
         assert r.seed == run_seed(campaign.seed, r.unit_id, identity)

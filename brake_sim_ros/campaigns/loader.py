@@ -489,8 +489,8 @@ def _defect_axis(ctx: _Ctx, item: dict[str, Any], where: str) -> DefectAxis:
     if len(set(values)) != len(values):
         raise ctx.fail(f"{where}.severities", fractions, "distinct fractions")
     healthy = item.get("healthy", True)
-    if not isinstance(healthy, bool):
-        raise ctx.fail(f"{where}.healthy", healthy, "true or false")
+    if not isinstance(healthy, bool) and not (isinstance(healthy, int) and 0 <= healthy <= 1000):
+        raise ctx.fail(f"{where}.healthy", healthy, "true, false or a count of healthy runs 0-1000")
     choices = defect_choices(tuple(kinds), values, healthy)
     for c in choices:  # a fraction beyond a kind's range: refused here, naming it
         if c.kind in KIND_BY_NAME:
@@ -617,7 +617,11 @@ def plan_runs(campaign: Campaign) -> list[RunSpec]:
             if campaign.outputs.sample_rate_hz is not None:
                 data["sample_rate_hz"] = campaign.outputs.sample_rate_hz
             seeded = any(isinstance(a, Axis) and a.key == "seed" for a in campaign.axes)
-            identity = {k: v for k, v in columns.items() if k not in DERIVED_COLUMNS}
+            identity = {
+                k: v
+                for k, v in columns.items()
+                if k not in DERIVED_COLUMNS and not (k == "defect_repeat" and v == 0)
+            }
             seed = data.get("seed", 0) if seeded else run_seed(campaign.seed, unit, identity)
             # the units are one fleet: each the same brake in all its runs (its scatter is
             # drawn from the unit id and the fleet seed), each run its own noise and draws
