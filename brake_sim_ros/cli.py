@@ -22,6 +22,8 @@ from brake_sim_ros import __version__
 from brake_sim_ros.errors import BrakeSimError
 from brake_sim_ros.identifiers import IDENTIFIER_RULE
 from brake_sim_ros.model.layout import SIDES
+from brake_sim_ros.monitoring.registry import help_text as detector_help
+from brake_sim_ros.monitoring.registry import names as detector_names
 from brake_sim_ros.solvers.methods import METHODS, SOLVER_METHODS
 from brake_sim_ros.solvers.presets import PRESETS
 from brake_sim_ros.studies import BENCHMARKS
@@ -521,12 +523,22 @@ def _model_where(path: str) -> str:
     return f"--model {describe_path(path)}"
 
 
+def _load_model(path: str, name: str | None) -> Detector:
+    """The detector saved in ``path`` (``--model``): a built-in, or a user's whose class
+    ``name`` names (``module:Class`` or ``path/to/file.py:Class``; the file never does)."""
+    from brake_sim_ros.monitoring import saved
+    from brake_sim_ros.monitoring.registry import BUILTIN, make_detector
+
+    user = make_detector(name) if name is not None and name not in BUILTIN else None
+    return saved.load(path, None if user else name, where=_model_where(path), user=user)
+
+
 def cmd_fit(args: argparse.Namespace) -> int:
     """``brake-sim fit DIR --detector NAME --out MODEL.json``: fit a detector on one split
     and save it (``monitoring.saved``), for ``score --model`` and ``monitor --model``."""
     from brake_sim_ros.datasets.reader import open_dataset
     from brake_sim_ros.monitoring import evaluate, saved
-    from brake_sim_ros.monitoring.baselines import make_detector
+    from brake_sim_ros.monitoring.registry import make_detector
     from brake_sim_ros.recording.output import atomic_output, probe_output
 
     dataset = open_dataset(args.directory)
@@ -561,8 +573,8 @@ def cmd_score(args: argparse.Namespace) -> int:
     import json
 
     from brake_sim_ros.datasets.reader import open_dataset
-    from brake_sim_ros.monitoring import evaluate, saved
-    from brake_sim_ros.monitoring.baselines import make_detector
+    from brake_sim_ros.monitoring import evaluate
+    from brake_sim_ros.monitoring.registry import make_detector
     from brake_sim_ros.recording.output import check_output, replace_output
 
     dataset = open_dataset(args.directory)
@@ -572,6 +584,10 @@ def cmd_score(args: argparse.Namespace) -> int:
     names: list[str | None] = args.detector or ([None] if args.model else ["rms"])
     if args.out and len(names) > 1:
         raise BrakeSimError("--out with several --detector: allowed one detector (or --report)")
+    if args.windows and len(names) > 1:
+        raise BrakeSimError("--windows with several --detector: allowed one detector")
+    if args.windows and not args.windows.endswith(".parquet"):
+        raise BrakeSimError(f"--windows {args.windows!r}: allowed a FILE.parquet path")
     if args.model and len(names) > 1:
         raise BrakeSimError("--model with several --detector: allowed one detector")
     if args.model and args.fit_split is not None:
@@ -579,20 +595,28 @@ def cmd_score(args: argparse.Namespace) -> int:
     inputs = [args.model] if args.model else []
     if args.out:
         check_output(args.out, inputs=inputs, overwrite=True, option="--out")  # before the work
+    if args.windows:
+        samples = os.path.realpath(Path(args.directory) / "samples")
+        if os.path.commonpath([samples, os.path.realpath(Path(args.windows).parent)]) == samples:
+            raise BrakeSimError(f"--windows {args.windows}: inside the dataset's samples")
+        check_output(args.windows, inputs=inputs, overwrite=True, option="--windows")
+    window_rows: list[dict] = []
     if args.report:
         _check_report_directory(args.report)
     scores = []
     for name in names:
         try:
             if args.model:
-                detector = saved.load(args.model, name, where=_model_where(args.model))
+                detector = _load_model(args.model, name)
                 fitted = f"loaded from {args.model}"
             else:
                 detector = make_detector(name or "rms")
                 fit_split = args.fit_split or "train"
                 windows = evaluate.fit(detector, dataset, fit_split)
                 fitted = f"fitted on {fit_split} ({windows} windows)"
-            score = evaluate.score(detector, dataset, args.split, hold_s=args.hold_s)
+            score = evaluate.score(
+                detector, dataset, args.split, hold_s=args.hold_s, windows=window_rows
+            )
         except BrakeSimError:
             raise
         except (ValueError, RuntimeError) as exc:  # the detector's, or the dataset's, one line
@@ -627,6 +651,8 @@ def cmd_score(args: argparse.Namespace) -> int:
         text = json.dumps(scores[0], indent=1, sort_keys=True)
         replace_output(args.out, lambda tmp: tmp.write_text(text + "\n"))
         print(f"JSON: {args.out}")
+    if args.windows:
+        _write_windows(args.windows, window_rows)
     if args.report:
         from brake_sim_ros.monitoring.report import report_files
 
@@ -643,6 +669,18 @@ def cmd_score(args: argparse.Namespace) -> int:
     return 0
 
 
+def _write_windows(path: str, rows: list[dict]) -> None:
+    """``score --windows``: every assessed window as Parquet, written whole."""
+    import pyarrow.parquet as pq
+
+    from brake_sim_ros.monitoring.windows import windows_table
+    from brake_sim_ros.recording.output import replace_output
+
+    table = windows_table(rows)
+    replace_output(path, lambda tmp: pq.write_table(table, tmp), option="--windows")
+    print(f"windows: {table.num_rows} in {path}")
+
+
 def _check_report_directory(directory: str) -> None:
     """Refuse a report directory that is a link or not a directory, before any work."""
     from brake_sim_ros.recording.mcap_format import describe_path
@@ -652,6 +690,26 @@ def _check_report_directory(directory: str) -> None:
         raise BrakeSimError(f"--report {describe_path(out)}: a link; allowed a directory path")
     if out.exists() and not out.is_dir():
         raise BrakeSimError(f"--report {describe_path(out)}: not a directory")
+
+
+def cmd_plot(args: argparse.Namespace) -> int:
+    """``brake-sim plot SOURCE --out FILE.png``: one run drawn headless
+    (:mod:`brake_sim_ros.monitoring.plot`)."""
+    from brake_sim_ros.monitoring import plot
+    from brake_sim_ros.recording.output import atomic_output, probe_output
+
+    if not args.out.endswith(".png"):
+        raise BrakeSimError(f"--out {args.out!r}: allowed a FILE.png path")
+    probe_output(args.out, inputs=[args.source], overwrite=args.overwrite, option="--out")
+    try:
+        columns, name = plot.read_run(args.source, args.run)
+        windows = None if args.windows is None else plot.read_windows(args.windows, name)
+        with atomic_output(args.out, overwrite=args.overwrite, option="--out") as tmp:
+            plot.draw(columns, tmp, title=name, windows=windows)
+    except ValueError as exc:
+        raise BrakeSimError(" ".join(str(exc).split())) from None
+    print(f"plot: {args.out}")
+    return 0
 
 
 # --- unit ----------------------------------------------------------------------------
@@ -796,9 +854,7 @@ def _monitor_parser() -> argparse.ArgumentParser:
         " (/brake_monitor/diagnoses) and /diagnostics status. ROS options go after"
         " --ros-args.",
     )
-    p.add_argument(
-        "--detector", required=True, help="rms, kurtosis, crest, or module:Class (as score)"
-    )
+    p.add_argument("--detector", required=True, help=detector_help())
     p.add_argument(
         "--simulator",
         metavar="NODE",
@@ -867,17 +923,14 @@ def run_monitor(argv: list[str]) -> int:
 
 def _monitor_detector(parser: argparse.ArgumentParser, args: argparse.Namespace) -> Detector:
     """The monitor's detector: loaded (``--model``), or made and fitted (``--fit``)."""
-    from brake_sim_ros.monitoring.baselines import BUILTIN, make_detector
-    from brake_sim_ros.monitoring.detector import Detector
+    from brake_sim_ros.monitoring.registry import REGISTRY, make_detector
 
     if args.model is not None:
         if args.fit is not None:
             parser.error("--model and --fit: allowed one (a saved detector, or a dataset)")
-        from brake_sim_ros.monitoring import saved
-
         try:
-            detector = saved.load(args.model, args.detector, where=_model_where(args.model))
-        except saved.ModelFileError as exc:
+            detector = _load_model(args.model, args.detector)
+        except ValueError as exc:  # ModelFileError too
             parser.error(str(exc))
         print(f"brake-sim monitor: {detector.name} loaded from {args.model}")
         return detector
@@ -886,8 +939,8 @@ def _monitor_detector(parser: argparse.ArgumentParser, args: argparse.Namespace)
     except ValueError as exc:
         parser.error(str(exc))
     # a built-in that learns cannot assess unfitted; a user's class may come ready-made
-    learns = type(detector).fit is not Detector.fit
-    if learns and args.fit is None and args.detector in BUILTIN:
+    entry = REGISTRY.get(args.detector)
+    if entry is not None and entry.learns and args.fit is None:
         parser.error(
             f"detector {detector.name} learns from data: give --fit DIR, a sweep's dataset"
             " (brake-sim sweep) to fit it on, or --model MODEL.json (brake-sim fit)"
@@ -916,6 +969,7 @@ class _Parser(argparse.ArgumentParser):
 
 
 def build_parser() -> argparse.ArgumentParser:
+    """Every command's parser (but node, live, monitor, replay and severity: their own)."""
     parser = _Parser(prog="brake-sim", description=__doc__.splitlines()[0])
     parser.add_argument("--version", action="version", version=f"brake-sim-ros {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
@@ -1102,8 +1156,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--detector",
         action="append",
-        help="rms, kurtosis, crest, orders, impact, learned, or module:Class (default rms);"
-        " repeat it to score several",
+        help=detector_help() + " (default rms); repeat it to score several",
     )
     p.add_argument("--split", default="test", help="split to score (default test)")
     p.add_argument("--debug", action="store_true", help=DEBUG_HELP)
@@ -1112,6 +1165,12 @@ def build_parser() -> argparse.ArgumentParser:
         "--hold", dest="hold_s", type=float, default=0.2, help="alarm hold, s (default 0.2)"
     )
     p.add_argument("--out", help="write the score as JSON here (one detector)")
+    p.add_argument(
+        "--windows",
+        metavar="FILE.parquet",
+        help="write every assessed window (run, time, health index, alarm, diagnosis, truth,"
+        " class) here, to compute any metric (one detector)",
+    )
     p.add_argument(
         "--model",
         metavar="MODEL.json",
@@ -1130,18 +1189,31 @@ def build_parser() -> argparse.ArgumentParser:
         help="fit a detector on a dataset's train split and save it as JSON",
         description="Fit a detector on one split of a sweep's dataset and save it, fitted,"
         " as a JSON file (brake_sim_ros.monitoring.saved documents it) that score --model"
-        " and monitor --model load instead of refitting. Saved forms: rms, kurtosis, crest,"
-        " orders, impact, learned.",
+        " and monitor --model load instead of refitting. Saved forms: "
+        + ", ".join(detector_names(saved_only=True))
+        + ", and your Detector's with saved_state and load_state.",
     )
     p.add_argument("directory", help="a sweep's output directory")
-    p.add_argument(
-        "--detector", required=True, help="rms, kurtosis, crest, orders, impact or learned"
-    )
+    p.add_argument("--detector", required=True, help=detector_help(saved_only=True))
     p.add_argument("--fit-split", default="train", help="split to fit on (default train)")
     p.add_argument("--out", required=True, metavar="MODEL.json", help="the file to write")
     p.add_argument("--overwrite", action="store_true", help="replace an existing --out")
     p.add_argument("--debug", action="store_true", help=DEBUG_HELP)
     p.set_defaults(func=cmd_fit)
+
+    p = sub.add_parser(
+        "plot",
+        help="draw one run to a PNG: measured channels with defect labels and drive phases,"
+        " a spectrogram, the tone ring's orders, a detector's health index",
+    )
+    p.add_argument("source", help="a simulate --out file (.parquet, .npz) or a dataset directory")
+    p.add_argument("--run", metavar="RUN_ID", help="the dataset's run to draw")
+    p.add_argument(
+        "--windows", metavar="FILE.parquet", help="a score --windows file: draw its health index"
+    )
+    p.add_argument("--out", required=True, metavar="FILE.png", help="the PNG to write")
+    p.add_argument("--overwrite", action="store_true", help="replace an existing --out")
+    p.set_defaults(func=cmd_plot)
 
     p = sub.add_parser(
         "bench",

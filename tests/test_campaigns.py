@@ -63,25 +63,46 @@ def test_builtin_campaigns_are_leak_free(name):
     assert not campaign.held_out or held  # a held-out rule that matches nothing tests nothing
 
 
-def test_demo_has_every_catalogue_defect_at_two_severities_on_three_units():
-    runs = load_campaign("demo").runs()
-    assert len({r.unit_id for r in runs}) == 3
-    kinds = {(r.columns["defect_kind"], r.columns["defect_location"]) for r in runs}
-    assert kinds >= {(k.name, loc) for k in KINDS for loc in k.locations}
-    for kind in KINDS:
-        severities = {
-            r.columns["defect_severity"] for r in runs if r.columns["defect_kind"] == kind.name
+def test_the_demo_can_fit_and_score_every_baseline():
+    """Every catalogue defect at its limit in every split (half of it on test only),
+    several units per split (impact needs healthy stops of three train units), minutes of
+    healthy operation on test, and runs longer than the 1.5 s the orders baseline needs."""
+    campaign = load_campaign("demo")
+    runs = campaign.runs()
+    every = {(k.name, loc) for k in KINDS for loc in k.locations}
+    for split, units in (("train", 5), ("validation", 2), ("test", 2)):
+        mine = [r for r in runs if r.split == split]
+        assert len({r.unit_id for r in mine}) == units
+        at_limit = {
+            (r.columns["defect_kind"], r.columns["defect_location"])
+            for r in mine
+            if r.columns["defect_severity_fraction"] == 1.0
         }
-        assert severities == {0.5 * kind.service_limit, kind.service_limit}
-        # the label column of the run carries the severity the axis asked for (a share
-        # change is stored as the share, 0.5 + severity: equal to rounding)
-        for r in runs:
-            if r.columns["defect_kind"] == kind.name:
-                label = f"defect:{kind.name}:{r.columns['defect_location']} [{kind.unit}]"
-                assert r.labels[label] == pytest.approx(r.columns["defect_severity"], abs=1e-12)
-                assert sum(v != 0.0 for v in r.labels.values()) == 1 + (
-                    kind.name == "actuation_share_change"
-                )
+        assert at_limit == every
+        healthy = [r for r in mine if r.columns["defect_kind"] == "healthy"]
+        assert len({r.unit_id for r in healthy}) == units
+        assert len({r.seed for r in healthy}) == len(healthy)  # each its own run
+        if split == "test":
+            assert sum(r.duration_s for r in healthy) >= 120.0
+    halves = {r.split for r in runs if r.columns["defect_severity_fraction"] == 0.5}
+    assert halves == {"test"}
+    assert min(r.duration_s for r in runs) > 1.5
+    assert campaign.outputs.sample_rate_hz == 5120.0
+
+
+def test_healthy_counts_make_that_many_healthy_runs_each_its_own():
+    text = TINY.replace("severities = [0.5, 1.0]", "severities = [0.5, 1.0]\nhealthy = 3")
+    runs = parse_campaign(text, "t.toml").runs()
+    healthy = [r for r in runs if r.columns["defect_kind"] == "healthy"]
+    per_unit = {r.unit_id for r in healthy}
+    assert len(healthy) == 3 * 2 * len(per_unit)  # three per force on each unit
+    assert sorted({r.columns["defect_repeat"] for r in healthy}) == [0, 1, 2]
+    assert len({r.seed for r in healthy}) == len(healthy)
+    defective = [r for r in runs if r.columns["defect_kind"] != "healthy"]
+    assert {r.columns["defect_repeat"] for r in defective} == {0}
+    for bad in ("-1", "1001", "1.5", "'all'"):
+        with pytest.raises(CampaignError, match=r"axes\[0\]\.healthy"):
+            parse_campaign(text.replace("healthy = 3", f"healthy = {bad}"), "t.toml")
 
 
 def test_plan_crosses_units_and_axes_and_holds_values_out():
@@ -264,13 +285,16 @@ def _campaigns(draw):
 @given(_campaigns())
 def test_random_campaigns_are_leak_free(case):
     text, n_units, fractions = case
+    forces = tomllib.loads(text)["axes"][1]["values"]
     wanted = sum(f > 0 for f in fractions)
     try:
         campaign = parse_campaign(text, "r.toml")
         runs = campaign.runs()
     except CampaignError as exc:
-        # the only refusals: too few units for the splits, or a held-out rule without test
-        assert n_units < wanted or fractions[2] == 0.0, str(exc)
+        # the only refusals: too few units for the splits, a held-out rule without test, or
+        # a held-out range that no force falls in
+        idle = "matches no run" in str(exc) and not any(1000.0 <= f <= 1200.0 for f in forces)
+        assert n_units < wanted or fractions[2] == 0.0 or idle, str(exc)
         return
     assert n_units >= wanted
     by_unit = _splits_by_unit(runs)
@@ -321,3 +345,55 @@ def test_each_unit_is_one_brake_in_all_its_runs_each_run_its_own_seed():
     assert len({r.seed for r in runs}) == len(runs)
     with pytest.raises(CampaignError, match="key 'seeds'"):
         parse_campaign(TINY.replace("seed = 3\n", "seed = 3\nseeds = 'unit'\n"), "t.toml")
+
+
+def _demo_with_rule(rule: str) -> str:
+    text = load_campaign("demo").text
+    head = text[: text.index("[[split.held_out]]")]
+    return head + "[[split.held_out]]\n" + rule
+
+
+def test_a_held_out_rule_that_matches_no_run_is_refused_in_one_line():
+    # the trap: severities are fractions of the service limit in [[axes]], while
+    # defect_severity is the absolute size in each kind's unit: 0.25 matches no run
+    text = _demo_with_rule("column = 'defect_severity'\nvalues = [0.25]\n")
+    with pytest.raises(CampaignError) as caught:
+        parse_campaign(text, "demo.toml")
+    message = str(caught.value)
+    assert "\n" not in message
+    assert "split.held_out[0]" in message and "matches no run" in message
+    assert "defect_severity_fraction" in message
+    with pytest.raises(CampaignError, match=r"split\.held_out\[0\].*matches no run"):
+        parse_campaign(_demo_with_rule("column = 'peak_force_n'\nmin = 5000.0\n"), "d.toml")
+
+
+def test_the_severity_fraction_column_is_the_axis_value_and_holds_out_by_fraction():
+    campaign = parse_campaign(
+        _demo_with_rule("column = 'defect_severity_fraction'\nvalues = [0.5]\n"), "demo.toml"
+    )
+    axis = tomllib.loads(campaign.text)["axes"][0]
+    runs = campaign.runs()
+    limits = {k.name: k.service_limit for k in KINDS}
+    healthy = [r for r in runs if r.columns["defect_kind"] == "healthy"]
+    assert healthy and all(r.columns["defect_severity_fraction"] == 0.0 for r in healthy)
+    for r in runs:
+        c = r.columns
+        if c["defect_kind"] == "healthy":
+            continue
+        assert c["defect_severity_fraction"] in axis["severities"]
+        assert c["defect_severity"] == c["defect_severity_fraction"] * limits[c["defect_kind"]]
+        if c["defect_severity_fraction"] == 0.5:
+            assert r.split == "test"
+    assert {r.columns["defect_severity_fraction"] for r in runs} == {0.0, 0.5, 1.0}
+
+
+def test_the_fraction_column_leaves_every_run_seed_as_it_was():
+    # a derived column is no part of a run's identity: datasets keep their seeds
+    campaign = load_campaign("demo")
+    for r in campaign.runs():
+        identity = {
+            k: v
+            for k, v in r.columns.items()
+            if k != "defect_severity_fraction" and not (k == "defect_repeat" and v == 0)
+        }
+        assert r.seed == run_seed(campaign.seed, r.unit_id, identity)

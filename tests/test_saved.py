@@ -19,10 +19,10 @@ from brake_sim_ros.datasets import open as open_dataset
 from brake_sim_ros.datasets.sweep import sweep
 from brake_sim_ros.model.catalogue import KIND_BY_NAME
 from brake_sim_ros.monitoring import evaluate, saved
-from brake_sim_ros.monitoring.baselines import make_detector
 from brake_sim_ros.monitoring.detector import Assessment, Detector, Diagnosis
 from brake_sim_ros.monitoring.forest import ForestArrays
 from brake_sim_ros.monitoring.order_analysis import OrderAnalysis
+from brake_sim_ros.monitoring.registry import make_detector
 
 CAMPAIGN = """
 name = "saved"

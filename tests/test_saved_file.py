@@ -138,7 +138,10 @@ def _drop(key):
 
 MUTATIONS = {
     "format": (_set(("format",), MARKER), "format"),
-    "version": (_set(("schema_version",), 2), "schema_version"),
+    "version": (_set(("schema_version",), 3), "schema_version"),
+    "version 1": (_set(("schema_version",), 1), "did not record the rate: fit it again"),
+    "rate": (_set(("fitted_at", "sample_rate_hz"), -5120.0), "fitted_at.sample_rate_hz"),
+    "unit": (_set(("fitted_at", "channels"), {"backing_plate_accel_y": 5}), "fitted_at"),
     "version as true": (_set(("schema_version",), True), "schema_version"),
     "other detector": (_set(("detector",), "orders"), "holds a fitted orders"),
     "unknown detector": (_set(("detector",), MARKER), "detector"),

@@ -131,6 +131,8 @@ def test_the_dataset_holds_every_run_labelled_with_its_scenario(reference, campa
         if side:
             column = f"defect:pivot_radius_change:{side} [%]"
             assert table[column][0].as_py() == m["defect_severity"] != 0.0
+        # the fraction of the service limit: the campaign's severities axis value
+        assert m["defect_severity_fraction"] in ((0.5, 1.0) if side else (0.0,))
         assert any(c.startswith("measured:") and "[" in c for c in table.column_names)
     # the lock holds the campaign resolved, and says which version wrote it
     lock = json.loads((reference / LOCK_NAME).read_text())

@@ -42,7 +42,8 @@ def run(
     Returns:
         0 after an interrupt, 2 when the node refused to start (a parameter of
         ``--ros-args`` out of range or of the wrong type, a topic name ROS refuses: bad
-        arguments, like every other refusal of ``brake-sim monitor``).
+        arguments, like every other refusal of ``brake-sim monitor``) or refused the
+        samples (at another rate than the detector was fitted at).
     """
     stop = start_ros(ros_argv)  # the loop ends between callbacks, never on a dead context
     node = None
@@ -63,8 +64,11 @@ def run(
         )
         executor = SingleThreadedExecutor()
         executor.add_node(node)
-        while rclpy.ok() and not stop.requested:
+        while rclpy.ok() and not stop.requested and node.refusal is None:
             executor.spin_once(timeout_sec=0.1)
+        if node.refusal is not None:
+            print(f"brake-sim monitor: refused: {node.refusal}", file=sys.stderr, flush=True)
+            return EXIT_REFUSED
         return 0
     except (KeyboardInterrupt, ExternalShutdownException):
         return 0
@@ -74,7 +78,8 @@ def run(
             print(
                 f"brake-sim monitor: {s.windows} windows assessed, {s.alarms} alarms,"
                 f" {s.diagnoses} diagnoses; dropped {s.malformed} malformed and"
-                f" {s.out_of_order} out-of-order messages; {s.gaps} gaps",
+                f" {s.out_of_order} out-of-order messages; {s.gaps} gaps"
+                f" ({s.samples_lost} samples never received)",
                 flush=True,
             )
             node.destroy_node()

@@ -22,8 +22,20 @@ from brake_sim_ros.model.catalogue import KIND_BY_NAME, fields_at, kinds_at
 from brake_sim_ros.model.defects import Defects
 
 DEFECT_AXIS = "defect"
-# the manifest columns a defect axis fills (kind "healthy" and location "" for no defect)
-DEFECT_COLUMNS = ("defect_kind", "defect_location", "defect_severity")
+# the manifest columns a defect axis fills (kind "healthy" and location "" for no defect):
+# ``defect_severity`` in the kind's unit (``brake-sim defects``), signed as its service
+# limit; ``defect_severity_fraction`` that severity over the kind's service limit (the
+# value of the axis's ``severities``, 0 when healthy); ``defect_repeat`` which of the
+# axis's ``healthy = N`` healthy runs (0 to N - 1; 0 for a defect)
+DEFECT_COLUMNS = (
+    "defect_kind",
+    "defect_location",
+    "defect_severity",
+    "defect_severity_fraction",
+    "defect_repeat",
+)
+# a column derived from the others: not part of a run's identity (its seed)
+DERIVED_COLUMNS = ("defect_severity_fraction",)
 HEALTHY = "healthy"
 DRAW_METHODS = ("random", "lhs")
 # spawn keys of the campaign seed's streams (run seeds use the run's identity instead)
@@ -41,11 +53,16 @@ class DefectChoice:
         kind: a catalogue kind name, or ``"healthy"``.
         location: one of the kind's locations ("" when healthy).
         severity: in the kind's unit (0 when healthy).
+        fraction: ``severity`` over the kind's service limit (0 when healthy).
+        repeat: which healthy run of the axis's ``healthy = N`` (0 for a defect): each
+            its own run, with its own seed.
     """
 
     kind: str
     location: str
     severity: float
+    fraction: float = 0.0
+    repeat: int = 0
 
     def defects(self) -> Defects:
         if self.kind == HEALTHY:
@@ -53,7 +70,8 @@ class DefectChoice:
         return Defects.single(self.kind, self.location, self.severity)
 
     def columns(self) -> dict[str, Value]:
-        return dict(zip(DEFECT_COLUMNS, (self.kind, self.location, self.severity), strict=True))
+        values = (self.kind, self.location, self.severity, self.fraction, self.repeat)
+        return dict(zip(DEFECT_COLUMNS, values, strict=True))
 
 
 @dataclass(frozen=True)
@@ -85,16 +103,17 @@ AnyAxis = Axis | DefectAxis
 
 
 def defect_choices(
-    kinds: tuple[str, ...], fractions: tuple[float, ...], healthy: bool
+    kinds: tuple[str, ...], fractions: tuple[float, ...], healthy: bool | int
 ) -> tuple[DefectChoice, ...]:
     """Every kind at each of its locations at each severity, a severity being a fraction
-    of the kind's service limit (``catalogue.DefectKind.service_limit``, signed), plus a
-    healthy brake first when ``healthy``."""
-    out = [DefectChoice(HEALTHY, "", 0.0)] if healthy else []
+    of the kind's service limit (``catalogue.DefectKind.service_limit``, signed), after
+    ``healthy`` healthy brakes (True: one; each its own run and seed), so that a dataset
+    can hold minutes of healthy operation beside every defect."""
+    out = [DefectChoice(HEALTHY, "", 0.0, 0.0, i) for i in range(int(healthy))]
     for name in kinds:
         kind = KIND_BY_NAME[name]
         for location in kind.locations:
-            out += [DefectChoice(name, location, f * kind.service_limit) for f in fractions]
+            out += [DefectChoice(name, location, f * kind.service_limit, f) for f in fractions]
     return tuple(out)
 
 

@@ -30,6 +30,7 @@ from brake_sim_ros import __version__
 from brake_sim_ros.campaigns.axes import (
     DEFECT_AXIS,
     DEFECT_COLUMNS,
+    DERIVED_COLUMNS,
     DRAW_METHODS,
     AnyAxis,
     Axis,
@@ -46,6 +47,7 @@ from brake_sim_ros.campaigns.splits import (
     HeldOut,
     assign_units,
     held_out_kind_problem,
+    idle_rule,
     unit_counts,
     value_kind,
 )
@@ -324,7 +326,20 @@ def _parse(data: dict[str, Any], text: str, source: str, directory: Path | None)
             f"at most {MAX_RUNS} runs (units x conditions); this campaign has"
             f" {len(unit_ids)} x {n_points}",
         )
+    _refuse_idle_rules(ctx, campaign)
     return campaign
+
+
+def _refuse_idle_rules(ctx: _Ctx, campaign: Campaign) -> None:
+    """Refuse a held-out rule that matches no condition of the campaign (it would hold
+    nothing out), in one line."""
+    if campaign.held_out:
+        points = condition_points(
+            campaign.axes, campaign.draw_method, campaign.draw_count, campaign.seed
+        )
+        problem = idle_rule([point_columns(p) for p in points], campaign.held_out)
+        if problem is not None:
+            raise CampaignError(f"{ctx.source}: key 'split.held_out[{problem[0]}]': {problem[1]}")
 
 
 def _units(ctx: _Ctx, top: dict[str, Any]) -> tuple[str, ...]:
@@ -484,8 +499,8 @@ def _defect_axis(ctx: _Ctx, item: dict[str, Any], where: str) -> DefectAxis:
     if len(set(values)) != len(values):
         raise ctx.fail(f"{where}.severities", fractions, "distinct fractions")
     healthy = item.get("healthy", True)
-    if not isinstance(healthy, bool):
-        raise ctx.fail(f"{where}.healthy", healthy, "true or false")
+    if not isinstance(healthy, bool) and not (isinstance(healthy, int) and 0 <= healthy <= 1000):
+        raise ctx.fail(f"{where}.healthy", healthy, "true, false or a count of healthy runs 0-1000")
     choices = defect_choices(tuple(kinds), values, healthy)
     for c in choices:  # a fraction beyond a kind's range: refused here, naming it
         if c.kind in KIND_BY_NAME:
@@ -626,7 +641,12 @@ def plan_runs(campaign: Campaign) -> list[RunSpec]:
             if campaign.outputs.sample_rate_hz is not None:
                 data["sample_rate_hz"] = campaign.outputs.sample_rate_hz
             seeded = any(isinstance(a, Axis) and a.key == "seed" for a in campaign.axes)
-            seed = data.get("seed", 0) if seeded else run_seed(campaign.seed, unit, columns)
+            identity = {
+                k: v
+                for k, v in columns.items()
+                if k not in DERIVED_COLUMNS and not (k == "defect_repeat" and v == 0)
+            }
+            seed = data.get("seed", 0) if seeded else run_seed(campaign.seed, unit, identity)
             # the units are one fleet: each the same brake in all its runs (its scatter is
             # drawn from the unit id and the fleet seed), each run its own noise and draws
             data.setdefault("fleet_seed", campaign.seed)

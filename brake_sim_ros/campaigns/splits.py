@@ -137,3 +137,24 @@ def leaks(rows: Iterable[Mapping[str, Value]], held_out: Sequence[HeldOut] = ())
         if len(splits) > 1:
             problems.append(f"unit {unit} is in the splits {sorted(splits)}")
     return problems
+
+
+def idle_rule(
+    rows: Sequence[Mapping[str, Value]], held_out: Sequence[HeldOut]
+) -> tuple[int, str] | None:
+    """The first held-out rule that matches none of ``rows`` (a campaign's condition
+    points as manifest columns): ``(its index, why)``; None when every rule holds
+    something out. Such a rule holds nothing out while the dataset claims it does."""
+    for i, rule in enumerate(held_out):
+        if any(rule.matches(row) for row in rows):
+            continue
+        seen = sorted({str(row[rule.column]) for row in rows if rule.column in row})
+        shown = ", ".join(seen[:6]) + (", ..." if len(seen) > 6 else "")
+        hint = (
+            " (defect_severity is in each kind's unit; a fraction of the service limit is"
+            " defect_severity_fraction)"
+            if rule.column == "defect_severity"
+            else ""
+        )
+        return i, f"matches no run; allowed values {rule.column} takes: {shown}{hint}"
+    return None

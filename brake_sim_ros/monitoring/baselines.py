@@ -1,4 +1,5 @@
-"""Baseline detectors a reader can follow, and the registry that names detectors.
+"""Baseline detectors a reader can follow (the registry that names every built-in
+detector is :mod:`.registry`).
 
 * :class:`VibrationThreshold` (``rms``, ``kurtosis``, ``crest``): one statistic of one
   measured channel per window (default 0.1 s of the backing plate's y acceleration);
@@ -17,14 +18,12 @@ All of them read their features through :mod:`.features`.
 
 from __future__ import annotations
 
-import importlib
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Iterable, Mapping
 
 import numpy as np
 
 from brake_sim_ros.monitoring.detector import Assessment, Detector, TrainingWindow
 from brake_sim_ros.monitoring.features import STATISTICS, crest_factor, kurtosis, rms
-from brake_sim_ros.monitoring.user_code import user_code
 
 DEFAULT_CHANNEL = "backing_plate_accel_y"
 
@@ -78,51 +77,4 @@ class VibrationThreshold(Detector):
         )
 
 
-def _orders() -> Detector:
-    from brake_sim_ros.monitoring.order_analysis import OrderAnalysis
-
-    return OrderAnalysis()
-
-
-def _impact() -> Detector:
-    from brake_sim_ros.monitoring.impact import ImpactDetector
-
-    return ImpactDetector()
-
-
-def _learned() -> Detector:
-    from brake_sim_ros.monitoring.learned import LearnedClassifier
-
-    return LearnedClassifier()
-
-
-BUILTIN: dict[str, Callable[[], Detector]] = {
-    **{name: (lambda name=name: VibrationThreshold(name)) for name in STATISTICS},
-    "orders": _orders,
-    "impact": _impact,
-    "learned": _learned,
-}
-__all__ = ["BUILTIN", "STATISTICS", "VibrationThreshold", "crest_factor", "kurtosis", "rms"]
-
-
-def make_detector(name: str) -> Detector:
-    """A built-in detector by name (:data:`BUILTIN`), or a user's as ``module:Class`` (a
-    :class:`Detector` subclass built without arguments)."""
-    if name in BUILTIN:
-        return BUILTIN[name]()
-    module, sep, attr = name.partition(":")
-    if not sep or not module or not attr:
-        raise ValueError(
-            f"detector {name!r}: allowed a built-in ({', '.join(sorted(BUILTIN))}) or module:Class"
-        )
-    try:
-        # the module's own code runs here: SyntaxError, SystemExit... are one line
-        with user_code(name, f"importing {module}", passthrough=(ImportError,)):
-            imported = importlib.import_module(module)
-        cls = getattr(imported, attr)
-    except (ImportError, AttributeError) as exc:
-        raise ValueError(f"detector {name!r}: cannot import it ({type(exc).__name__})") from None
-    if not (isinstance(cls, type) and issubclass(cls, Detector)):
-        raise ValueError(f"detector {name!r}: not a brake_sim_ros.monitoring Detector subclass")
-    with user_code(cls, "__init__"):
-        return cls()
+__all__ = ["STATISTICS", "VibrationThreshold", "crest_factor", "kurtosis", "rms"]

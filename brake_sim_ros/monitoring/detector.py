@@ -26,11 +26,17 @@ import abc
 import math
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
+from types import MappingProxyType
 from typing import Any
 
 import numpy as np
 
+from brake_sim_ros.errors import BrakeSimError
 from brake_sim_ros.monitoring.user_code import user_code
+
+
+class RateMismatchError(BrakeSimError, ValueError):
+    """Samples at another rate than the detector was fitted at (one line, both rates)."""
 
 
 @dataclass(frozen=True)
@@ -196,6 +202,13 @@ class Detector(abc.ABC):
     name: str = "detector"
     channels: tuple[str, ...] = ()
     window_s: float = 0.1
+    # What fitting saw (``evaluate.fit`` records it; a saved detector keeps it): the
+    # sample rate, Hz (None: not recorded), and each channel read with its unit. What a
+    # detector learns (a threshold on an RMS) belongs to that rate: feeding samples at
+    # another rate is refused, unless the detector declares that it resamples.
+    fitted_rate_hz: float | None = None
+    fitted_channels: Mapping[str, str] = MappingProxyType({})
+    resamples: bool = False
 
     def __init__(self) -> None:
         self._rate: float | None = None
@@ -213,7 +226,32 @@ class Detector(abc.ABC):
     ) -> Assessment:
         """The verdict on one window (``window_samples`` values per channel)."""
 
+    # -- the saved form (``brake-sim fit``; the built-ins' is in :mod:`.saved`) -----------
+    def saved_state(self) -> Mapping[str, Any] | None:
+        """What fitting learned, for a saved file: a mapping of JSON values (finite
+        numbers, strings, booleans, null, lists, string-keyed objects) and float64 or
+        int64 numpy arrays, restored bit for bit. None (the default): no saved form."""
+        return None
+
+    def load_state(self, state: Mapping[str, Any]) -> None:
+        """Take back what :meth:`saved_state` gave, on an instance built without
+        arguments; raise ValueError (one line) on a state it cannot take."""
+        raise NotImplementedError(f"detector {self.name}: no saved form")
+
     # -- the streaming part -------------------------------------------------------------
+    def rate_refusal(self, sample_rate_hz: float) -> str | None:
+        """Why samples at ``sample_rate_hz`` (Hz) cannot be judged, in one line naming both
+        rates; None when they can (the fitted rate, not recorded, or a resampling
+        detector)."""
+        fitted = self.fitted_rate_hz
+        if self.resamples or fitted is None or sample_rate_hz == fitted:
+            return None
+        return (
+            f"detector {self.name} was fitted at {fitted:g} Hz and the samples are at"
+            f" {sample_rate_hz:g} Hz: allowed {fitted:g} Hz (fit it on runs at"
+            f" {sample_rate_hz:g} Hz, or stream at {fitted:g} Hz)"
+        )
+
     def window_samples(self, sample_rate_hz: float) -> int:
         return max(1, round(self.window_s * sample_rate_hz))
 
@@ -222,7 +260,15 @@ class Detector(abc.ABC):
         self._buffer, self._buffered, self._next_index, self._rate = {}, 0, None, None
 
     def feed(self, chunk: SampleChunk) -> list[Assessment]:
-        """The assessments of every window that ``chunk`` completes, in order."""
+        """The assessments of every window that ``chunk`` completes, in order.
+
+        Raises:
+            RateMismatchError: samples at another rate than the fitted one.
+            ValueError: a channel the detector reads is missing.
+        """
+        refusal = self.rate_refusal(chunk.sample_rate_hz)
+        if refusal is not None:
+            raise RateMismatchError(refusal)
         missing = [c for c in self.channels if c not in chunk.channels]
         if missing:
             raise ValueError(

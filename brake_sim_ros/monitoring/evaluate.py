@@ -40,14 +40,21 @@ The score (:func:`score`, written as JSON by ``brake-sim score``; :data:`SCHEMA_
     forecast costs more than an early one by as much); null when it gives no finite
     forecast there (new in version 4)
 ``per_run``: one object per run: ``run_id``, ``unit_id``, ``defects`` (kind:location
-    labels active at the end), ``onset_s``, ``delay_s``, ``false_alarms``
+    labels active at the end), ``onset_s``, ``delay_s``, ``false_alarms``, ``healthy_s``
+    (s of healthy operation; new in version 5)
+``held_out``: one object per held-out rule of the dataset (``[[split.held_out]]``):
+    ``rule`` (``column``, ``values``, ``minimum``, ``maximum``), and ``held_out`` and
+    ``rest``, the figures over the runs it matches and over the split's other runs:
+    ``runs``, ``windows``, ``detection`` (``defective_runs``, ``detected``, ``missed``,
+    ``median_delay_s``), ``false_alarms`` (``count``, ``healthy_hours``, ``per_hour``),
+    ``health_index`` (``auroc``, ``auprc``) (new in version 5; :mod:`.windows`)
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -57,8 +64,9 @@ from brake_sim_ros.model.catalogue import KIND_BY_NAME, KINDS, label_column
 from brake_sim_ros.monitoring import metrics
 from brake_sim_ros.monitoring.detector import Assessment, Detector, SampleChunk, TrainingWindow
 from brake_sim_ros.monitoring.user_code import user_code
+from brake_sim_ros.monitoring.windows import held_out_figures, window_rows
 
-SCHEMA_VERSION = 4
+SCHEMA_VERSION = 5
 HEALTHY = "healthy"  # the class of a healthy window or run in the per-class figures
 MEASURED_PREFIX = "measured:"
 # label column -> "kind:location", the catalogue's (``brake-sim defects``)
@@ -77,6 +85,7 @@ class RunSamples:
     label_names: tuple[str, ...]  # "kind:location"
     labels: np.ndarray  # (n, len(label_names)) severities, 0 where absent
     rul_s: np.ndarray | None = None  # (n,) the ``rul [s]`` label (NaN: censored); None: none
+    units: dict[str, str] = field(default_factory=dict)  # channel name -> its unit
 
     def active(self, row: int) -> tuple[tuple[str, str], ...]:
         """``(kind, location)`` of the defects active at sample ``row``."""
@@ -101,6 +110,12 @@ def _channel_name(column: str) -> str:
     return column[len(MEASURED_PREFIX) :].rsplit(" [", 1)[0]
 
 
+def _channel_unit(column: str) -> str:
+    """``measured:<name> [<unit>]`` -> ``<unit>`` ("" without one)."""
+    _head, sep, unit = column.rpartition(" [")
+    return unit[:-1] if sep and unit.endswith("]") else ""
+
+
 def read_run(dataset: SweepDataset, run_id: str) -> RunSamples:
     table = dataset.run_table(run_id)
     names = table.column_names
@@ -109,6 +124,11 @@ def read_run(dataset: SweepDataset, run_id: str) -> RunSamples:
         raise ValueError(f"run {run_id}: {time_s.size} samples; a detector needs 2 or more")
     channels = {
         _channel_name(c): table[c].to_numpy(zero_copy_only=False).astype(np.float64)
+        for c in names
+        if c.startswith(MEASURED_PREFIX) and not c.endswith("_edge_time [s]")
+    }
+    units = {
+        _channel_name(c): _channel_unit(c)
         for c in names
         if c.startswith(MEASURED_PREFIX) and not c.endswith("_edge_time [s]")
     }
@@ -129,6 +149,7 @@ def read_run(dataset: SweepDataset, run_id: str) -> RunSamples:
         label_names=tuple(LABELS[c] for c in label_cols),
         labels=labels,
         rul_s=rul,
+        units=units,
     )
 
 
@@ -182,11 +203,25 @@ def chunks(run: RunSamples, chunk_s: float) -> Iterator[SampleChunk]:
 
 def fit(detector: Detector, dataset: SweepDataset, split: str = "train") -> int:
     """Fit ``detector`` on the windows of ``split`` (its window length); the number of
-    windows it saw."""
+    windows it saw. Records on the detector the sample rate and the units of the channels
+    it read (:attr:`Detector.fitted_rate_hz`, :attr:`Detector.fitted_channels`).
+
+    Raises:
+        ValueError: the split's runs are at several sample rates (one line).
+    """
     windows: list[TrainingWindow] = []
+    rates: set[float] = set()
+    units: dict[str, str] = {}
     longest = 0
     for run_id in dataset.runs(split):
         run = read_run(dataset, run_id)
+        rates.add(run.sample_rate_hz)
+        units.update(run.units)
+        if len(rates) > 1:
+            shown = ", ".join(f"{r:g}" for r in sorted(rates))
+            raise ValueError(
+                f"split {split}: runs at {shown} Hz; allowed one sample rate to fit a detector on"
+            )
         n = window_samples(detector, run.sample_rate_hz)
         longest = max(longest, run.time_s.size)
         for start in range(0, run.time_s.size - n + 1, n):
@@ -205,6 +240,9 @@ def fit(detector: Detector, dataset: SweepDataset, split: str = "train") -> int:
         _no_window(detector, dataset, split, longest)
     with user_code(detector, "fit"):
         detector.fit(windows)
+    if rates:
+        detector.fitted_rate_hz = rates.pop()
+        detector.fitted_channels = {c: units[c] for c in detector.channels if c in units}
     return len(windows)
 
 
@@ -231,7 +269,29 @@ def _no_window(detector: Detector, dataset: SweepDataset, split: str, longest: i
     )
 
 
+def unit_refusal(detector: Detector, run: RunSamples) -> str | None:
+    """Why ``run``'s channels cannot be judged by ``detector``: a channel in another unit
+    than it was fitted on (one line); None when they match or nothing was recorded."""
+    for name, unit in detector.fitted_channels.items():
+        if name in run.units and run.units[name] != unit:
+            return (
+                f"detector {detector.name} was fitted on {name} in [{unit}]; run {run.run_id}"
+                f" gives it in [{run.units[name]}]: allowed [{unit}]"
+            )
+    return None
+
+
 def assess_run(detector: Detector, run: RunSamples, chunk_s: float) -> list[Assessment]:
+    """The detector's assessments over ``run`` fed in chunks of ``chunk_s``.
+
+    Raises:
+        ValueError: the run's rate or a channel's unit is not what the detector was fitted
+            on (one line; :class:`~.detector.RateMismatchError` for the rate).
+        DetectorCodeError: the detector's code raised.
+    """
+    refusal = detector.rate_refusal(run.sample_rate_hz) or unit_refusal(detector, run)
+    if refusal is not None:
+        raise ValueError(refusal)
     with user_code(detector, "feed"):
         detector.reset()
         return [a for c in chunks(run, chunk_s) for a in detector.feed(c)]
@@ -244,8 +304,12 @@ def score(
     *,
     hold_s: float = 0.2,
     chunk_s: float = 0.1,
+    windows: list[dict] | None = None,
 ) -> dict:
-    """Run ``detector`` (fitted) over ``split`` and score it (module docstring)."""
+    """Run ``detector`` (fitted) over ``split`` and score it (module docstring);
+    ``windows``, when given, receives every assessed window's row
+    (:func:`~.windows.window_rows`)."""
+    rows_out: list[dict] = [] if windows is None else windows
     per_run, delays, missed = [], [], 0
     fa_count, fa_hours = 0, 0.0
     truth, index, true_class, diagnosed = [], [], [], []
@@ -265,10 +329,13 @@ def score(
         defective = np.any(run.labels[rows] != 0.0, axis=1) if rows.size else np.zeros(0, bool)
         truth.extend(defective.tolist())
         index.extend(a.health_index for a in found)
-        window_class.extend(
+        classes = [
             ":".join(run.active(int(row))[0]) if bad else HEALTHY
             for row, bad in zip(rows, defective, strict=True)
-        )
+        ]
+        window_class.extend(classes)
+        actives = [[":".join(x) for x in run.active(int(row))] for row in rows]
+        rows_out.extend(window_rows(run.run_id, run.unit_id, found, times, actives, classes))
         if run.rul_s is not None:
             for a, row in zip(found, rows, strict=True):
                 if math.isfinite(a.rul_s) and math.isfinite(run.rul_s[row]):
@@ -276,11 +343,10 @@ def score(
         onset = run.onset_index
         onset_s = None if onset is None else float(run.time_s[onset])
         delay = None
+        count, hours = 0, 0.0
         if rows.size:
             count, hours = metrics.false_alarms_per_hour(alarm, times, ~defective, hold_s)
             fa_count, fa_hours = fa_count + count, fa_hours + hours
-        else:
-            count = 0
         if onset_s is not None:
             delay = metrics.detection_delay(alarm, times, onset_s, hold_s) if rows.size else None
             if delay is None:
@@ -308,6 +374,7 @@ def score(
                 "onset_s": onset_s,
                 "delay_s": delay,
                 "false_alarms": count,
+                "healthy_s": hours * 3600.0,
             }
         )
     if not truth:
@@ -371,4 +438,10 @@ def score(
         "severity": _severity_figures(severities) if severities else None,
         "forecast": _forecast_figures(forecasts) if forecasts else None,
         "per_run": per_run,
+        "held_out": held_out_figures(
+            dataset.held_out,
+            {r["run_id"]: r for r in dataset.manifest.to_pylist()},
+            per_run,
+            rows_out,
+        ),
     }

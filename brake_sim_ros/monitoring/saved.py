@@ -11,13 +11,15 @@ trees' arrays (:mod:`.forest` says why, and checks every index). :func:`dumps` g
 file's text; the CLI writes it (whole, never through a link or over an input:
 :mod:`brake_sim_ros.recording.output`, an adapter this layer does not import).
 
-The file (:data:`SCHEMA_VERSION` 1), one JSON object::
+The file (:data:`SCHEMA_VERSION` 2), one JSON object::
 
     format          "brake-sim detector"
-    schema_version  1
+    schema_version  2 (version 1 did not record the rate: refused, fit it again)
     detector        the detector's name: rms, kurtosis, crest, orders, impact, learned
     software        brake_sim_ros version that wrote it (informative)
     fitted_on       {"dataset": path, "split": name, "windows": count} (informative)
+    fitted_at       {"sample_rate_hz": Hz or null (not recorded), "channels": {name: unit}}
+                    what it was fitted on; samples at another rate are refused
     parameters      the constructor's arguments (below)
     state           what fitting learned (below)
 
@@ -66,31 +68,41 @@ import numpy as np
 from brake_sim_ros import __version__
 from brake_sim_ros.errors import BrakeSimError
 from brake_sim_ros.model.catalogue import KINDS
+from brake_sim_ros.monitoring import registry
 from brake_sim_ros.monitoring.baselines import STATISTICS, VibrationThreshold
 from brake_sim_ros.monitoring.detector import Detector
 from brake_sim_ros.monitoring.features import ORDERS, feature_names
+from brake_sim_ros.monitoring.fitted import (
+    DTYPES,
+    array_json,
+    fitted_at_json,
+    has_saved_form,
+    load_state,
+    read_fitted_at,
+    state_json,
+)
 from brake_sim_ros.monitoring.forest import ForestArrays
 from brake_sim_ros.monitoring.impact import N_FEATURES, ImpactDetector
 from brake_sim_ros.monitoring.learned import HEALTHY, LearnedClassifier
 from brake_sim_ros.monitoring.order_analysis import OrderAnalysis
 
 FORMAT = "brake-sim detector"
-SCHEMA_VERSION = 1
+SCHEMA_VERSION = 2
 # The largest file the loader reads: 256 MiB. The reference campaign's learned detector
 # (100 trees on 14 040 windows, 18 severity forests) takes 61 MB: a campaign four times
 # its size fits; a larger file is refused before it is read.
 MAX_MODEL_BYTES = 256 * 1024**2
-SAVED = (*STATISTICS, "orders", "impact", "learned")  # the detectors that have a saved form
+SAVED = registry.names(saved_only=True)  # the detectors that have a saved form
 TOP_KEYS = (
     "format",
     "schema_version",
     "detector",
     "software",
     "fitted_on",
+    "fitted_at",
     "parameters",
     "state",
 )
-DTYPES = {"float64": "<f8", "int64": "<i8"}
 DEFECTIVE_CLASSES = frozenset(f"{k.name}:{loc}" for k in KINDS for loc in k.locations)
 CLASSES = DEFECTIVE_CLASSES | {HEALTHY}
 _NAME = re.compile(r"[a-z][a-z0-9_]{0,63}")  # a measured channel's name
@@ -231,24 +243,15 @@ class _Checker:
         return forest
 
 
-def _array(a: np.ndarray, dtype: str) -> dict[str, Any]:
-    data = np.ascontiguousarray(a, dtype=DTYPES[dtype])
-    return {
-        "dtype": dtype,
-        "shape": list(data.shape),
-        "base64": base64.b64encode(data.tobytes()).decode("ascii"),
-    }
-
-
 def _forest(f: ForestArrays) -> dict[str, Any]:
     return {
         "n_features": f.n_features,
-        "node_counts": _array(f.node_counts, "int64"),
-        "left": _array(f.left, "int64"),
-        "right": _array(f.right, "int64"),
-        "feature": _array(f.feature, "int64"),
-        "threshold": _array(f.threshold, "float64"),
-        "leaf_values": _array(f.leaf_values, "float64"),
+        "node_counts": array_json(f.node_counts, "int64"),
+        "left": array_json(f.left, "int64"),
+        "right": array_json(f.right, "int64"),
+        "feature": array_json(f.feature, "int64"),
+        "threshold": array_json(f.threshold, "float64"),
+        "leaf_values": array_json(f.leaf_values, "float64"),
     }
 
 
@@ -289,10 +292,10 @@ def _dump_orders(d: OrderAnalysis) -> tuple[dict, dict]:
         },
         {
             "gate": d.gate if math.isfinite(d.gate) else None,
-            "mean": _array(d.mean, "float64"),
-            "std": _array(d.std, "float64"),
+            "mean": array_json(d.mean, "float64"),
+            "std": array_json(d.std, "float64"),
             "threshold": d.threshold,
-            "healthy_index": _array(d.healthy_index, "float64"),
+            "healthy_index": array_json(d.healthy_index, "float64"),
         },
     )
 
@@ -330,7 +333,7 @@ def _dump_learned(d: LearnedClassifier) -> tuple[dict, dict]:
         {
             "classes": list(d.classes),
             "threshold": d.threshold,
-            "healthy_index": _array(d.healthy_index, "float64"),
+            "healthy_index": array_json(d.healthy_index, "float64"),
             "forest": _forest(_as_arrays(d.model)),
             "severity": {c: _forest(_as_arrays(m)) for c, m in d.severity_models.items()},
         },
@@ -372,15 +375,15 @@ def _dump_impact(d: ImpactDetector) -> tuple[dict, dict]:
         {"window_s": d.window_s},
         {
             "sample_rate_hz": d.sample_rate_hz,
-            "coef": _array(d.coef, "float64"),
-            "scale": _array(d.scale, "float64"),
-            "location": _array(d.location, "float64"),
-            "precision": _array(d.precision, "float64"),
+            "coef": array_json(d.coef, "float64"),
+            "scale": array_json(d.scale, "float64"),
+            "location": array_json(d.location, "float64"),
+            "precision": array_json(d.precision, "float64"),
             "rate_mean": d.rate_mean,
             "threshold": d.threshold,
-            "healthy_index": _array(d.healthy_index, "float64"),
+            "healthy_index": array_json(d.healthy_index, "float64"),
             "classes": list(d.classes),
-            "centroids": _array(d.centroids, "float64"),
+            "centroids": array_json(d.centroids, "float64"),
             "severity_slope": [x if math.isfinite(x) else None for x in d.severity_slope],
         },
     )
@@ -442,13 +445,18 @@ _LOADERS: dict[str, _Loader] = {
 
 # --- the file ---------------------------------------------------------------------------
 def check_savable(detector: Detector) -> None:
-    """Refuse, in one line, a detector with no saved form (a user's ``module:Class``).
+    """Refuse, in one line, a detector with no saved form (a user's without
+    ``saved_state`` and ``load_state``).
 
     Raises:
         ModelFileError: the detector is not one of :data:`SAVED`.
     """
-    if type(detector) not in _CODECS or detector.name not in SAVED:
-        raise ModelFileError(f"detector {detector.name}: no saved form; allowed {', '.join(SAVED)}")
+    builtin = type(detector) in _CODECS and detector.name in SAVED
+    if not (builtin or (not isinstance(detector, tuple(_CODECS)) and has_saved_form(detector))):
+        raise ModelFileError(
+            f"detector {detector.name}: no saved form; allowed {', '.join(SAVED)}, or a"
+            " Detector with saved_state and load_state"
+        )
 
 
 def document(detector: Detector, *, fitted_on: Mapping[str, Any]) -> dict[str, Any]:
@@ -458,16 +466,22 @@ def document(detector: Detector, *, fitted_on: Mapping[str, Any]) -> dict[str, A
         ModelFileError: a detector with no saved form, or one not fitted.
     """
     check_savable(detector)
-    codec = _CODECS[type(detector)]
-    if getattr(detector, "threshold", None) is None:
+    if type(detector) not in _CODECS:  # a user's
+        try:
+            parameters, state = {}, state_json(detector)
+        except ValueError as exc:
+            raise ModelFileError(" ".join(str(exc).split())) from None
+    elif getattr(detector, "threshold", None) is None:
         raise ModelFileError(f"detector {detector.name} is not fitted: nothing to save")
-    parameters, state = codec[0](detector)
+    else:
+        parameters, state = _CODECS[type(detector)][0](detector)
     return {
         "format": FORMAT,
         "schema_version": SCHEMA_VERSION,
         "detector": detector.name,
         "software": f"brake_sim_ros {__version__}",
         "fitted_on": dict(fitted_on),
+        "fitted_at": fitted_at_json(detector),
         "parameters": parameters,
         "state": state,
     }
@@ -543,10 +557,16 @@ def read_document(path: str | os.PathLike[str], *, where: str = "saved detector"
 
 
 def load(
-    path: str | os.PathLike[str], name: str | None = None, *, where: str = "saved detector"
+    path: str | os.PathLike[str],
+    name: str | None = None,
+    *,
+    where: str = "saved detector",
+    user: Detector | None = None,
 ) -> Detector:
     """The fitted detector saved in ``path``, ready to feed; with ``name``, only if the
-    file holds that detector. ``where`` names the file in messages.
+    file holds that detector. ``where`` names the file in messages. ``user``: a user's
+    detector built without arguments (its class named on the command line, never by the
+    file), given the file's state if the file holds a detector of its name.
 
     Raises:
         ModelFileError: one line naming the key and what is allowed (module docstring).
@@ -557,15 +577,21 @@ def load(
     if doc["format"] != FORMAT:
         raise c.fail("format", f"not a saved detector; allowed {FORMAT!r}")
     if doc["schema_version"] != SCHEMA_VERSION or isinstance(doc["schema_version"], bool):
-        raise c.fail("schema_version", f"not one this version reads; allowed {SCHEMA_VERSION}")
-    detector = c.string(doc["detector"], "detector", SAVED)
-    if name is not None and detector != name:
-        raise c.fail(
-            "detector", f"the file holds a fitted {detector}; allowed the named one, {name}"
-        )
+        old = " (version 1 did not record the rate: fit it again)"
+        allowed = f"allowed {SCHEMA_VERSION}" + (old if doc["schema_version"] == 1 else "")
+        raise c.fail("schema_version", f"not one this version reads; {allowed}")
+    kind = c.string(doc["detector"], "detector", SAVED if user is None else (user.name,))
+    if name is not None and user is None and kind != name:
+        raise c.fail("detector", f"the file holds a fitted {kind}; allowed the named one, {name}")
     c.string(doc["software"], "software")
     fitted = c.obj(doc["fitted_on"], "fitted_on", ("dataset", "split", "windows"))
     c.string(fitted["dataset"], "fitted_on.dataset")
     c.string(fitted["split"], "fitted_on.split")
     c.integer(fitted["windows"], "fitted_on.windows", 0, 2**62)
-    return _LOADERS[detector](detector, doc["parameters"], doc["state"], c)
+    rate, channels = read_fitted_at(doc["fitted_at"], c)
+    if user is None:
+        loaded = _LOADERS[kind](kind, doc["parameters"], doc["state"], c)
+    else:
+        loaded = load_state(user, doc["parameters"], doc["state"], c)
+    loaded.fitted_rate_hz, loaded.fitted_channels = rate, channels
+    return loaded

@@ -2,7 +2,12 @@
 
 from __future__ import annotations
 
-from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, ParameterType
+from rcl_interfaces.msg import (
+    FloatingPointRange,
+    IntegerRange,
+    ParameterDescriptor,
+    ParameterType,
+)
 
 from brake_sim_ros.stream.parameters import ParamSpec
 
@@ -27,5 +32,9 @@ def descriptor(spec: ParamSpec) -> ParameterDescriptor:
             FloatingPointRange(
                 from_value=float(spec.range[0]), to_value=float(spec.range[1]), step=0.0
             )
+        ]
+    elif spec.range is not None and type(spec.default) is int:
+        desc.integer_range = [
+            IntegerRange(from_value=int(spec.range[0]), to_value=int(spec.range[1]), step=1)
         ]
     return desc

@@ -146,6 +146,8 @@ class StreamingDetector(Protocol):
 
     def reset(self) -> None: ...
 
+    def rate_refusal(self, sample_rate_hz: float) -> str | None: ...
+
 
 @dataclass
 class MonitorStats:
@@ -253,6 +255,8 @@ class MonitorNode(Node):
             raise BrakeSimError(f"diagnostics_period_s {period_s!r}: allowed 0.05 to 60 s")
         self.run_id = ""
         self.unit_id = self.unit_id_fixed
+        # why the node stops: samples at another rate than the detector was fitted at
+        self.refusal: str | None = None
         self._next_index: int | None = None
         self._rate: float | None = None
         self._last_stamp_ns = 0
@@ -349,11 +353,24 @@ class MonitorNode(Node):
                 f"dropped a malformed MeasuredChunk on {self.measured_topic}: {exc}",
             )
             return
+        refusal = self.detector.rate_refusal(rate)
+        if refusal is not None:  # every verdict would be wrong: stop, do not warn and run on
+            self.refusal = refusal
+            self.get_logger().error(refusal)
+            return
         if self._next_index is None or (first == 0 and self._next_index > 0) or rate != self._rate:
             self.stats.runs += 1
             self.detector.reset()
             if self._next_index is not None:
                 self.get_logger().info(f"a new run at sample {first} ({rate:g} Hz)")
+            if first > 0:  # the run's first samples were sent before this monitor heard them
+                self.stats.gaps += 1
+                self.stats.samples_lost += first
+                self._warn(
+                    f"samples 0 to {first - 1} of the run never arrived (the monitor joined"
+                    " late: start it before the node, or the node with"
+                    " measured_subscribers:=1)"
+                )
         elif first < self._next_index:
             self.stats.out_of_order += 1
             self._warn(

@@ -154,6 +154,11 @@ class BrakeSimNode(NodeParameters, NodeServices, NodeTiming, Node):
             f" max_actuation_force_n {session.settings['max_actuation_force_n']:g} N,"
             f" duration {session.settings['duration_s']:g} s,"
             f" {session.chunk_samples} samples per chunk"
+            + (
+                f"; waiting for {self._awaited_subscribers} ~/measured subscriber(s)"
+                if self._awaited_subscribers
+                else ""
+            )
         )
 
     def _start_session(self) -> RunSession:
@@ -193,6 +198,7 @@ class BrakeSimNode(NodeParameters, NodeServices, NodeTiming, Node):
         work = session.work_refusal()
         if work:
             raise BrakeSimError(f"scenario '{scenario.name}': {work}")
+        self._awaited_subscribers = _measured_subscribers(session.settings)
         self._double_names = {
             name
             for name in self._model_names + table
@@ -374,3 +380,15 @@ class BrakeSimNode(NodeParameters, NodeServices, NodeTiming, Node):
 
     def summary(self) -> str:
         return summary(self.run_view(), self.stats)
+
+
+def _measured_subscribers(settings: dict) -> int:
+    """The ``measured_subscribers`` setting, refused (ParameterError) without
+    ``publish_measured``: there would be no ~/measured to wait for."""
+    n = int(settings["measured_subscribers"])
+    if n and not settings["publish_measured"]:
+        raise ParameterError(
+            f"measured_subscribers={n} without publish_measured: allowed 0 (there is no"
+            " ~/measured to wait for), or set publish_measured:=true"
+        )
+    return n

@@ -75,8 +75,20 @@ class NodeTiming:
             )
         self.get_logger().info(f"real-time check: {verdict.message}")
 
+    def _waiting_for_subscribers(self) -> bool:
+        """True while ~/measured has fewer subscribers than ``measured_subscribers``: the
+        first sample waits, so no subscriber misses the run's start."""
+        if not self._awaited_subscribers:
+            return False
+        count = self._out.subscriber_count(stream.MEASURED)
+        if count < self._awaited_subscribers:
+            return True
+        self.get_logger().info(f"~/measured has {count} subscriber(s): the run starts")
+        self._awaited_subscribers = 0
+        return False
+
     def _on_tick(self) -> None:
-        if self._failure or self._finished:
+        if self._failure or self._finished or self._waiting_for_subscribers():
             return
         now = self._wall()
         session = self.session

@@ -44,6 +44,11 @@ class NodeOutputs:
                 self._outputs[topic] = (pub, dataclasses.replace(topic, name=pub.topic_name))
         self.sinks: list[MessageSink] = []
 
+    def subscriber_count(self, topic: Topic) -> int:
+        """How many subscriptions ``topic``'s publisher has now (0 if not published)."""
+        out = self._outputs.get(topic)
+        return 0 if out is None else out[0].get_subscription_count()
+
     def emit(self, topic: Topic, msg: Any, ns: int) -> None:
         """Publish ``msg`` on ``topic`` and hand it to every sink, at simulated time ``ns``.
 

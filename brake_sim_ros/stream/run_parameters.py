@@ -67,16 +67,16 @@ class RunParameter:
 
     Attributes:
         name: ROS parameter name, also its key in the run record.
-        default: default value; its Python type (float, bool, str) is the ROS type.
+        default: default value; its Python type (float, int, bool, str) is the ROS type.
         text: one or two sentences with the unit (the fixed-at-start note is added).
-        range: closed (low, high) for doubles (the node's descriptor and resim's check).
+        range: closed (low, high) for numbers (the node's descriptor and resim's check).
         changes: when it may change.
         affects: what it changes.
         constraints: free-text additional constraints shown by tools.
     """
 
     name: str
-    default: float | bool | str
+    default: float | int | bool | str
     text: str
     range: tuple[float, float] | None = None
     changes: Change = Change.ANY_TIME
@@ -98,7 +98,7 @@ class RunParameter:
             raise ParameterError(
                 f"{where}: {self.name}={str(value)[:64]!r}: allowed a {kind.__name__}"
             )
-        if self.range is not None and isinstance(value, float):
+        if self.range is not None and kind in (int, float):
             lo, hi = self.range
             if not (math.isfinite(value) and lo <= value <= hi):
                 raise ParameterError(f"{where}: {self.name}={value!r}: allowed {lo:g} to {hi:g}")
@@ -220,6 +220,16 @@ RUN_PARAMETERS: tuple[RunParameter, ...] = (
         "and publish what they measure on ~/measured (MeasuredChunk), measured_rate_hz "
         "chunks per simulated second. Off by default.",
         changes=Change.AT_START,
+    ),
+    RunParameter(
+        "measured_subscribers",
+        0,
+        "With publish_measured: hold the first sample until ~/measured has this many "
+        "subscribers (0 to 64), so that a monitor started first assesses the run from "
+        "sample 0; 0 = start at once.",
+        (0, 64),
+        changes=Change.AT_START,
+        affects=Affects.PACING,
     ),
     RunParameter(
         "measured_rate_hz",

@@ -41,7 +41,7 @@ from brake_sim_ros.datasets.sweep import sweep
 from brake_sim_ros.errors import BrakeSimError
 from brake_sim_ros.model.catalogue import KIND_BY_NAME, KINDS
 from brake_sim_ros.monitoring import evaluate, metrics
-from brake_sim_ros.monitoring.baselines import make_detector
+from brake_sim_ros.monitoring.registry import make_detector
 
 FRACTIONS = (0.1, 0.2, 0.35, 0.5, 0.75, 1.0)  # of each kind's service limit
 FORCES = (1150.0, 1400.0)  # N per shoe, around the published 1300 N

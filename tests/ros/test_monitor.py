@@ -73,6 +73,8 @@ CLI = [sys.executable, "-m", "brake_sim_ros.cli"]
 TOPICS = ["--topics", stream.MEASURED.name, stream.DEFECTS.name]  # what the monitor reads
 LOSSLESS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
 DIAGNOSED = ("initial_angle", "left")
+# the node's options in the documented order: its sensors on, the run held for the monitor
+MEASURED_FIRST = ["--ros-args", "-p", "publish_measured:=true", "-p", "measured_subscribers:=1"]
 
 
 class OffsetRms(VibrationThreshold):
@@ -370,6 +372,100 @@ def test_the_monitor_runs_a_saved_detector_as_offline(recording, threshold, tmp_
     assert f"rms loaded from {model}" in output
     assert _verdicts(ears.health) == expected
     assert {h.detector for h in ears.health} == {"rms"} and not ears.diagnoses
+
+
+def test_a_detector_fitted_at_5120_hz_is_refused_at_25600_hz_in_one_line(
+    recording, threshold, tmp_path
+):
+    """A saved rms fitted at 5120 Hz (as ``evaluate.fit`` records it) given a chunk at
+    25.6 kHz (the node's default): the monitor stops with exit 2 and one line naming both
+    rates; it assesses nothing (before: a health index near 0 through the whole stop)."""
+    _path, measured, _run = recording
+    detector = VibrationThreshold("rms", window_s=0.07)
+    detector.threshold = threshold
+    detector.fitted_rate_hz = 5120.0
+    model = tmp_path / "rms.json"
+    model.write_text(
+        saved.dumps(detector, fitted_on={"dataset": "test", "split": "train", "windows": 0})
+    )
+    faster = deserialize_message(_serialize(measured[0]), MeasuredChunk)
+    faster.sample_rate_hz = 25600.0
+    log = tmp_path / "monitor.log"
+    with _monitoring(14, threshold, log, ["--detector", "rms", "--model", str(model)]) as ears:
+        ears.measured.publish(faster)
+        ears.spin_until(lambda: ears.monitor.poll() is not None, 15.0)
+    output = log.read_text()
+    assert ears.exit_code == 2, output
+    refused = [line for line in output.splitlines() if "brake-sim monitor: refused:" in line]
+    assert len(refused) == 1, output
+    assert "fitted at 5120 Hz" in refused[0] and "at 25600 Hz" in refused[0]
+    assert not ears.health and "Traceback" not in output
+
+
+def test_the_monitor_counts_the_samples_sent_before_it_heard_the_run(
+    recording, threshold, tmp_path
+):
+    """A monitor that first hears a run at sample N counts a gap of N samples never
+    received, from the run's first sample (before: 0 gaps)."""
+    _path, measured, _run = recording
+    first = int(measured[2].first_sample_index)
+    assert first > 0
+    log = tmp_path / "monitor.log"
+    with _monitoring(15, threshold, log) as ears:
+        for msg in measured[2:5]:
+            ears.measured.publish(msg)
+            ears.spin_until(lambda: False, 0.05)
+        ears.spin_until(lambda: any(_value(s, "chunks") == "3" for s in ears.diagnostics), 10.0)
+    output = log.read_text()
+    assert ears.exit_code == 0, output
+    last = [s for s in ears.diagnostics if _value(s, "chunks") == "3"][-1]
+    assert (_value(last, "gaps"), _value(last, "samples_lost")) == ("1", str(first))
+    assert f"samples 0 to {first - 1} of the run never arrived" in output
+    assert f"1 gaps ({first} samples never received)" in output
+
+
+def test_monitor_then_node_in_the_documented_order_assess_every_window_from_sample_0(
+    recording, threshold, tmp_path
+):
+    """The documented order: the monitor first, then the node with its sensors on and
+    ``measured_subscribers:=1``. The node holds its first sample until the monitor has
+    subscribed, so every window from sample 0 is assessed and none is lost (before: the
+    first window came at 1.4 s and the stop's impacts were never assessed)."""
+    scenario = tmp_path / "monitor_test.toml"
+    scenario.write_text(SCENARIO)
+    log = tmp_path / "monitor.log"
+    window = OffsetRms().window_samples(5120.0)
+    expected = [(w * window, (w + 1) * window - 1) for w in range(5120 // window)]
+    with _monitoring(16, threshold, log) as ears:
+        node = subprocess.run(
+            [*CLI, "node", "--scenario", str(scenario), "--exit-at-end", *MEASURED_FIRST],
+            env=ros_environment(ears.domain_id),
+            capture_output=True,
+            text=True,
+            timeout=120,
+        )
+        assert node.returncode == 0, node.stdout + node.stderr
+        ears.spin_until(lambda: len(ears.health) >= len(expected), 15.0)
+        ears.spin_until(lambda: any(_value(s, "chunks") == "10" for s in ears.diagnostics), 5.0)
+    output = log.read_text()
+    assert "waiting for 1 ~/measured subscriber(s)" in node.stdout + node.stderr
+    assert ears.exit_code == 0, output
+    assert [(h.first_sample_index, h.last_sample_index) for h in ears.health] == expected
+    last = [s for s in ears.diagnostics if _value(s, "chunks") == "10"][-1]
+    assert (_value(last, "gaps"), _value(last, "samples_lost")) == ("0", "0"), output
+
+
+def test_measured_subscribers_without_measured_is_refused_in_one_line(tmp_path):
+    node = subprocess.run(
+        [*CLI, "node", "--scenario", "symmetric", "--ros-args", "-p", "measured_subscribers:=1"],
+        env=ros_environment(domain_id_for(17)),
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert node.returncode != 0
+    assert "measured_subscribers=1 without publish_measured" in node.stdout + node.stderr
+    assert "Traceback" not in node.stdout + node.stderr
 
 
 def _impact_fitted_on(measured: list[MeasuredChunk]) -> ImpactDetector:
