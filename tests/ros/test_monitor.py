@@ -53,12 +53,6 @@ from brake_sim_ros.stream.offline import StreamSettings
 from brake_sim_ros.stream.run import run_scenario
 from tests.sample_blocks import training_windows
 
-pytestmark = [
-    pytest.mark.ros,
-    # lark (pulled in by rclpy's type-description code) imports sre_parse.
-    pytest.mark.filterwarnings("ignore:module 'sre_(parse|constants)' is deprecated"),
-]
-
 SCENARIO = """\
 name = "monitor_test"
 duration_s = 1.0

@@ -24,7 +24,6 @@ from brake_sim_ros.ros.harness import domain_id_for, ros_environment
 from brake_sim_ros.ros.monitor import MonitorStats, PeriodView, health_level
 
 MONITOR = [sys.executable, "-m", "brake_sim_ros.cli", "monitor"]
-pytestmark = pytest.mark.filterwarnings("ignore:module 'sre_(parse|constants)' is deprecated")
 
 
 def _chunk(**changes) -> SimpleNamespace:
