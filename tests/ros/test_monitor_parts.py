@@ -134,6 +134,7 @@ def test_fit_on_a_file_that_is_not_a_dataset_is_one_line(tmp_path, capsys):
     assert len(err.splitlines()) == 1 and "not json" not in err
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("parameter", "says"),
     [

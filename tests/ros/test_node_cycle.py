@@ -5,6 +5,7 @@ first seconds as the offline stepper does, bit for bit, and refuses actuation co
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 
 from brake_sim_ros.model.layout import COL
@@ -46,6 +47,7 @@ def test_the_node_streams_a_drive_cycle_and_refuses_commands_to_its_brake(node_a
     assert offline[-1, COL["drum_speed_rad_s"]] > 1.0
 
 
+@pytest.mark.slow
 def test_the_node_carries_the_load_a_hold_draws_across_its_chunks(tmp_path, node_and_client):
     """A repeating cycle whose standing holds change the vehicle's load (tests/
     test_cycle_load.py), streamed by the node over 6 s: the second lap drives and brakes

@@ -241,6 +241,7 @@ def test_exit_at_end_prints_a_summary_and_exits_0(nodes):
     assert "commands accepted 0, rejected 0" in out
 
 
+@pytest.mark.slow
 def test_brake_sim_node_command_runs_a_scenario_to_the_end():
     """The README's main command, through the ``brake-sim`` CLI, shortened."""
     proc = subprocess.run(
@@ -268,6 +269,7 @@ def test_brake_sim_node_command_runs_a_scenario_to_the_end():
     assert "case1_left_pivot_out" in out and "ended at simulated time 0.3000 s" in out
 
 
+@pytest.mark.slow
 def test_a_defect_and_a_force_that_need_small_steps_are_not_refused():
     """Friction smoothed over 5 mm/s with commands up to 20 kN allowed (limit far below the
     sample interval): the node starts, at the scenario's sample rate, and says which
@@ -305,6 +307,7 @@ def test_a_defect_and_a_force_that_need_small_steps_are_not_refused():
     assert "published 1280 samples" in out
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("args", "message"),
     [

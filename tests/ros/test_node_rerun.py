@@ -19,6 +19,7 @@ SAMPLE_RATE_HZ = 25_600.0
 N_SAMPLES = round(RUN_S * SAMPLE_RATE_HZ)
 
 
+@pytest.mark.slow
 def test_node_rerun_save(tmp_path, nodes):
     rrd = tmp_path / "node.rrd"
     code, out = nodes.run(

@@ -68,6 +68,7 @@ def _wait_for_line(node: NodeProcess, text: str, timeout_s: float) -> None:
         time.sleep(0.05)
 
 
+@pytest.mark.slow
 def test_live_recording_equals_offline_recording(tmp_path, nodes):
     live = tmp_path / "live.mcap"
     code, out = nodes.run(
@@ -97,6 +98,7 @@ def test_live_recording_equals_offline_recording(tmp_path, nodes):
     assert "real_time_factor" in records["brake_sim_ros_parameters"]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("method", FIXED_STEP_METHODS)
 def test_live_equals_offline_for_every_scheme(tmp_path, nodes, method):
     """Same scenario, same scheme: the node's recording and the offline one hold the same
@@ -121,6 +123,7 @@ def test_live_equals_offline_for_every_scheme(tmp_path, nodes, method):
     assert live_msgs == offline_msgs
 
 
+@pytest.mark.slow
 def test_the_recording_holds_the_qos_the_node_offers(tmp_path, nodes):
     """Each recorded channel's offered_qos_profiles equals what the running node's
     publisher offers, as DDS discovery reports it to another participant (every topic:
@@ -249,6 +252,7 @@ def test_sigkill_then_recover_loses_less_than_the_flush_interval(tmp_path, node_
     assert lost_samples * dt < FLUSH_NS / 1e9 + 0.0101  # + the last chunk's own 10 ms
 
 
+@pytest.mark.slow
 def test_recording_failure_is_reported_and_the_node_streams_on(tmp_path, nodes):
     """The file system refuses a write in the middle of the run (a file-size limit of
     64 KiB on the node process; Python ignores SIGXFSZ, so the write fails with EFBIG):

@@ -99,6 +99,7 @@ def session(tmp_path_factory, node_and_client):
     return recording, out, done.stdout, rejected, refused
 
 
+@pytest.mark.slow
 def test_the_resimulation_gives_the_recorded_samples_bit_for_bit(session):
     recording, out, said, _rejected, _refused = session
     live, again = pivot_arrays(recording), pivot_arrays(out)
@@ -192,6 +193,7 @@ def test_bad_drive_settings_refuse_the_node_in_one_line(nodes, override, says):
     assert "Traceback" not in out
 
 
+@pytest.mark.slow
 def test_a_node_started_on_a_growing_defect_grows_it_and_resimulates(tmp_path, node_and_client):
     """A node started on a scenario whose defect grows (not reset to it): its recording
     holds the growing truth, its samples are the offline run's (the scenario's own setup,
