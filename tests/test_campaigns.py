@@ -50,6 +50,7 @@ def _splits_by_unit(runs):
     return out
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", builtin_campaigns())
 def test_builtin_campaigns_are_leak_free(name):
     campaign = load_campaign(name)
@@ -134,6 +135,7 @@ def test_plan_crosses_units_and_axes_and_holds_values_out():
     assert len({r.run_id for r in runs}) == len(runs)
 
 
+@pytest.mark.slow
 def test_seeds_come_from_the_campaign_seed_and_the_run_identity_not_hash():
     runs = parse_campaign(TINY, "tiny.toml").runs()
     assert len({r.seed for r in runs}) == len(runs)

@@ -29,6 +29,7 @@ def _cli(*args, cwd=None):
     )
 
 
+@pytest.mark.slow
 def test_simulate_writes_a_history_numpy_opens(tmp_path):
     out = tmp_path / "run.npz"
     r = _cli("simulate", "symmetric", "--duration", "1.0", "--out", str(out), "--quiet")
@@ -42,6 +43,7 @@ def test_simulate_writes_a_history_numpy_opens(tmp_path):
     assert meta["scenario"] == "symmetric" and meta["sample_rate_hz"] == 25_600.0
 
 
+@pytest.mark.slow
 def test_simulate_csv(tmp_path):
     out = tmp_path / "run.csv"
     r = _cli("simulate", "case5_left_tilted", "--duration", "0.3", "--out", str(out), "--quiet")
@@ -50,6 +52,7 @@ def test_simulate_csv(tmp_path):
     assert arr["time_s"].size == 7680 and "right_pivot_fy_n" in arr.dtype.names
 
 
+@pytest.mark.slow
 def test_simulate_runs_at_the_scenarios_sample_rate_for_every_preset_and_defect(tmp_path):
     """The sample rate is the scenario's: the preset and a defect that needs a smaller step
     (case 2's leading pivot 3 % inward: limit 9 us) change the physics step, not the rate."""
@@ -69,6 +72,7 @@ def test_simulate_runs_at_the_scenarios_sample_rate_for_every_preset_and_defect(
         assert f"{rate:g} Hz samples, physics step" in r.stdout
 
 
+@pytest.mark.slow
 def test_errors_are_one_line_and_nonzero(tmp_path):
     bad = tmp_path / "bad.toml"
     bad.write_text('name = "b"\n[parameters.friction]\ncoefficient = -1.0\n')
@@ -85,6 +89,7 @@ def test_errors_are_one_line_and_nonzero(tmp_path):
         assert len(lines) == 1 and lines[0].startswith("brake-sim: error:"), r.stderr
 
 
+@pytest.mark.slow
 def test_validate_writes_report_and_json(tmp_path):
     r = _cli("validate", "--out", str(tmp_path / "v"), "--json", str(tmp_path / "f.json"))
     assert r.returncode == 0, r.stderr
@@ -241,6 +246,7 @@ def test_node_overwrite_replaces_an_existing_recording_path(tmp_path):
     assert args.record == str(existing)
 
 
+@pytest.mark.slow
 def test_simulate_parquet_holds_samples_and_the_measured_channels(tmp_path):
     """``--out run.parquet``: read back by pyarrow, every sample, the measured channels
     with units in their names, the same bits as the stream's ~/measured, and the run's
@@ -283,6 +289,7 @@ def test_simulate_parquet_holds_samples_and_the_measured_channels(tmp_path):
         assert table[name].to_numpy().tobytes() == np.asarray(values).tobytes(), name
 
 
+@pytest.mark.slow
 def test_simulate_parquet_labels_every_sample_with_the_defects_ground_truth(tmp_path):
     """Per catalogue kind and location a severity column, the scenario's defect on every
     row and 0 for the healthy others; the metadata lists the defects as DefectState does."""
@@ -339,6 +346,7 @@ def test_a_slower_channel_is_null_between_its_samples():
     assert table["fault:slow_x"].null_count == values.null_count
 
 
+@pytest.mark.slow
 def test_scenarios_lists_the_channels_with_units_and_rates():
     r = _cli("scenarios", "--channels", "symmetric")
     assert r.returncode == 0, r.stderr
@@ -368,6 +376,7 @@ def test_scenarios_channels_refuses_a_hostile_file_in_one_line(tmp_path, kind):
     assert secret not in r.stderr and "Traceback" not in r.stderr
 
 
+@pytest.mark.slow
 def test_simulate_parquet_and_npz_hold_the_tone_ring_edges_on_their_samples(tmp_path):
     """``measured:wheel_speed_edge_time [s]``, read back by pyarrow and by numpy: each edge
     of the run on the row of the first sample at or after it, NaN on every other row, and

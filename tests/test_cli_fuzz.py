@@ -376,6 +376,7 @@ def _command_lines(draw) -> list[str]:
     return argv
 
 
+@pytest.mark.slow
 @settings(
     max_examples=int(os.environ.get("FUZZ_EXAMPLES", "60")),
     deadline=None,
@@ -411,6 +412,7 @@ def test_random_command_lines(tmp_path_factory, argv):
 
 
 # --- real processes ---------------------------------------------------------------------------
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("argv", "fragment"),
     [

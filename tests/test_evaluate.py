@@ -143,6 +143,7 @@ def test_the_score_command_writes_the_json_and_refuses_in_one_line(dataset, tmp_
     assert json.loads(out.read_text())["detector"] == "kurtosis"  # not written through
 
 
+@pytest.mark.slow
 def test_the_baselines_report_is_written_whole_and_the_same_twice(dataset, tmp_path, capsys):
     from brake_sim_ros import cli
 

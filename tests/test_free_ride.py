@@ -13,6 +13,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -56,6 +57,7 @@ def _step(p, y, dt, free, mode, t_knots, f_knots):
     return y_out, free_stages
 
 
+@pytest.mark.slow
 def test_free_stages_step_the_urban_cycle_with_the_same_bits():
     scenario = load_scenario("urban")
     stepper = stepper_for(scenario)

@@ -188,6 +188,7 @@ def _runs(dataset, kind: str) -> list[evaluate.RunSamples]:
     return [evaluate.read_run(dataset, i) for i in dataset.runs("test") if i in ids]
 
 
+@pytest.mark.slow
 def test_shoe_defects_at_their_limits_are_detected_on_unseen_units(fitted, dataset):
     """An initial angle of -2 deg and a broken return spring change the first impacts far
     beyond the healthy units' scatter: every test run (3 unseen units, 3 forces, 2 shoes)

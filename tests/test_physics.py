@@ -156,6 +156,7 @@ def test_fixed_step_converges_to_reference():
     assert max(errors[dt][0].max() for dt in errors) < 1e-8
 
 
+@pytest.mark.slow
 def test_first_impact_and_stop_of_default_step_match_reference(symmetric_rk4, symmetric_reference):
     fixed, ref = symmetric_rk4.metrics, symmetric_reference.metrics
     for side in ("left", "right"):

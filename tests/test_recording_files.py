@@ -278,6 +278,7 @@ def test_recover_refuses_what_is_not_mcap(tmp_path):
         recover(tmp_path / "missing.mcap", tmp_path / "out.mcap")
 
 
+@pytest.mark.slow
 def test_cli_simulate_mcap_and_recover(tmp_path):
     path = tmp_path / "cli.mcap"
     env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[1])}

@@ -509,6 +509,7 @@ def test_issue_pattern_damaged_chunk_keeps_before_and_after(bags, tmp_path):
 SUBPROCESS_CASES = ("payload#0", "schema_this_msg_X")
 
 
+@pytest.mark.slow
 def test_subprocesses_refuse_with_one_line(bags, tmp_path):
     """view and replay refuse the damaged file; recover refuses to write over its input."""
     by_name = {c.name: c for c in CASES}

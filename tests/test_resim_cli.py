@@ -72,6 +72,7 @@ def recorded(tmp_path_factory) -> Path:
     return path
 
 
+@pytest.mark.slow
 def test_an_offline_recording_resimulates_to_the_same_bits(recorded, tmp_path):
     out = tmp_path / "again.mcap"
     r = resim(recorded, "--out", out)
@@ -88,6 +89,7 @@ def test_an_offline_recording_resimulates_to_the_same_bits(recorded, tmp_path):
     assert run["run_id"] == run_record(recorded)["run_id"]
 
 
+@pytest.mark.slow
 def test_a_resimulation_resimulates_again_as_the_run_it_came_from(tmp_path):
     """An offline run whose defect grows (from 0.05 s), re-simulated, then re-simulated
     again: each time bit for bit (the second from the first's file alone, which says the
@@ -107,6 +109,7 @@ def test_a_resimulation_resimulates_again_as_the_run_it_came_from(tmp_path):
     assert pivot_arrays(twice)["left_fx_n"].tobytes() == pivot_arrays(first)["left_fx_n"].tobytes()
 
 
+@pytest.mark.slow
 def test_a_recording_holds_the_live_drives_settings(tmp_path):
     """A run that takes live drive commands records the settings in force (brake_sim_run)
     and its re-simulation keeps them."""
@@ -128,6 +131,7 @@ def recorded_symmetric(folder: Path) -> Path:
     return path
 
 
+@pytest.mark.slow
 def test_another_preset_resimulates_and_says_the_samples_differ(recorded, tmp_path):
     """The same recording under another preset (another physics step): written, and the
     comparison names the first sample that differs instead of claiming equality."""
@@ -241,6 +245,7 @@ def test_an_mcap_without_the_simulators_metadata_is_refused_in_one_line(tmp_path
     _refused(resim(foreign, "--out", out), out, "no brake_sim_scenario, brake_sim_unit,")
 
 
+@pytest.mark.slow
 def test_the_input_as_output_is_refused_and_left_as_it_was(recorded):
     before = hashlib.sha256(recorded.read_bytes()).hexdigest()
     for extra in ((), ("--overwrite",)):
@@ -250,6 +255,7 @@ def test_the_input_as_output_is_refused_and_left_as_it_was(recorded):
     assert hashlib.sha256(recorded.read_bytes()).hexdigest() == before
 
 
+@pytest.mark.slow
 def test_an_output_through_a_symlink_is_refused(recorded, tmp_path):
     target = tmp_path / "elsewhere.mcap"
     link = tmp_path / "link.mcap"

@@ -158,6 +158,7 @@ def test_invalid_arguments_are_refused():
         Pacer(DT).plan(0.0, 0, 0, 1)
 
 
+@pytest.mark.slow
 def test_pure_ros_modules_do_not_import_rclpy():
     """pacing, commands, parameters, conversion and diagnostics stay testable without DDS."""
     import subprocess

@@ -78,6 +78,7 @@ def _key(a: Assessment) -> tuple:
     return a.sample_index, repr(a.time_s), repr(a.health_index), a.alarm, diagnosis
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["rms", "kurtosis", "crest", "orders", "learned"])
 def test_a_loaded_detector_assesses_bit_for_bit_as_the_fitted_one(name, dataset, tmp_path):
     fitted = _fitted(name, dataset)
@@ -120,6 +121,7 @@ def test_forest_arrays_predict_as_scikit_learn(dataset):
         assert np.array_equal(arrays.predict(X), model.predict(X))
 
 
+@pytest.mark.slow
 def test_fit_then_score_with_the_model_scores_as_fitting(dataset_dir, dataset, tmp_path, capsys):
     model = tmp_path / "learned.json"
     assert main(["fit", str(dataset_dir), "--detector", "learned", "--out", str(model)]) == 0
@@ -145,6 +147,7 @@ def test_fit_then_score_with_the_model_scores_as_fitting(dataset_dir, dataset, t
     assert "--fit-split with --model" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_learned_severity_per_class_on_the_test_split(dataset):
     """The learned baseline's diagnoses carry severities in the kind's unit, between the
     smallest and largest trained (a forest averages training targets), and the score

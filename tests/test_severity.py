@@ -37,6 +37,7 @@ def test_a_pin_moved_out_lowers_its_shoes_first_impact_peak_and_period_monotonic
     assert peak[0] > peak[1] > peak[2] and period[0] > period[1] > period[2]
 
 
+@pytest.mark.slow
 def test_the_report_has_a_table_and_a_figure_per_kind_and_location(tmp_path):
     out = tmp_path / "sev"
     kind = KIND_BY_NAME["actuation_share_change"]

@@ -98,6 +98,7 @@ def reference(tmp_path_factory, campaign_file) -> Path:
     return out
 
 
+@pytest.mark.slow
 def test_the_dataset_holds_every_run_labelled_with_its_scenario(reference, campaign_file):
     runs = {r.run_id: r for r in load_campaign(campaign_file).runs()}
     manifest = pq.read_table(reference / MANIFEST_NAME).to_pylist()
@@ -196,6 +197,7 @@ def _sweep_until_a_run_is_done(campaign_file: Path, out: Path) -> subprocess.Pop
     return process
 
 
+@pytest.mark.slow
 def test_a_sweep_killed_midway_resumes_to_the_same_bytes(tmp_path, reference, campaign_file):
     out = tmp_path / "killed"
     process = _sweep_until_a_run_is_done(campaign_file, out)
@@ -224,6 +226,7 @@ def test_a_local_dask_cluster_gives_the_same_bytes(tmp_path, reference, campaign
     _same_dataset(reference, out)
 
 
+@pytest.mark.slow
 def test_a_failed_run_is_recorded_and_the_others_go_on(tmp_path, campaign_file):
     campaign = load_campaign(campaign_file)
     out = tmp_path / "failing"
@@ -340,6 +343,7 @@ def _children(pid: int) -> list[int]:
     return out
 
 
+@pytest.mark.slow
 def test_a_worker_killed_midway_is_one_line_and_the_sweep_resumes(
     tmp_path, reference, campaign_file
 ):

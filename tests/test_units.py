@@ -191,6 +191,7 @@ def test_a_bad_unit_id_is_refused_in_one_line(unit_id):
         scatter.deviations("u", -1)
 
 
+@pytest.mark.slow
 def test_the_unit_command_prints_the_unit_against_nominal():
     r = subprocess.run(
         [sys.executable, "-m", "brake_sim_ros.cli", "unit", "VIN-0042", "--fleet-seed", "11"],
@@ -240,6 +241,7 @@ def test_ground_truth_and_recording_carry_the_unit(tmp_path):
     assert [(t.unit_id, t.seed) for t in truths] == [("VIN-0042", 11)]
 
 
+@pytest.mark.slow
 def test_simulate_writes_the_unit_into_the_parquet_metadata(tmp_path):
     pq = pytest.importorskip("pyarrow.parquet")
     source = tmp_path / "unit.toml"
@@ -270,6 +272,7 @@ preset = "fast"
 """
 
 
+@pytest.mark.slow
 def test_fifty_units_spread_stop_time_and_first_impact_as_the_scatter_predicts():
     """The spread across 50 units against a linear model of the scatter, derived before
     the fleet is run: each parameter moved one sigma alone gives its effect on a figure,

@@ -16,27 +16,21 @@ import math
 
 import numpy as np
 import pytest
+from brake_sim_msgs.msg import DriveCommand
+from rclpy.qos import QoSProfile, ReliabilityPolicy
 
-pytestmark = [
-    pytest.mark.ros,
-    pytest.mark.realtime,  # a ~/step call is bounded by the node's measured wall cost per sample
-    pytest.mark.filterwarnings("ignore:module 'sre_(parse|constants)' is deprecated"),
-]
+from brake_sim_ros import stream
+from brake_sim_ros.model.cycle import DRIVE_MODES, SPEED_TOLERANCE, LiveDrive
+from brake_sim_ros.model.layout import COL
+from brake_sim_ros.ros.harness import SimClient, domain_id_for
+from brake_sim_ros.scenarios import load_scenario
+from brake_sim_ros.stream import conversion
+from brake_sim_ros.stream.build import stepper_for
+from tests.bag_helpers import rosbags_timed
+from tests.test_drive_command import RATE, RIG  # the rig and its sample rate
 
-rclpy = pytest.importorskip("rclpy", reason="rclpy not installed (run scripts/setup.sh)")
-
-from brake_sim_msgs.msg import DriveCommand  # noqa: E402
-from rclpy.qos import QoSProfile, ReliabilityPolicy  # noqa: E402
-
-from brake_sim_ros import stream  # noqa: E402
-from brake_sim_ros.model.cycle import DRIVE_MODES, SPEED_TOLERANCE, LiveDrive  # noqa: E402
-from brake_sim_ros.model.layout import COL  # noqa: E402
-from brake_sim_ros.ros.harness import NodeProcess, SimClient, domain_id_for  # noqa: E402
-from brake_sim_ros.scenarios import load_scenario  # noqa: E402
-from brake_sim_ros.stream import conversion  # noqa: E402
-from brake_sim_ros.stream.build import stepper_for  # noqa: E402
-from tests.bag_helpers import rosbags_timed  # noqa: E402
-from tests.test_drive_command import RATE, RIG  # noqa: E402  (the rig and its sample rate)
+# a ~/step call is bounded by the node's measured wall cost per sample
+pytestmark = pytest.mark.realtime
 
 DOMAIN = domain_id_for(41)
 BRAKE_N = 1500.0
@@ -44,25 +38,16 @@ LOSSLESS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
 
 
 @pytest.fixture(scope="module")
-def rig(tmp_path_factory):
+def rig(tmp_path_factory, node_and_client):
     """(client, scenario path) of a node on the rig, paused, commands held."""
     folder = tmp_path_factory.mktemp("drive")
     path = folder / "rig.toml"
     path.write_text(RIG)
-    node = NodeProcess.start(
-        ["--scenario", str(path), "--ros-args", "-p", "paused:=true",
-         "-p", "diagnostics_period_s:=0.1", "-p", "on_command_timeout:=hold",
-         "-p", "state_rate_hz:=256.0", "-p", f"scenario_dirs:={folder}"],
-        domain_id=DOMAIN,
-        log_path=folder / "node.log",
-    )  # fmt: skip
-    client = SimClient(DOMAIN, stream_qos=LOSSLESS)
-    try:
-        client.wait_for_node(60.0)
+    args = ["--scenario", str(path), "--ros-args", "-p", "paused:=true",
+            "-p", "diagnostics_period_s:=0.1", "-p", "on_command_timeout:=hold",
+            "-p", "state_rate_hz:=256.0", "-p", f"scenario_dirs:={folder}"]  # fmt: skip
+    with node_and_client(args, DOMAIN, stream_qos=LOSSLESS) as (_, client):
         yield client, path
-    finally:
-        client.close()
-        assert node.stop() == 0, node.output()
 
 
 def _counted(client: SimClient, key: str, n: int) -> dict[str, str]:
@@ -185,22 +170,15 @@ def test_runs_that_take_no_drive_reject_it(rig, scenario, says):
         assert client.reset(scenario=str(path)).success
 
 
-def test_accepted_drive_commands_are_recorded_at_their_sample(tmp_path):
+def test_accepted_drive_commands_are_recorded_at_their_sample(tmp_path, node_and_client):
     """A node recording (--record) holds each accepted drive command, stamped with the
     sample it took effect at, as rosbags reads it back; a rejected one is not there."""
     scenario_path = tmp_path / "rig.toml"
     scenario_path.write_text(RIG)
     bag = tmp_path / "run.mcap"
-    domain = domain_id_for(42)
-    node = NodeProcess.start(
-        ["--scenario", str(scenario_path), "--record", str(bag), "--ros-args",
-         "-p", "paused:=true", "-p", "diagnostics_period_s:=0.1"],
-        domain_id=domain,
-        log_path=tmp_path / "node.log",
-    )  # fmt: skip
-    client = SimClient(domain)
-    try:
-        client.wait_for_node(60.0)
+    args = ["--scenario", str(scenario_path), "--record", str(bag), "--ros-args",
+            "-p", "paused:=true", "-p", "diagnostics_period_s:=0.1"]  # fmt: skip
+    with node_and_client(args, domain_id_for(42)) as (_, client):
         client.drive(DriveCommand.MODE_TARGET_SPEED, speed_m_s=5.0)
         _counted(client, "drive_commands_accepted", 1)
         assert client.step(steps=256).success
@@ -208,9 +186,6 @@ def test_accepted_drive_commands_are_recorded_at_their_sample(tmp_path):
         _counted(client, "drive_commands_rejected", 1)
         client.drive(DriveCommand.MODE_TORQUE, torque_n_m=30.0)
         _counted(client, "drive_commands_accepted", 2)
-    finally:
-        client.close()
-        assert node.stop() == 0, node.output()
     recorded = rosbags_timed(bag)[stream.DRIVE.name]
     period = 1.0 / RATE
     assert [(ns, m.mode, m.drive_torque_n_m, m.target_speed_m_s) for ns, m in recorded] == [

@@ -6,13 +6,10 @@ import subprocess
 import sys
 from pathlib import Path
 
-import pytest
 from rosbags.highlevel import AnyReader
 
 from brake_sim_ros.ros.harness import domain_id_for, ros_environment
 from tests.rerun_helpers import verify
-
-pytestmark = pytest.mark.ros
 
 DURATION_S = 0.5
 

@@ -53,12 +53,6 @@ from brake_sim_ros.stream.offline import StreamSettings
 from brake_sim_ros.stream.run import run_scenario
 from tests.sample_blocks import training_windows
 
-pytestmark = [
-    pytest.mark.ros,
-    # lark (pulled in by rclpy's type-description code) imports sre_parse.
-    pytest.mark.filterwarnings("ignore:module 'sre_(parse|constants)' is deprecated"),
-]
-
 SCENARIO = """\
 name = "monitor_test"
 duration_s = 1.0
@@ -245,6 +239,7 @@ def _wait_for_monitor(listener: Listener, proc: subprocess.Popen, log: Path) -> 
     listener.spin_until(lambda: False, 0.3)  # both ends of every match settled
 
 
+@pytest.mark.slow
 def test_offline_and_replayed_through_the_monitor_agree(recording, threshold, tmp_path):
     path, measured, run_id = recording
     offline = _offline(measured, threshold)
@@ -307,6 +302,7 @@ def _serialize(msg: MeasuredChunk) -> bytes:
     return serialize_message(msg)
 
 
+@pytest.mark.slow
 def test_monitor_survives_malformed_and_out_of_order_messages(recording, threshold, tmp_path):
     """Malformed, oversized, rate-less and repeated chunks are dropped with one warning line
     each, and a chunk the detector cannot read is one warning; the valid chunks around them
@@ -485,6 +481,7 @@ def _impact_fitted_on(measured: list[MeasuredChunk]) -> ImpactDetector:
     return detector
 
 
+@pytest.mark.slow
 def test_the_monitor_runs_the_impact_baseline_as_offline(recording, threshold, tmp_path):
     """A detector that carries state from message to message (it finds the application in
     one message and judges it in a later one, then holds the verdict): a saved impact

@@ -24,7 +24,6 @@ from brake_sim_ros.ros.harness import domain_id_for, ros_environment
 from brake_sim_ros.ros.monitor import MonitorStats, PeriodView, health_level
 
 MONITOR = [sys.executable, "-m", "brake_sim_ros.cli", "monitor"]
-pytestmark = pytest.mark.filterwarnings("ignore:module 'sre_(parse|constants)' is deprecated")
 
 
 def _chunk(**changes) -> SimpleNamespace:
@@ -135,6 +134,7 @@ def test_fit_on_a_file_that_is_not_a_dataset_is_one_line(tmp_path, capsys):
     assert len(err.splitlines()) == 1 and "not json" not in err
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("parameter", "says"),
     [

@@ -17,17 +17,8 @@ import sys
 import time
 
 import pytest
-
-pytestmark = [
-    pytest.mark.ros,
-    # lark (pulled in by rclpy's type-description code) imports sre_parse.
-    pytest.mark.filterwarnings("ignore:module 'sre_(parse|constants)' is deprecated"),
-]
-
-rclpy = pytest.importorskip("rclpy", reason="rclpy not installed (run scripts/setup.sh)")
-
-# Not skipped: with rclpy present, missing interfaces mean a broken setup.
-from brake_sim_msgs.msg import (  # noqa: E402
+import rclpy
+from brake_sim_msgs.msg import (
     ActuationCommand,
     BrakeState,
     ContactEvent,
@@ -36,9 +27,9 @@ from brake_sim_msgs.msg import (  # noqa: E402
     MeasuredChunk,
     PivotForceChunk,
 )
-from brake_sim_msgs.srv import ResetSimulation, StepSimulation  # noqa: E402
+from brake_sim_msgs.srv import ResetSimulation, StepSimulation
 
-from brake_sim_ros.ros.harness import domain_id_for  # noqa: E402
+from brake_sim_ros.ros.harness import domain_id_for
 
 FRAME = "brake_backing_plate"
 TOPIC = "/brake_sim_test/pivot_forces"

@@ -6,37 +6,23 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from rclpy.qos import QoSProfile, ReliabilityPolicy
 
-pytestmark = [
-    pytest.mark.ros,
-    pytest.mark.filterwarnings("ignore:module 'sre_(parse|constants)' is deprecated"),
-]
-
-rclpy = pytest.importorskip("rclpy", reason="rclpy not installed (run scripts/setup.sh)")
-
-from rclpy.qos import QoSProfile, ReliabilityPolicy  # noqa: E402
-
-from brake_sim_ros.model.layout import COL  # noqa: E402
-from brake_sim_ros.ros.harness import NodeProcess, SimClient, domain_id_for  # noqa: E402
-from brake_sim_ros.scenarios import load_scenario, parse_scenario  # noqa: E402
-from brake_sim_ros.stream.build import stepper_for  # noqa: E402
-from tests.test_cycle_load import LAPS  # noqa: E402
+from brake_sim_ros.model.layout import COL
+from brake_sim_ros.ros.harness import domain_id_for
+from brake_sim_ros.scenarios import load_scenario, parse_scenario
+from brake_sim_ros.stream.build import stepper_for
+from tests.test_cycle_load import LAPS
 
 DOMAIN = domain_id_for(23)
 RUN_S = 1.0
 LOSSLESS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
 
 
-def test_the_node_streams_a_drive_cycle_and_refuses_commands_to_its_brake(tmp_path):
-    node = NodeProcess.start(
-        ["--scenario", "urban", "--duration", str(RUN_S), "--ros-args", "-p", "paused:=true",
-         "-p", "real_time_factor:=0.0", "-p", "diagnostics_period_s:=0.2"],
-        domain_id=DOMAIN,
-        log_path=tmp_path / "node.log",
-    )  # fmt: skip
-    client = SimClient(DOMAIN, stream_qos=LOSSLESS)
-    try:
-        client.wait_for_node(60.0)
+def test_the_node_streams_a_drive_cycle_and_refuses_commands_to_its_brake(node_and_client):
+    args = ["--scenario", "urban", "--duration", str(RUN_S), "--ros-args", "-p", "paused:=true",
+            "-p", "real_time_factor:=0.0", "-p", "diagnostics_period_s:=0.2"]  # fmt: skip
+    with node_and_client(args, DOMAIN, stream_qos=LOSSLESS) as (_, client):
         client.spin_for(0.2)
         assert client.set_parameter("paused", False).successful
         client.command(500.0, 500.0)  # a brake the cycle commands: refused, the run goes on
@@ -47,9 +33,6 @@ def test_the_node_streams_a_drive_cycle_and_refuses_commands_to_its_brake(tmp_pa
         n = round(RUN_S * scenario.sample_rate_hz)
         client.wait_for(lambda: client.sample_count >= n, 10.0, "every sample")
         diag = client.next_diagnostics()
-    finally:
-        client.close()
-        assert node.stop() == 0, node.output()
     assert int(diag["commands_rejected"]) >= 1 and int(diag["commands_accepted"]) == 0
     assert "drive cycle" in diag["last_command_rejection"]
     got = client.chunk_arrays()
@@ -64,7 +47,8 @@ def test_the_node_streams_a_drive_cycle_and_refuses_commands_to_its_brake(tmp_pa
     assert offline[-1, COL["drum_speed_rad_s"]] > 1.0
 
 
-def test_the_node_carries_the_load_a_hold_draws_across_its_chunks(tmp_path):
+@pytest.mark.slow
+def test_the_node_carries_the_load_a_hold_draws_across_its_chunks(tmp_path, node_and_client):
     """A repeating cycle whose standing holds change the vehicle's load (tests/
     test_cycle_load.py), streamed by the node over 6 s: the second lap drives and brakes
     with the drawn load, and the published pivot forces equal the offline run's bit for
@@ -72,26 +56,17 @@ def test_the_node_carries_the_load_a_hold_draws_across_its_chunks(tmp_path):
     path = tmp_path / "laden.toml"
     path.write_text(LAPS.format(seed=5))
     run_s = 6.0
-    node = NodeProcess.start(
-        ["--scenario", str(path), "--duration", str(run_s), "--ros-args", "-p", "paused:=true",
-         "-p", "real_time_factor:=0.0", "-p", f"scenario_dirs:={tmp_path}"],
-        domain_id=DOMAIN,
-        log_path=tmp_path / "node.log",
-    )  # fmt: skip
-    client = SimClient(DOMAIN, stream_qos=LOSSLESS)
+    args = ["--scenario", str(path), "--duration", str(run_s), "--ros-args", "-p", "paused:=true",
+            "-p", "real_time_factor:=0.0", "-p", f"scenario_dirs:={tmp_path}"]  # fmt: skip
     scenario = parse_scenario(path.read_text(), str(path))
     n = round(run_s * scenario.sample_rate_hz)
-    try:
-        client.wait_for_node(60.0)
+    with node_and_client(args, DOMAIN, stream_qos=LOSSLESS) as (_, client):
         client.spin_for(0.2)
         assert client.set_parameter("paused", False).successful
         client.wait_for(
             lambda: client.diagnostics().get("state") == "finished", 120.0, "the end of the run"
         )
         client.wait_for(lambda: client.sample_count >= n, 10.0, "every sample")
-    finally:
-        client.close()
-        assert node.stop() == 0, node.output()
     offline = stepper_for(scenario).run(run_s)
     inertia, segment = offline["flywheel_inertia_kg_m2"], offline["cycle_segment"]
     changed = np.flatnonzero(inertia != inertia[0])[0]  # the first load change

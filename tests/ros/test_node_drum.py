@@ -5,16 +5,7 @@ live through its parameters."""
 
 from __future__ import annotations
 
-import pytest
-
-pytestmark = [
-    pytest.mark.ros,
-    pytest.mark.filterwarnings("ignore:module 'sre_(parse|constants)' is deprecated"),
-]
-
-rclpy = pytest.importorskip("rclpy", reason="rclpy not installed (run scripts/setup.sh)")
-
-from brake_sim_ros.ros.harness import NodeProcess, SimClient, domain_id_for  # noqa: E402
+from brake_sim_ros.ros.harness import domain_id_for
 
 OVAL = (
     'name = "oval"\nduration_s = 2.0\n[defects.drum]\n'
@@ -30,18 +21,13 @@ def _drum(truth) -> list[tuple]:
     ]
 
 
-def test_the_node_keeps_the_scenarios_drum_through_parameter_changes_and_resets(tmp_path):
+def test_the_node_keeps_the_scenarios_drum_through_parameter_changes_and_resets(
+    tmp_path, node_and_client
+):
     (tmp_path / "oval.toml").write_text(OVAL)
-    domain = domain_id_for(73)
-    node = NodeProcess.start(
-        ["--duration", "3600", "--ros-args", "-p", f"scenario_dirs:={tmp_path}"],
-        domain_id=domain,
-        log_path=tmp_path / "node.log",
-    )
-    sim = SimClient(domain)
+    args = ["--duration", "3600", "--ros-args", "-p", f"scenario_dirs:={tmp_path}"]
     expected = [(50.0, "um", ["order_2_amplitude_um", "order_2_phase_deg"], [50.0, 30.0])]
-    try:
-        sim.wait_for_node(30.0)
+    with node_and_client(args, domain_id_for(73), wait_s=30.0) as (_, sim):
         assert _drum(sim.rx.defects[-1]) == []  # the built-in symmetric brake: round
         assert sim.reset(scenario="oval.toml", timeout_s=10.0).success
         sim.wait_for(lambda: _drum(sim.rx.defects[-1]) == expected, 5.0, "the oval drum")
@@ -55,23 +41,14 @@ def test_the_node_keeps_the_scenarios_drum_through_parameter_changes_and_resets(
         assert ("pivot_radius_change", "left", 1.0) in [
             (d.kind, d.location, d.severity) for d in truth.defects
         ]
-    finally:
-        sim.close()
-        assert node.stop() == 0, node.output()
 
 
-def test_a_drum_flat_is_injected_live_through_its_parameters(tmp_path):
+def test_a_drum_flat_is_injected_live_through_its_parameters(tmp_path, node_and_client):
     (tmp_path / "oval.toml").write_text(OVAL)
-    domain = domain_id_for(74)
     args = ["-p", f"scenario_dirs:={tmp_path}", "-p", "real_time_factor:=0.2"]  # a busy CPU
-    node = NodeProcess.start(
-        ["--duration", "3600", "--ros-args", *args],
-        domain_id=domain,
-        log_path=tmp_path / "node.log",
-    )
-    sim = SimClient(domain)
-    try:
-        sim.wait_for_node(30.0)
+    with node_and_client(
+        ["--duration", "3600", "--ros-args", *args], domain_id_for(74), wait_s=30.0
+    ) as (_, sim):
         assert sim.reset(scenario="oval.toml", timeout_s=10.0).success
         sim.wait_for(lambda: _drum(sim.rx.defects[-1]) != [], 5.0, "the oval drum")
         n = len(sim.rx.defects)
@@ -93,6 +70,3 @@ def test_a_drum_flat_is_injected_live_through_its_parameters(tmp_path):
         refused = sim.set_parameter("defects.drum.flat_depth_um", 600.0)  # the core's slope
         assert not refused.successful
         assert "slope pi d / (2 w R0) = 0.3000, allowed at most 0.05" in refused.reason
-    finally:
-        sim.close()
-        assert node.stop() == 0, node.output()

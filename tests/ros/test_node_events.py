@@ -15,21 +15,13 @@ import dataclasses
 
 import numpy as np
 import pytest
+from rclpy.qos import QoSProfile, ReliabilityPolicy
 
-pytestmark = [
-    pytest.mark.ros,
-    pytest.mark.filterwarnings("ignore:module 'sre_(parse|constants)' is deprecated"),
-]
-
-rclpy = pytest.importorskip("rclpy", reason="rclpy not installed (run scripts/setup.sh)")
-
-from rclpy.qos import QoSProfile, ReliabilityPolicy  # noqa: E402
-
-from brake_sim_ros import stream  # noqa: E402
-from brake_sim_ros.analysis import contact_events as ce  # noqa: E402
-from brake_sim_ros.ros.harness import NodeProcess, SimClient, domain_id_for  # noqa: E402
-from brake_sim_ros.scenarios import load_scenario  # noqa: E402
-from brake_sim_ros.stream.offline import StreamSettings, offline_messages  # noqa: E402
+from brake_sim_ros import stream
+from brake_sim_ros.analysis import contact_events as ce
+from brake_sim_ros.ros.harness import SimClient, domain_id_for
+from brake_sim_ros.scenarios import load_scenario
+from brake_sim_ros.stream.offline import StreamSettings, offline_messages
 
 DOMAIN = domain_id_for(8)
 N_STEPS = 7680  # 0.3 s of 25.6 kHz samples: every bounce of the symmetric run, contact starts
@@ -60,28 +52,11 @@ def offline_events(scenario_name: str, n_steps: int) -> list[tuple]:
 
 
 @pytest.fixture(scope="module")
-def sim(tmp_path_factory):
-    log = tmp_path_factory.mktemp("node") / "node.log"
-    node = NodeProcess.start(
-        [
-            "--ros-args",
-            "-p",
-            "paused:=true",
-            "-p",
-            f"run_id:={RUN_ID}",
-            "-p",
-            "publish_measured:=true",
-        ],
-        domain_id=DOMAIN,
-        log_path=log,
-    )
-    client = SimClient(DOMAIN, stream_qos=LOSSLESS)
-    try:
-        client.wait_for_node(30.0)
+def sim(node_and_client):
+    args = ["--ros-args", "-p", "paused:=true", "-p", f"run_id:={RUN_ID}",
+            "-p", "publish_measured:=true"]  # fmt: skip
+    with node_and_client(args, DOMAIN, stream_qos=LOSSLESS, wait_s=30.0) as (_, client):
         yield client
-    finally:
-        client.close()
-        assert node.stop() == 0, node.output()
 
 
 def step_all(sim: SimClient, sizes: list[int], total: int) -> None:

@@ -9,16 +9,7 @@ import sys
 
 import pytest
 
-pytestmark = [
-    pytest.mark.ros,
-    pytest.mark.filterwarnings("ignore:module 'sre_(parse|constants)' is deprecated"),
-]
-
-rclpy = pytest.importorskip("rclpy", reason="rclpy not installed (run scripts/setup.sh)")
-
-from brake_sim_ros.ros.harness import (  # noqa: E402
-    NodeProcess,
-    SimClient,
+from brake_sim_ros.ros.harness import (
     domain_id_for,
     ros_environment,
 )
@@ -60,24 +51,12 @@ def test_node_refuses_to_start_measuring_a_scenario_without_sensors(allowed):
     assert "publish_measured true refused" in lines[0] and "'measured_signals'" in lines[0]
 
 
-def test_reset_to_a_scenario_without_sensors_is_refused_and_the_node_runs_on(allowed, tmp_path):
-    domain = domain_id_for(72)
-    node = NodeProcess.start(
-        [
-            "--duration",
-            "3600",
-            "--ros-args",
-            "-p",
-            f"scenario_dirs:={allowed}",
-            "-p",
-            "publish_measured:=true",
-        ],
-        domain_id=domain,
-        log_path=tmp_path / "node.log",
-    )
-    sim = SimClient(domain)
-    try:
-        sim.wait_for_node(30.0)
+def test_reset_to_a_scenario_without_sensors_is_refused_and_the_node_runs_on(
+    allowed, node_and_client
+):
+    args = ["--duration", "3600", "--ros-args", "-p", f"scenario_dirs:={allowed}",
+            "-p", "publish_measured:=true"]  # fmt: skip
+    with node_and_client(args, domain_id_for(72), wait_s=30.0) as (_, sim):
         response = sim.reset(scenario="lean.toml", timeout_s=10.0)
         assert not response.success
         assert "\n" not in response.message and "publish_measured is on" in response.message
@@ -93,6 +72,3 @@ def test_reset_to_a_scenario_without_sensors_is_refused_and_the_node_runs_on(all
         assert response.success, response.message
         measured = sim.measured_count
         sim.wait_for(lambda: sim.measured_count > measured, 5.0, "measured chunks")
-    finally:
-        sim.close()
-        assert node.stop() == 0, node.output()

@@ -4,19 +4,10 @@ severity, and a run-time change of a growing defect's value keeps its growth law
 
 from __future__ import annotations
 
-import pytest
-
-pytestmark = [
-    pytest.mark.ros,
-    pytest.mark.filterwarnings("ignore:module 'sre_(parse|constants)' is deprecated"),
-]
-
-rclpy = pytest.importorskip("rclpy", reason="rclpy not installed (run scripts/setup.sh)")
-
-from brake_sim_ros import stream  # noqa: E402
-from brake_sim_ros.ros.harness import NodeProcess, SimClient, domain_id_for  # noqa: E402
-from brake_sim_ros.scenarios.loader import parse_scenario  # noqa: E402
-from brake_sim_ros.stream.offline import offline_messages  # noqa: E402
+from brake_sim_ros import stream
+from brake_sim_ros.ros.harness import domain_id_for
+from brake_sim_ros.scenarios.loader import parse_scenario
+from brake_sim_ros.stream.offline import offline_messages
 
 GROWING = (
     'name = "growing"\nduration_s = 2.0\n[defects.left]\n'
@@ -32,25 +23,11 @@ def _truth(msg) -> tuple:
     )
 
 
-def test_the_node_publishes_the_growing_truth_the_offline_stream_does(tmp_path):
+def test_the_node_publishes_the_growing_truth_the_offline_stream_does(tmp_path, node_and_client):
     (tmp_path / "growing.toml").write_text(GROWING)
-    domain = domain_id_for(74)
-    node = NodeProcess.start(
-        [
-            "--duration",
-            "3600",
-            "--ros-args",
-            "-p",
-            "paused:=true",
-            "-p",
-            f"scenario_dirs:={tmp_path}",
-        ],
-        domain_id=domain,
-        log_path=tmp_path / "node.log",
-    )
-    sim = SimClient(domain)
-    try:
-        sim.wait_for_node(30.0)
+    args = ["--duration", "3600", "--ros-args", "-p", "paused:=true",
+            "-p", f"scenario_dirs:={tmp_path}"]  # fmt: skip
+    with node_and_client(args, domain_id_for(74), wait_s=30.0) as (_, sim):
         assert sim.reset(scenario="growing.toml", timeout_s=10.0).success
         sim.wait_for(
             lambda: sim.rx.defects and sim.rx.defects[-1].scenario == "growing", 5.0, "reset"
@@ -81,6 +58,3 @@ def test_the_node_publishes_the_growing_truth_the_offline_stream_does(tmp_path):
         assert dict(zip(changed.attribute_names, changed.attribute_values, strict=True)) == {
             "final_severity_pct": 3.0
         }
-    finally:
-        sim.close()
-        assert node.stop() == 0, node.output()

@@ -16,26 +16,20 @@ import uuid
 from pathlib import Path
 
 import pytest
+import rclpy
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
-pytestmark = [
-    pytest.mark.ros,
-    pytest.mark.realtime,  # each refusal answered within 1-2 s of wall time, then a chunk in 1 s
-    pytest.mark.filterwarnings("ignore:module 'sre_(parse|constants)' is deprecated"),
-]
-
-rclpy = pytest.importorskip("rclpy", reason="rclpy not installed (run scripts/setup.sh)")
-
-from hypothesis import HealthCheck, given, settings  # noqa: E402
-from hypothesis import strategies as st  # noqa: E402
-
-from brake_sim_ros.ros.harness import (  # noqa: E402
-    NodeProcess,
+from brake_sim_ros.ros.harness import (
     SimClient,
     domain_id_for,
     ros_environment,
 )
-from brake_sim_ros.scenarios import loader  # noqa: E402
-from brake_sim_ros.scenarios.loader import MAX_SCENARIO_BYTES  # noqa: E402
+from brake_sim_ros.scenarios import loader
+from brake_sim_ros.scenarios.loader import MAX_SCENARIO_BYTES
+
+# each refusal answered within 1-2 s of wall time, then a chunk in 1 s
+pytestmark = pytest.mark.realtime
 
 DOMAIN = domain_id_for(17)
 MARKER = f"SECRET{uuid.uuid4().hex[:12]}"  # in every hostile file: must never come back
@@ -72,30 +66,13 @@ def dirs(tmp_path_factory):
 
 
 @pytest.fixture(scope="module")
-def sim(dirs, tmp_path_factory):
+def sim(dirs, node_and_client):
     allowed, _outside = dirs
-    log = tmp_path_factory.mktemp("node") / "node.log"
-    node = NodeProcess.start(
-        [
-            "--duration",
-            "3600",
-            "--ros-args",
-            "-p",
-            f"scenario_dirs:={allowed}",
-            "-p",
-            "diagnostics_period_s:=0.2",
-        ],
-        domain_id=DOMAIN,
-        log_path=log,
-    )
-    client = SimClient(DOMAIN)
-    try:
-        client.wait_for_node(30.0)
+    args = ["--duration", "3600", "--ros-args", "-p", f"scenario_dirs:={allowed}",
+            "-p", "diagnostics_period_s:=0.2"]  # fmt: skip
+    with node_and_client(args, DOMAIN, wait_s=30.0) as (node, client):
         yield client
-    finally:
-        client.close()
-        assert node.stop() == 0, node.output()
-        assert MARKER not in node.output()  # not in the node's log (/rosout) either
+    assert MARKER not in node.output()  # not in the node's log (/rosout) either
 
 
 def assert_refused_and_alive(sim: SimClient, success: bool, message: str) -> None:
@@ -283,7 +260,7 @@ def test_heard_chunks_are_not_counted_as_unheard(sim):
     assert later["publish_failures"] == "0"
 
 
-def test_chunks_nobody_subscribes_to_are_counted(tmp_path):
+def test_chunks_nobody_subscribes_to_are_counted(nodes):
     """A listener of /diagnostics only: every chunk the node published went to nobody."""
     from diagnostic_msgs.msg import DiagnosticArray
     from rclpy.context import Context
@@ -293,14 +270,6 @@ def test_chunks_nobody_subscribes_to_are_counted(tmp_path):
     from brake_sim_ros.ros import qos
 
     domain = domain_id_for(19)
-    node = NodeProcess.start(
-        ["--ros-args", "-p", "diagnostics_period_s:=0.1"],
-        domain_id=domain,
-        log_path=tmp_path / "node.log",
-    )
-    context = Context()
-    rclpy.init(context=context, domain_id=domain)
-    listener = rclpy.create_node("diagnostics_listener", context=context)
     seen: list[dict[str, str]] = []
 
     def on_diagnostics(msg: DiagnosticArray) -> None:
@@ -308,19 +277,22 @@ def test_chunks_nobody_subscribes_to_are_counted(tmp_path):
             if status.hardware_id == "brake_sim":
                 seen.append({kv.key: kv.value for kv in status.values})
 
-    listener.create_subscription(
-        DiagnosticArray, "/diagnostics", on_diagnostics, qos.for_topic(stream.DIAGNOSTICS)
-    )
-    executor = SingleThreadedExecutor(context=context)
-    executor.add_node(listener)
-    try:
-        end = time.monotonic() + 30.0
-        while not (seen and int(seen[-1]["chunks_published"]) >= 10):
-            assert time.monotonic() < end, node.output()
-            executor.spin_once(timeout_sec=0.1)
-        assert seen[-1]["chunks_unheard"] == seen[-1]["chunks_published"], seen[-1]
-    finally:
-        executor.shutdown(timeout_sec=1.0)
-        listener.destroy_node()
-        rclpy.try_shutdown(context=context)
-        assert node.stop() == 0, node.output()
+    with nodes.process(["--ros-args", "-p", "diagnostics_period_s:=0.1"], domain) as node:
+        context = Context()
+        rclpy.init(context=context, domain_id=domain)
+        listener = rclpy.create_node("diagnostics_listener", context=context)
+        listener.create_subscription(
+            DiagnosticArray, "/diagnostics", on_diagnostics, qos.for_topic(stream.DIAGNOSTICS)
+        )
+        executor = SingleThreadedExecutor(context=context)
+        executor.add_node(listener)
+        try:
+            end = time.monotonic() + 30.0
+            while not (seen and int(seen[-1]["chunks_published"]) >= 10):
+                assert time.monotonic() < end, node.output()
+                executor.spin_once(timeout_sec=0.1)
+            assert seen[-1]["chunks_unheard"] == seen[-1]["chunks_published"], seen[-1]
+        finally:
+            executor.shutdown(timeout_sec=1.0)
+            listener.destroy_node()
+            rclpy.try_shutdown(context=context)

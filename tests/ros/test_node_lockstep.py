@@ -16,24 +16,18 @@ import uuid
 
 import numpy as np
 import pytest
+from rclpy.qos import QoSProfile, ReliabilityPolicy
 
-pytestmark = [
-    pytest.mark.ros,
-    pytest.mark.realtime,  # a ~/step call is bounded by the node's measured wall cost per sample
-    pytest.mark.filterwarnings("ignore:module 'sre_(parse|constants)' is deprecated"),
-]
+from brake_sim_ros.model.defects import Defects, ShoeDefect
+from brake_sim_ros.model.layout import COL
+from brake_sim_ros.ros.harness import SimClient, domain_id_for
+from brake_sim_ros.scenarios import load_scenario
+from brake_sim_ros.stream import conversion
+from brake_sim_ros.stream.build import stepper_for
+from brake_sim_ros.viz.annotations import shoe_defects
 
-rclpy = pytest.importorskip("rclpy", reason="rclpy not installed (run scripts/setup.sh)")
-
-from rclpy.qos import QoSProfile, ReliabilityPolicy  # noqa: E402
-
-from brake_sim_ros.model.defects import Defects, ShoeDefect  # noqa: E402
-from brake_sim_ros.model.layout import COL  # noqa: E402
-from brake_sim_ros.ros.harness import NodeProcess, SimClient, domain_id_for  # noqa: E402
-from brake_sim_ros.scenarios import load_scenario  # noqa: E402
-from brake_sim_ros.stream import conversion  # noqa: E402
-from brake_sim_ros.stream.build import stepper_for  # noqa: E402
-from brake_sim_ros.viz.annotations import shoe_defects  # noqa: E402
+# a ~/step call is bounded by the node's measured wall cost per sample
+pytestmark = pytest.mark.realtime
 
 DOMAIN = domain_id_for(2)
 DT = 1 / 25_600  # the sample period
@@ -44,30 +38,12 @@ LOSSLESS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
 
 
 @pytest.fixture(scope="module")
-def client(tmp_path_factory):
-    log = tmp_path_factory.mktemp("node") / "node.log"
-    node = NodeProcess.start(
-        [
-            "--ros-args",
-            "-p",
-            "paused:=true",
-            "-p",
-            "diagnostics_period_s:=0.1",
-            "-p",
-            f"max_actuation_force_n:={MAX_FORCE}",
-            "-p",
-            f"state_rate_hz:={STATE_RATE_HZ}",
-        ],
-        domain_id=DOMAIN,
-        log_path=log,
-    )
-    sim = SimClient(DOMAIN, stream_qos=LOSSLESS)
-    try:
-        sim.wait_for_node(30.0)
+def client(node_and_client):
+    args = ["--ros-args", "-p", "paused:=true", "-p", "diagnostics_period_s:=0.1",
+            "-p", f"max_actuation_force_n:={MAX_FORCE}",
+            "-p", f"state_rate_hz:={STATE_RATE_HZ}"]  # fmt: skip
+    with node_and_client(args, DOMAIN, stream_qos=LOSSLESS, wait_s=30.0) as (_, sim):
         yield sim
-    finally:
-        sim.close()
-        assert node.stop() == 0, node.output()
 
 
 @pytest.fixture

@@ -19,31 +19,21 @@ import time
 
 import numpy as np
 import pytest
-
-pytestmark = [
-    pytest.mark.ros,
-    pytest.mark.filterwarnings("ignore:module 'sre_(parse|constants)' is deprecated"),
-]
-
-rclpy = pytest.importorskip("rclpy", reason="rclpy not installed (run scripts/setup.sh)")
-
-from rclpy.qos import (  # noqa: E402
+from rclpy.qos import (
     DurabilityPolicy,
     QoSProfile,
     ReliabilityPolicy,
 )
 
-from brake_sim_ros import stream  # noqa: E402
-from brake_sim_ros.ros import qos  # noqa: E402
-from brake_sim_ros.ros.harness import (  # noqa: E402
-    NodeProcess,
-    SimClient,
+from brake_sim_ros import stream
+from brake_sim_ros.ros import qos
+from brake_sim_ros.ros.harness import (
     domain_id_for,
     ros_environment,
 )
-from brake_sim_ros.scenarios import load_scenario  # noqa: E402
-from brake_sim_ros.stream import conversion  # noqa: E402
-from brake_sim_ros.stream.build import stepper_for  # noqa: E402
+from brake_sim_ros.scenarios import load_scenario
+from brake_sim_ros.stream import conversion
+from brake_sim_ros.stream.build import stepper_for
 
 DOMAIN = domain_id_for(1)
 RUN_S = 3.0
@@ -63,26 +53,15 @@ BAD_PARAMETERS = {
 
 
 @pytest.fixture(scope="module")
-def run(tmp_path_factory):
+def run(node_and_client):
     """Start the node, record its whole 3 s run, stop it; return (client, node process)."""
-    log = tmp_path_factory.mktemp("node") / "node.log"
     # started paused: the stream is recorded from sample 0 once discovery is complete
-    node = NodeProcess.start(
-        [
-            "--duration",
-            str(RUN_S),
-            "--ros-args",
-            "-p",
-            "paused:=true",
-            "-p",
-            "diagnostics_period_s:=0.2",
-        ],
-        domain_id=DOMAIN,
-        log_path=log,
-    )
-    client = SimClient(DOMAIN, stream_qos=LOSSLESS)
-    try:
-        client.wait_for_node(30.0)
+    args = ["--duration", str(RUN_S), "--ros-args", "-p", "paused:=true",
+            "-p", "diagnostics_period_s:=0.2"]  # fmt: skip
+    with node_and_client(args, DOMAIN, stream_qos=LOSSLESS, wait_s=30.0, exit_code=None) as (
+        node,
+        client,
+    ):
         client.spin_for(0.2)
         assert client.set_parameter("paused", False).successful
         client.refusals = {}
@@ -96,9 +75,6 @@ def run(tmp_path_factory):
         client.wait_for(lambda: client.sample_count >= N_SAMPLES, 5.0, "all samples")
         client.final = client.next_diagnostics()
         yield client, node
-    finally:
-        client.close()
-        node.stop()
 
 
 @pytest.mark.realtime  # these share the module's run, paced against the wall clock
@@ -254,22 +230,18 @@ def test_ground_truth_is_latched_for_late_subscribers(run):
     assert list(late[-1].defects) == [] and list(late[-1].labels) == []
 
 
-def test_exit_at_end_prints_a_summary_and_exits_0(tmp_path):
-    node = NodeProcess.start(
+def test_exit_at_end_prints_a_summary_and_exits_0(nodes):
+    code, out = nodes.run(
         ["--duration", "0.5", "--exit-at-end", "--ros-args", "-p", "real_time_factor:=0.0"],
-        domain_id=domain_id_for(3),
-        log_path=tmp_path / "node.log",
+        domain_id_for(3),
     )
-    try:
-        assert node.wait(60.0) == 0, node.output()
-    finally:
-        node.stop()
-    out = node.output()
+    assert code == 0, out
     assert "ended at simulated time 0.5000 s" in out
     assert "published 12800 samples in 50 chunks" in out
     assert "commands accepted 0, rejected 0" in out
 
 
+@pytest.mark.slow
 def test_brake_sim_node_command_runs_a_scenario_to_the_end():
     """The README's main command, through the ``brake-sim`` CLI, shortened."""
     proc = subprocess.run(
@@ -297,6 +269,7 @@ def test_brake_sim_node_command_runs_a_scenario_to_the_end():
     assert "case1_left_pivot_out" in out and "ended at simulated time 0.3000 s" in out
 
 
+@pytest.mark.slow
 def test_a_defect_and_a_force_that_need_small_steps_are_not_refused():
     """Friction smoothed over 5 mm/s with commands up to 20 kN allowed (limit far below the
     sample interval): the node starts, at the scenario's sample rate, and says which
@@ -334,6 +307,7 @@ def test_a_defect_and_a_force_that_need_small_steps_are_not_refused():
     assert "published 1280 samples" in out
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("args", "message"),
     [

@@ -8,48 +8,27 @@ import pytest
 
 from tests.rerun_helpers import read, verify
 
-pytestmark = [
-    pytest.mark.ros,
-    pytest.mark.filterwarnings("ignore:module 'sre_(parse|constants)' is deprecated"),
-]
-
-pytest.importorskip("rclpy", reason="rclpy not installed (run scripts/setup.sh)")
 pytest.importorskip("rerun")
 
-from brake_sim_ros.ros.harness import NodeProcess, domain_id_for  # noqa: E402
-from brake_sim_ros.stream import conversion  # noqa: E402
-from brake_sim_ros.viz import entities as E  # noqa: E402
+from brake_sim_ros.ros.harness import domain_id_for
+from brake_sim_ros.stream import conversion
+from brake_sim_ros.viz import entities as E
 
 RUN_S = 0.5
 SAMPLE_RATE_HZ = 25_600.0
 N_SAMPLES = round(RUN_S * SAMPLE_RATE_HZ)
 
 
-def test_node_rerun_save(tmp_path):
+@pytest.mark.slow
+def test_node_rerun_save(tmp_path, nodes):
     rrd = tmp_path / "node.rrd"
-    node = NodeProcess.start(
-        [
-            "--duration",
-            str(RUN_S),
-            "--exit-at-end",
-            "--rerun",
-            "save",
-            str(rrd),
-            "--ros-args",
-            "-p",
-            "real_time_factor:=0.0",
-            "-p",
-            "defects.left.pivot_radius_change_pct:=3.0",
-        ],
-        domain_id=domain_id_for(7),
-        log_path=tmp_path / "node.log",
-    )
-    try:
-        code = node.wait(60.0)
-    finally:
-        node.stop()
-    assert code == 0, node.output()
-    assert f"published {N_SAMPLES} samples" in node.output()
+    code, out = nodes.run(
+        ["--duration", str(RUN_S), "--exit-at-end", "--rerun", "save", str(rrd), "--ros-args",
+         "-p", "real_time_factor:=0.0", "-p", "defects.left.pivot_radius_change_pct:=3.0"],
+        domain_id_for(7),
+    )  # fmt: skip
+    assert code == 0, out
+    assert f"published {N_SAMPLES} samples" in out
     verify(rrd)
     c = read(rrd)
     for side in E.SIDES:

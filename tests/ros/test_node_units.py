@@ -6,36 +6,22 @@ from __future__ import annotations
 
 import json
 
-import pytest
+from mcap.reader import make_reader
 
-pytestmark = [
-    pytest.mark.ros,
-    pytest.mark.filterwarnings("ignore:module 'sre_(parse|constants)' is deprecated"),
-]
-
-rclpy = pytest.importorskip("rclpy", reason="rclpy not installed (run scripts/setup.sh)")
-
-from mcap.reader import make_reader  # noqa: E402
-
-from brake_sim_ros.recording import metadata  # noqa: E402
-from brake_sim_ros.ros.harness import NodeProcess, SimClient, domain_id_for  # noqa: E402
-from brake_sim_ros.scenarios import load_scenario  # noqa: E402
+from brake_sim_ros.recording import metadata
+from brake_sim_ros.ros.harness import domain_id_for
+from brake_sim_ros.scenarios import load_scenario
 
 UNIT = "VIN-0042"
 
 
-def test_the_node_runs_the_unit_records_it_and_redraws_it_with_a_new_seed(tmp_path):
-    domain = domain_id_for(74)
+def test_the_node_runs_the_unit_records_it_and_redraws_it_with_a_new_seed(
+    tmp_path, node_and_client
+):
     bag = tmp_path / "unit.mcap"
-    node = NodeProcess.start(
-        ["--duration", "3600", "--record", str(bag), "--ros-args", "-p", f"unit_id:={UNIT}"],
-        domain_id=domain,
-        log_path=tmp_path / "node.log",
-    )
-    sim = SimClient(domain)
+    args = ["--duration", "3600", "--record", str(bag), "--ros-args", "-p", f"unit_id:={UNIT}"]
     first = load_scenario("symmetric").with_unit(UNIT)
-    try:
-        sim.wait_for_node(30.0)
+    with node_and_client(args, domain_id_for(74), wait_s=30.0) as (_, sim):
         truth = sim.rx.defects[-1]
         assert (truth.unit_id, truth.seed) == (UNIT, 0)
         mu = sim.get_parameters(["friction.coefficient"])["friction.coefficient"]
@@ -48,9 +34,6 @@ def test_the_node_runs_the_unit_records_it_and_redraws_it_with_a_new_seed(tmp_pa
         # a new seed is new noise on the same brake: the unit is not drawn again
         mu = sim.get_parameters(["friction.coefficient"])["friction.coefficient"]
         assert mu == first.setup.params.friction.coefficient
-    finally:
-        sim.close()
-        assert node.stop() == 0, node.output()
     with open(bag, "rb") as f:
         records = {m.name: m.metadata for m in make_reader(f).iter_metadata()}
     unit = records[metadata.UNIT]

@@ -21,26 +21,20 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import rclpy
+import yaml
+from mcap.reader import make_reader
+from rclpy.qos import QoSProfile, ReliabilityPolicy
 
-pytestmark = [
-    pytest.mark.ros,
-    pytest.mark.filterwarnings("ignore:module 'sre_(parse|constants)' is deprecated"),
-]
-rclpy = pytest.importorskip("rclpy", reason="rclpy not installed (run scripts/setup.sh)")
-
-import yaml  # noqa: E402
-from mcap.reader import make_reader  # noqa: E402
-from rclpy.qos import QoSProfile, ReliabilityPolicy  # noqa: E402
-
-from brake_sim_ros import stream  # noqa: E402
-from brake_sim_ros.recording.record import record_offline  # noqa: E402
-from brake_sim_ros.recording.recover import recover  # noqa: E402
-from brake_sim_ros.ros.harness import NodeProcess, SimClient, domain_id_for  # noqa: E402
-from brake_sim_ros.scenarios import load_scenario  # noqa: E402
-from brake_sim_ros.solvers.methods import FIXED_STEP_METHODS  # noqa: E402
-from brake_sim_ros.stream import conversion  # noqa: E402
-from brake_sim_ros.stream.offline import StreamSettings  # noqa: E402
-from tests.bag_helpers import rosbags_decoded  # noqa: E402
+from brake_sim_ros import stream
+from brake_sim_ros.recording.record import record_offline
+from brake_sim_ros.recording.recover import recover
+from brake_sim_ros.ros.harness import NodeProcess, domain_id_for
+from brake_sim_ros.scenarios import load_scenario
+from brake_sim_ros.solvers.methods import FIXED_STEP_METHODS
+from brake_sim_ros.stream import conversion
+from brake_sim_ros.stream.offline import StreamSettings
+from tests.bag_helpers import rosbags_decoded
 
 SCENARIO = "symmetric"
 SCENARIOS = Path(__file__).parents[2] / "brake_sim_ros" / "scenarios" / "builtin"
@@ -74,17 +68,15 @@ def _wait_for_line(node: NodeProcess, text: str, timeout_s: float) -> None:
         time.sleep(0.05)
 
 
-def test_live_recording_equals_offline_recording(tmp_path):
+@pytest.mark.slow
+def test_live_recording_equals_offline_recording(tmp_path, nodes):
     live = tmp_path / "live.mcap"
-    node = NodeProcess.start(
+    code, out = nodes.run(
         ["--scenario", SCENARIO, "--duration", "1.5", "--exit-at-end", "--record", str(live),
          "--ros-args", "-p", "real_time_factor:=0.0", "-p", "publish_measured:=true"],
-        domain_id=domain_id_for(40), log_path=tmp_path / "node.log",
+        domain_id_for(40), timeout_s=120,
     )  # fmt: skip
-    try:
-        assert node.wait(120) == 0, node.output()
-    finally:
-        node.stop()
+    assert code == 0, out
     offline = tmp_path / "offline.mcap"
     # the live run's id, given to the offline run: then every byte must be equal
     record_offline(
@@ -106,24 +98,21 @@ def test_live_recording_equals_offline_recording(tmp_path):
     assert "real_time_factor" in records["brake_sim_ros_parameters"]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("method", FIXED_STEP_METHODS)
-def test_live_equals_offline_for_every_scheme(tmp_path, method):
+def test_live_equals_offline_for_every_scheme(tmp_path, nodes, method):
     """Same scenario, same scheme: the node's recording and the offline one hold the same
     bytes, through the first impacts (0.8 s), whichever fixed-step scheme is chosen."""
     text = (SCENARIOS / "symmetric.toml").read_text()
     scenario_file = tmp_path / f"{method}.toml"
     scenario_file.write_text(f'{text}\n[solver]\nmethod = "{method}"\n')
     live = tmp_path / "live.mcap"
-    node = NodeProcess.start(
+    code, out = nodes.run(
         ["--scenario", str(scenario_file), "--duration", "0.8", "--exit-at-end",
          "--record", str(live), "--ros-args", "-p", "real_time_factor:=0.0"],
-        domain_id=domain_id_for(50 + FIXED_STEP_METHODS.index(method)),
-        log_path=tmp_path / "node.log",
+        domain_id_for(50 + FIXED_STEP_METHODS.index(method)), timeout_s=120,
     )  # fmt: skip
-    try:
-        assert node.wait(120) == 0, node.output()
-    finally:
-        node.stop()
+    assert code == 0, out
     offline = tmp_path / "offline.mcap"
     scenario = load_scenario(str(scenario_file))
     assert scenario.solver.method == method
@@ -134,40 +123,38 @@ def test_live_equals_offline_for_every_scheme(tmp_path, method):
     assert live_msgs == offline_msgs
 
 
-def test_the_recording_holds_the_qos_the_node_offers(tmp_path):
+@pytest.mark.slow
+def test_the_recording_holds_the_qos_the_node_offers(tmp_path, nodes):
     """Each recorded channel's offered_qos_profiles equals what the running node's
     publisher offers, as DDS discovery reports it to another participant (every topic:
     ~/measured switched on)."""
     path = tmp_path / "rec.mcap"
     domain = domain_id_for(47)
-    node = NodeProcess.start(
-        ["--scenario", SCENARIO, "--duration", "3", "--exit-at-end", "--record", str(path),
-         "--ros-args", "-p", "publish_measured:=true"],
-        domain_id=domain, log_path=tmp_path / "node.log",
-    )  # fmt: skip
-    context = rclpy.context.Context()
-    rclpy.init(context=context, domain_id=domain)
+    args = ["--scenario", SCENARIO, "--duration", "3", "--exit-at-end", "--record", str(path),
+            "--ros-args", "-p", "publish_measured:=true"]  # fmt: skip
     offered: dict[str, tuple[str, str, int]] = {}
-    try:
-        probe = rclpy.create_node("qos_probe", context=context)
-        published = [t for t in stream.TOPICS if t.published]
-        end = time.monotonic() + 30.0
-        while len(offered) < len(published) and time.monotonic() < end:
-            for topic in published:
-                for info in probe.get_publishers_info_by_topic(topic.name):
-                    if info.node_name == "brake_sim":
-                        q = info.qos_profile
-                        offered[topic.name] = (
-                            q.reliability.name.lower(),
-                            q.durability.name.lower(),
-                            q.depth,
-                        )
-            time.sleep(0.1)
-        probe.destroy_node()
-        assert node.wait(60) == 0, node.output()
-    finally:
-        rclpy.try_shutdown(context=context)
-        node.stop()
+    with nodes.process(args, domain) as node:
+        context = rclpy.context.Context()
+        rclpy.init(context=context, domain_id=domain)
+        try:
+            probe = rclpy.create_node("qos_probe", context=context)
+            published = [t for t in stream.TOPICS if t.published]
+            end = time.monotonic() + 30.0
+            while len(offered) < len(published) and time.monotonic() < end:
+                for topic in published:
+                    for info in probe.get_publishers_info_by_topic(topic.name):
+                        if info.node_name == "brake_sim":
+                            q = info.qos_profile
+                            offered[topic.name] = (
+                                q.reliability.name.lower(),
+                                q.durability.name.lower(),
+                                q.depth,
+                            )
+                time.sleep(0.1)
+            probe.destroy_node()
+            assert node.wait(60) == 0, node.output()
+        finally:
+            rclpy.try_shutdown(context=context)
     assert set(offered) == {t.name for t in stream.TOPICS if t.published}
     with path.open("rb") as f:
         reader = make_reader(f)
@@ -187,19 +174,14 @@ def test_the_recording_holds_the_qos_the_node_offers(tmp_path):
 
 @pytest.mark.realtime  # signalled after 2.5 s of wall time: more than 1 s of signal
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
-def test_signal_closes_the_file_with_every_message(tmp_path, sig):
+def test_signal_closes_the_file_with_every_message(tmp_path, nodes, sig):
     path = tmp_path / "rec.mcap"
-    node = NodeProcess.start(
-        ["--scenario", SCENARIO, "--duration", "600", "--record", str(path)],
-        domain_id=domain_id_for(41 + int(sig)), log_path=tmp_path / "node.log",
-    )  # fmt: skip
-    try:
+    args = ["--scenario", SCENARIO, "--duration", "600", "--record", str(path)]
+    with nodes.process(args, domain_id_for(41 + int(sig))) as node:
         _wait_for_line(node, "samples per chunk", 60.0)
         time.sleep(2.5)  # about 2.5 s of signal at real-time factor 1
         node.proc.send_signal(sig)
         assert node.wait(20) == 0, node.output()
-    finally:
-        node.stop()
     out = node.output()
     match = SUMMARY.search(out)
     assert match, out
@@ -220,18 +202,15 @@ def test_signal_closes_the_file_with_every_message(tmp_path, sig):
 
 
 @pytest.mark.realtime  # killed after 3 s of wall time, with a command flushed to the file
-def test_sigkill_then_recover_loses_less_than_the_flush_interval(tmp_path):
+def test_sigkill_then_recover_loses_less_than_the_flush_interval(tmp_path, node_and_client):
     path = tmp_path / "killed.mcap"
-    domain = domain_id_for(50)
-    node = NodeProcess.start(
-        ["--scenario", SCENARIO, "--duration", "600", "--record", str(path),
-         "--ros-args", "-p", "paused:=true"],
-        domain_id=domain, log_path=tmp_path / "node.log",
-    )  # fmt: skip
+    args = ["--scenario", SCENARIO, "--duration", "600", "--record", str(path),
+            "--ros-args", "-p", "paused:=true"]  # fmt: skip
     reliable = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
-    client = SimClient(domain, stream_qos=reliable)
-    try:
-        client.wait_for_node(60.0)
+    with node_and_client(args, domain_id_for(50), stream_qos=reliable, exit_code=None) as (
+        node,
+        client,
+    ):
         assert client.set_parameter("paused", False).successful
         client.spin_for(1.0)
         client.command(300.0, 300.0)  # an accepted command goes into the file
@@ -239,9 +218,6 @@ def test_sigkill_then_recover_loses_less_than_the_flush_interval(tmp_path):
         node.proc.send_signal(signal.SIGKILL)
         node.wait(10)
         client.spin_for(0.3)  # what was on its way
-    finally:
-        client.close()
-        node.stop()
     received = client.rx.chunks
     assert client.gaps == 0 and received[0].first_sample_index == 0
     fixed = tmp_path / "fixed.mcap"
@@ -276,7 +252,8 @@ def test_sigkill_then_recover_loses_less_than_the_flush_interval(tmp_path):
     assert lost_samples * dt < FLUSH_NS / 1e9 + 0.0101  # + the last chunk's own 10 ms
 
 
-def test_recording_failure_is_reported_and_the_node_streams_on(tmp_path):
+@pytest.mark.slow
+def test_recording_failure_is_reported_and_the_node_streams_on(tmp_path, nodes):
     """The file system refuses a write in the middle of the run (a file-size limit of
     64 KiB on the node process; Python ignores SIGXFSZ, so the write fails with EFBIG):
     the node reports it, drops the recorder and streams on to the end."""
@@ -284,16 +261,12 @@ def test_recording_failure_is_reported_and_the_node_streams_on(tmp_path):
     wrapper.write_text(f'#!/bin/sh\nulimit -f 128\nexec "{sys.executable}" "$@"\n')
     wrapper.chmod(0o755)
     target = tmp_path / "limited.mcap"
-    node = NodeProcess.start(
+    code, out = nodes.run(
         ["--scenario", SCENARIO, "--duration", "2", "--exit-at-end", "--record", str(target),
          "--record-flush-s", "0.25", "--ros-args", "-p", "real_time_factor:=0.0"],
-        domain_id=domain_id_for(60), log_path=tmp_path / "node.log", python=str(wrapper),
+        domain_id_for(60), timeout_s=120, python=str(wrapper),
     )  # fmt: skip
-    try:
-        assert node.wait(120) == 0, node.output()
-    finally:
-        node.stop()
-    out = node.output()
+    assert code == 0, out
     assert "File too large" in out, out
     assert "the chunks written before are in the file" in out
     assert "the simulation goes on" in out
@@ -306,18 +279,15 @@ def test_recording_failure_is_reported_and_the_node_streams_on(tmp_path):
     [("fifo.mcap", "not a regular file"), ("/dev/null/sub/x.mcap", "")],
     ids=["fifo", "bad-path"],
 )
-def test_an_unusable_record_path_is_refused_before_the_node_starts(tmp_path, target, cause):
+def test_an_unusable_record_path_is_refused_before_the_node_starts(tmp_path, nodes, target, cause):
     if target == "fifo.mcap":
         target = str(tmp_path / target)
         os.mkfifo(target)
-    node = NodeProcess.start(
+    code, out = nodes.run(
         ["--scenario", SCENARIO, "--duration", "0.5", "--exit-at-end", "--record", target],
-        domain_id=domain_id_for(61), log_path=tmp_path / "node.log",
-    )  # fmt: skip
-    try:
-        assert node.wait(60) == 2, node.output()
-    finally:
-        node.stop()
-    last = node.output().strip().splitlines()[-1]
+        domain_id_for(61),
+    )
+    assert code == 2, out
+    last = out.strip().splitlines()[-1]
     assert last.startswith("python -m brake_sim_ros.app.node: error: --record"), last
     assert cause in last

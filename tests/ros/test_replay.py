@@ -29,10 +29,7 @@ from brake_sim_ros.ros import qos
 from brake_sim_ros.ros.harness import domain_id_for, ros_environment
 from brake_sim_ros.ros.messages import message_class
 
-pytestmark = [
-    pytest.mark.ros,
-    pytest.mark.realtime,  # arrival times against the recording's log times
-]
+pytestmark = pytest.mark.realtime  # arrival times against the recording's log times
 
 DURATION_S = 1.5
 # Timing tolerance of a replayed message against its recorded log time (wall s at rate 1).

@@ -15,26 +15,18 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from brake_sim_msgs.msg import DriveCommand
+from mcap.reader import make_reader
+from mcap_ros2.decoder import DecoderFactory
+from rclpy.qos import QoSProfile, ReliabilityPolicy
 
-pytestmark = [
-    pytest.mark.ros,
-    pytest.mark.filterwarnings("ignore:module 'sre_(parse|constants)' is deprecated"),
-]
-
-rclpy = pytest.importorskip("rclpy", reason="rclpy not installed (run scripts/setup.sh)")
-
-from brake_sim_msgs.msg import DriveCommand  # noqa: E402
-from mcap.reader import make_reader  # noqa: E402
-from mcap_ros2.decoder import DecoderFactory  # noqa: E402
-from rclpy.qos import QoSProfile, ReliabilityPolicy  # noqa: E402
-
-from brake_sim_ros import stream  # noqa: E402
-from brake_sim_ros.model.cycle import LiveDrive  # noqa: E402
-from brake_sim_ros.ros.harness import NodeProcess, SimClient, domain_id_for  # noqa: E402
-from brake_sim_ros.scenarios import parse_scenario  # noqa: E402
-from brake_sim_ros.stream.build import stepper_for  # noqa: E402
-from tests.test_drive_command import RATE, RIG  # noqa: E402
-from tests.test_resim_cli import pivot_arrays, resim, run_record  # noqa: E402
+from brake_sim_ros import stream
+from brake_sim_ros.model.cycle import LiveDrive
+from brake_sim_ros.ros.harness import SimClient, domain_id_for
+from brake_sim_ros.scenarios import parse_scenario
+from brake_sim_ros.stream.build import stepper_for
+from tests.test_drive_command import RATE, RIG
+from tests.test_resim_cli import pivot_arrays, resim, run_record
 
 LOSSLESS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
 LIMIT_N_M = 200.0  # the node's max_drive_torque_n_m (the rig's own: the default 120)
@@ -61,25 +53,18 @@ def _step(client: SimClient, samples: int) -> None:
 
 
 @pytest.fixture(scope="module")
-def session(tmp_path_factory):
+def session(tmp_path_factory, node_and_client):
     """(recording, re-simulation, client's diagnostics) of one live session."""
     folder = tmp_path_factory.mktemp("resim_live")
     scenario = folder / "rig.toml"
     scenario.write_text(RIG)
     recording = folder / "live.mcap"
-    domain = domain_id_for(61)
-    node = NodeProcess.start(
-        ["--scenario", str(scenario), "--record", str(recording), "--ros-args",
-         "-p", "paused:=true", "-p", "diagnostics_period_s:=0.1",
-         "-p", f"max_drive_torque_n_m:={LIMIT_N_M}", "-p", f"speed_time_constant_s:={TAU_S}",
-         "-p", "on_command_timeout:=ramp_to_zero", "-p", "command_timeout_s:=0.5",
-         "-p", "state_rate_hz:=256.0"],
-        domain_id=domain,
-        log_path=folder / "node.log",
-    )  # fmt: skip
-    client = SimClient(domain, stream_qos=LOSSLESS)
-    try:
-        client.wait_for_node(60.0)
+    args = ["--scenario", str(scenario), "--record", str(recording), "--ros-args",
+            "-p", "paused:=true", "-p", "diagnostics_period_s:=0.1",
+            "-p", f"max_drive_torque_n_m:={LIMIT_N_M}", "-p", f"speed_time_constant_s:={TAU_S}",
+            "-p", "on_command_timeout:=ramp_to_zero", "-p", "command_timeout_s:=0.5",
+            "-p", "state_rate_hz:=256.0"]  # fmt: skip
+    with node_and_client(args, domain_id_for(61), stream_qos=LOSSLESS) as (_, client):
         refused = client.set_parameter("max_drive_torque_n_m", 300.0)
         client.drive(DriveCommand.MODE_TARGET_SPEED, speed_m_s=5.0)
         _counted(client, "drive_commands_accepted", 1)
@@ -105,9 +90,6 @@ def session(tmp_path_factory):
         client.spin_for(0.4)
         assert client.set_parameter("paused", True).successful
         client.spin_for(0.3)
-    finally:
-        client.close()
-        assert node.stop() == 0, node.output()
     out = folder / "resim.mcap"
     done = resim(recording, "--out", out)
     assert done.returncode == 0, done.stderr
@@ -117,6 +99,7 @@ def session(tmp_path_factory):
     return recording, out, done.stdout, rejected, refused
 
 
+@pytest.mark.slow
 def test_the_resimulation_gives_the_recorded_samples_bit_for_bit(session):
     recording, out, said, _rejected, _refused = session
     live, again = pivot_arrays(recording), pivot_arrays(out)
@@ -202,19 +185,16 @@ def test_the_nodes_drive_settings_took_effect_and_are_recorded(session):
         ("speed_time_constant_s:=0.005", "vehicle speed_time_constant_s 0.005"),
     ],
 )
-def test_bad_drive_settings_refuse_the_node_in_one_line(tmp_path, override, says):
-    node = NodeProcess.start(
-        ["--scenario", "rig", "--ros-args", "-p", override],
-        domain_id=domain_id_for(62),
-        log_path=tmp_path / "node.log",
-    )
-    assert node.wait(60.0) != 0
-    refusal = [line for line in node.output().splitlines() if "refused" in line]
-    assert len(refusal) == 1 and says in refusal[0], node.output()
-    assert "Traceback" not in node.output()
+def test_bad_drive_settings_refuse_the_node_in_one_line(nodes, override, says):
+    code, out = nodes.run(["--scenario", "rig", "--ros-args", "-p", override], domain_id_for(62))
+    assert code != 0
+    refusal = [line for line in out.splitlines() if "refused" in line]
+    assert len(refusal) == 1 and says in refusal[0], out
+    assert "Traceback" not in out
 
 
-def test_a_node_started_on_a_growing_defect_grows_it_and_resimulates(tmp_path):
+@pytest.mark.slow
+def test_a_node_started_on_a_growing_defect_grows_it_and_resimulates(tmp_path, node_and_client):
     """A node started on a scenario whose defect grows (not reset to it): its recording
     holds the growing truth, its samples are the offline run's (the scenario's own setup,
     growth and all), and its re-simulation gives them bit for bit."""
@@ -226,20 +206,10 @@ def test_a_node_started_on_a_growing_defect_grows_it_and_resimulates(tmp_path):
     scenario = tmp_path / "growing.toml"
     scenario.write_text(text)
     recording = tmp_path / "live.mcap"
-    domain = domain_id_for(63)
-    node = NodeProcess.start(
-        ["--scenario", str(scenario), "--record", str(recording), "--ros-args",
-         "-p", "paused:=true"],
-        domain_id=domain,
-        log_path=tmp_path / "node.log",
-    )  # fmt: skip
-    client = SimClient(domain)
-    try:
-        client.wait_for_node(60.0)
+    args = ["--scenario", str(scenario), "--record", str(recording), "--ros-args",
+            "-p", "paused:=true"]  # fmt: skip
+    with node_and_client(args, domain_id_for(63)) as (_, client):
         _step(client, RATE)
-    finally:
-        client.close()
-        assert node.stop() == 0, node.output()
     truths = _decoded(recording, stream.DEFECTS.name)
     assert len(truths) > 3  # the start, then the growth's updates
     stepper = stepper_for(parse_scenario(text))
