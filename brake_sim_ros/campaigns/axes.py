@@ -34,6 +34,8 @@ DEFECT_COLUMNS = (
     "defect_severity_fraction",
     "defect_repeat",
 )
+# those of them that hold numbers (the rest hold strings)
+DEFECT_NUMBER_COLUMNS = ("defect_severity", "defect_severity_fraction", "defect_repeat")
 # a column derived from the others: not part of a run's identity (its seed)
 DERIVED_COLUMNS = ("defect_severity_fraction",)
 HEALTHY = "healthy"

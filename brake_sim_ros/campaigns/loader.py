@@ -30,6 +30,7 @@ from brake_sim_ros import __version__
 from brake_sim_ros.campaigns.axes import (
     DEFECT_AXIS,
     DEFECT_COLUMNS,
+    DEFECT_NUMBER_COLUMNS,
     DERIVED_COLUMNS,
     DRAW_METHODS,
     AnyAxis,
@@ -541,7 +542,7 @@ def _split(
         if isinstance(a, DefectAxis):
             columns |= set(DEFECT_COLUMNS)
             for c in DEFECT_COLUMNS:
-                types[c] = {"number"} if c == "defect_severity" else {"string"}
+                types[c] = {"number"} if c in DEFECT_NUMBER_COLUMNS else {"string"}
         else:
             columns.add(a.name)
             kinds = {"number"} if a.uniform is not None else {value_kind(v) for v in a.values}
