@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from brake_sim_ros.monitoring import saved
-from brake_sim_ros.monitoring.forest import LEAF, MAX_TREE_DEPTH, ForestArrays
+from brake_sim_ros.monitoring.forest import LEAF, MAX_TREE_DEPTH, MAX_TREES, ForestArrays
 from brake_sim_ros.monitoring.learned import LearnedClassifier
 from tests.test_saved_file import FITTED_ON, _windows
 
@@ -110,3 +110,34 @@ def test_fitting_makes_no_tree_deeper_than_a_saved_one_may_be(fitted):
     assert forest.check() is None
     estimators = fitted.model.named_steps["forest"].estimators_
     assert all(e.max_depth == MAX_TREE_DEPTH for e in estimators)
+
+
+def _many(trees: int, n_features: int, outputs: int) -> dict:
+    """``trees`` one-split trees (root -> two leaves), concatenated."""
+    left = np.tile(np.array([1, LEAF, LEAF], dtype=np.int64), trees)
+    right = np.tile(np.array([2, LEAF, LEAF], dtype=np.int64), trees)
+    return {
+        "n_features": n_features,
+        "node_counts": _encoded(np.full(trees, 3), "int64"),
+        "left": _encoded(left, "int64"),
+        "right": _encoded(right, "int64"),
+        "feature": _encoded(np.zeros(3 * trees, dtype=np.int64), "int64"),
+        "threshold": _encoded(np.full(3 * trees, 0.5), "float64"),
+        "leaf_values": _encoded(np.full((2 * trees, outputs), 1.0 / outputs), "float64"),
+    }
+
+
+def test_more_trees_than_fitting_makes_are_refused_and_as_many_load(fitted, tmp_path):
+    """A window walks every tree: a forest of a million one-split trees would cost as the
+    chain does. At most MAX_TREES (what fitting makes) load."""
+    doc = saved.document(fitted, fitted_on=FITTED_ON)
+    outputs = len(doc["state"]["classes"])
+    n_features = doc["state"]["forest"]["n_features"]
+    for trees in (MAX_TREES + 1, 1_000_000):
+        doc["state"]["forest"] = _many(trees, n_features, outputs)
+        with pytest.raises(saved.ModelFileError, match=f"{trees} trees; allowed at most") as info:
+            saved.load(_write(tmp_path, doc), "learned")
+        assert "\n" not in str(info.value)
+    doc["state"]["forest"] = _many(MAX_TREES, n_features, outputs)
+    assert saved.load(_write(tmp_path, doc), "learned").model.node_counts.size == MAX_TREES
+    assert ForestArrays.from_sklearn(fitted.model).node_counts.size <= MAX_TREES

@@ -33,6 +33,9 @@ LEAF = -1  # scikit-learn's TREE_LEAF: a node without children
 # reference campaign are far shallower) and so the deepest a saved one may hold: a window's
 # prediction walks at most this many levels, however the file was made
 MAX_TREE_DEPTH = 128
+# the most trees one fitted forest holds (learned.py's classifier: N_TREES = 100; its
+# severity regressors have fewer): a window's prediction walks at most this many trees
+MAX_TREES = 100
 
 
 @dataclass(frozen=True)
@@ -85,6 +88,8 @@ class ForestArrays:
         counts, n = self.node_counts, self.left.size
         if counts.ndim != 1 or counts.size == 0 or np.any(counts < 1):
             return "node_counts: allowed one count >= 1 per tree"
+        if counts.size > MAX_TREES:
+            return f"{counts.size} trees; allowed at most {MAX_TREES}, the most fitting makes"
         if int(counts.sum()) != n:
             return f"node_counts: they add to {int(counts.sum())}, the trees hold {n} nodes"
         for name in ("right", "feature", "threshold"):

@@ -52,11 +52,11 @@ from sklearn.pipeline import Pipeline
 
 from brake_sim_ros.monitoring.detector import Assessment, Diagnosis, TrainingWindow
 from brake_sim_ros.monitoring.features import CHANNELS, window_features
-from brake_sim_ros.monitoring.forest import MAX_TREE_DEPTH, ForestArrays
+from brake_sim_ros.monitoring.forest import MAX_TREE_DEPTH, MAX_TREES, ForestArrays
 from brake_sim_ros.monitoring.history import HistoryDetector
 
 HEALTHY = "healthy"
-N_TREES = 100
+N_TREES = MAX_TREES  # a saved forest may hold no more (forest.py)
 MIN_LEAF = 2
 FOLDS = 3
 FALSE_ALARM_FRACTION = 0.01  # of healthy training windows over the threshold, out of fold
