@@ -62,14 +62,14 @@ def scenario():
 
 def test_every_entry_is_complete():
     """Name, default of a ROS type, a description with its unit or values, a range for
-    every double (the node's descriptor and resim's check), when it changes, what it
+    every number (the node's descriptor and resim's check), when it changes, what it
     affects; names unique."""
     names = [p.name for p in run_parameters.RUN_PARAMETERS]
     assert len(names) == len(set(names))
     for p in run_parameters.RUN_PARAMETERS:
-        assert type(p.default) in (float, bool, str), p.name
+        assert type(p.default) in (float, int, bool, str), p.name
         assert p.description.strip(), p.name
-        assert (p.range is not None) == isinstance(p.default, float), p.name
+        assert (p.range is not None) == (type(p.default) in (float, int)), p.name
         assert isinstance(p.changes, Change) and isinstance(p.affects, Affects), p.name
         fixed = "Fixed at start-up" in p.description
         assert fixed == (p.changes is Change.AT_START), p.name

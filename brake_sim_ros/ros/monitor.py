@@ -367,6 +367,7 @@ class MonitorNode(Node):
                 self.stats.gaps += 1
                 self.stats.samples_lost += first
                 self._warn(
+                    "late joins",
                     f"samples 0 to {first - 1} of the run never arrived (the monitor joined"
                     " late: start it before the node, or the node with"
                     " measured_subscribers:=1)"

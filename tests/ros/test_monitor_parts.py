@@ -102,9 +102,9 @@ def test_health_level_of_a_period():
     ("args", "says"),
     [
         ([], "the following arguments are required: --detector"),
-        (["--detector", "nope"], "detector 'nope': allowed a built-in"),
+        (["--detector", "nope"], "detector 'nope': allowed rms, kurtosis, crest"),
         (["--detector", "os:path"], "not a brake_sim_ros.monitoring Detector subclass"),
-        (["--detector", "no_such_module_x:Cls"], "cannot import it"),
+        (["--detector", "no_such_module_x:Cls"], "no module 'no_such_module_x' on the Python"),
         (["--detector", "rms"], "learns from data: give --fit DIR"),
         (["--detector", "rms", "--fit", "/nonexistent/dir"], "--fit /nonexistent/dir:"),
         (["--detector", "rms", "--simulator", "brake sim"], "--simulator 'brake sim'"),
