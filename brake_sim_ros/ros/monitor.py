@@ -262,12 +262,16 @@ class MonitorNode(Node):
         self._last_stamp_ns = 0
         self._last_assessment: HealthAssessment | None = None
         self._faults: dict[str, _FaultLog] = {}
-        window_s = getattr(detector, "window_s", None)
-        if isinstance(window_s, int | float) and not 0.0 < window_s <= MAX_WINDOW_S:
-            raise BrakeSimError(
-                f"detector {detector.name}: window_s {window_s!r}; allowed more than 0 up to"
-                f" {MAX_WINDOW_S:g} s (the monitor buffers a window)"
-            )
+        # what the monitor buffers: a window, and a history detector's last history_s
+        for attribute in ("window_s", "history_s"):
+            seconds = getattr(detector, attribute, None)
+            if attribute == "history_s" and seconds is None:
+                continue
+            if isinstance(seconds, int | float) and not 0.0 < seconds <= MAX_WINDOW_S:
+                raise BrakeSimError(
+                    f"detector {detector.name}: {attribute} {seconds!r}; allowed more than 0"
+                    f" up to {MAX_WINDOW_S:g} s (the monitor buffers it)"
+                )
         try:
             self.create_subscription(
                 MeasuredChunk, self.measured_topic, self._on_measured, qos.profile(MEASURED_QOS)

@@ -108,6 +108,25 @@ def test_a_window_longer_than_the_limit_is_refused_at_start():
         rclpy.try_shutdown(context=context)
 
 
+class LongMemory(Counting):
+    """A history detector that would keep its windows for 1e9 s."""
+
+    history_s = 1e9
+
+
+def test_a_history_longer_than_the_limit_is_refused_at_start():
+    context = Context()
+    rclpy.init(context=context, domain_id=domain_id_for(35))
+    try:
+        with pytest.raises(BrakeSimError, match=r"history_s 1000000000\.0; allowed") as info:
+            MonitorNode(LongMemory(), chunk_from_measured, context=context)
+        assert "\n" not in str(info.value)
+        made = MonitorNode(Counting(), chunk_from_measured, context=context)  # no history: runs
+        made.destroy_node()
+    finally:
+        rclpy.try_shutdown(context=context)
+
+
 @pytest.mark.parametrize(
     "ros_args",
     [
