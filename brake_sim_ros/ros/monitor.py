@@ -374,7 +374,7 @@ class MonitorNode(Node):
                     "late joins",
                     f"samples 0 to {first - 1} of the run never arrived (the monitor joined"
                     " late: start it before the node, or the node with"
-                    " measured_subscribers:=1)"
+                    " measured_subscribers:=1)",
                 )
         elif first < self._next_index:
             self.stats.out_of_order += 1

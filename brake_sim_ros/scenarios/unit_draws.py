@@ -11,6 +11,9 @@ the same bits out), the unit id and the fleet seed.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from typing import TypeVar
+
 from brake_sim_ros.fleet.scatter import NOMINAL_UNIT, unit_parameters, unit_sensors
 from brake_sim_ros.model.parameters import BrakeParameters
 from brake_sim_ros.sensing.sensors import SensorSet
@@ -19,32 +22,35 @@ _KEPT = 256  # distinct (nominal, unit, seed) keys kept per kind; then the memor
 _BRAKES: dict[tuple[str, str, int], BrakeParameters] = {}
 _SENSORS: dict[tuple[str, str, int], SensorSet] = {}
 
+_T = TypeVar("_T")
 
-def unit_brake(nominal: BrakeParameters, unit_id: str, fleet_seed: int) -> BrakeParameters:
-    """:func:`~brake_sim_ros.fleet.scatter.unit_parameters`, remembered (its errors are not);
-    unit "nominal" is ``nominal`` itself, as there."""
+
+def _remembered(
+    memory: dict[tuple[str, str, int], _T],
+    draw: Callable[[_T, str, int], _T],
+    nominal: _T,
+    unit_id: str,
+    fleet_seed: int,
+) -> _T:
+    """``draw(nominal, unit_id, fleet_seed)``, kept in ``memory`` (its errors are not);
+    unit "nominal" is ``nominal`` itself, as in :mod:`~brake_sim_ros.fleet.scatter`."""
     if unit_id == NOMINAL_UNIT:
         return nominal
     key = (repr(nominal), unit_id, fleet_seed)
-    brake = _BRAKES.get(key)
-    if brake is None:
-        brake = unit_parameters(nominal, unit_id, fleet_seed)
-        if len(_BRAKES) >= _KEPT:
-            _BRAKES.clear()
-        _BRAKES[key] = brake
-    return brake
+    drawn = memory.get(key)
+    if drawn is None:
+        drawn = draw(nominal, unit_id, fleet_seed)
+        if len(memory) >= _KEPT:
+            memory.clear()
+        memory[key] = drawn
+    return drawn
+
+
+def unit_brake(nominal: BrakeParameters, unit_id: str, fleet_seed: int) -> BrakeParameters:
+    """:func:`~brake_sim_ros.fleet.scatter.unit_parameters`, remembered."""
+    return _remembered(_BRAKES, unit_parameters, nominal, unit_id, fleet_seed)
 
 
 def unit_sensor_set(nominal: SensorSet, unit_id: str, fleet_seed: int) -> SensorSet:
-    """:func:`~brake_sim_ros.fleet.scatter.unit_sensors`, remembered; unit "nominal" is
-    ``nominal`` itself, as there."""
-    if unit_id == NOMINAL_UNIT:
-        return nominal
-    key = (repr(nominal), unit_id, fleet_seed)
-    sensors = _SENSORS.get(key)
-    if sensors is None:
-        sensors = unit_sensors(nominal, unit_id, fleet_seed)
-        if len(_SENSORS) >= _KEPT:
-            _SENSORS.clear()
-        _SENSORS[key] = sensors
-    return sensors
+    """:func:`~brake_sim_ros.fleet.scatter.unit_sensors`, remembered."""
+    return _remembered(_SENSORS, unit_sensors, nominal, unit_id, fleet_seed)
