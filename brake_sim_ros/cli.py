@@ -19,18 +19,18 @@ from typing import TYPE_CHECKING, NoReturn
 import numpy as np
 
 from brake_sim_ros import __version__
+from brake_sim_ros.detection.registry import help_text as detector_help
+from brake_sim_ros.detection.registry import names as detector_names
 from brake_sim_ros.errors import BrakeSimError
 from brake_sim_ros.identifiers import IDENTIFIER_RULE
 from brake_sim_ros.model.layout import SIDES
-from brake_sim_ros.monitoring.registry import help_text as detector_help
-from brake_sim_ros.monitoring.registry import names as detector_names
 from brake_sim_ros.solvers.methods import METHODS, SOLVER_METHODS
 from brake_sim_ros.solvers.presets import PRESETS
 from brake_sim_ros.studies import BENCHMARKS
 
 if TYPE_CHECKING:  # the CLI imports the numerics only when a command needs them
     from brake_sim_ros.analysis.impacts import ShoeMetrics
-    from brake_sim_ros.monitoring.detector import Detector
+    from brake_sim_ros.detection.detector import Detector
     from brake_sim_ros.scenarios.loader import Scenario
     from brake_sim_ros.stream.run import RunResult
     from brake_sim_ros.viz.targets import RerunTarget
@@ -526,8 +526,8 @@ def _model_where(path: str) -> str:
 def _load_model(path: str, name: str | None) -> Detector:
     """The detector saved in ``path`` (``--model``): a built-in, or a user's whose class
     ``name`` names (``module:Class`` or ``path/to/file.py:Class``; the file never does)."""
-    from brake_sim_ros.monitoring import saved
-    from brake_sim_ros.monitoring.registry import BUILTIN, make_detector
+    from brake_sim_ros.detection import saved
+    from brake_sim_ros.detection.registry import BUILTIN, make_detector
 
     user = make_detector(name) if name is not None and name not in BUILTIN else None
     return saved.load(path, None if user else name, where=_model_where(path), user=user)
@@ -535,10 +535,10 @@ def _load_model(path: str, name: str | None) -> Detector:
 
 def cmd_fit(args: argparse.Namespace) -> int:
     """``brake-sim fit DIR --detector NAME --out MODEL.json``: fit a detector on one split
-    and save it (``monitoring.saved``), for ``score --model`` and ``monitor --model``."""
+    and save it (``detection.saved``), for ``score --model`` and ``monitor --model``."""
     from brake_sim_ros.datasets.reader import open_dataset
-    from brake_sim_ros.monitoring import evaluate, saved
-    from brake_sim_ros.monitoring.registry import make_detector
+    from brake_sim_ros.detection import evaluate, saved
+    from brake_sim_ros.detection.registry import make_detector
     from brake_sim_ros.recording.output import atomic_output, probe_output
 
     dataset = open_dataset(args.directory)
@@ -568,13 +568,13 @@ def cmd_fit(args: argparse.Namespace) -> int:
 def cmd_score(args: argparse.Namespace) -> int:
     """``brake-sim score DIR --detector NAME [--detector NAME ...]``: fit each detector on
     one split (or load it: ``--model``), score it on another, print the headline figures
-    and write the JSON (``monitoring.evaluate``) and, with ``--report``, the report
-    (``monitoring.report``)."""
+    and write the JSON (``detection.evaluate``) and, with ``--report``, the report
+    (``detection.report``)."""
     import json
 
     from brake_sim_ros.datasets.reader import open_dataset
-    from brake_sim_ros.monitoring import evaluate
-    from brake_sim_ros.monitoring.registry import make_detector
+    from brake_sim_ros.detection import evaluate
+    from brake_sim_ros.detection.registry import make_detector
     from brake_sim_ros.recording.output import check_output, replace_output
 
     dataset = open_dataset(args.directory)
@@ -654,7 +654,7 @@ def cmd_score(args: argparse.Namespace) -> int:
     if args.windows:
         _write_windows(args.windows, window_rows)
     if args.report:
-        from brake_sim_ros.monitoring.report import report_files
+        from brake_sim_ros.detection.report import report_files
 
         files = report_files(scores)
         for name in files:  # every file's rules before the first is written
@@ -673,7 +673,7 @@ def _write_windows(path: str, rows: list[dict]) -> None:
     """``score --windows``: every assessed window as Parquet, written whole."""
     import pyarrow.parquet as pq
 
-    from brake_sim_ros.monitoring.windows import windows_table
+    from brake_sim_ros.detection.windows import windows_table
     from brake_sim_ros.recording.output import replace_output
 
     table = windows_table(rows)
@@ -694,8 +694,8 @@ def _check_report_directory(directory: str) -> None:
 
 def cmd_plot(args: argparse.Namespace) -> int:
     """``brake-sim plot SOURCE --out FILE.png``: one run drawn headless
-    (:mod:`brake_sim_ros.monitoring.plot`)."""
-    from brake_sim_ros.monitoring import plot
+    (:mod:`brake_sim_ros.detection.plot`)."""
+    from brake_sim_ros.detection import plot
     from brake_sim_ros.recording.output import atomic_output, probe_output
 
     if not args.out.endswith(".png"):
@@ -899,7 +899,7 @@ def run_monitor(argv: list[str]) -> int:
     from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
     from rclpy.utilities import remove_ros_args
 
-    from brake_sim_ros.monitoring.detector import chunk_from_measured
+    from brake_sim_ros.detection.detector import chunk_from_measured
 
     parser = _monitor_parser()
     try:
@@ -923,7 +923,7 @@ def run_monitor(argv: list[str]) -> int:
 
 def _monitor_detector(parser: argparse.ArgumentParser, args: argparse.Namespace) -> Detector:
     """The monitor's detector: loaded (``--model``), or made and fitted (``--fit``)."""
-    from brake_sim_ros.monitoring.registry import REGISTRY, make_detector
+    from brake_sim_ros.detection.registry import REGISTRY, make_detector
 
     if args.model is not None:
         if args.fit is not None:
@@ -947,7 +947,7 @@ def _monitor_detector(parser: argparse.ArgumentParser, args: argparse.Namespace)
         )
     if args.fit is not None:
         from brake_sim_ros.datasets.reader import open_dataset
-        from brake_sim_ros.monitoring import evaluate
+        from brake_sim_ros.detection import evaluate
 
         try:
             windows = evaluate.fit(detector, open_dataset(args.fit), args.fit_split)
@@ -1150,7 +1150,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="fit a detector on a dataset's train split and score it on test",
         description="Fit a detector on one split of a sweep's dataset and score it on"
         " another: detection delay, false alarms per healthy hour, AUROC/AUPRC of its"
-        " health index (brake_sim_ros.monitoring.evaluate documents the JSON).",
+        " health index (brake_sim_ros.detection.evaluate documents the JSON).",
     )
     p.add_argument("directory", help="a sweep's output directory")
     p.add_argument(
@@ -1188,7 +1188,7 @@ def build_parser() -> argparse.ArgumentParser:
         "fit",
         help="fit a detector on a dataset's train split and save it as JSON",
         description="Fit a detector on one split of a sweep's dataset and save it, fitted,"
-        " as a JSON file (brake_sim_ros.monitoring.saved documents it) that score --model"
+        " as a JSON file (brake_sim_ros.detection.saved documents it) that score --model"
         " and monitor --model load instead of refitting. Saved forms: "
         + ", ".join(detector_names(saved_only=True))
         + ", and your Detector's with saved_state and load_state.",

@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from brake_sim_ros.monitoring.detector import Assessment, Detector, TrainingWindow
+from brake_sim_ros.detection.detector import Assessment, Detector, TrainingWindow
 
 
 class PeakAcceleration(Detector):

@@ -7,8 +7,8 @@ from collections.abc import Mapping
 
 import numpy as np
 
+from brake_sim_ros.detection.detector import TrainingWindow
 from brake_sim_ros.model.run_setup import SampleBlock
-from brake_sim_ros.monitoring.detector import TrainingWindow
 from brake_sim_ros.sensing.faults import SensorFault
 from brake_sim_ros.sensing.kinds import SENSOR_KINDS
 from brake_sim_ros.sensing.sensors import (

@@ -8,9 +8,9 @@ import math
 import numpy as np
 import pytest
 
-from brake_sim_ros.monitoring import features as f
-from brake_sim_ros.monitoring.detector import SampleChunk, TrainingWindow
-from brake_sim_ros.monitoring.order_analysis import OrderAnalysis
+from brake_sim_ros.detection import features as f
+from brake_sim_ros.detection.detector import SampleChunk, TrainingWindow
+from brake_sim_ros.detection.order_analysis import OrderAnalysis
 
 FS = 51200.0
 SPEED = 100.0  # rad/s: 15.9 revolutions per second
@@ -181,7 +181,7 @@ def test_bad_order_detectors_are_refused():
 
 
 def test_the_learned_baseline_isolates_a_separable_defect_the_same_way_twice():
-    from brake_sim_ros.monitoring.learned import LearnedClassifier
+    from brake_sim_ros.detection.learned import LearnedClassifier
 
     drum = (("drum_out_of_round", "drum"),)
     train = _tone_ring_windows(0.0, range(6)) + _tone_ring_windows(3e-3, range(6, 12), drum)

@@ -6,14 +6,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from brake_sim_ros.monitoring.baselines import (
+from brake_sim_ros.detection.baselines import (
     VibrationThreshold,
     crest_factor,
     kurtosis,
     rms,
 )
-from brake_sim_ros.monitoring.detector import SampleChunk, TrainingWindow
-from brake_sim_ros.monitoring.registry import make_detector
+from brake_sim_ros.detection.detector import SampleChunk, TrainingWindow
+from brake_sim_ros.detection.registry import make_detector
 
 FS = 1000.0
 CH = "accel"

@@ -19,7 +19,7 @@ import pytest
 from brake_sim_ros import cli
 from brake_sim_ros.campaigns import load_campaign
 from brake_sim_ros.datasets.sweep import sweep
-from brake_sim_ros.monitoring.detector import Assessment, Detector
+from brake_sim_ros.detection.detector import Assessment, Detector
 from brake_sim_ros.ros.harness import domain_id_for, ros_environment
 
 ROOT = Path(__file__).resolve().parents[1]

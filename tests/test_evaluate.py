@@ -13,9 +13,9 @@ import pytest
 from brake_sim_ros.campaigns import load_campaign
 from brake_sim_ros.datasets import open as open_dataset
 from brake_sim_ros.datasets.sweep import sweep
-from brake_sim_ros.monitoring import evaluate
-from brake_sim_ros.monitoring.detector import Assessment, Detector
-from brake_sim_ros.monitoring.registry import make_detector
+from brake_sim_ros.detection import evaluate
+from brake_sim_ros.detection.detector import Assessment, Detector
+from brake_sim_ros.detection.registry import make_detector
 
 CAMPAIGN = """
 name = "scored"

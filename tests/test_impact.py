@@ -15,9 +15,9 @@ import pytest
 from brake_sim_ros.campaigns import load_campaign
 from brake_sim_ros.datasets import open as open_dataset
 from brake_sim_ros.datasets.sweep import sweep
-from brake_sim_ros.monitoring import evaluate, metrics, saved
-from brake_sim_ros.monitoring.detector import Assessment, SampleChunk
-from brake_sim_ros.monitoring.impact import (
+from brake_sim_ros.detection import evaluate, metrics, saved
+from brake_sim_ros.detection.detector import Assessment, SampleChunk
+from brake_sim_ros.detection.impact import (
     APPLY_BAR,
     N_BINS,
     N_FEATURES,
@@ -26,7 +26,7 @@ from brake_sim_ros.monitoring.impact import (
     ImpactDetector,
     event_features,
 )
-from brake_sim_ros.monitoring.registry import make_detector
+from brake_sim_ros.detection.registry import make_detector
 from tests.sample_blocks import training_windows
 
 RATE = 5120.0

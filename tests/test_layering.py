@@ -42,10 +42,10 @@ ALLOWED: dict[str, set[str]] = {
     "campaigns": _LIBRARY,  # campaign files: varied scenarios, read by the scenario loader
     # tables of runs (Parquet) and sweeps: campaigns run, files written by recording.output
     "datasets": _STREAM | {"campaigns", "recording"},
-    "monitoring": _STREAM | {"datasets"},  # detectors and their scoring, on datasets
-    "studies": _STREAM | _ADAPTERS | {"campaigns", "datasets", "monitoring"},
+    "detection": _STREAM | {"datasets"},  # detectors and their scoring, on datasets
+    "studies": _STREAM | _ADAPTERS | {"campaigns", "datasets", "detection"},
     "app": _STREAM | _ADAPTERS,
-    "cli": _STREAM | _ADAPTERS | {"app", "studies", "datasets", "monitoring", "campaigns"},
+    "cli": _STREAM | _ADAPTERS | {"app", "studies", "datasets", "detection", "campaigns"},
 }
 
 

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from brake_sim_ros.monitoring import metrics as m
+from brake_sim_ros.detection import metrics as m
 
 T = np.arange(20) * 0.5  # 0, 0.5, ..., 9.5 s
 

@@ -16,8 +16,8 @@ from brake_sim_ros import cli
 from brake_sim_ros.campaigns import load_campaign
 from brake_sim_ros.datasets.reader import open_dataset
 from brake_sim_ros.datasets.sweep import sweep
-from brake_sim_ros.monitoring import evaluate, saved
-from brake_sim_ros.monitoring.registry import make_detector
+from brake_sim_ros.detection import evaluate, saved
+from brake_sim_ros.detection.registry import make_detector
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "peak_detector.py"
 EXAMPLE_SPEC = f"{EXAMPLE}:PeakAcceleration"

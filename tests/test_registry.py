@@ -10,11 +10,11 @@ import pkgutil
 
 import pytest
 
-import brake_sim_ros.monitoring as monitoring_package
+import brake_sim_ros.detection as detection_package
 from brake_sim_ros import cli
-from brake_sim_ros.monitoring import saved
-from brake_sim_ros.monitoring.detector import Detector
-from brake_sim_ros.monitoring.registry import BUILTIN, ENTRIES, REGISTRY, help_text
+from brake_sim_ros.detection import saved
+from brake_sim_ros.detection.detector import Detector
+from brake_sim_ros.detection.registry import BUILTIN, ENTRIES, REGISTRY, help_text
 
 
 def _help(argv: list[str], capsys) -> str:
@@ -49,8 +49,8 @@ def test_the_registry_is_the_only_list_of_built_in_detectors():
     assert set(saved._LOADERS) == set(saved.SAVED)  # no codec without an entry
     # every Detector class the package defines is built by an entry
     made = {type(e.make()) for e in ENTRIES}
-    for info in pkgutil.iter_modules(monitoring_package.__path__):
-        module = importlib.import_module(f"brake_sim_ros.monitoring.{info.name}")
+    for info in pkgutil.iter_modules(detection_package.__path__):
+        module = importlib.import_module(f"brake_sim_ros.detection.{info.name}")
         for _, cls in inspect.getmembers(module, inspect.isclass):
             mine = cls.__module__ == module.__name__ and not inspect.isabstract(cls)
             if mine and issubclass(cls, Detector):

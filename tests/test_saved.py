@@ -17,12 +17,12 @@ from brake_sim_ros.campaigns import load_campaign
 from brake_sim_ros.cli import main
 from brake_sim_ros.datasets import open as open_dataset
 from brake_sim_ros.datasets.sweep import sweep
+from brake_sim_ros.detection import evaluate, saved
+from brake_sim_ros.detection.detector import Assessment, Detector, Diagnosis
+from brake_sim_ros.detection.forest import ForestArrays
+from brake_sim_ros.detection.order_analysis import OrderAnalysis
+from brake_sim_ros.detection.registry import make_detector
 from brake_sim_ros.model.catalogue import KIND_BY_NAME
-from brake_sim_ros.monitoring import evaluate, saved
-from brake_sim_ros.monitoring.detector import Assessment, Detector, Diagnosis
-from brake_sim_ros.monitoring.forest import ForestArrays
-from brake_sim_ros.monitoring.order_analysis import OrderAnalysis
-from brake_sim_ros.monitoring.registry import make_detector
 
 CAMPAIGN = """
 name = "saved"

@@ -15,10 +15,10 @@ import numpy as np
 import pytest
 
 from brake_sim_ros.cli import main
-from brake_sim_ros.monitoring import saved
-from brake_sim_ros.monitoring.baselines import VibrationThreshold
-from brake_sim_ros.monitoring.detector import SampleChunk, TrainingWindow
-from brake_sim_ros.monitoring.learned import LearnedClassifier
+from brake_sim_ros.detection import saved
+from brake_sim_ros.detection.baselines import VibrationThreshold
+from brake_sim_ros.detection.detector import SampleChunk, TrainingWindow
+from brake_sim_ros.detection.learned import LearnedClassifier
 
 FS = 2560.0
 N = 256

@@ -14,9 +14,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from brake_sim_ros.monitoring import saved
-from brake_sim_ros.monitoring.forest import LEAF, MAX_TREE_DEPTH, MAX_TREES, ForestArrays
-from brake_sim_ros.monitoring.learned import LearnedClassifier
+from brake_sim_ros.detection import saved
+from brake_sim_ros.detection.forest import LEAF, MAX_TREE_DEPTH, MAX_TREES, ForestArrays
+from brake_sim_ros.detection.learned import LearnedClassifier
 from tests.test_saved_file import FITTED_ON, _windows
 
 

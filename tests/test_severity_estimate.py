@@ -10,8 +10,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from brake_sim_ros.monitoring.detector import SampleChunk, TrainingWindow
-from brake_sim_ros.monitoring.learned import LearnedClassifier
+from brake_sim_ros.detection.detector import SampleChunk, TrainingWindow
+from brake_sim_ros.detection.learned import LearnedClassifier
 
 FS = 2560.0
 WINDOW = 256  # 0.1 s

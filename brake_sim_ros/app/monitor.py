@@ -4,7 +4,7 @@ The composition root of the monitor node: ROS start-up and shutdown, and the spi
 The command line (detector name, fitting, topics) is parsed by ``brake_sim_ros.cli``,
 which builds and fits the detector and hands it in with its chunk conversion: the node
 (:class:`brake_sim_ros.ros.monitor.MonitorNode`) and this module import nothing of
-``monitoring``.
+``detection``.
 """
 
 from __future__ import annotations

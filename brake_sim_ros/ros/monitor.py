@@ -1,6 +1,6 @@
 """A brake-health monitor as a ROS 2 node: :class:`MonitorNode` (a leaf adapter).
 
-It runs one detector (the streaming contract of :mod:`brake_sim_ros.monitoring.detector`,
+It runs one detector (the streaming contract of :mod:`brake_sim_ros.detection.detector`,
 handed in by the composition root with the function that turns a ``MeasuredChunk`` into
 the detector's input) over the measured channels of a brake, and publishes what the
 detector says. It knows nothing of the detector's method; it translates and guards.
@@ -67,7 +67,7 @@ MAX_ID_CHARS = 128  # run and unit ids longer than this (from the wire) are cut
 # stamp (its time since sample 0 computed in float64), not a malformed message
 STAMP_ROUNDING_NS = 1_000
 FAULT_SUMMARY_S = 10.0  # after a fault's first line, its count at most once per this (wall)
-MAX_WINDOW_SAMPLES = 1 << 22  # monitoring.detector's: the node imports nothing of it
+MAX_WINDOW_SAMPLES = 1 << 22  # detection.detector's: the node imports nothing of it
 MAX_WINDOW_S = 60.0
 
 # The monitor wants every sample: a reliable subscription with room for 10 s of the
@@ -135,7 +135,7 @@ def parameter_specs() -> list[ParamSpec]:
 
 
 class StreamingDetector(Protocol):
-    """What the node needs of a detector (:class:`brake_sim_ros.monitoring.detector.
+    """What the node needs of a detector (:class:`brake_sim_ros.detection.detector.
     Detector` has it)."""
 
     name: str
@@ -216,7 +216,7 @@ class MonitorNode(Node):
     Args:
         detector: fitted, ready to :meth:`feed`.
         to_chunk: MeasuredChunk -> the detector's input chunk; raises ValueError on a
-            malformed message (:func:`brake_sim_ros.monitoring.detector.chunk_from_measured`).
+            malformed message (:func:`brake_sim_ros.detection.detector.chunk_from_measured`).
         parameter_overrides: values that replace the parameters' defaults.
         context: the rclpy context (default: the global one).
 

@@ -19,7 +19,7 @@ brakes they were not trained on, at a stated false-alarm rate.
    learned baseline's is out of fold, the impact baseline's is its healthy training stops
    judged out of unit; else its assessments of the healthy training runs).
 3. On the test units, a defective run is detected when an alarm is held 0.2 s at or
-   after its onset (:mod:`brake_sim_ros.monitoring.metrics`). The table gives, per kind
+   after its onset (:mod:`brake_sim_ros.detection.metrics`). The table gives, per kind
    (its locations together) and detector, the detected share at each fraction, and the
    floor: the smallest fraction from which on at least half of the runs are detected at
    every larger fraction too. False alarms per hour of the healthy test runs are printed.
@@ -38,10 +38,10 @@ import numpy as np
 from brake_sim_ros.campaigns.loader import parse_campaign
 from brake_sim_ros.datasets import open as open_dataset
 from brake_sim_ros.datasets.sweep import sweep
+from brake_sim_ros.detection import evaluate, metrics
+from brake_sim_ros.detection.registry import make_detector
 from brake_sim_ros.errors import BrakeSimError
 from brake_sim_ros.model.catalogue import KIND_BY_NAME, KINDS
-from brake_sim_ros.monitoring import evaluate, metrics
-from brake_sim_ros.monitoring.registry import make_detector
 
 FRACTIONS = (0.1, 0.2, 0.35, 0.5, 0.75, 1.0)  # of each kind's service limit
 FORCES = (1150.0, 1400.0)  # N per shoe, around the published 1300 N

@@ -37,12 +37,12 @@ from rclpy.serialization import deserialize_message
 
 from brake_sim_ros import stream
 from brake_sim_ros.datasets.parquet import run_table, write_history
+from brake_sim_ros.detection import saved
+from brake_sim_ros.detection.baselines import VibrationThreshold
+from brake_sim_ros.detection.detector import Diagnosis as DetectorDiagnosis
+from brake_sim_ros.detection.detector import chunk_from_measured
+from brake_sim_ros.detection.impact import ImpactDetector
 from brake_sim_ros.model.catalogue import KIND_BY_NAME
-from brake_sim_ros.monitoring import saved
-from brake_sim_ros.monitoring.baselines import VibrationThreshold
-from brake_sim_ros.monitoring.detector import Diagnosis as DetectorDiagnosis
-from brake_sim_ros.monitoring.detector import chunk_from_measured
-from brake_sim_ros.monitoring.impact import ImpactDetector
 from brake_sim_ros.recording.reader import open_recording
 from brake_sim_ros.recording.record import record_offline
 from brake_sim_ros.ros.harness import domain_id_for, ros_environment

@@ -15,8 +15,8 @@ import rclpy
 from brake_sim_msgs.msg import MeasuredChunk
 from rclpy.context import Context
 
+from brake_sim_ros.detection.detector import Assessment, Detector, chunk_from_measured
 from brake_sim_ros.errors import BrakeSimError
-from brake_sim_ros.monitoring.detector import Assessment, Detector, chunk_from_measured
 from brake_sim_ros.ros.harness import domain_id_for
 from brake_sim_ros.ros.monitor import FAULT_SUMMARY_S, MAX_WINDOW_SAMPLES, MonitorNode
 from brake_sim_ros.stream.conversion import stamp_ns, time_msg

@@ -15,7 +15,7 @@ import pytest
 from diagnostic_msgs.msg import DiagnosticStatus
 
 from brake_sim_ros.cli import main
-from brake_sim_ros.monitoring.detector import (
+from brake_sim_ros.detection.detector import (
     MAX_CHUNK_SAMPLES,
     MAX_CHUNK_VALUES,
     chunk_from_measured,
@@ -103,7 +103,7 @@ def test_health_level_of_a_period():
     [
         ([], "the following arguments are required: --detector"),
         (["--detector", "nope"], "detector 'nope': allowed rms, kurtosis, crest"),
-        (["--detector", "os:path"], "not a brake_sim_ros.monitoring Detector subclass"),
+        (["--detector", "os:path"], "not a brake_sim_ros.detection Detector subclass"),
         (["--detector", "no_such_module_x:Cls"], "no module 'no_such_module_x' on the Python"),
         (["--detector", "rms"], "learns from data: give --fit DIR"),
         (["--detector", "rms", "--fit", "/nonexistent/dir"], "--fit /nonexistent/dir:"),

@@ -66,13 +66,11 @@ from typing import Any
 import numpy as np
 
 from brake_sim_ros import __version__
-from brake_sim_ros.errors import BrakeSimError
-from brake_sim_ros.model.catalogue import KINDS
-from brake_sim_ros.monitoring import registry
-from brake_sim_ros.monitoring.baselines import STATISTICS, VibrationThreshold
-from brake_sim_ros.monitoring.detector import Detector
-from brake_sim_ros.monitoring.features import ORDERS, feature_names
-from brake_sim_ros.monitoring.fitted import (
+from brake_sim_ros.detection import registry
+from brake_sim_ros.detection.baselines import STATISTICS, VibrationThreshold
+from brake_sim_ros.detection.detector import Detector
+from brake_sim_ros.detection.features import ORDERS, feature_names
+from brake_sim_ros.detection.fitted import (
     DTYPES,
     array_json,
     fitted_at_json,
@@ -81,10 +79,12 @@ from brake_sim_ros.monitoring.fitted import (
     read_fitted_at,
     state_json,
 )
-from brake_sim_ros.monitoring.forest import ForestArrays
-from brake_sim_ros.monitoring.impact import N_FEATURES, ImpactDetector
-from brake_sim_ros.monitoring.learned import HEALTHY, LearnedClassifier
-from brake_sim_ros.monitoring.order_analysis import OrderAnalysis
+from brake_sim_ros.detection.forest import ForestArrays
+from brake_sim_ros.detection.impact import N_FEATURES, ImpactDetector
+from brake_sim_ros.detection.learned import HEALTHY, LearnedClassifier
+from brake_sim_ros.detection.order_analysis import OrderAnalysis
+from brake_sim_ros.errors import BrakeSimError
+from brake_sim_ros.model.catalogue import KINDS
 
 FORMAT = "brake-sim detector"
 SCHEMA_VERSION = 2

@@ -60,11 +60,11 @@ import numpy as np
 
 from brake_sim_ros.datasets.life import RUL_COLUMN
 from brake_sim_ros.datasets.reader import DatasetError, SweepDataset
+from brake_sim_ros.detection import metrics
+from brake_sim_ros.detection.detector import Assessment, Detector, SampleChunk, TrainingWindow
+from brake_sim_ros.detection.user_code import user_code
+from brake_sim_ros.detection.windows import held_out_figures, window_rows
 from brake_sim_ros.model.catalogue import KIND_BY_NAME, KINDS, label_column
-from brake_sim_ros.monitoring import metrics
-from brake_sim_ros.monitoring.detector import Assessment, Detector, SampleChunk, TrainingWindow
-from brake_sim_ros.monitoring.user_code import user_code
-from brake_sim_ros.monitoring.windows import held_out_figures, window_rows
 
 SCHEMA_VERSION = 5
 HEALTHY = "healthy"  # the class of a healthy window or run in the per-class figures

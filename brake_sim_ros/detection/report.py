@@ -2,7 +2,7 @@
 the figures of the issue, as files for a directory (the CLI writes them, each whole, never
 through a link, replaced on a rerun):
 
-* ``score-<detector>.json``: :func:`brake_sim_ros.monitoring.evaluate.score`'s JSON (its
+* ``score-<detector>.json``: :func:`brake_sim_ros.detection.evaluate.score`'s JSON (its
   module documents the schema);
 * ``roc.png``: every detector's ROC curve of its health index over the windows (from the
   JSON's ``health_index.roc``), the AUROC in the legend;

@@ -1,7 +1,7 @@
 """The learned baseline (``learned``): a random forest on windowed features, trained on the
 train split, that detects (P(defective)) and isolates (which defect, where).
 
-Features: :func:`~brake_sim_ros.monitoring.features.window_features` (the one feature
+Features: :func:`~brake_sim_ros.detection.features.window_features` (the one feature
 function of every baseline: rms, kurtosis, crest and band levels of both backing-plate
 accelerations, their amplitudes at drum orders 1-20, the drum's angle fluctuation at those
 orders from the tone ring, its speed and deceleration, the line pressure's mean and
@@ -50,10 +50,10 @@ from sklearn.impute import SimpleImputer
 from sklearn.model_selection import GroupKFold
 from sklearn.pipeline import Pipeline
 
-from brake_sim_ros.monitoring.detector import Assessment, Diagnosis, TrainingWindow
-from brake_sim_ros.monitoring.features import CHANNELS, window_features
-from brake_sim_ros.monitoring.forest import MAX_TREE_DEPTH, MAX_TREES, ForestArrays
-from brake_sim_ros.monitoring.history import HistoryDetector
+from brake_sim_ros.detection.detector import Assessment, Diagnosis, TrainingWindow
+from brake_sim_ros.detection.features import CHANNELS, window_features
+from brake_sim_ros.detection.forest import MAX_TREE_DEPTH, MAX_TREES, ForestArrays
+from brake_sim_ros.detection.history import HistoryDetector
 
 HEALTHY = "healthy"
 N_TREES = MAX_TREES  # a saved forest may hold no more (forest.py)

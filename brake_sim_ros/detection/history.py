@@ -16,7 +16,7 @@ from collections.abc import Iterable, Iterator, Mapping
 
 import numpy as np
 
-from brake_sim_ros.monitoring.detector import Assessment, Detector, TrainingWindow
+from brake_sim_ros.detection.detector import Assessment, Detector, TrainingWindow
 
 
 class HistoryDetector(Detector):

@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from brake_sim_ros.monitoring import metrics
+from brake_sim_ros.detection import metrics
 
 # column -> (pyarrow type name, meaning)
 COLUMNS: dict[str, tuple[str, str]] = {

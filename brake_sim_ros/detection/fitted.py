@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from brake_sim_ros.monitoring.detector import Detector
+from brake_sim_ros.detection.detector import Detector
 
 DTYPES = {"float64": "<f8", "int64": "<i8"}
 ARRAY_KEYS = ("dtype", "shape", "base64")

@@ -31,8 +31,8 @@ from typing import Any
 
 import numpy as np
 
+from brake_sim_ros.detection.user_code import user_code
 from brake_sim_ros.errors import BrakeSimError
-from brake_sim_ros.monitoring.user_code import user_code
 
 
 class RateMismatchError(BrakeSimError, ValueError):

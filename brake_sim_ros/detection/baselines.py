@@ -22,8 +22,8 @@ from collections.abc import Iterable, Mapping
 
 import numpy as np
 
-from brake_sim_ros.monitoring.detector import Assessment, Detector, TrainingWindow
-from brake_sim_ros.monitoring.features import STATISTICS, crest_factor, kurtosis, rms
+from brake_sim_ros.detection.detector import Assessment, Detector, TrainingWindow
+from brake_sim_ros.detection.features import STATISTICS, crest_factor, kurtosis, rms
 
 DEFAULT_CHANNEL = "backing_plate_accel_y"
 

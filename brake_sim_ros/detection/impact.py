@@ -58,8 +58,8 @@ from dataclasses import dataclass
 import numpy as np
 from sklearn.covariance import LedoitWolf
 
-from brake_sim_ros.monitoring.detector import Assessment, Detector, Diagnosis, TrainingWindow
-from brake_sim_ros.monitoring.features import ACCEL_CHANNELS, PRESSURE_CHANNEL
+from brake_sim_ros.detection.detector import Assessment, Detector, Diagnosis, TrainingWindow
+from brake_sim_ros.detection.features import ACCEL_CHANNELS, PRESSURE_CHANNEL
 
 APPLY_BAR = 2.0  # line pressure that marks an application (its noise is about 0.1 bar)
 RELEASE_BAR = 1.0  # below it the brake is released and the next application is armed

@@ -4,7 +4,7 @@
 current directory only when Python put it there: ``python -m``, not the ``brake-sim``
 script); ``path/to/file.py:Class`` loads that file, wherever it is, with no change to
 ``sys.path``. Either way the class must subclass
-:class:`~brake_sim_ros.monitoring.detector.Detector` and be built without arguments.
+:class:`~brake_sim_ros.detection.detector.Detector` and be built without arguments.
 
 An import that fails is one line saying which: the module or file not found, or, when it
 was found, the error raised while importing it (a module it imports that is missing, a
@@ -21,7 +21,7 @@ import sys
 import traceback
 from types import ModuleType
 
-from brake_sim_ros.monitoring.detector import Detector
+from brake_sim_ros.detection.detector import Detector
 
 
 def _failure(spec: str, exc: BaseException) -> ValueError:
@@ -94,5 +94,5 @@ def load_class(spec: str) -> type[Detector]:
     if cls is None:
         raise ValueError(f"detector {spec!r}: {where} has no {attr!r}")
     if not (isinstance(cls, type) and issubclass(cls, Detector)):
-        raise ValueError(f"detector {spec!r}: not a brake_sim_ros.monitoring Detector subclass")
+        raise ValueError(f"detector {spec!r}: not a brake_sim_ros.detection Detector subclass")
     return cls

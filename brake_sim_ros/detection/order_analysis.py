@@ -4,7 +4,7 @@ from the tone ring, against a healthy reference.
 A drum whose radius varies with its angle (out of round: ovality is order 2) makes the
 braking torque vary with the angle, so the drum runs ahead of and behind a smooth stop at
 those orders; the tone ring's edges, equally spaced in angle, show it as a ripple of their
-times (:func:`~brake_sim_ros.monitoring.features.angle_fluctuation_orders`, rad at orders
+times (:func:`~brake_sim_ros.detection.features.angle_fluctuation_orders`, rad at orders
 1-20, over the last :attr:`OrderAnalysis.history_s` = 1 s, about 16 revolutions at the
 start of the published stop; assessed every 0.1 s). At 5120 Hz the edge times' rounding to
 the samples is the noise floor (about 3e-4 rad at order 2 over 0.5 s of sliding on the
@@ -37,10 +37,10 @@ from collections.abc import Iterable, Mapping
 
 import numpy as np
 
+from brake_sim_ros.detection.detector import Assessment, Diagnosis, TrainingWindow
+from brake_sim_ros.detection.features import PULSE_CHANNEL, angle_fluctuation_orders, rms
+from brake_sim_ros.detection.history import HistoryDetector
 from brake_sim_ros.model.catalogue import DRUM_KIND
-from brake_sim_ros.monitoring.detector import Assessment, Diagnosis, TrainingWindow
-from brake_sim_ros.monitoring.features import PULSE_CHANNEL, angle_fluctuation_orders, rms
-from brake_sim_ros.monitoring.history import HistoryDetector
 
 MAD_TO_STD = 1.4826  # a normal distribution's standard deviation over its median |deviation|
 FLOOR_RAD = 1e-12

@@ -15,8 +15,8 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from brake_sim_ros.monitoring.baselines import VibrationThreshold
-from brake_sim_ros.monitoring.detector import Detector
+from brake_sim_ros.detection.baselines import VibrationThreshold
+from brake_sim_ros.detection.detector import Detector
 
 USER_FORMS = "module:Class or path/to/file.py:Class"
 
@@ -48,19 +48,19 @@ def _statistic(name: str) -> Callable[[], Detector]:
 
 
 def _orders() -> Detector:
-    from brake_sim_ros.monitoring.order_analysis import OrderAnalysis
+    from brake_sim_ros.detection.order_analysis import OrderAnalysis
 
     return OrderAnalysis()
 
 
 def _impact() -> Detector:
-    from brake_sim_ros.monitoring.impact import ImpactDetector
+    from brake_sim_ros.detection.impact import ImpactDetector
 
     return ImpactDetector()
 
 
 def _learned() -> Detector:
-    from brake_sim_ros.monitoring.learned import LearnedClassifier
+    from brake_sim_ros.detection.learned import LearnedClassifier
 
     return LearnedClassifier()
 
@@ -105,8 +105,8 @@ def make_detector(name: str) -> Detector:
         return REGISTRY[name].make()
     if ":" not in name:
         raise ValueError(f"detector {name!r}: allowed {', '.join(REGISTRY)}, {USER_FORMS}")
-    from brake_sim_ros.monitoring.user_class import load_class
-    from brake_sim_ros.monitoring.user_code import user_code
+    from brake_sim_ros.detection.user_class import load_class
+    from brake_sim_ros.detection.user_code import user_code
 
     cls = load_class(name)
     with user_code(cls, "__init__"):

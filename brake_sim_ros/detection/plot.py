@@ -25,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-from brake_sim_ros.monitoring.features import ORDERS, angle_fluctuation_orders
+from brake_sim_ros.detection.features import ORDERS, angle_fluctuation_orders
 
 MEASURED = "measured:"
 LABEL = "defect:"

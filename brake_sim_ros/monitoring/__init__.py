@@ -1,2 +1,0 @@
-"""Brake health monitoring: the detector interface, baseline detectors and the scoring of
-detectors against the ground truth (issue "Monitoring")."""
