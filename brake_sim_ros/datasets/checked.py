@@ -133,6 +133,22 @@ def _check_held_out(rule: Any, where: str) -> None:
             raise DatasetError(f"{where}.{key}: allowed a finite number or null")
 
 
+def parquet_table(data: bytes) -> pa.Table:
+    """The Parquet file ``data`` as a table, read from a copy in Arrow's own memory.
+
+    Read from the Python bytes themselves, Arrow may release its last reference to them on
+    one of its pool's threads after the read has returned; if that happens while the
+    interpreter shuts down, the thread cannot take the GIL and the process aborts
+    ("terminate called without an active exception"). Arrow's memory needs no GIL.
+
+    Raises:
+        pyarrow.ArrowException, OSError, ValueError: the bytes are not a Parquet file.
+    """
+    owned = pa.allocate_buffer(len(data))
+    np.frombuffer(owned, np.uint8)[:] = np.frombuffer(data, np.uint8)
+    return pq.read_table(pa.BufferReader(owned))
+
+
 def parse_manifest(data: bytes, lock: dict[str, Any], where: str) -> pa.Table:
     """``manifest.parquet``, its columns and types checked (then :func:`check_agreement`).
 
@@ -140,7 +156,7 @@ def parse_manifest(data: bytes, lock: dict[str, Any], where: str) -> pa.Table:
         DatasetError: one line naming the column or run.
     """
     try:
-        manifest = pq.read_table(pa.BufferReader(data))
+        manifest = parquet_table(data)
     except (pa.ArrowException, OSError, ValueError) as exc:
         raise DatasetError(f"{where}: cannot be read ({type(exc).__name__})") from None
     for name, kind in MANIFEST_TYPES.items():
@@ -197,7 +213,7 @@ def read_run(root: Path, row: dict[str, Any]) -> pa.Table:
     if hashlib.sha256(data).hexdigest() != row["sha256"]:
         raise DatasetError(f"{where}: its file's SHA-256 is not the manifest's: damaged")
     try:
-        table = pq.read_table(pa.BufferReader(data))
+        table = parquet_table(data)
     except (pa.ArrowException, OSError, ValueError) as exc:
         raise DatasetError(f"{where}: its file cannot be read ({type(exc).__name__})") from None
     if table.num_rows != row["rows"]:
