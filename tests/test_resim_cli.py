@@ -272,3 +272,47 @@ def test_an_existing_output_needs_overwrite(recorded, tmp_path):
     r = resim(recorded, "--out", out)
     assert r.returncode != 0 and "pass --overwrite" in r.stderr
     assert out.read_bytes() == b"mine"
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(
+    ("options", "samples"),
+    [(("--sample-rate", "5120"), 256), (("--preset", "accurate", "--max-step", "1e-5"), 1280)],
+)
+def test_a_run_made_with_solver_options_resimulates_with_them(tmp_path, options, samples):
+    """``simulate --sample-rate`` / ``--preset`` / ``--max-step`` change the run over its
+    scenario's text: the recording says so, and re-simulation runs with them (it refused
+    the other sample rate, and re-ran another preset with the text's)."""
+    first, again = tmp_path / "first.mcap", tmp_path / "again.mcap"
+    made = subprocess.run(
+        [sys.executable, "-m", "brake_sim_ros.cli", "simulate", "symmetric", "--duration",
+         "0.05", "--quiet", "--mcap", str(first), *options],
+        capture_output=True, text=True, timeout=600,
+    )  # fmt: skip
+    assert made.returncode == 0, made.stderr
+    r = resim(first, "--out", again)
+    assert r.returncode == 0, r.stderr
+    assert f"{samples} samples equal to the recording's, bit for bit" in r.stdout
+    assert pivot_arrays(again)["left_fx_n"].tobytes() == pivot_arrays(first)["left_fx_n"].tobytes()
+
+
+@pytest.mark.parametrize(
+    ("text", "says"),
+    [
+        ("{", "not JSON"),
+        ('{"preset": "fast"}', "allowed the keys"),
+        ('[1, 2]', "allowed the keys"),
+        ('{"preset": "fast", "method": "rk4", "max_step_s": true, "sample_rate_hz": 1}',
+         "max_step_s: allowed a float"),
+        ('{"preset": "warp", "method": "rk4", "max_step_s": 1e-5, "sample_rate_hz": 1e3}',
+         "preset 'warp'"),
+        ('{"preset": "fast", "method": "rk4", "max_step_s": 1e-5, "sample_rate_hz": 1e12}',
+         "sample rate"),
+    ],
+)  # fmt: skip
+def test_a_hostile_recorded_solver_is_one_line(text, says):
+    from brake_sim_ros.app.resim import ResimError, _recorded_solver
+
+    with pytest.raises(ResimError, match=says) as caught:
+        _recorded_solver(load_scenario("symmetric"), text, "x.mcap")
+    assert "\n" not in str(caught.value) and str(caught.value).startswith("x.mcap: ")

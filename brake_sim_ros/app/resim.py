@@ -29,6 +29,7 @@ link, written whole or not at all).
 from __future__ import annotations
 
 import ast
+import json
 import os
 import time
 from collections.abc import Iterator
@@ -178,7 +179,36 @@ def _scenario(records: dict[str, dict[str, str]], name: str) -> Scenario:
     )
     if (unit_id, seed, fleet) != (scenario.unit_id, scenario.seed, scenario.fleet_seed):
         scenario = scenario.with_unit(unit_id, seed=seed, fleet_seed=fleet)
+    if "solver" in recorded:  # recordings before it ran with the text's own settings
+        scenario = _recorded_solver(scenario, recorded["solver"], name)
     return scenario
+
+
+_SOLVER_KINDS = {
+    "preset": (str,),
+    "method": (str,),
+    "max_step_s": (float,),
+    "sample_rate_hz": (float, int),
+}
+
+
+def _recorded_solver(scenario: Scenario, text: str, name: str) -> Scenario:
+    """``scenario`` with the recorded solver settings and sample rate (the options the run
+    was made with over its text), each checked as a scenario's own would be."""
+    where = f"{name}: {metadata.SCENARIO} solver"
+    try:
+        values = json.loads(text)
+    except (ValueError, RecursionError):
+        raise ResimError(f"{where}: not JSON: allowed what brake-sim records") from None
+    if not isinstance(values, dict) or set(values) != set(_SOLVER_KINDS):
+        raise ResimError(f"{where}: allowed the keys {', '.join(_SOLVER_KINDS)}")
+    for key, kinds in _SOLVER_KINDS.items():
+        if isinstance(values[key], bool) or not isinstance(values[key], kinds):
+            raise ResimError(f"{where} {key}: allowed a {kinds[0].__name__}")
+    try:
+        return scenario.with_solver(**values)
+    except BrakeSimError as exc:
+        raise ResimError(f"{where}: {exc}") from None
 
 
 def _sample_of(ns: int, rate: Fraction, period_s: float, where: str) -> int:
@@ -462,6 +492,10 @@ def resimulate(
         )
         session.settings["duration_s"] = run.samples * session.period_s
         records = dict(run.records)
+        records[metadata.SCENARIO] = {  # the settings it now runs with (--preset)
+            **records[metadata.SCENARIO],
+            "solver": json.dumps(metadata.solver_values(scenario)),
+        }
         records[metadata.RUN] = metadata.run_record(
             session,
             mode="resim",

@@ -9,7 +9,9 @@ Metadata records (MCAP ``Metadata``; every value a string):
     rebuilds the ``BrakeParameters`` and ``Defects`` of the run (:func:`model_from_record`).
 ``brake_sim_scenario``
     ``name``, ``source`` (file path or ``<built-in NAME>``), ``toml`` (the scenario file's
-    text), ``sha256`` (of that text), ``description``.
+    text), ``sha256`` (of that text), ``description``, ``solver`` (JSON: ``preset``,
+    ``method``, ``max_step_s``, ``sample_rate_hz`` as the run had them, the command's
+    options over the text included).
 ``brake_sim_run``
     ``run_id`` (of the ground-truth messages at the start of the recording; a live run
     makes a new one at each ~/reset, which its DefectState then carries), ``seed``,
@@ -128,6 +130,20 @@ def scenario_record(scenario: Scenario) -> dict[str, str]:
         "toml": scenario.text,
         "sha256": scenario.digest,
         "description": scenario.description,
+        # what the run's options changed over the text (simulate --preset/--method/
+        # --max-step/--sample-rate, resim --preset): re-simulation applies them again
+        "solver": json.dumps(solver_values(scenario)),
+    }
+
+
+def solver_values(scenario: Scenario) -> dict[str, Any]:
+    """The solver settings and sample rate ``scenario`` runs with (JSON-ready)."""
+    solver = scenario.solver
+    return {
+        "preset": solver.preset,
+        "method": solver.method,
+        "max_step_s": solver.max_step_s,
+        "sample_rate_hz": scenario.sample_rate_hz,
     }
 
 
