@@ -24,12 +24,12 @@ import itertools
 import math
 import os
 import re
-import stat
 import tomllib
 from dataclasses import dataclass, field
 from importlib import resources
 from typing import Any
 
+from brake_sim_ros import regular_file
 from brake_sim_ros.errors import BrakeSimError, ScenarioError
 from brake_sim_ros.fleet import conditions as operating
 from brake_sim_ros.fleet.scatter import NOMINAL_UNIT, UnitValue, unit_values
@@ -69,6 +69,7 @@ from brake_sim_ros.model.thermal import Thermal
 from brake_sim_ros.model.vehicle import DRIVE_LIMITS as VEHICLE_DRIVE_LIMITS
 from brake_sim_ros.model.vehicle import LIMITS as VEHICLE_LIMITS
 from brake_sim_ros.model.vehicle import LOAD_FACTOR_RANGE, Vehicle
+from brake_sim_ros.regular_file import FileRefusedError, read_regular_file
 from brake_sim_ros.scenarios.sensors import parse_sensors
 from brake_sim_ros.scenarios.unit_draws import unit_brake, unit_sensor_set
 from brake_sim_ros.sensing.sensors import (
@@ -1123,13 +1124,23 @@ def _describe(path: str | os.PathLike[str]) -> str:
     return shown if len(shown) <= 300 else f"{shown[:150]}...{shown[-100:]}"
 
 
-_FILE_TYPES = (
-    (stat.S_ISDIR, "a directory"),
-    (stat.S_ISFIFO, "a FIFO (named pipe)"),
-    (stat.S_ISCHR, "a character device"),
-    (stat.S_ISBLK, "a block device"),
-    (stat.S_ISSOCK, "a socket"),
-)
+def _refusal(name: str, exc: FileRefusedError) -> str:
+    """The one-line message for a scenario file :func:`read_regular_file` refused."""
+    cannot = f"{name}: cannot read the scenario file"
+    if exc.reason == regular_file.MISSING:
+        return f"{cannot}: no such file"
+    if exc.reason == regular_file.NOT_A_PATH:
+        return f"{cannot}: not a valid path"
+    if exc.reason == regular_file.NOT_REGULAR:
+        if exc.detail:
+            return f"{cannot}: it is {exc.detail}; allowed a regular file"
+        return f"{cannot}: not a regular file; allowed one"
+    if exc.reason in (regular_file.TOO_LARGE, regular_file.GREW):
+        return (
+            f"{name}: the scenario file is larger than {MAX_SCENARIO_BYTES} bytes (1 MiB):"
+            " allowed at most that"
+        )
+    return f"{cannot}: {exc.detail}"
 
 
 def read_scenario_file(path: str | os.PathLike[str]) -> Scenario:
@@ -1171,52 +1182,9 @@ def read_scenario_text(path: str | os.PathLike[str], *, follow_symlinks: bool = 
     """
     name = _describe(path)
     try:
-        # O_NONBLOCK: opening a FIFO does not wait for a writer; it is refused below
-        flags = os.O_RDONLY | os.O_NONBLOCK | os.O_CLOEXEC
-        if not follow_symlinks:
-            flags |= getattr(os, "O_NOFOLLOW", 0)
-        fd = os.open(path, flags)
-    except FileNotFoundError:
-        raise ScenarioError(f"{name}: cannot read the scenario file: no such file") from None
-    except OSError as exc:
-        raise ScenarioError(
-            f"{name}: cannot read the scenario file: {exc.strerror or exc}"
-        ) from None
-    except (ValueError, TypeError):  # a NUL byte in the path, not a path at all
-        raise ScenarioError(f"{name}: cannot read the scenario file: not a valid path") from None
-    try:
-        info = os.fstat(fd)
-        for test, what in _FILE_TYPES:
-            if test(info.st_mode):
-                raise ScenarioError(
-                    f"{name}: cannot read the scenario file: it is {what}; allowed a regular file"
-                )
-        if not stat.S_ISREG(info.st_mode):
-            raise ScenarioError(
-                f"{name}: cannot read the scenario file: not a regular file; allowed one"
-            )
-        too_big = ScenarioError(
-            f"{name}: the scenario file is larger than {MAX_SCENARIO_BYTES} bytes (1 MiB):"
-            " allowed at most that"
-        )
-        if info.st_size > MAX_SCENARIO_BYTES:
-            raise too_big
-        chunks, size = [], 0
-        while size <= MAX_SCENARIO_BYTES:  # the file may grow after fstat
-            chunk = os.read(fd, MAX_SCENARIO_BYTES + 1 - size)
-            if not chunk:
-                break
-            chunks.append(chunk)
-            size += len(chunk)
-        if size > MAX_SCENARIO_BYTES:
-            raise too_big
-    except OSError as exc:
-        raise ScenarioError(
-            f"{name}: cannot read the scenario file: {exc.strerror or exc}"
-        ) from None
-    finally:
-        os.close(fd)
-    data = b"".join(chunks)
+        data = read_regular_file(path, MAX_SCENARIO_BYTES, follow_symlinks=follow_symlinks)
+    except FileRefusedError as exc:
+        raise ScenarioError(_refusal(name, exc)) from None
     try:
         text = data.decode("utf-8")
     except UnicodeDecodeError as exc:
