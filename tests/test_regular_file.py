@@ -12,7 +12,7 @@ from brake_sim_ros.datasets.checked import DatasetError, read_bytes
 from brake_sim_ros.detection.saved import MAX_MODEL_BYTES, ModelFileError, read_document
 from brake_sim_ros.errors import ScenarioError
 from brake_sim_ros.regular_file import FileRefusedError, read_regular_file
-from brake_sim_ros.scenarios.loader import read_scenario_text
+from brake_sim_ros.scenarios.files import read_scenario_text
 
 
 def _reason(path: os.PathLike[str] | str, limit: int = 100, **kw: bool) -> FileRefusedError:

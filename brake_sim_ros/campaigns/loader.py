@@ -56,17 +56,13 @@ from brake_sim_ros.campaigns.toml_text import dumps
 from brake_sim_ros.errors import BrakeSimError
 from brake_sim_ros.identifiers import IDENTIFIER_RULE, is_identifier
 from brake_sim_ros.model.catalogue import KIND_BY_NAME, KINDS
+from brake_sim_ros.scenarios.checker import MISSING, Checker, show_value
+from brake_sim_ros.scenarios.files import MAX_SCENARIO_BYTES, is_path, read_scenario_text
 from brake_sim_ros.scenarios.loader import (
-    _MISSING,
     BUILTIN_PACKAGE,
-    MAX_SCENARIO_BYTES,
-    _Ctx,
-    _is_path,
     builtin_names,
     parse_scenario,
     parse_toml,
-    read_scenario_text,
-    show_value,
 )
 
 CAMPAIGN_PACKAGE = "brake_sim_ros.campaigns.builtin"
@@ -212,11 +208,11 @@ def load_campaign(name_or_path: str | os.PathLike[str]) -> Campaign:
     text_path = os.fspath(name_or_path)
     # a built-in's name is the built-in, even beside a file or directory of that name
     # (give ./NAME for the file)
-    is_path = _is_path(name_or_path) and not (
+    names_a_file = is_path(name_or_path) and not (
         isinstance(name_or_path, str) and name_or_path in builtin_campaigns()
     )
     try:
-        if is_path:
+        if names_a_file:
             text = read_scenario_text(name_or_path)
             return parse_campaign(text, text_path, directory=Path(text_path).parent)
         if text_path not in builtin_campaigns():
@@ -233,7 +229,7 @@ def load_campaign(name_or_path: str | os.PathLike[str]) -> Campaign:
         raise CampaignError(message) from None
 
 
-def _base_text(ctx: _Ctx, base: Any, directory: Path | None) -> str:
+def _base_text(ctx: Checker, base: Any, directory: Path | None) -> str:
     """The base scenario's TOML text: a built-in name, or a path (relative to the
     campaign file's directory)."""
     if not isinstance(base, str) or not base:
@@ -269,23 +265,23 @@ def parse_campaign(text: str, source: str, directory: Path | None = None) -> Cam
         raise CampaignError(str(exc)) from None
 
 
-def _integer(ctx: _Ctx, value: Any, key: str, lo: int, hi: int) -> int:
+def _integer(ctx: Checker, value: Any, key: str, lo: int, hi: int) -> int:
     if isinstance(value, bool) or not isinstance(value, int) or not lo <= value <= hi:
         raise ctx.fail(key, value, f"an integer from {lo} to {hi}")
     return value
 
 
 def _parse(data: dict[str, Any], text: str, source: str, directory: Path | None) -> Campaign:
-    ctx = _Ctx(source)
+    ctx = Checker(source)
     keys = {"name", "description", "base", "seed", "units", "unit_ids", "outputs", "axes"}
     top = ctx.table(data, "", keys | {"draws", "split"})
     if "name" not in top:
-        raise ctx.fail("name", _MISSING, "a campaign name; it is required")
+        raise ctx.fail("name", MISSING, "a campaign name; it is required")
     name = top["name"]
     if not is_identifier(name):
         raise ctx.fail("name", name, IDENTIFIER_RULE)
     if "base" not in top:
-        raise ctx.fail("base", _MISSING, "a base scenario (built-in name or .toml path)")
+        raise ctx.fail("base", MISSING, "a base scenario (built-in name or .toml path)")
     base_text = _base_text(ctx, top["base"], directory)
     base_data = parse_toml(base_text, f"{source}: base {top['base']}")
     parse_scenario(base_text, f"{source}: base scenario")  # refused here, not per run
@@ -331,7 +327,7 @@ def _parse(data: dict[str, Any], text: str, source: str, directory: Path | None)
     return campaign
 
 
-def _refuse_idle_rules(ctx: _Ctx, campaign: Campaign) -> None:
+def _refuse_idle_rules(ctx: Checker, campaign: Campaign) -> None:
     """Refuse a held-out rule that matches no condition of the campaign (it would hold
     nothing out), in one line."""
     if campaign.held_out:
@@ -343,7 +339,7 @@ def _refuse_idle_rules(ctx: _Ctx, campaign: Campaign) -> None:
             raise CampaignError(f"{ctx.source}: key 'split.held_out[{problem[0]}]': {problem[1]}")
 
 
-def _units(ctx: _Ctx, top: dict[str, Any]) -> tuple[str, ...]:
+def _units(ctx: Checker, top: dict[str, Any]) -> tuple[str, ...]:
     if "units" in top and "unit_ids" in top:
         raise ctx.fail(
             "unit_ids", top["unit_ids"], "either 'units' (a count) or 'unit_ids', not both"
@@ -362,7 +358,7 @@ def _units(ctx: _Ctx, top: dict[str, Any]) -> tuple[str, ...]:
     return tuple(f"unit-{i:04d}" for i in range(n))
 
 
-def _outputs(ctx: _Ctx, data: Any) -> Outputs:
+def _outputs(ctx: Checker, data: Any) -> Outputs:
     data = ctx.table(data, "outputs", {"duration_s", "sample_rate_hz", "columns"})
     duration = data.get("duration_s")
     if duration is not None:
@@ -381,7 +377,7 @@ def _outputs(ctx: _Ctx, data: Any) -> Outputs:
     return Outputs(duration, rate, tuple(columns))
 
 
-def _values(ctx: _Ctx, values: Any, key: str) -> tuple[Value, ...]:
+def _values(ctx: Checker, values: Any, key: str) -> tuple[Value, ...]:
     if not isinstance(values, list) or not 0 < len(values) <= MAX_AXIS_VALUES:
         raise ctx.fail(key, values, f"an array of 1 to {MAX_AXIS_VALUES} values")
     kinds = set()
@@ -403,7 +399,7 @@ def _values(ctx: _Ctx, values: Any, key: str) -> tuple[Value, ...]:
     return tuple(values)
 
 
-def _axes(ctx: _Ctx, data: Any) -> tuple[AnyAxis, ...]:
+def _axes(ctx: Checker, data: Any) -> tuple[AnyAxis, ...]:
     if not isinstance(data, list) or len(data) > 32:
         raise ctx.fail("axes", data, "an array of at most 32 [[axes]] tables")
     axes: list[AnyAxis] = []
@@ -418,7 +414,7 @@ def _axes(ctx: _Ctx, data: Any) -> tuple[AnyAxis, ...]:
         if not parts or len(parts) > 8 or not all(_KEY_PART.fullmatch(p) for p in parts):
             raise ctx.fail(
                 f"{where}.key",
-                _MISSING if key is None else key,
+                MISSING if key is None else key,
                 "a dotted scenario key, e.g. 'actuation.peak_force_n'",
             )
         if parts[0] in _NOT_VARIED or parts[0] == "defects":
@@ -461,7 +457,7 @@ def _axes(ctx: _Ctx, data: Any) -> tuple[AnyAxis, ...]:
     return tuple(axes)
 
 
-def _linspace(ctx: _Ctx, value: Any, key: str) -> tuple[Value, ...]:
+def _linspace(ctx: Checker, value: Any, key: str) -> tuple[Value, ...]:
     if not isinstance(value, list) or len(value) != 3:
         raise ctx.fail(key, value, "[start, stop, num]: num evenly spaced values, both ends in")
     start = ctx.number(value[0], f"{key}[0]")
@@ -473,7 +469,7 @@ def _linspace(ctx: _Ctx, value: Any, key: str) -> tuple[Value, ...]:
     return values
 
 
-def _defect_axis(ctx: _Ctx, item: dict[str, Any], where: str) -> DefectAxis:
+def _defect_axis(ctx: Checker, item: dict[str, Any], where: str) -> DefectAxis:
     item = ctx.table(item, where, {"name", "defects", "severities", "healthy"})
     if item.get("name", DEFECT_AXIS) != DEFECT_AXIS:
         raise ctx.fail(f"{where}.name", item["name"], f"'{DEFECT_AXIS}' for the defect axis")
@@ -512,23 +508,23 @@ def _defect_axis(ctx: _Ctx, item: dict[str, Any], where: str) -> DefectAxis:
     return DefectAxis(choices)
 
 
-def _draws(ctx: _Ctx, data: Any, axes: tuple[AnyAxis, ...]) -> tuple[str, int]:
+def _draws(ctx: Checker, data: Any, axes: tuple[AnyAxis, ...]) -> tuple[str, int]:
     drawn = any(isinstance(a, Axis) and a.uniform is not None for a in axes)
     if data is None:
         if drawn:
-            raise ctx.fail("draws", _MISSING, "a [draws] table (method, n) for the 'uniform' axes")
+            raise ctx.fail("draws", MISSING, "a [draws] table (method, n) for the 'uniform' axes")
         return "lhs", 0
     data = ctx.table(data, "draws", {"method", "n"})
     if not drawn:
         raise ctx.fail("draws", data, "no [draws] table without an axis of 'uniform' values")
     method = ctx.string(data.get("method", "lhs"), "draws.method", DRAW_METHODS)
     if "n" not in data:
-        raise ctx.fail("draws.n", _MISSING, "the number of drawn points")
+        raise ctx.fail("draws.n", MISSING, "the number of drawn points")
     return method, _integer(ctx, data["n"], "draws.n", 1, MAX_RUNS)
 
 
 def _split(
-    ctx: _Ctx, data: Any, axes: tuple[AnyAxis, ...]
+    ctx: Checker, data: Any, axes: tuple[AnyAxis, ...]
 ) -> tuple[dict[str, float], tuple[HeldOut, ...]]:
     data = ctx.table(data, "split", {*SPLITS, "held_out"})
     fractions = {s: ctx.number(data.get(s, 0.0), f"split.{s}", 0.0, 1.0) for s in SPLITS}
@@ -560,7 +556,7 @@ def _split(
         if column not in columns:
             raise ctx.fail(
                 f"{where}.column",
-                _MISSING if column is None else column,
+                MISSING if column is None else column,
                 f"a varied column, one of {sorted(columns)}",
             )
         values = _values(ctx, rule["values"], f"{where}.values") if "values" in rule else ()
