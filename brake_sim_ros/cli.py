@@ -31,7 +31,7 @@ from brake_sim_ros.studies import BENCHMARKS
 if TYPE_CHECKING:  # the CLI imports the numerics only when a command needs them
     from brake_sim_ros.analysis.impacts import ShoeMetrics
     from brake_sim_ros.detection.detector import Detector
-    from brake_sim_ros.scenarios.loader import Scenario
+    from brake_sim_ros.scenarios.types import Scenario
     from brake_sim_ros.stream.run import RunResult
     from brake_sim_ros.viz.targets import RerunTarget
 

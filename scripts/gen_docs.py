@@ -115,10 +115,11 @@ def benchmark_list() -> str:
 
 def campaign_table() -> str:
     """The built-in campaigns as a Markdown table: runs in all and per split (their plans,
-    ``campaigns.loader.plan_runs``), units, run length and sample rate."""
+    ``campaigns.campaign.plan_runs``), units, run length and sample rate."""
     from collections import Counter
 
-    from brake_sim_ros.campaigns.loader import builtin_campaigns, load_campaign, plan_runs
+    from brake_sim_ros.campaigns.campaign import plan_runs
+    from brake_sim_ros.campaigns.loader import builtin_campaigns, load_campaign
 
     rows = [
         "| campaign | runs | train | validation | test | units | run | sample rate |",

@@ -11,7 +11,8 @@ import io
 from pytest import approx
 
 from brake_sim_ros.campaigns.axes import defect_choices, defects_table
-from brake_sim_ros.campaigns.loader import parse_campaign, plan_runs
+from brake_sim_ros.campaigns.campaign import plan_runs
+from brake_sim_ros.campaigns.loader import parse_campaign
 from brake_sim_ros.cli import main
 from brake_sim_ros.model.catalogue import DefectKind, label_column, label_columns
 from brake_sim_ros.model.defects import Defects

@@ -7,7 +7,8 @@ from __future__ import annotations
 import pytest
 
 from brake_sim_ros.campaigns import load_campaign
-from brake_sim_ros.campaigns.loader import CampaignError, builtin_campaigns
+from brake_sim_ros.campaigns.campaign import CampaignError
+from brake_sim_ros.campaigns.loader import builtin_campaigns
 
 BASE = """
 name = "held"

@@ -12,7 +12,7 @@ from hypothesis import strategies as st
 
 from brake_sim_ros.campaigns import CampaignError, builtin_campaigns, load_campaign, parse_campaign
 from brake_sim_ros.campaigns.axes import DefectChoice, defect_choices
-from brake_sim_ros.campaigns.loader import run_seed
+from brake_sim_ros.campaigns.campaign import run_seed
 from brake_sim_ros.campaigns.splits import SPLITS, HeldOut, leaks, unit_counts
 from brake_sim_ros.campaigns.toml_text import dumps
 from brake_sim_ros.model.catalogue import KINDS
@@ -147,7 +147,7 @@ def test_seeds_come_from_the_campaign_seed_and_the_run_identity_not_hash():
     other = parse_campaign(TINY.replace("seed = 3", "seed = 4"), "tiny.toml").runs()
     assert not {r.seed for r in runs} & {r.seed for r in other}
     code = (
-        "from brake_sim_ros.campaigns.loader import run_seed;"
+        "from brake_sim_ros.campaigns.campaign import run_seed;"
         "print(run_seed(3, 'u', {'a': 1.0, 'b': 'x'}))"
     )
     printed = {

@@ -16,7 +16,7 @@ from brake_sim_ros.model.cycle import KMH_PER_M_S, SPEED_TOLERANCE
 from brake_sim_ros.model.fidelity import DRIVEN_COLUMNS, plan
 from brake_sim_ros.model.vehicle import GRAVITY_M_S2, Vehicle, road_load_torque
 from brake_sim_ros.scenarios import load_scenario, parse_scenario
-from brake_sim_ros.scenarios.loader import force_from_pressure_n
+from brake_sim_ros.scenarios.tables import force_from_pressure_n
 from brake_sim_ros.solvers.fixed_step import FixedStepStepper
 from brake_sim_ros.stream.build import stepper_for
 

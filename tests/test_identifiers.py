@@ -5,7 +5,8 @@ from __future__ import annotations
 
 import pytest
 
-from brake_sim_ros.campaigns.loader import CampaignError, parse_campaign
+from brake_sim_ros.campaigns.campaign import CampaignError
+from brake_sim_ros.campaigns.loader import parse_campaign
 from brake_sim_ros.errors import ParameterError, ScenarioError
 from brake_sim_ros.identifiers import IDENTIFIER_RULE
 from brake_sim_ros.scenarios import parse_scenario

@@ -10,7 +10,8 @@ import pytest
 from brake_sim_ros.analysis.impacts import event_metrics
 from brake_sim_ros.errors import ParameterError, ScenarioError
 from brake_sim_ros.scenarios import load_scenario
-from brake_sim_ros.scenarios.loader import DEFAULT_SAMPLE_RATE_HZ, parse_scenario
+from brake_sim_ros.scenarios.loader import parse_scenario
+from brake_sim_ros.scenarios.types import DEFAULT_SAMPLE_RATE_HZ
 from brake_sim_ros.solvers.presets import DEFAULT_PRESET, PRESETS, get_preset
 from brake_sim_ros.stream.build import stepper_for
 from brake_sim_ros.studies.work_precision import compare

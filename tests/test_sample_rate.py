@@ -11,7 +11,7 @@ import pytest
 
 from brake_sim_ros.model.defects import Defects, ShoeDefect
 from brake_sim_ros.scenarios import builtin_names, load_scenario, parse_scenario
-from brake_sim_ros.scenarios.loader import DEFAULT_SAMPLE_RATE_HZ
+from brake_sim_ros.scenarios.types import DEFAULT_SAMPLE_RATE_HZ
 from brake_sim_ros.solvers.presets import PRESETS
 from brake_sim_ros.stream.build import stepper_for
 from brake_sim_ros.stream.run import run_scenario

@@ -23,15 +23,15 @@ from hypothesis import strategies as st
 
 from brake_sim_ros.errors import ScenarioError
 from brake_sim_ros.scenarios import builtin_names, load_scenario, loader
+from brake_sim_ros.scenarios.checker import SHOWN_CHARS
+from brake_sim_ros.scenarios.files import MAX_SCENARIO_BYTES
 from brake_sim_ros.scenarios.loader import (
     BUILTIN_PACKAGE,
     MAX_NAME_CHARS,
     MAX_NESTING,
-    MAX_SCENARIO_BYTES,
-    SHOWN_CHARS,
-    Scenario,
     read_scenario_file,
 )
+from brake_sim_ros.scenarios.types import Scenario
 
 BUILTIN = {
     name: resources.files(BUILTIN_PACKAGE).joinpath(f"{name}.toml").read_bytes()

@@ -5,14 +5,8 @@ run (its scenario, seed, unit and split). ``brake-sim sweep`` runs them
 (:mod:`brake_sim_ros.datasets.sweep`).
 """
 
-from brake_sim_ros.campaigns.loader import (
-    Campaign,
-    CampaignError,
-    RunSpec,
-    builtin_campaigns,
-    load_campaign,
-    parse_campaign,
-)
+from brake_sim_ros.campaigns.campaign import Campaign, CampaignError, RunSpec
+from brake_sim_ros.campaigns.loader import builtin_campaigns, load_campaign, parse_campaign
 
 __all__ = [
     "Campaign",

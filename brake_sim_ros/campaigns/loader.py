@@ -1,4 +1,5 @@
-"""Campaign files (TOML): strict loading, and the plan of runs a campaign makes.
+"""Campaign files (TOML): strict loading into a :class:`~.campaign.Campaign` (whose runs
+:mod:`.campaign` plans).
 
 A campaign names a base scenario (a built-in name, or a path relative to the campaign
 file), the axes it varies (:mod:`.axes`), how many units, what each run outputs and the
@@ -13,60 +14,46 @@ See ``builtin/demo.toml`` for a commented example.
 
 from __future__ import annotations
 
-import copy
-import hashlib
-import json
 import math
 import os
 import re
-from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from brake_sim_ros import __version__
 from brake_sim_ros.campaigns.axes import (
     DEFECT_AXIS,
     DEFECT_COLUMNS,
     DEFECT_NUMBER_COLUMNS,
-    DERIVED_COLUMNS,
     DRAW_METHODS,
     AnyAxis,
     Axis,
     DefectAxis,
-    DefectChoice,
     Value,
     condition_points,
     defect_choices,
-    defects_table,
     point_columns,
 )
+from brake_sim_ros.campaigns.campaign import Campaign, CampaignError, Outputs
 from brake_sim_ros.campaigns.splits import (
     SPLITS,
     HeldOut,
-    assign_units,
     held_out_kind_problem,
     idle_rule,
     unit_counts,
     value_kind,
 )
-from brake_sim_ros.campaigns.toml_text import dumps
 from brake_sim_ros.errors import BrakeSimError
-from brake_sim_ros.identifiers import IDENTIFIER_RULE, is_identifier
 from brake_sim_ros.model.catalogue import KIND_BY_NAME, KINDS
+from brake_sim_ros.scenarios.checker import MISSING, Checker, show_value
+from brake_sim_ros.scenarios.files import MAX_SCENARIO_BYTES, is_path, read_scenario_text
 from brake_sim_ros.scenarios.loader import (
-    _MISSING,
     BUILTIN_PACKAGE,
-    MAX_SCENARIO_BYTES,
-    _Ctx,
-    _is_path,
     builtin_names,
     parse_scenario,
     parse_toml,
-    read_scenario_text,
-    show_value,
 )
 
 CAMPAIGN_PACKAGE = "brake_sim_ros.campaigns.builtin"
@@ -74,9 +61,6 @@ MAX_RUNS = 100_000  # runs of one campaign (a manifest row and a file each)
 MAX_UNITS = 10_000
 DEFAULT_UNITS = 3  # the fewest that fill the default train/validation/test split
 MAX_AXIS_VALUES = 10_000
-# samples of one run: the run's history is kept in memory to be written (about 40 float64
-# columns: 2e6 samples is some 650 MB with the table's copy)
-MAX_RUN_SAMPLES = 2_000_000
 _COLUMN = re.compile(r"[a-z][a-z0-9_]{0,63}")
 _KEY_PART = re.compile(r"[A-Za-z0-9_]{1,64}")
 # scenario keys no axis sets: the campaign sets them (name, unit) or they are text
@@ -97,105 +81,6 @@ RESERVED_COLUMNS = (
 )
 
 
-class CampaignError(BrakeSimError, ValueError):
-    """A campaign file that cannot be loaded, in one line naming the file and the key."""
-
-
-@dataclass(frozen=True)
-class Outputs:
-    """What every run writes.
-
-    Attributes:
-        duration_s: simulated time per run, s (None: the base scenario's).
-        sample_rate_hz: output samples per second (None: the base scenario's).
-        columns: the history columns kept (``sample_index``, ``time_s``, the label
-            columns and ``rul [s]`` are always kept); empty: every column.
-    """
-
-    duration_s: float | None = None
-    sample_rate_hz: float | None = None
-    columns: tuple[str, ...] = ()
-
-
-@dataclass(frozen=True)
-class RunSpec:
-    """One run of a campaign, resolved: everything a worker needs, and its manifest row.
-
-    Attributes:
-        run_id: ``run-NNNNN``, its index among the campaign's unit x condition pairs.
-        unit_id: the brake unit it runs on.
-        seed: the scenario seed (an axis's, or derived from the campaign seed and the
-            run's identity with :class:`numpy.random.SeedSequence`).
-        split: ``train``, ``validation`` or ``test``.
-        columns: the varied values by manifest column.
-        labels: the defect label columns (``defect:<kind>:<location> [<unit>]``) -> severity.
-        scenario_text: the varied scenario as TOML (what the scenario loader read).
-        duration_s: its simulated duration, s.
-        keep: the history columns to keep (empty: all).
-    """
-
-    run_id: str
-    unit_id: str
-    seed: int
-    split: str
-    columns: dict[str, Value]
-    labels: dict[str, float]
-    scenario_text: str
-    duration_s: float
-    keep: tuple[str, ...] = ()
-
-
-@dataclass(frozen=True)
-class Campaign:
-    """A loaded campaign file."""
-
-    name: str
-    description: str
-    source: str
-    text: str
-    base: str
-    base_text: str
-    seed: int
-    unit_ids: tuple[str, ...]
-    outputs: Outputs
-    axes: tuple[AnyAxis, ...]
-    draw_method: str
-    draw_count: int
-    fractions: dict[str, float]
-    held_out: tuple[HeldOut, ...]
-    base_data: dict[str, Any] = field(default_factory=dict, repr=False, compare=False)
-
-    def runs(self) -> list[RunSpec]:
-        """Every run, in run-id order (see :func:`plan_runs`)."""
-        return plan_runs(self)
-
-    def lock_text(self, runs: list[RunSpec]) -> str:
-        """The ``campaign.lock``: the campaign and base scenario texts, the library version
-        and every run resolved (JSON, keys sorted, so the same campaign gives the same
-        bytes)."""
-        body = {
-            "campaign": self.name,
-            "campaign_source": self.source,
-            "campaign_sha256": hashlib.sha256(self.text.encode()).hexdigest(),
-            "campaign_toml": self.text,
-            "base_toml": self.base_text,
-            "version": __version__,
-            "held_out": [vars(h) for h in self.held_out],
-            "runs": [
-                {
-                    "run_id": r.run_id,
-                    "unit_id": r.unit_id,
-                    "seed": r.seed,
-                    "split": r.split,
-                    "columns": r.columns,
-                    "scenario_sha256": hashlib.sha256(r.scenario_text.encode()).hexdigest(),
-                }
-                for r in runs
-            ],
-        }
-        return json.dumps(body, sort_keys=True, indent=1) + "\n"
-
-
 # --- reading -------------------------------------------------------------------------------
 def builtin_campaigns() -> list[str]:
     files = resources.files(CAMPAIGN_PACKAGE).iterdir()
@@ -212,11 +97,11 @@ def load_campaign(name_or_path: str | os.PathLike[str]) -> Campaign:
     text_path = os.fspath(name_or_path)
     # a built-in's name is the built-in, even beside a file or directory of that name
     # (give ./NAME for the file)
-    is_path = _is_path(name_or_path) and not (
+    names_a_file = is_path(name_or_path) and not (
         isinstance(name_or_path, str) and name_or_path in builtin_campaigns()
     )
     try:
-        if is_path:
+        if names_a_file:
             text = read_scenario_text(name_or_path)
             return parse_campaign(text, text_path, directory=Path(text_path).parent)
         if text_path not in builtin_campaigns():
@@ -233,7 +118,7 @@ def load_campaign(name_or_path: str | os.PathLike[str]) -> Campaign:
         raise CampaignError(message) from None
 
 
-def _base_text(ctx: _Ctx, base: Any, directory: Path | None) -> str:
+def _base_text(ctx: Checker, base: Any, directory: Path | None) -> str:
     """The base scenario's TOML text: a built-in name, or a path (relative to the
     campaign file's directory)."""
     if not isinstance(base, str) or not base:
@@ -269,27 +154,20 @@ def parse_campaign(text: str, source: str, directory: Path | None = None) -> Cam
         raise CampaignError(str(exc)) from None
 
 
-def _integer(ctx: _Ctx, value: Any, key: str, lo: int, hi: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, int) or not lo <= value <= hi:
-        raise ctx.fail(key, value, f"an integer from {lo} to {hi}")
-    return value
-
-
 def _parse(data: dict[str, Any], text: str, source: str, directory: Path | None) -> Campaign:
-    ctx = _Ctx(source)
+    ctx = Checker(source)
     keys = {"name", "description", "base", "seed", "units", "unit_ids", "outputs", "axes"}
     top = ctx.table(data, "", keys | {"draws", "split"})
     if "name" not in top:
-        raise ctx.fail("name", _MISSING, "a campaign name; it is required")
+        raise ctx.fail("name", MISSING, "a campaign name; it is required")
     name = top["name"]
-    if not is_identifier(name):
-        raise ctx.fail("name", name, IDENTIFIER_RULE)
+    ctx.identifier(name, "name")
     if "base" not in top:
-        raise ctx.fail("base", _MISSING, "a base scenario (built-in name or .toml path)")
+        raise ctx.fail("base", MISSING, "a base scenario (built-in name or .toml path)")
     base_text = _base_text(ctx, top["base"], directory)
     base_data = parse_toml(base_text, f"{source}: base {top['base']}")
     parse_scenario(base_text, f"{source}: base scenario")  # refused here, not per run
-    seed = _integer(ctx, top.get("seed", 0), "seed", 0, 2**63 - 1)
+    seed = ctx.integer(top.get("seed", 0), "seed", 0, 2**63 - 1)
     unit_ids = _units(ctx, top)
     outputs = _outputs(ctx, top.get("outputs", {}))
     axes = _axes(ctx, top.get("axes", []))
@@ -331,7 +209,7 @@ def _parse(data: dict[str, Any], text: str, source: str, directory: Path | None)
     return campaign
 
 
-def _refuse_idle_rules(ctx: _Ctx, campaign: Campaign) -> None:
+def _refuse_idle_rules(ctx: Checker, campaign: Campaign) -> None:
     """Refuse a held-out rule that matches no condition of the campaign (it would hold
     nothing out), in one line."""
     if campaign.held_out:
@@ -343,7 +221,7 @@ def _refuse_idle_rules(ctx: _Ctx, campaign: Campaign) -> None:
             raise CampaignError(f"{ctx.source}: key 'split.held_out[{problem[0]}]': {problem[1]}")
 
 
-def _units(ctx: _Ctx, top: dict[str, Any]) -> tuple[str, ...]:
+def _units(ctx: Checker, top: dict[str, Any]) -> tuple[str, ...]:
     if "units" in top and "unit_ids" in top:
         raise ctx.fail(
             "unit_ids", top["unit_ids"], "either 'units' (a count) or 'unit_ids', not both"
@@ -353,16 +231,15 @@ def _units(ctx: _Ctx, top: dict[str, Any]) -> tuple[str, ...]:
         if not isinstance(ids, list) or not 0 < len(ids) <= MAX_UNITS:
             raise ctx.fail("unit_ids", ids, f"an array of 1 to {MAX_UNITS} unit ids")
         for i, unit in enumerate(ids):
-            if not is_identifier(unit):
-                raise ctx.fail(f"unit_ids[{i}]", unit, IDENTIFIER_RULE)
+            ctx.identifier(unit, f"unit_ids[{i}]")
         if len(set(ids)) != len(ids):
             raise ctx.fail("unit_ids", ids, "distinct unit ids")
         return tuple(ids)
-    n = _integer(ctx, top.get("units", DEFAULT_UNITS), "units", 1, MAX_UNITS)
+    n = ctx.integer(top.get("units", DEFAULT_UNITS), "units", 1, MAX_UNITS)
     return tuple(f"unit-{i:04d}" for i in range(n))
 
 
-def _outputs(ctx: _Ctx, data: Any) -> Outputs:
+def _outputs(ctx: Checker, data: Any) -> Outputs:
     data = ctx.table(data, "outputs", {"duration_s", "sample_rate_hz", "columns"})
     duration = data.get("duration_s")
     if duration is not None:
@@ -381,7 +258,7 @@ def _outputs(ctx: _Ctx, data: Any) -> Outputs:
     return Outputs(duration, rate, tuple(columns))
 
 
-def _values(ctx: _Ctx, values: Any, key: str) -> tuple[Value, ...]:
+def _values(ctx: Checker, values: Any, key: str) -> tuple[Value, ...]:
     if not isinstance(values, list) or not 0 < len(values) <= MAX_AXIS_VALUES:
         raise ctx.fail(key, values, f"an array of 1 to {MAX_AXIS_VALUES} values")
     kinds = set()
@@ -403,7 +280,7 @@ def _values(ctx: _Ctx, values: Any, key: str) -> tuple[Value, ...]:
     return tuple(values)
 
 
-def _axes(ctx: _Ctx, data: Any) -> tuple[AnyAxis, ...]:
+def _axes(ctx: Checker, data: Any) -> tuple[AnyAxis, ...]:
     if not isinstance(data, list) or len(data) > 32:
         raise ctx.fail("axes", data, "an array of at most 32 [[axes]] tables")
     axes: list[AnyAxis] = []
@@ -418,7 +295,7 @@ def _axes(ctx: _Ctx, data: Any) -> tuple[AnyAxis, ...]:
         if not parts or len(parts) > 8 or not all(_KEY_PART.fullmatch(p) for p in parts):
             raise ctx.fail(
                 f"{where}.key",
-                _MISSING if key is None else key,
+                MISSING if key is None else key,
                 "a dotted scenario key, e.g. 'actuation.peak_force_n'",
             )
         if parts[0] in _NOT_VARIED or parts[0] == "defects":
@@ -461,19 +338,19 @@ def _axes(ctx: _Ctx, data: Any) -> tuple[AnyAxis, ...]:
     return tuple(axes)
 
 
-def _linspace(ctx: _Ctx, value: Any, key: str) -> tuple[Value, ...]:
+def _linspace(ctx: Checker, value: Any, key: str) -> tuple[Value, ...]:
     if not isinstance(value, list) or len(value) != 3:
         raise ctx.fail(key, value, "[start, stop, num]: num evenly spaced values, both ends in")
     start = ctx.number(value[0], f"{key}[0]")
     stop = ctx.number(value[1], f"{key}[1]")
-    num = _integer(ctx, value[2], f"{key}[2]", 2, MAX_AXIS_VALUES)
+    num = ctx.integer(value[2], f"{key}[2]", 2, MAX_AXIS_VALUES)
     values = tuple(float(v) for v in np.linspace(start, stop, num))
     if len(set(values)) != len(values):
         raise ctx.fail(key, value, "distinct values (start differs from stop)")
     return values
 
 
-def _defect_axis(ctx: _Ctx, item: dict[str, Any], where: str) -> DefectAxis:
+def _defect_axis(ctx: Checker, item: dict[str, Any], where: str) -> DefectAxis:
     item = ctx.table(item, where, {"name", "defects", "severities", "healthy"})
     if item.get("name", DEFECT_AXIS) != DEFECT_AXIS:
         raise ctx.fail(f"{where}.name", item["name"], f"'{DEFECT_AXIS}' for the defect axis")
@@ -512,23 +389,23 @@ def _defect_axis(ctx: _Ctx, item: dict[str, Any], where: str) -> DefectAxis:
     return DefectAxis(choices)
 
 
-def _draws(ctx: _Ctx, data: Any, axes: tuple[AnyAxis, ...]) -> tuple[str, int]:
+def _draws(ctx: Checker, data: Any, axes: tuple[AnyAxis, ...]) -> tuple[str, int]:
     drawn = any(isinstance(a, Axis) and a.uniform is not None for a in axes)
     if data is None:
         if drawn:
-            raise ctx.fail("draws", _MISSING, "a [draws] table (method, n) for the 'uniform' axes")
+            raise ctx.fail("draws", MISSING, "a [draws] table (method, n) for the 'uniform' axes")
         return "lhs", 0
     data = ctx.table(data, "draws", {"method", "n"})
     if not drawn:
         raise ctx.fail("draws", data, "no [draws] table without an axis of 'uniform' values")
     method = ctx.string(data.get("method", "lhs"), "draws.method", DRAW_METHODS)
     if "n" not in data:
-        raise ctx.fail("draws.n", _MISSING, "the number of drawn points")
-    return method, _integer(ctx, data["n"], "draws.n", 1, MAX_RUNS)
+        raise ctx.fail("draws.n", MISSING, "the number of drawn points")
+    return method, ctx.integer(data["n"], "draws.n", 1, MAX_RUNS)
 
 
 def _split(
-    ctx: _Ctx, data: Any, axes: tuple[AnyAxis, ...]
+    ctx: Checker, data: Any, axes: tuple[AnyAxis, ...]
 ) -> tuple[dict[str, float], tuple[HeldOut, ...]]:
     data = ctx.table(data, "split", {*SPLITS, "held_out"})
     fractions = {s: ctx.number(data.get(s, 0.0), f"split.{s}", 0.0, 1.0) for s in SPLITS}
@@ -560,7 +437,7 @@ def _split(
         if column not in columns:
             raise ctx.fail(
                 f"{where}.column",
-                _MISSING if column is None else column,
+                MISSING if column is None else column,
                 f"a varied column, one of {sorted(columns)}",
             )
         values = _values(ctx, rule["values"], f"{where}.values") if "values" in rule else ()
@@ -578,106 +455,3 @@ def _split(
     if held and fractions["test"] == 0.0:
         raise ctx.fail("split.test", 0.0, "a test fraction > 0 when values are held out")
     return fractions, tuple(held)
-
-
-# --- planning ------------------------------------------------------------------------------
-def _set(data: dict[str, Any], key: str, value: Any, where: str) -> None:
-    """Set the dotted ``key`` in the TOML data (tables made as needed)."""
-    parts = key.split(".")
-    table = data
-    for part in parts[:-1]:
-        table = table.setdefault(part, {})
-        if not isinstance(table, dict):
-            raise CampaignError(
-                f"{where}: key '{key}': '{part}' is not a table in the base scenario"
-            )
-    table[parts[-1]] = value
-
-
-def run_seed(campaign_seed: int, unit_id: str, columns: dict[str, Value]) -> int:
-    """A run's seed from the campaign seed and the run's identity (its unit and varied
-    values), through :class:`numpy.random.SeedSequence`: the same run, the same seed,
-    whatever else the campaign holds; never Python's salted ``hash()``."""
-    identity = json.dumps({"unit_id": unit_id, **columns}, sort_keys=True).encode()
-    digest = hashlib.sha256(identity).digest()
-    words = tuple(int.from_bytes(digest[i : i + 4], "little") for i in range(0, 32, 4))
-    state = np.random.SeedSequence(campaign_seed, spawn_key=words).generate_state(2, np.uint64)
-    return int(((int(state[0]) << 64) | int(state[1])) % 2**63)
-
-
-def plan_runs(campaign: Campaign) -> list[RunSpec]:
-    """Every run of ``campaign``: each unit x each condition point (units outer), a run id
-    by that index; a condition with a held-out value runs on test units only (its index is
-    skipped on the others). Each varied scenario is read by the scenario loader.
-
-    Raises:
-        CampaignError: a varied scenario the scenario loader refuses (naming the run).
-    """
-    base = campaign.base_data
-    points = condition_points(
-        campaign.axes, campaign.draw_method, campaign.draw_count, campaign.seed
-    )
-    split_of = assign_units(campaign.unit_ids, campaign.fractions, campaign.seed)
-    axes = {a.name: a for a in campaign.axes}
-    runs = []
-    index = 0
-    for unit in campaign.unit_ids:
-        for point in points:
-            run_id = f"run-{index:05d}"
-            index += 1
-            columns = point_columns(point)
-            held = any(rule.matches(columns) for rule in campaign.held_out)
-            split = split_of[unit]
-            if held and split != "test":
-                continue
-            data = copy.deepcopy(base)
-            where = f"{campaign.source} {run_id}"
-            for name, value in point.items():
-                if isinstance(value, DefectChoice):
-                    data["defects"] = defects_table(value.defects())
-                else:
-                    _set(data, axes[name].key, value, where)
-            if campaign.outputs.duration_s is not None:
-                data["duration_s"] = campaign.outputs.duration_s
-            if campaign.outputs.sample_rate_hz is not None:
-                data["sample_rate_hz"] = campaign.outputs.sample_rate_hz
-            seeded = any(isinstance(a, Axis) and a.key == "seed" for a in campaign.axes)
-            identity = {
-                k: v
-                for k, v in columns.items()
-                if k not in DERIVED_COLUMNS and not (k == "defect_repeat" and v == 0)
-            }
-            seed = data.get("seed", 0) if seeded else run_seed(campaign.seed, unit, identity)
-            # the units are one fleet: each the same brake in all its runs (its scatter is
-            # drawn from the unit id and the fleet seed), each run its own noise and draws
-            data.setdefault("fleet_seed", campaign.seed)
-            data.update(name=f"{campaign.name}.{run_id}", unit_id=unit, seed=seed)
-            text = dumps(data)
-            try:
-                scenario = parse_scenario(text, where)
-            except BrakeSimError as exc:
-                raise CampaignError(f"{exc} (a varied scenario of the campaign)") from None
-            samples = scenario.duration_s * scenario.sample_rate_hz
-            if samples > MAX_RUN_SAMPLES:
-                raise CampaignError(
-                    f"{where}: {scenario.duration_s:g} s at {scenario.sample_rate_hz:g} Hz is"
-                    f" {samples:.3g} samples: allowed at most {MAX_RUN_SAMPLES} per run (the run"
-                    " is kept in memory to be written); shorten the runs or lower the rate"
-                )
-            defect = next((v for v in point.values() if isinstance(v, DefectChoice)), None)
-            if defect is not None and scenario.setup.defects != defect.defects():
-                raise CampaignError(f"{where}: the defect axis's defect did not reach the scenario")
-            runs.append(
-                RunSpec(
-                    run_id=run_id,
-                    unit_id=unit,
-                    seed=seed,
-                    split=split,
-                    columns=columns,
-                    labels=scenario.setup.defects.severities(),
-                    scenario_text=text,
-                    duration_s=scenario.duration_s,
-                    keep=campaign.outputs.columns,
-                )
-            )
-    return runs

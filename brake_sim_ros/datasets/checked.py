@@ -19,8 +19,6 @@ from __future__ import annotations
 import hashlib
 import json
 import math
-import os
-import stat
 from pathlib import Path
 from typing import Any
 
@@ -28,10 +26,12 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 
+from brake_sim_ros import regular_file
 from brake_sim_ros.campaigns.splits import SPLITS
 from brake_sim_ros.datasets.sweep import run_file
 from brake_sim_ros.errors import BrakeSimError
 from brake_sim_ros.recording.mcap_format import describe_path
+from brake_sim_ros.regular_file import FileRefusedError, read_regular_file
 
 LOCK_LIMIT_BYTES = 64 * 1024**2  # what prepare_output accepts
 MANIFEST_LIMIT_BYTES = 256 * 1024**2
@@ -62,26 +62,26 @@ def read_bytes(path: Path, limit: int, where: str) -> bytes:
         DatasetError: missing, not a regular file, too large or unreadable (one line).
     """
     try:
-        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | os.O_NOFOLLOW)
-    except FileNotFoundError:
-        raise DatasetError(f"{where}: missing") from None
-    except OSError as exc:
-        raise DatasetError(f"{where}: cannot open it ({exc.strerror}; a link?)") from None
-    try:
-        info = os.fstat(fd)
-        if not stat.S_ISREG(info.st_mode):
-            raise DatasetError(f"{where}: not a regular file")
-        if info.st_size > limit:
-            raise DatasetError(f"{where}: {info.st_size} bytes; allowed at most {limit}")
-        with os.fdopen(fd, "rb", closefd=False) as f:
-            data = f.read(limit + 1)
-    except OSError as exc:
-        raise DatasetError(f"{where}: cannot read it ({exc.strerror or exc})") from None
-    finally:
-        os.close(fd)
-    if len(data) > limit:
-        raise DatasetError(f"{where}: grew past {limit} bytes while read")
-    return data
+        return read_regular_file(path, limit, follow_symlinks=False)
+    except FileRefusedError as exc:
+        raise DatasetError(_refusal(where, limit, exc)) from None
+
+
+def _refusal(where: str, limit: int, exc: FileRefusedError) -> str:
+    """The one-line message for a file of the sweep :func:`read_regular_file` refused."""
+    if exc.reason == regular_file.MISSING:
+        return f"{where}: missing"
+    if exc.reason == regular_file.NOT_OPENED:
+        return f"{where}: cannot open it ({exc.detail}; a link?)"
+    if exc.reason == regular_file.NOT_A_PATH:
+        return f"{where}: cannot open it (not a valid path)"
+    if exc.reason == regular_file.NOT_REGULAR:
+        return f"{where}: not a regular file"
+    if exc.reason == regular_file.TOO_LARGE:
+        return f"{where}: {exc.size} bytes; allowed at most {limit}"
+    if exc.reason == regular_file.GREW:
+        return f"{where}: grew past {limit} bytes while read"
+    return f"{where}: cannot read it ({exc.detail})"
 
 
 def parse_lock(data: bytes, where: str) -> dict[str, Any]:

@@ -72,7 +72,7 @@ from brake_sim_ros.sensing.sensors import SensorBank
 from brake_sim_ros.stream.ground_truth import recorded_wear
 
 if TYPE_CHECKING:
-    from brake_sim_ros.scenarios.loader import Scenario
+    from brake_sim_ros.scenarios.types import Scenario
     from brake_sim_ros.stream.run import RunResult
 
 METADATA_KEY = b"brake_sim"

@@ -57,7 +57,7 @@ from brake_sim_ros.recording.mcap_format import describe_path
 from brake_sim_ros.recording.output import OutputError, atomic_output
 
 if TYPE_CHECKING:
-    from brake_sim_ros.campaigns.loader import Campaign, RunSpec
+    from brake_sim_ros.campaigns.campaign import Campaign, RunSpec
     from brake_sim_ros.datasets.executors import Executor
 
 LOCK_NAME = "campaign.lock"

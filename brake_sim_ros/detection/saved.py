@@ -59,13 +59,12 @@ import json
 import math
 import os
 import re
-import stat
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 import numpy as np
 
-from brake_sim_ros import __version__
+from brake_sim_ros import __version__, regular_file
 from brake_sim_ros.detection import registry
 from brake_sim_ros.detection.baselines import STATISTICS, VibrationThreshold
 from brake_sim_ros.detection.detector import Detector
@@ -85,6 +84,7 @@ from brake_sim_ros.detection.learned import HEALTHY, LearnedClassifier
 from brake_sim_ros.detection.order_analysis import OrderAnalysis
 from brake_sim_ros.errors import BrakeSimError
 from brake_sim_ros.model.catalogue import KINDS
+from brake_sim_ros.regular_file import FileRefusedError, read_regular_file
 
 FORMAT = "brake-sim detector"
 SCHEMA_VERSION = 2
@@ -509,6 +509,21 @@ def _unique_keys(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
     return out
 
 
+def _refusal(where: str, exc: FileRefusedError) -> str:
+    """The one-line message for a saved detector :func:`read_regular_file` refused."""
+    if exc.reason in (regular_file.MISSING, regular_file.NOT_OPENED):
+        return f"{where}: cannot open it ({exc.detail})"
+    if exc.reason == regular_file.NOT_A_PATH:
+        return f"{where}: cannot open it (not a valid path)"
+    if exc.reason == regular_file.NOT_REGULAR:
+        return f"{where}: not a regular file; allowed a saved detector"
+    if exc.reason == regular_file.TOO_LARGE:
+        return f"{where}: {exc.size} bytes; allowed at most {MAX_MODEL_BYTES}"
+    if exc.reason == regular_file.GREW:
+        return f"{where}: more than {MAX_MODEL_BYTES} bytes; allowed at most that"
+    return f"{where}: cannot read it ({exc.detail})"
+
+
 def read_document(path: str | os.PathLike[str], *, where: str = "saved detector") -> dict[str, Any]:
     """The parsed JSON of a saved detector file, after the file's checks (a regular file of
     at most :data:`MAX_MODEL_BYTES`, UTF-8, strict JSON, no duplicate keys).
@@ -519,26 +534,9 @@ def read_document(path: str | os.PathLike[str], *, where: str = "saved detector"
         ModelFileError: one line naming what is wrong.
     """
     try:
-        # O_NONBLOCK: a FIFO must be refused, not waited on
-        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
-    except OSError as exc:
-        raise ModelFileError(f"{where}: cannot open it ({exc.strerror or exc})") from None
-    try:
-        info = os.fstat(fd)
-        if not stat.S_ISREG(info.st_mode):  # checked before a directory or FIFO is read
-            raise ModelFileError(f"{where}: not a regular file; allowed a saved detector")
-        if info.st_size > MAX_MODEL_BYTES:
-            raise ModelFileError(
-                f"{where}: {info.st_size} bytes; allowed at most {MAX_MODEL_BYTES}"
-            )
-        with os.fdopen(os.dup(fd), "rb") as f:
-            raw = f.read(MAX_MODEL_BYTES + 1)
-    except OSError as exc:
-        raise ModelFileError(f"{where}: cannot read it ({exc.strerror or exc})") from None
-    finally:
-        os.close(fd)
-    if len(raw) > MAX_MODEL_BYTES:
-        raise ModelFileError(f"{where}: more than {MAX_MODEL_BYTES} bytes; allowed at most that")
+        raw = read_regular_file(path, MAX_MODEL_BYTES)
+    except FileRefusedError as exc:
+        raise ModelFileError(_refusal(where, exc)) from None
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError:

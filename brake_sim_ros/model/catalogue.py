@@ -154,7 +154,7 @@ class DefectKind:
         actuation: what it does to the shoe's actuation (:data:`ACTUATION_EFFECTS`).
         speed_dependent: its effect on a shoe follows the drum speed (no one-shoe model).
         table: its severity is not one number but a table of the scenario (a drum's
-            harmonics): no node parameter, read by :mod:`brake_sim_ros.scenarios.loader`.
+            harmonics): no node parameter, read by :mod:`brake_sim_ros.scenarios.defect_tables`.
     """
 
     name: str

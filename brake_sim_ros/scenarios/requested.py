@@ -9,7 +9,7 @@ A service request is hostile until checked. It may name
   ``..``) before the check, so neither a symlink nor ``../`` leads outside.
 
 The file is opened without following a final symlink and without blocking (a FIFO never
-hangs the caller), must pass :func:`~brake_sim_ros.scenarios.loader.read_scenario_text`'s
+hangs the caller), must pass :func:`~brake_sim_ros.scenarios.files.read_scenario_text`'s
 limits (a regular file of at most 1 MiB, UTF-8 without NUL characters) and be TOML nested
 at most :data:`~brake_sim_ros.scenarios.loader.MAX_NESTING` deep. Refusals are
 :class:`~brake_sim_ros.errors.ScenarioError` with one line that never quotes the file's
@@ -29,14 +29,14 @@ from importlib import resources
 from pathlib import Path
 
 from brake_sim_ros.errors import BrakeSimError, ScenarioError
+from brake_sim_ros.scenarios.files import read_scenario_text
 from brake_sim_ros.scenarios.loader import (
     BUILTIN_PACKAGE,
-    Scenario,
     builtin_names,
     parse_scenario,
     parse_toml,
-    read_scenario_text,
 )
+from brake_sim_ros.scenarios.types import Scenario
 
 MAX_REQUEST_CHARS = 1024  # a scenario name or path in a request
 _SHOWN_CHARS = 64  # at most this much of the caller's own text is echoed back

@@ -3,8 +3,8 @@
 Absent tables give the defaults (:class:`~brake_sim_ros.sensing.structure.StructureParameters`,
 :func:`~brake_sim_ros.sensing.sensors.default_channels`); ``sensors = []`` measures nothing.
 An unknown key, a wrong type or a value out of range is an error naming the file, the table
-and key, the value and what is allowed, like the rest of the loader (whose checker, ``ctx``,
-this module uses). Example::
+and key, the value and what is allowed, like the rest of the loader (whose checker,
+:class:`~.checker.Checker`, this module uses). Example::
 
     [structure]                        # optional; all modes replace the defaults
     mounts = ["backing_plate", "knuckle"]
@@ -38,9 +38,10 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from typing import Any, Protocol
+from typing import Any
 
 from brake_sim_ros.errors import BrakeSimError, ScenarioError
+from brake_sim_ros.scenarios.checker import Checker
 from brake_sim_ros.sensing.faults import FAULT_KINDS, SensorFault
 from brake_sim_ros.sensing.kinds import SENSOR_KINDS
 from brake_sim_ros.sensing.sensors import (
@@ -50,23 +51,6 @@ from brake_sim_ros.sensing.sensors import (
     default_channels,
 )
 from brake_sim_ros.sensing.structure import AXES, Mode, StructureParameters
-
-
-class Checker(Protocol):
-    """The loader's strict value checks (``loader._Ctx``)."""
-
-    source: str
-
-    def fail(self, key: str, value: Any, allowed: str) -> ScenarioError: ...
-
-    def table(self, data: Any, key: str, allowed_keys: set[str]) -> dict[str, Any]: ...
-
-    def number(
-        self, value: Any, key: str, lo: float = ..., hi: float = ..., lo_open: bool = ...
-    ) -> float: ...
-
-    def string(self, value: Any, key: str, choices: tuple[str, ...] | None = None) -> str: ...
-
 
 _MODE_KEYS = {f.name for f in dataclasses.fields(Mode)}
 # transducer fields a sensor table may override; 0 means "none" for the optional ones
@@ -80,12 +64,6 @@ _FAULT_KEYS = {f.name for f in dataclasses.fields(SensorFault)}
 def _array(ctx: Checker, value: Any, key: str) -> list[Any]:
     if not isinstance(value, list):
         raise ctx.fail(key, value, "an array")
-    return value
-
-
-def _integer(ctx: Checker, value: Any, key: str, lo: int, hi: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, int) or not lo <= value <= hi:
-        raise ctx.fail(key, value, f"an integer from {lo} to {hi}")
     return value
 
 
@@ -172,7 +150,7 @@ def _channel(ctx: Checker, data: Any, key: str) -> SensorChannel:
     for name in sorted(_TRANSDUCER_KEYS & set(data)):
         where = f"{key}.{name}"
         if name == "adc_bits":
-            bits = _integer(ctx, data[name], where, 0, 32)
+            bits = ctx.integer(data[name], where, 0, 32)
             changes[name] = bits or None
         else:
             value = ctx.number(data[name], where)
@@ -185,8 +163,8 @@ def _channel(ctx: Checker, data: Any, key: str) -> SensorChannel:
             data["sensitivity_ratio"], f"{key}.sensitivity_ratio", 0.0, 100.0, lo_open=True
         )
     if "tone_ring_teeth" in data:
-        fields["tone_ring_teeth"] = _integer(
-            ctx, data["tone_ring_teeth"], f"{key}.tone_ring_teeth", 1, 1000
+        fields["tone_ring_teeth"] = ctx.integer(
+            data["tone_ring_teeth"], f"{key}.tone_ring_teeth", 1, 1000
         )
     if "piston_diameter_m" in data:
         fields["piston_diameter_m"] = ctx.number(

@@ -10,7 +10,7 @@ from __future__ import annotations
 from brake_sim_ros.errors import FidelityError
 from brake_sim_ros.model.fidelity import levels_serving, plan
 from brake_sim_ros.model.run_setup import BrakeSetup
-from brake_sim_ros.scenarios.loader import Scenario
+from brake_sim_ros.scenarios.types import Scenario
 from brake_sim_ros.sensing.sensors import SensorBank
 from brake_sim_ros.solvers.fixed_step import FixedStepStepper
 from brake_sim_ros.solvers.methods import METHODS

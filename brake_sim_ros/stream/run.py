@@ -18,7 +18,7 @@ from brake_sim_ros.errors import FidelityError
 from brake_sim_ros.model.assembly import SIDES, ModelOptions
 from brake_sim_ros.model.fidelity import Plan, plan
 from brake_sim_ros.model.run_setup import BrakeSetup, SampleBlock
-from brake_sim_ros.scenarios.loader import Scenario
+from brake_sim_ros.scenarios.types import Scenario
 from brake_sim_ros.solvers.methods import METHODS, MethodOptions
 
 _IMPACT_COLUMNS = ("indentation_m", "pivot_fx_n", "pivot_fy_n", "actuation_force_n")

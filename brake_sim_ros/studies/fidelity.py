@@ -24,7 +24,7 @@ from brake_sim_ros.analysis.energy import ENERGY_COLUMNS, energy_balance
 from brake_sim_ros.model.fidelity import LEVELS, Needs
 from brake_sim_ros.model.layout import SIDES
 from brake_sim_ros.scenarios import load_scenario
-from brake_sim_ros.scenarios.loader import Scenario
+from brake_sim_ros.scenarios.types import Scenario
 from brake_sim_ros.stream.run import RunResult, run_scenario
 
 TARGET_CONTACT_X_REAL_TIME = 1000.0

@@ -24,7 +24,7 @@ from pathlib import Path
 
 from brake_sim_ros.campaigns import load_campaign
 from brake_sim_ros.campaigns.axes import condition_points
-from brake_sim_ros.campaigns.loader import Campaign
+from brake_sim_ros.campaigns.campaign import Campaign
 from brake_sim_ros.datasets.sweep import start_pool_server, sweep
 from brake_sim_ros.errors import BrakeSimError
 

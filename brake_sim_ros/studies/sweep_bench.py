@@ -26,7 +26,8 @@ from pathlib import Path
 import pyarrow.parquet as pq
 
 from brake_sim_ros.campaigns import load_campaign
-from brake_sim_ros.campaigns.loader import Campaign, parse_campaign
+from brake_sim_ros.campaigns.campaign import Campaign
+from brake_sim_ros.campaigns.loader import parse_campaign
 from brake_sim_ros.datasets.sweep import (
     DONE_DIR,
     MANIFEST_NAME,

@@ -43,7 +43,7 @@ from brake_sim_ros.analysis.impacts import EventMetrics, event_metrics
 from brake_sim_ros.errors import BrakeSimError
 from brake_sim_ros.model.run_setup import SampleBlock
 from brake_sim_ros.scenarios import load_scenario
-from brake_sim_ros.scenarios.loader import Scenario
+from brake_sim_ros.scenarios.types import Scenario
 from brake_sim_ros.solvers.fixed_step import FixedStepStepper
 from brake_sim_ros.solvers.reference import run_reference
 

@@ -26,7 +26,7 @@ from brake_sim_ros.ros.harness import (
     ros_environment,
 )
 from brake_sim_ros.scenarios import loader
-from brake_sim_ros.scenarios.loader import MAX_SCENARIO_BYTES
+from brake_sim_ros.scenarios.files import MAX_SCENARIO_BYTES
 
 # each refusal answered within 1-2 s of wall time, then a chunk in 1 s
 pytestmark = pytest.mark.realtime
