@@ -26,8 +26,8 @@ from pathlib import Path
 import numpy as np
 
 from brake_sim_ros.model.assembly import ModelOptions
-from brake_sim_ros.sensing.sensors import SensorBank, SensorSet
 from brake_sim_ros.scenarios import Scenario, load_scenario, parse_scenario
+from brake_sim_ros.sensing.sensors import SensorBank, SensorSet
 from brake_sim_ros.solvers.fixed_step import FixedStepStepper
 from tests.sample_blocks import faulted_set  # the sensor set tests/test_sensors.py runs
 
