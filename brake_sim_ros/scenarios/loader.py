@@ -62,7 +62,12 @@ from brake_sim_ros.model.defects import (
     ShoeDefect,
 )
 from brake_sim_ros.model.fidelity import ACCURACY_PRESETS, LEVEL_BY_NAME, OUTPUTS, Needs, plan
-from brake_sim_ros.model.parameters import PARAMETER_GROUPS, BrakeParameters
+from brake_sim_ros.model.parameters import (
+    BRAKES,
+    DEFAULT_BRAKE,
+    PARAMETER_GROUPS,
+    BrakeParameters,
+)
 from brake_sim_ros.model.run_setup import BrakeSetup
 from brake_sim_ros.model.thermal import LIMITS as THERMAL_LIMITS
 from brake_sim_ros.model.thermal import Thermal
@@ -747,7 +752,24 @@ def _cycle(ctx: _Ctx, data: Any) -> Cycle:
         raise ScenarioError(f"{ctx.source}: [cycle]: {exc}") from exc
 
 
-def _parameters(ctx: _Ctx, data: Any) -> BrakeParameters:
+def _brake(ctx: _Ctx, top: dict[str, Any]) -> BrakeParameters:
+    """The top-level key ``brake`` (default "study"): the brake whose default parameters
+    the scenario's ``[parameters]`` override (``BrakeParameters.of_brake``). The fidelity
+    levels below the full model represent the study brake only, so the service brake
+    refuses a ``[needs]`` table."""
+    name = ctx.string(top.get("brake", DEFAULT_BRAKE), "brake", BRAKES)
+    if name == "service" and "needs" in top:
+        raise ctx.fail(
+            "needs",
+            top["needs"],
+            'no [needs] with brake = "service" (the reduced fidelity levels model the study'
+            " brake's shoes, without return springs and rest stops: the service brake runs"
+            " the full model)",
+        )
+    return BrakeParameters.of_brake(name)
+
+
+def _parameters(ctx: _Ctx, data: Any, base: BrakeParameters) -> BrakeParameters:
     data = ctx.table(data, "parameters", set(PARAMETER_GROUPS))
     overrides: dict[str, dict[str, float]] = {}
     for group, values in data.items():
@@ -756,7 +778,7 @@ def _parameters(ctx: _Ctx, data: Any) -> BrakeParameters:
         values = ctx.table(values, f"parameters.{group}", names)
         overrides[group] = {k: ctx.number(v, f"parameters.{group}.{k}") for k, v in values.items()}
     try:
-        return BrakeParameters().with_overrides(overrides)
+        return base.with_overrides(overrides)
     except BrakeSimError as exc:
         raise ScenarioError(f"{ctx.source}: [parameters]: {exc}") from exc
 
@@ -987,6 +1009,7 @@ def _parse(data: dict[str, Any], text: str, source: str) -> Scenario:
         {
             "name",
             "description",
+            "brake",
             "duration_s",
             "sample_rate_hz",
             "seed",
@@ -1013,7 +1036,7 @@ def _parse(data: dict[str, Any], text: str, source: str) -> Scenario:
     for key, value in (("seed", seed), ("fleet_seed", fleet_seed)):
         if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value < 2**63:
             raise ctx.fail(key, value, "an integer from 0 to 2^63 - 1")
-    params = _parameters(ctx, top.get("parameters", {}))
+    params = _parameters(ctx, top.get("parameters", {}), _brake(ctx, top))
     defects = _defects(ctx, top.get("defects", {}))
     cycle = _cycle(ctx, top["cycle"]) if "cycle" in top else None
     if cycle is not None and "actuation" in top:
