@@ -5,6 +5,7 @@ written again here in numpy from the documented formulas), never read off a run.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -410,3 +411,36 @@ def test_energy_closes_through_the_springs_and_stops(three):
     assert abs(books.residual_j) < 1e-6 * books.turnover_j
     with pytest.raises(ValueError, match="packed="):
         energy_balance(block, scenario.setup.params)
+
+
+def test_the_step_limit_resolves_the_rest_stop_mode():
+    """A stop ten times stiffer (1e8 N/m) rings at ``sqrt(k_st / m) / 2 pi`` with the shoe's
+    inertia at the tip ``m = I/q^2`` (2.03 kHz), above every other mode: the step limit
+    sees it (the brake linearised at rest on its stops) and resolves it with 16 steps."""
+    from brake_sim_ros.model.run_setup import BrakeSetup
+    from brake_sim_ros.solvers.stability import STEPS_PER_PERIOD, step_limit
+
+    base = BrakeParameters.of_brake("service")
+    stiff = dataclasses.replace(
+        base, service=dataclasses.replace(base.service, stop_stiffness_n_per_m=1e8)
+    )
+    setup = BrakeSetup(params=stiff)
+    mass = _tip_mass(Tip(stiff, "left", ShoeDefect()))
+    expected_hz = math.sqrt(1e8 / mass) / (2 * math.pi)
+    limit = step_limit(setup, 1000.0)
+    assert limit.fastest_frequency_hz == pytest.approx(expected_hz, rel=0.02)
+    assert limit.max_step_s <= 1.0 / (STEPS_PER_PERIOD * expected_hz) * 1.02
+    assert step_limit(BrakeSetup(params=base), 1000.0).max_step_s > 2 * limit.max_step_s
+
+
+def test_a_parameter_change_keeps_the_scenarios_brake():
+    """The node and re-simulation rebuild the model from flat parameter values (which hold
+    no brake choice): the service brake's springs stay."""
+    from brake_sim_ros.stream.parameters import changed_setup, model_values
+
+    setup = parse_scenario(IDLE).setup
+    values = model_values(setup.params, setup.defects)
+    values["friction.coefficient"] = 0.3
+    changed = changed_setup(setup, values)
+    assert changed.params.service == setup.params.service is not None
+    assert changed.params.friction.coefficient == 0.3
