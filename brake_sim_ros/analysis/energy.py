@@ -14,12 +14,19 @@ the whole event; it can fail, since the quadratures and the motion are independe
 A run whose drive cycle changes the vehicle's load (model/cycle.py) stores the flywheel's
 kinetic energy with the inertia in force at each sample (``flywheel_inertia_kg_m2``) and
 is supplied the kinetic energy its load changes brought (``load_change_work_j``).
+The service brake (model/service.py) also stores energy in its return springs and rest
+stops (from the shoe angles and the packed parameters, which place them for the run's
+defects); its stops' dampers lose theirs into ``contact_loss_j``, and its actuator work
+is the wheel cylinders' alone.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numpy as np
+
+from brake_sim_ros.model import service
 from brake_sim_ros.model.assembly import SIDES
 from brake_sim_ros.model.parameters import BrakeParameters
 from brake_sim_ros.model.run_setup import SampleBlock
@@ -96,11 +103,23 @@ def stored_energy_j(block: SampleBlock, params: BrakeParameters, row: int) -> fl
     return float(kinetic + elastic)
 
 
-def energy_balance(block: SampleBlock, params: BrakeParameters) -> EnergyBalance:
-    """Energy books of ``block`` (one run, samples in order) for the model ``params``.
+def spring_energy_j(block: SampleBlock, packed: np.ndarray, rows: list[int]) -> list[float]:
+    """Elastic energy of the service brake's return springs and rest stops (J) at ``rows``
+    of ``block``, for the run's packed parameters ``packed`` (its stepper's
+    ``packed_parameters``)."""
+    left = np.array([block["left_angle_rad"][r] for r in rows], dtype=float)
+    right = np.array([block["right_angle_rad"][r] for r in rows], dtype=float)
+    return [float(e) for e in service.stored_energy_rows(packed, left, right)]
+
+
+def energy_balance(
+    block: SampleBlock, params: BrakeParameters, *, packed: np.ndarray | None = None
+) -> EnergyBalance:
+    """Energy books of ``block`` (one run, samples in order) for the model ``params``;
+    a service brake's also need the run's packed parameters ``packed`` (its springs).
 
     Raises:
-        ValueError: for an empty block.
+        ValueError: for an empty block, or a service brake without ``packed``.
         KeyError: ``block`` lacks one of :data:`ENERGY_COLUMNS` (check with
             ``block.has(*ENERGY_COLUMNS)``).
     """
@@ -108,6 +127,14 @@ def energy_balance(block: SampleBlock, params: BrakeParameters) -> EnergyBalance
         raise ValueError("energy_balance needs at least one sample")
     start = stored_energy_j(block, params, 0)
     end = stored_energy_j(block, params, -1)
+    if params.service is not None:
+        if packed is None:
+            raise ValueError(
+                "energy_balance of a service brake needs packed= (the run's packed"
+                " parameters: where its springs and stops sit for its defects)"
+            )
+        first, last = spring_energy_j(block, packed, [0, len(block) - 1])
+        start, end = start + first, end + last
     work = block["actuation_work_j"]
     supplied = float(work[-1] - work[0])
     spent = float(sum(block[name][-1] - block[name][0] for name in _LOSSES))

@@ -9,7 +9,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from brake_sim_ros.errors import ParameterError
-from brake_sim_ros.model import growth, kernel, thermal
+from brake_sim_ros.model import growth, kernel, service, thermal
 from brake_sim_ros.model import layout as L
 from brake_sim_ros.model.actuation import RESIDUAL_FORCE_N, RETURN_SPRING_PRELOAD_N
 from brake_sim_ros.model.catalogue import KIND_BY_NAME
@@ -213,7 +213,40 @@ def pack(
     _pack_drum(params, defects, p)
     _pack_growth(params, defects, p)
     thermal.pack_fade(p)
+    _pack_service(params, defects, p)
     return p
+
+
+def _pack_service(params: BrakeParameters, defects: Defects, p: np.ndarray) -> None:
+    """Pack the service brake's springs and stops (layout.P_SERVICE, P_SPRING_*;
+    :mod:`.service`); the study brake packs none. On the service brake a weakened return
+    spring acts through its spring (preload and rate times ``1 - weakening``), not through
+    the study brake's net-force shortcut (actuation.spring_release), so the shoe's force
+    is shaped only by a reshaped history (delay, lag, pulsation)."""
+    spec = params.service
+    if spec is None:
+        return
+    p[L.P_SERVICE] = 1.0
+    p[L.P_RESIDUAL_FORCE] = spec.residual_force_n
+    p[L.P_STOP_STIFFNESS] = spec.stop_stiffness_n_per_m
+    p[L.P_STOP_DAMPING] = spec.stop_damping_n_s_per_m
+    for i, side in enumerate(SIDES):
+        defect: ShoeDefect = getattr(defects, side)
+        b = L.P_SHOE_BASE + i * L.SHOE_STRIDE
+        p[b + L.S_SPRING_RELEASE] = 0.0
+        p[b + L.S_SPRING_MARGIN] = 0.0
+        p[b + L.S_ACTUATION_SHAPED] = 1.0 if defect.actuation_shaped else 0.0
+        phi = p[b + L.S_SIGN] * math.radians(defect.initial_angle_deg)
+        rest = service.tip_travel.py_func(p, b, math.cos(phi), math.sin(phi), 0.0)[0]
+        kept = 1.0 - defect.return_spring_weakening_pct / 100.0
+        r = L.P_SPRING_BASE + i * L.SPRING_STRIDE
+        p[r + L.R_PRELOAD] = kept * spec.return_spring_preload_n
+        p[r + L.R_RATE] = kept * spec.return_spring_rate_n_per_m
+        p[r + L.R_REST_TRAVEL] = rest
+        # the healthy shoe rests on its stop at its rest angle: the stop carries the
+        # preload less the residual force there
+        healthy_press = spec.return_spring_preload_n - spec.residual_force_n
+        p[r + L.R_STOP_TRAVEL] = rest + healthy_press / spec.stop_stiffness_n_per_m
 
 
 def _pack_growth(params: BrakeParameters, defects: Defects, p: np.ndarray) -> None:

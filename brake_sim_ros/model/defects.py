@@ -48,8 +48,10 @@ class ShoeDefect(_FieldSet):
     ``F (1 + a sin(2 pi f t))`` for a pulsation; a weak return spring past the stop's
     margin (``actuation.spring_release``: preload 60 N against a residual line force of
     20 N, so past 67 %) lets the residual pressure press the shoe on the drum without
-    actuation: drag; a worn lining's surface moves in by the wear, so the running
-    clearance grows (an adjuster that takes up wear is not modelled).
+    actuation: drag (on the service brake the spring itself is weakened, preload and rate
+    times ``1 - pct/100``: :mod:`brake_sim_ros.model.service`); a worn lining's surface
+    moves in by the wear, so the running clearance grows (an adjuster that takes up wear
+    is not modelled).
     """
 
     @classmethod

@@ -15,7 +15,16 @@ import math
 import numpy as np
 from numba import njit
 
-from brake_sim_ros.model import actuation, contact, cycle, growth, standstill, thermal, vehicle
+from brake_sim_ros.model import (
+    actuation,
+    contact,
+    cycle,
+    growth,
+    service,
+    standstill,
+    thermal,
+    vehicle,
+)
 from brake_sim_ros.model import layout as L
 from brake_sim_ros.model.compiled import JIT
 
@@ -112,8 +121,25 @@ def _evaluate_from(
     else:
         ffl = contact.sliding_friction(p, bl, fnl, vl)
         ffr = contact.sliding_friction(p, br, fnr, vr)
-    sl = contact.shoe_forces(p, bl, y[L.Y_LEFT_SPEED], fe_left, kl, fnl, ffl, vl)
-    sr = contact.shoe_forces(p, br, y[L.Y_RIGHT_SPEED], fe_right, kr, fnr, ffr, vr)
+    tip_left = fe_left  # the net force along the cylinder axis at each tip, N
+    tip_right = fe_right
+    serviced = p[L.P_SERVICE] > 0.0  # the service brake: springs, stops, residual force
+    stop_loss = 0.0
+    rate_left = 0.0
+    rate_right = 0.0
+    if serviced:
+        fe_left, tip_left, stop_loss, rate_left, fe_right, tip_right, rate_right = _service_tips(
+            p, y, kl, kr, fe_left, fe_right
+        )
+    sl = contact.shoe_forces(p, bl, y[L.Y_LEFT_SPEED], tip_left, kl, fnl, ffl, vl)
+    sr = contact.shoe_forces(p, br, y[L.Y_RIGHT_SPEED], tip_right, kr, fnr, ffr, vr)
+    contact_power = sl[contact.E_CONTACT_POWER] + sr[contact.E_CONTACT_POWER]
+    actuation_power = sl[contact.E_ACTUATION_POWER] + sr[contact.E_ACTUATION_POWER]
+    if serviced:
+        # the stops' dampers lose energy as contacts do; the actuator's work is the
+        # cylinders' alone (the springs and stops store theirs: model/service.py)
+        contact_power += stop_loss
+        actuation_power = fe_left * rate_left + fe_right * rate_right
     road = _derivatives(
         y,
         p,
@@ -124,8 +150,8 @@ def _evaluate_from(
         sr[contact.E_THETA_DDOT],
         sl[contact.E_FRICTION_POWER],
         sr[contact.E_FRICTION_POWER],
-        sl[contact.E_CONTACT_POWER] + sr[contact.E_CONTACT_POWER],
-        sl[contact.E_ACTUATION_POWER] + sr[contact.E_ACTUATION_POWER],
+        contact_power,
+        actuation_power,
         sl[contact.E_DRUM_TORQUE] + sr[contact.E_DRUM_TORQUE],
         dydt,
     )
@@ -187,6 +213,22 @@ def _evaluate_from(
     )
     o[L.C_FLYWHEEL_INERTIA] = p[L.P_FLYWHEEL_INERTIA]
     o[L.C_LOAD_CHANGE_WORK] = 0.0  # no load change; fixed_step_advance writes a cycle's
+
+
+@njit(**JIT)
+def _service_tips(p, y, kl, kr, fe_left, fe_right):
+    """The service brake's tip forces (:mod:`.service`) of both shoes, given their contact
+    kinematics ``kl``/``kr`` and commanded forces (N, after their gains): (left cylinder
+    force N, left net force at the tip N, both stops' damper loss W, left tip speed m/s,
+    then the right shoe's cylinder force, net force and tip speed). A call, not inlined:
+    the study brake's path stays as it was."""
+    bl = L.P_SHOE_BASE
+    br = L.P_SHOE_BASE + L.SHOE_STRIDE
+    ul, rate_l, _ = service.tip_travel(p, bl, kl[8], kl[9], y[L.Y_LEFT_SPEED])
+    ur, rate_r, _ = service.tip_travel(p, br, kr[8], kr[9], y[L.Y_RIGHT_SPEED])
+    cyl_l, net_l, loss_l = service.tip_forces(p, 0, fe_left, ul, rate_l)
+    cyl_r, net_r, loss_r = service.tip_forces(p, 1, fe_right, ur, rate_r)
+    return cyl_l, net_l, loss_l + loss_r, rate_l, cyl_r, net_r, rate_r
 
 
 @njit(inline="always", **JIT)
@@ -768,6 +810,8 @@ def fixed_step_advance(
     br = L.P_SHOE_BASE + L.SHOE_STRIDE
     can_hold = located and not growing and p[bl + L.S_ENABLED] > 0.0 and p[br + L.S_ENABLED] > 0.0
     round_drum = p[L.P_DRUM_WAVE_COUNT] <= 0.0 and p[L.P_FLAT_DEPTH] <= 0.0
+    # a service brake's shoes are never free: the spring holds each on its stop
+    serviced = p[L.P_SERVICE] > 0.0
     held = False
     kin_l = contact.kinematics(pw, bl, 0.0, 0.0, 0.0, 0.0)
     kin_r = kin_l
@@ -872,7 +916,7 @@ def fixed_step_advance(
                 # modes frozen for the step; k1 (auto) equals k1 with these modes
                 ml = L.CONTACT_ON if h_start[0] > 0.0 else L.CONTACT_OFF
                 mr = L.CONTACT_ON if h_start[1] > 0.0 else L.CONTACT_OFF
-            if round_drum and not growing:
+            if round_drum and not growing and not serviced:
                 free[0] = kin_l[0]
                 free[2] = kin_r[0]
             rk4_step(

@@ -195,7 +195,24 @@ P_COOLING = P_THERMAL + 8
 P_COOLING_PER_SPEED = P_THERMAL + 9
 P_AMBIENT = P_THERMAL + 10
 
-N_PARAMS = P_AMBIENT + 1
+# the service brake (model/service.py; parameters.ServiceBrakeParameters): P_SERVICE 1.0
+# when the brake has return springs and rest stops (else the study brake: none of the
+# slots below is read); the residual line force under which the wheel cylinder never
+# pushes, N; the rest stop's stiffness N/m and damping N s/m at the tip; then per shoe
+# (left, then right at + SPRING_STRIDE) its spring's preload N and rate N/m as weakened,
+# the tip travel at its rest angle (where the preload is), and where its stop engages, m
+P_SERVICE = P_AMBIENT + 1
+P_RESIDUAL_FORCE = P_SERVICE + 1
+P_STOP_STIFFNESS = P_SERVICE + 2
+P_STOP_DAMPING = P_SERVICE + 3
+P_SPRING_BASE = P_SERVICE + 4
+SPRING_STRIDE = 4
+R_PRELOAD = 0  # N at the tip, the healthy preload times (1 - weakening)
+R_RATE = 1  # N/m at the tip, the healthy rate times (1 - weakening)
+R_REST_TRAVEL = 2  # tip travel (m, outward, from the tip's assembled place) at rest
+R_STOP_TRAVEL = 3  # tip travel (m) below which the shoe presses on its stop
+
+N_PARAMS = P_SPRING_BASE + 2 * SPRING_STRIDE
 
 # --- state vector ---------------------------------------------------------------------
 Y_FLYWHEEL_ANGLE = 0

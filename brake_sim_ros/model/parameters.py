@@ -251,14 +251,129 @@ class FrictionParameters:
         )
 
 
+# The brakes a scenario chooses from (its top-level key ``brake``): the study's model as
+# published and calibrated, and the service brake, the same core with what a drum brake in a
+# car has (return springs holding each shoe on its rest stop, a running clearance as
+# workshops set it). "study" is the default: the published cases stay on it.
+BRAKES: tuple[str, ...] = ("study", "service")
+DEFAULT_BRAKE = "study"
+
+# Running clearance of the service brake, a shoe, at the lining: workshop specifications
+# give about 0.6 mm on the drum's diameter (0.3 mm a shoe), which a self-adjuster holds as
+# the lining wears (TESTBED figures for the service brake). The study brake's is 3.5 mm
+# (ShoeGeometry.running_clearance_m), as its calibration needs.
+SERVICE_RUNNING_CLEARANCE_M = 0.0003
+
+
+@dataclass(frozen=True)
+class ServiceBrakeParameters:
+    """What the service brake adds to the study's core: a return spring per shoe, acting
+    at the tip along the wheel-cylinder axis, that holds the shoe on a one-sided rest stop
+    against the line's residual pressure (model/service.py).
+
+    The spring pulls the tip inward with ``preload + rate x u`` (``u``: the tip's outward
+    travel along the cylinder axis from its rest place, m); the stop is a contact
+    (Kelvin-Voigt, pushing only while the shoe presses on it, never pulling) placed so that
+    the healthy shoe rests on it at its rest angle; the wheel cylinder never pushes less
+    than the residual pressure's force. A ``return_spring_weakening`` of ``w`` % scales
+    every force of the spring by ``1 - w/100``: past ``1 - residual/preload`` (67 %) the
+    spring no longer holds the shoe on its stop and the residual force drags it on the drum.
+    """
+
+    # Preload of the shoe's return spring at the tip, N. Estimate, kept from the study
+    # brake's weak-spring defect (model/actuation.py RETURN_SPRING_PRELOAD_N) so that a
+    # weakening means the same on both brakes: three times the residual force.
+    return_spring_preload_n: float = 60.0
+    # Rate of the return spring at the tip, N/m. Estimate: a coiled shoe return spring of
+    # about 10 N/mm; the tip travels about 0.6 mm to close the 0.3 mm clearance, so the
+    # spring's force grows by about 10 % of its preload before the lining touches.
+    return_spring_rate_n_per_m: float = 10_000.0
+    # Force of the residual line pressure on the wheel-cylinder piston, N: a check valve
+    # keeps 0.5-1 bar in a drum brake's lines to seal the cups; 0.7 bar on a 19.05 mm
+    # (3/4 in) bore is 20 N (model/actuation.py RESIDUAL_FORCE_N, the same figure). The
+    # cylinder's force never falls below it.
+    residual_force_n: float = 20.0
+    # Stiffness of the rest stop (the shoe's web on the adjuster and anchor), N/m at the
+    # tip. Estimate: steel on steel through the web, 1e7 N/m; the healthy preload's net
+    # 40 N compresses it by 4 um. Its mode with the shoe's inertia at the tip (0.61 kg) is
+    # at 644 Hz, level with the lining contact's (645 Hz: 3.7e7 N/m on 2.26 kg), so the
+    # stop does not lower the physics step (solvers/stability.py includes its mode).
+    stop_stiffness_n_per_m: float = 1.0e7
+    # Damping of the rest stop, N s/m: 20 % of critical on the shoe's inertia at the tip
+    # (estimate: a steel contact with the hold-down spring's friction), a coefficient of
+    # restitution near 0.5 when the returning shoe lands.
+    stop_damping_n_s_per_m: float = 1000.0
+
+    def __post_init__(self) -> None:
+        _finite(self)
+        _require(
+            0.0 < self.return_spring_preload_n <= 2000.0,
+            "return_spring_preload_n",
+            self.return_spring_preload_n,
+            "> 0 and at most 2000 N",
+        )
+        _require(
+            0.0 <= self.return_spring_rate_n_per_m <= 1e6,
+            "return_spring_rate_n_per_m",
+            self.return_spring_rate_n_per_m,
+            "0 to 1e6 N/m",
+        )
+        _require(
+            0.0 <= self.residual_force_n < self.return_spring_preload_n,
+            "residual_force_n",
+            self.residual_force_n,
+            f">= 0 and below the spring's preload ({self.return_spring_preload_n:g} N),"
+            " or a healthy spring could not hold the shoe on its stop",
+        )
+        _require(
+            1e5 <= self.stop_stiffness_n_per_m <= 1e9,
+            "stop_stiffness_n_per_m",
+            self.stop_stiffness_n_per_m,
+            "1e5 to 1e9 N/m",
+        )
+        _require(
+            self.stop_damping_n_s_per_m >= 0.0,
+            "stop_damping_n_s_per_m",
+            self.stop_damping_n_s_per_m,
+            ">= 0",
+        )
+
+    @property
+    def hold_weakening_pct(self) -> float:
+        """The weakening (%) past which the spring no longer holds the shoe on its stop
+        against the residual force: ``100 (1 - residual / preload)``."""
+        return 100.0 * (1.0 - self.residual_force_n / self.return_spring_preload_n)
+
+
 @dataclass(frozen=True)
 class BrakeParameters:
-    """Everything the physics needs apart from defects and actuation."""
+    """Everything the physics needs apart from defects and actuation.
+
+    ``service``: the service brake's return springs and rest stops
+    (:class:`ServiceBrakeParameters`); None for the study brake (the published model).
+    """
 
     driveline: DrivelineParameters = field(default_factory=DrivelineParameters)
     shoe: ShoeGeometry = field(default_factory=ShoeGeometry)
     contact: ContactParameters = field(default_factory=ContactParameters)
     friction: FrictionParameters = field(default_factory=FrictionParameters)
+    service: ServiceBrakeParameters | None = None
+
+    @classmethod
+    def of_brake(cls, brake: str) -> BrakeParameters:
+        """The default parameters of the brake named ``brake`` (:data:`BRAKES`): the study
+        brake's, or the service brake's (its springs and stops, and the service running
+        clearance)."""
+        _require(brake in BRAKES, "brake", brake, f"one of {list(BRAKES)}")
+        if brake == "study":
+            return cls()
+        shoe = replace(ShoeGeometry(), running_clearance_m=SERVICE_RUNNING_CLEARANCE_M)
+        return cls(shoe=shoe, service=ServiceBrakeParameters())
+
+    @property
+    def brake(self) -> str:
+        """The brake these parameters describe: "service" with springs, else "study"."""
+        return "study" if self.service is None else "service"
 
     @property
     def contact_stiffness_n_per_m(self) -> float:

@@ -43,6 +43,7 @@ from brake_sim_ros.scenarios.files import (
 from brake_sim_ros.scenarios.sensors import parse_sensors
 from brake_sim_ros.scenarios.tables import (
     parse_actuation,
+    parse_brake,
     parse_conditions,
     parse_cycle,
     parse_needs,
@@ -188,6 +189,7 @@ def _parse(data: dict[str, Any], text: str, source: str) -> Scenario:
         {
             "name",
             "description",
+            "brake",
             "duration_s",
             "sample_rate_hz",
             "seed",
@@ -213,7 +215,7 @@ def _parse(data: dict[str, Any], text: str, source: str) -> Scenario:
     seed, fleet_seed = top.get("seed", 0), top.get("fleet_seed", 0)
     for key, value in (("seed", seed), ("fleet_seed", fleet_seed)):
         ctx.seed(value, key)
-    params = parse_parameters(ctx, top.get("parameters", {}))
+    params = parse_parameters(ctx, top.get("parameters", {}), parse_brake(ctx, top))
     defects = parse_defects(ctx, top.get("defects", {}))
     cycle = parse_cycle(ctx, top["cycle"]) if "cycle" in top else None
     if cycle is not None and "actuation" in top:

@@ -21,7 +21,12 @@ from brake_sim_ros.model.assembly import SIDES, ModelOptions
 from brake_sim_ros.model.cycle import LIMITS as CYCLE_LIMITS
 from brake_sim_ros.model.cycle import Cycle, Segment
 from brake_sim_ros.model.fidelity import ACCURACY_PRESETS, LEVEL_BY_NAME, OUTPUTS, Needs
-from brake_sim_ros.model.parameters import PARAMETER_GROUPS, BrakeParameters
+from brake_sim_ros.model.parameters import (
+    BRAKES,
+    DEFAULT_BRAKE,
+    PARAMETER_GROUPS,
+    BrakeParameters,
+)
 from brake_sim_ros.model.thermal import LIMITS as THERMAL_LIMITS
 from brake_sim_ros.model.thermal import Thermal
 from brake_sim_ros.model.vehicle import LIMITS as VEHICLE_LIMITS
@@ -41,7 +46,24 @@ _RETIRED_STEP_KEY = (
 )
 
 
-def parse_parameters(ctx: Checker, data: Any) -> BrakeParameters:
+def parse_brake(ctx: Checker, top: dict[str, Any]) -> BrakeParameters:
+    """The top-level key ``brake`` (default "study"): the brake whose default parameters
+    the scenario's ``[parameters]`` override (``BrakeParameters.of_brake``). The fidelity
+    levels below the full model represent the study brake only, so the service brake
+    refuses a ``[needs]`` table."""
+    name = ctx.string(top.get("brake", DEFAULT_BRAKE), "brake", BRAKES)
+    if name == "service" and "needs" in top:
+        raise ctx.fail(
+            "needs",
+            top["needs"],
+            'no [needs] with brake = "service" (the reduced fidelity levels model the study'
+            " brake's shoes, without return springs and rest stops: the service brake runs"
+            " the full model)",
+        )
+    return BrakeParameters.of_brake(name)
+
+
+def parse_parameters(ctx: Checker, data: Any, base: BrakeParameters) -> BrakeParameters:
     """``[parameters.<group>]``: overrides of the default parameters, group by group."""
     data = ctx.table(data, "parameters", set(PARAMETER_GROUPS))
     overrides: dict[str, dict[str, float]] = {}
@@ -51,7 +73,7 @@ def parse_parameters(ctx: Checker, data: Any) -> BrakeParameters:
         values = ctx.table(values, f"parameters.{group}", names)
         overrides[group] = {k: ctx.number(v, f"parameters.{group}.{k}") for k, v in values.items()}
     try:
-        return BrakeParameters().with_overrides(overrides)
+        return base.with_overrides(overrides)
     except BrakeSimError as exc:
         raise ScenarioError(f"{ctx.source}: [parameters]: {exc}") from exc
 

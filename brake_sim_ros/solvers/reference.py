@@ -93,6 +93,11 @@ def run_reference(
             " with [vehicle] or [cycle] is allowed with a fixed-step method (rk4-located,"
             " rk4, semi-implicit-euler)"
         )
+    if setup.params.service is not None:
+        raise ParameterError(
+            'the reference solver does not locate the rest stops\' contacts: brake = "service"'
+            " is allowed with a fixed-step method (rk4-located, rk4, semi-implicit-euler)"
+        )
     if setup.thermal is not None:
         raise ParameterError(
             "the reference solver has no thermal state: a scenario with [thermal] is allowed"

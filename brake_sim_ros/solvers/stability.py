@@ -192,6 +192,13 @@ def step_limit(
     y[L.Y_DRUM_SPEED] = y[L.Y_FLYWHEEL_SPEED] = drum_speed
     on = (L.CONTACT_ON, L.CONTACT_ON)
     jacs = [_jacobian(y, p, fe, 0, on), _jacobian(y, p, fe, 1, on)]
+    if p[L.P_SERVICE] > 0.0:  # a service brake's shoes at rest on their stops (model/service.py)
+        rest = np.zeros(L.N_STATE)
+        rest[L.Y_DRUM_SPEED] = rest[L.Y_FLYWHEEL_SPEED] = drum_speed
+        for i, side in enumerate(L.SIDES):
+            rest[L.Y_LEFT_ANGLE + i] = math.radians(getattr(setup.defects, side).initial_angle_deg)
+        off = (L.CONTACT_OFF, L.CONTACT_OFF)
+        jacs.append(_jacobian(rest, p, (0.0, 0.0), 0, off))
     eigs = np.concatenate([np.linalg.eigvals(j) for j in jacs])
     if scheme == "semi-implicit-euler":
         stable = symplectic_euler_stable_step(jacs)

@@ -333,4 +333,6 @@ def changed_setup(setup: BrakeSetup, values: dict[str, Any]) -> BrakeSetup:
         if at[label_column(KIND_BY_NAME[kind], loc)] != 0.0
     )
     defects = dataclasses.replace(defects, growth=kept)
+    # the brake itself (a service brake's springs and stops) is the scenario's choice
+    params = dataclasses.replace(params, service=setup.params.service)
     return dataclasses.replace(setup, params=params, defects=defects)
