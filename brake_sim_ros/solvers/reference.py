@@ -25,6 +25,7 @@ from brake_sim_ros.model.assembly import indentation_at, initial_state, pack
 from brake_sim_ros.model.layout import SIDES
 from brake_sim_ros.model.run_setup import BrakeSetup, SampleBlock
 from brake_sim_ros.model.thermal import pack_thermal
+from brake_sim_ros.solvers.warmup import ensure_compiled
 
 SHOE_BASES = (L.P_SHOE_BASE, L.P_SHOE_BASE + L.SHOE_STRIDE)
 # A shoe in contact is declared separated only once the lining is this far off the drum.
@@ -118,6 +119,7 @@ def run_reference(
             " allowed with a fixed-step"
             " method (rk4-located, rk4, semi-implicit-euler)"
         )
+    ensure_compiled(parts=("reference",))  # compiled at first use, saying how far
     p = pack(setup.params, setup.defects, setup.options)
     pack_thermal(p, setup)  # the temperature the run is held at, recorded
     y = initial_state(setup.params, setup.defects)

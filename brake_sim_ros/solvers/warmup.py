@@ -1,14 +1,20 @@
-"""Compile every physics kernel once, ahead of use, and say so while it happens.
+"""Compile the physics kernels ahead of use, and say so while it happens.
 
 numba compiles a kernel on its first call and keeps the machine code in the on-disk cache
-(see :mod:`brake_sim_ros.model`). A first call otherwise sits silent for tens of seconds;
-:func:`ensure_compiled` runs a tiny event through every path (each fixed-step scheme, the
-sample evaluation of the reference solver, the contact-regime level, the step-limit
-analysis and the default sensors' paths) when the cache has no record of it, printing one
-line before, one every :data:`TICK_S` seconds while it compiles (the time so far, the
-functions in the cache so far, each part compiling or done) and one after: a fixed
-estimate of the time would not hold on a loaded machine. The set-up command runs it, so
-the first ``brake-sim`` command starts at once.
+(see :mod:`brake_sim_ros.model`). A first call otherwise sits silent for tens of seconds.
+The kernels come in parts (:data:`PARTS`), each compiled by running a tiny event through
+it when the cache has no record of it (a marker file per part), printing one line before,
+one every :data:`TICK_S` seconds while it compiles (the time so far, the parts done of
+those asked, the functions in the cache so far, each part's state) and one after: a fixed
+estimate of the time would not hold on a loaded machine.
+
+The set-up command compiles the parts of the default paths (:data:`DEFAULT_PARTS`: the
+fixed-step kernel and the default sensors, which ``brake-sim live`` and every preset run),
+so that the first ``brake-sim`` command starts at once. The others (the reference solver,
+the contact-regime levels) compile at their first use, with the same lines
+(:func:`ensure_compiled` at the top of their drivers). Processes that need a part at the
+same time (test or sweep workers) take turns on a lock file: one compiles, the others then
+load it from the cache.
 
 numba's own cache (``cache=True``) keys each compiled function by its source file's path,
 modification time and size, its signature and the target machine (CPU name and
@@ -16,40 +22,37 @@ features), so a cache is never loaded on a platform it was not built for;
 :mod:`brake_sim_ros.model` adds a directory per hash of the model's sources (numba checks
 only the file of each cached function, not the files of the functions it inlines).
 
-Run ``python -m brake_sim_ros.solvers.warmup`` to compile (or check) explicitly.
+Run ``python -m brake_sim_ros.solvers.warmup`` to compile (or check) the default parts,
+``... warmup --all`` for every part.
 """
 
 from __future__ import annotations
 
+import fcntl
 import os
 import subprocess
 import sys
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 import numba
 
 _MARKER = "brake_sim_compiled"
 TICK_S = 10.0  # s between two progress lines while the kernels compile
-# what the child process runs (by the module's name: run as __main__, this one has another)
-_CHILD = "from brake_sim_ros.solvers.warmup import _compile_the_rest; _compile_the_rest()"
-
-
-def _marker() -> Path | None:
-    cache = numba.config.CACHE_DIR
-    return Path(cache) / _MARKER if cache else None
-
-
-def is_compiled() -> bool:
-    """Whether the kernels of this source version are in the cache already."""
-    marker = _marker()
-    return marker is not None and marker.exists()
+# the child process's command (by the module's name: run as __main__, this one has another);
+# its parts are its arguments
+_CHILD = (
+    "import sys; from brake_sim_ros.solvers.warmup import compile_parts;"
+    " compile_parts(sys.argv[1:])"
+)
 
 
 def _compile_stepping() -> None:
-    """The fixed-step kernel, every scheme: the longest compile by far."""
+    """The fixed-step kernel (every scheme is one compiled function) and the step-limit
+    analysis: the longest compile by far."""
     from brake_sim_ros.model.run_setup import BrakeSetup
     from brake_sim_ros.solvers.fixed_step import FIXED_STEP_SCHEMES, FixedStepStepper
 
@@ -58,22 +61,73 @@ def _compile_stepping() -> None:
         FixedStepStepper(setup, 4e-5, scheme=scheme).advance(8, record_every=2)
 
 
-def _compile_the_rest() -> None:
-    """The reference solver's sample evaluation, the contact-regime level and the default
-    sensor set's paths (on a block of zeros: no stepping, so no kernel of the other part)."""
+def _compile_sensors() -> None:
+    """The default sensor set's paths, on a block of zeros (no stepping)."""
     import numpy as np
 
     from brake_sim_ros.model.layout import COLUMNS
-    from brake_sim_ros.model.run_setup import BrakeSetup, SampleBlock
+    from brake_sim_ros.model.run_setup import SampleBlock
     from brake_sim_ros.sensing.sensors import SensorBank, default_sensor_set
-    from brake_sim_ros.solvers.contact_regime import run_contact_regime
-    from brake_sim_ros.solvers.reference import run_reference
 
-    setup = BrakeSetup()
-    run_reference(setup, 0.01, rtol=1e-6)
-    run_contact_regime(setup, 0.01)
     block = SampleBlock(np.zeros((8, len(COLUMNS))), 0, 1.0 / 25_600.0)
     SensorBank(default_sensor_set(), 25_600.0, 0).advance(block)
+
+
+def _compile_reference() -> None:
+    """The reference solver's right-hand side and sample evaluation."""
+    from brake_sim_ros.model.run_setup import BrakeSetup
+    from brake_sim_ros.solvers.reference import run_reference
+
+    run_reference(BrakeSetup(), 0.01, rtol=1e-6)
+
+
+def _compile_contact_regime() -> None:
+    """The contact-regime levels' quasi-static shoes."""
+    from brake_sim_ros.model.run_setup import BrakeSetup
+    from brake_sim_ros.solvers.contact_regime import run_contact_regime
+
+    run_contact_regime(BrakeSetup(), 0.01)
+
+
+# key -> (what the progress lines call it, what compiles it); the first is the longest
+PARTS: dict[str, tuple[str, Callable[[], None]]] = {
+    "stepping": ("fixed-step kernel", _compile_stepping),
+    "sensors": ("default sensors", _compile_sensors),
+    "reference": ("reference solver", _compile_reference),
+    "contact-regime": ("contact-regime levels", _compile_contact_regime),
+}
+DEFAULT_PARTS = ("stepping", "sensors")  # what the default paths run: compiled at set-up
+
+_compiling: set[str] = set()  # parts this process compiles now (their drivers run inside)
+# (cache directory, part) this process has seen compiled: no second look at the disk
+_known: set[tuple[str | None, str]] = set()
+
+
+def _marker(part: str) -> Path | None:
+    cache = numba.config.CACHE_DIR
+    return Path(cache) / f"{_MARKER}.{part}" if cache else None
+
+
+def is_compiled(parts: Iterable[str] = DEFAULT_PARTS) -> bool:
+    """Whether the kernels of ``parts`` (of this source version) are in the cache already."""
+    for part in parts:
+        marker = _marker(part)
+        if (numba.config.CACHE_DIR, part) in _known:
+            continue
+        if marker is None or not marker.exists():
+            return False
+    return True
+
+
+def compile_parts(parts: Iterable[str]) -> None:
+    """Run the tiny event of each of ``parts`` here (their drivers' own checks stand aside)."""
+    parts = list(parts)
+    _compiling.update(parts)
+    try:
+        for part in parts:
+            PARTS[part][1]()
+    finally:
+        _compiling.difference_update(parts)
 
 
 def _cached_functions() -> int:
@@ -84,7 +138,7 @@ def _cached_functions() -> int:
 
 class _Progress:
     """A line to ``say`` every :data:`TICK_S` s from a daemon thread until stopped: the
-    time so far, the functions cached so far and each part's state."""
+    time so far, the parts done, the functions cached so far and each part's state."""
 
     def __init__(self, say: Callable[[str], None] | None, parts: dict[str, str]) -> None:
         self.say, self.parts = say, parts
@@ -97,9 +151,11 @@ class _Progress:
     def _tick(self) -> None:
         while not self.stopped.wait(TICK_S):
             states = ", ".join(f"{part}: {state}" for part, state in self.parts.items())
+            done = sum(state == "done" for state in self.parts.values())
             self.say(  # type: ignore[misc]
                 f"brake-sim: compiling the physics kernels: {time.perf_counter() - self.start:.0f}"
-                f" s so far, {_cached_functions()} functions in the cache; {states}"
+                f" s so far, {done} of {len(self.parts)} parts done, {_cached_functions()}"
+                f" functions in the cache; {states}"
             )
 
     def stop(self) -> None:
@@ -108,57 +164,104 @@ class _Progress:
             self.thread.join()
 
 
-def compile_kernels(say: Callable[[str], None] | None = None) -> float:
-    """Run every kernel path once on a tiny event, telling ``say`` how far it is every
+def compile_kernels(
+    say: Callable[[str], None] | None = None, parts: Iterable[str] = DEFAULT_PARTS
+) -> float:
+    """Run each of ``parts`` once on a tiny event, telling ``say`` how far it is every
     :data:`TICK_S` s (None: silent); returns the wall time taken, s.
 
-    On a machine with more than one core the two parts compile at once, the second in a
-    child process (numba compiles one function on one core; the cache takes both). Should
-    the child fail, its part compiles here after all, where an error shows in full."""
+    On a machine with more than one core and more than one part, the first part compiles
+    here and the others at once in a child process (numba compiles one function on one
+    core; the cache takes both). Should the child fail, its parts compile here after all,
+    where an error shows in full."""
     start = time.perf_counter()
+    keys = list(parts)
+    first, others = keys[:1], keys[1:]
+    states = {PARTS[key][0]: "waiting" for key in keys}
     child = None
-    parts = {"fixed-step kernel": "compiling", "reference, regimes and sensors": "waiting"}
-    if (os.cpu_count() or 1) > 1:
+    if others and (os.cpu_count() or 1) > 1:
         child = subprocess.Popen(
-            [sys.executable, "-c", _CHILD],
+            [sys.executable, "-c", _CHILD, *others],
             stdin=subprocess.DEVNULL,
             stdout=subprocess.DEVNULL,
             stderr=subprocess.DEVNULL,
         )
-        parts["reference, regimes and sensors"] = "compiling in another process"
-    progress = _Progress(say, parts)
+        for key in others:
+            states[PARTS[key][0]] = "compiling in another process"
+    progress = _Progress(say, states)
     try:
-        _compile_stepping()
-        parts["fixed-step kernel"] = "done"
+        for key in first:
+            states[PARTS[key][0]] = "compiling"
+            compile_parts([key])
+            states[PARTS[key][0]] = "done"
         if child is not None:
             child.wait()
         if child is None or child.returncode != 0:
-            parts["reference, regimes and sensors"] = "compiling"
-            _compile_the_rest()
-        parts["reference, regimes and sensors"] = "done"
+            for key in others:
+                states[PARTS[key][0]] = "compiling"
+                compile_parts([key])
+                states[PARTS[key][0]] = "done"
+        for key in others:
+            states[PARTS[key][0]] = "done"
     finally:
         progress.stop()
         if child is not None and child.poll() is None:
+            child.kill()
             child.wait()
     return time.perf_counter() - start
 
 
-def ensure_compiled(say: Callable[[str], None] | None = None) -> None:
-    """Compile the kernels unless this source version's are cached, telling ``say``."""
-    if is_compiled():
+@contextmanager
+def _turn() -> Iterator[None]:
+    """Hold the kernel cache's lock file: one process compiles at a time, the others wait
+    and then find the parts in the cache (no lock without a cache directory)."""
+    cache = numba.config.CACHE_DIR
+    if not cache:
+        yield
+        return
+    Path(cache).mkdir(parents=True, exist_ok=True)
+    with open(Path(cache) / f"{_MARKER}.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(lock, fcntl.LOCK_UN)
+
+
+def ensure_compiled(
+    say: Callable[[str], None] | None = None, parts: Iterable[str] = DEFAULT_PARTS
+) -> None:
+    """Compile the kernels of ``parts`` unless this source version's are cached, telling
+    ``say`` (default: stderr) how far it is; a part this process compiles now is taken as
+    done (its driver runs inside its compile)."""
+    wanted = [part for part in parts if part not in _compiling]
+    if is_compiled(wanted):
         return
     say = say or (lambda line: print(line, file=sys.stderr, flush=True))
+    with _turn():
+        missing = [part for part in wanted if not is_compiled([part])]
+        if missing:
+            _compile_announced(say, missing)
+    _known.update((numba.config.CACHE_DIR, part) for part in wanted)
+
+
+def _compile_announced(say: Callable[[str], None], parts: list[str]) -> None:
+    """Compile ``parts`` with a line before, the progress lines and a line after; then
+    mark each done."""
+    names = ", ".join(PARTS[part][0] for part in parts)
     say(
-        "brake-sim: compiling the physics kernels (once per installed version: minutes, a"
-        f" line every {TICK_S:.0f} s says how far)"
+        f"brake-sim: compiling the physics kernels ({names}; once per installed version:"
+        f" a line every {TICK_S:.0f} s says how far)"
     )
-    took = compile_kernels(say)
-    marker = _marker()
-    if marker is not None:
-        marker.parent.mkdir(parents=True, exist_ok=True)
-        marker.write_text(f"compiled in {took:.1f} s\n", encoding="utf-8")
-    say(f"brake-sim: kernels compiled in {took:.1f} s")
+    took = compile_kernels(say, parts)
+    for part in parts:
+        marker = _marker(part)
+        if marker is not None:
+            marker.parent.mkdir(parents=True, exist_ok=True)
+            marker.write_text(f"compiled in {took:.1f} s\n", encoding="utf-8")
+    say(f"brake-sim: kernels compiled in {took:.1f} s ({names})")
 
 
 if __name__ == "__main__":
-    ensure_compiled(lambda line: print(line, flush=True))
+    every = "--all" in sys.argv[1:]
+    ensure_compiled(lambda line: print(line, flush=True), tuple(PARTS) if every else DEFAULT_PARTS)
