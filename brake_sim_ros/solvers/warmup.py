@@ -40,6 +40,8 @@ from pathlib import Path
 
 import numba
 
+import brake_sim_ros.model  # noqa: F401 - its import points numba's cache (CACHE_DIR)
+
 _MARKER = "brake_sim_compiled"
 TICK_S = 10.0  # s between two progress lines while the kernels compile
 # the child process's command (by the module's name: run as __main__, this one has another);
@@ -263,5 +265,10 @@ def _compile_announced(say: Callable[[str], None], parts: list[str]) -> None:
 
 
 if __name__ == "__main__":
+    # the module by its name, whose state the drivers' own calls share (not this __main__)
+    from brake_sim_ros.solvers import warmup
+
     every = "--all" in sys.argv[1:]
-    ensure_compiled(lambda line: print(line, flush=True), tuple(PARTS) if every else DEFAULT_PARTS)
+    warmup.ensure_compiled(
+        lambda line: print(line, flush=True), tuple(warmup.PARTS) if every else DEFAULT_PARTS
+    )
