@@ -216,13 +216,16 @@ def compile_kernels(
 @contextmanager
 def _turn() -> Iterator[None]:
     """Hold the kernel cache's lock file: one process compiles at a time, the others wait
-    and then find the parts in the cache (no lock without a cache directory)."""
+    and then find the parts in the cache (no lock without a cache directory one may write
+    to: numba then compiles without caching, as it does without this module)."""
     cache = numba.config.CACHE_DIR
-    if not cache:
+    try:
+        Path(cache).mkdir(parents=True, exist_ok=True)
+        lock = open(Path(cache) / f"{_MARKER}.lock", "w")  # noqa: SIM115 - closed below
+    except (OSError, TypeError):
         yield
         return
-    Path(cache).mkdir(parents=True, exist_ok=True)
-    with open(Path(cache) / f"{_MARKER}.lock", "w") as lock:
+    with lock:
         fcntl.flock(lock, fcntl.LOCK_EX)
         try:
             yield
@@ -259,8 +262,11 @@ def _compile_announced(say: Callable[[str], None], parts: list[str]) -> None:
     for part in parts:
         marker = _marker(part)
         if marker is not None:
-            marker.parent.mkdir(parents=True, exist_ok=True)
-            marker.write_text(f"compiled in {took:.1f} s\n", encoding="utf-8")
+            try:
+                marker.parent.mkdir(parents=True, exist_ok=True)
+                marker.write_text(f"compiled in {took:.1f} s\n", encoding="utf-8")
+            except OSError:  # a cache one may not write to: compiled again next time
+                pass
     say(f"brake-sim: kernels compiled in {took:.1f} s ({names})")
 
 
