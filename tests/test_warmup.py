@@ -176,3 +176,14 @@ def test_a_cache_one_cannot_write_to_still_compiles(tmp_path, monkeypatch):
     said: list[str] = []
     warmup.ensure_compiled(said.append, ["reference"])  # no lock, no marker: no error
     assert done == ["reference"] and said[-1].startswith("brake-sim: kernels compiled in")
+
+
+def test_the_lines_say_the_child_s_parts_are_done_as_soon_as_it_ended(cache, monkeypatch):
+    monkeypatch.setattr(warmup, "TICK_S", 0.05)
+    monkeypatch.setattr(warmup.os, "cpu_count", lambda: 2)
+    monkeypatch.setattr(warmup, "_CHILD", "pass")  # a child that ends at once, well
+    _fake_parts(monkeypatch, [], seconds=2.0)  # the first part, here, takes long
+    said: list[str] = []
+    warmup.compile_kernels(said.append)
+    assert "fixed-step kernel: compiling, default sensors: done" in said[-1]
+    assert "1 of 2 parts done" in said[-1]

@@ -142,8 +142,13 @@ class _Progress:
     """A line to ``say`` every :data:`TICK_S` s from a daemon thread until stopped: the
     time so far, the parts done, the functions cached so far and each part's state."""
 
-    def __init__(self, say: Callable[[str], None] | None, parts: dict[str, str]) -> None:
-        self.say, self.parts = say, parts
+    def __init__(
+        self,
+        say: Callable[[str], None] | None,
+        parts: dict[str, str],
+        refresh: Callable[[], None] = lambda: None,
+    ) -> None:
+        self.say, self.parts, self.refresh = say, parts, refresh
         self.start = time.perf_counter()
         self.stopped = threading.Event()
         self.thread = threading.Thread(target=self._tick, daemon=True)
@@ -152,6 +157,7 @@ class _Progress:
 
     def _tick(self) -> None:
         while not self.stopped.wait(TICK_S):
+            self.refresh()
             states = ", ".join(f"{part}: {state}" for part, state in self.parts.items())
             done = sum(state == "done" for state in self.parts.values())
             self.say(  # type: ignore[misc]
@@ -190,7 +196,12 @@ def compile_kernels(
         )
         for key in others:
             states[PARTS[key][0]] = "compiling in another process"
-    progress = _Progress(say, states)
+
+    def refresh() -> None:  # the child's parts are done as soon as it ended well
+        if child is not None and child.poll() == 0:
+            states.update({PARTS[key][0]: "done" for key in others})
+
+    progress = _Progress(say, states, refresh)
     try:
         for key in first:
             states[PARTS[key][0]] = "compiling"
