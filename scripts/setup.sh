@@ -70,7 +70,7 @@ py_ok() {  # $1: interpreter; true if it runs and is Python >= 3.11
 # brake-sim command does not sit silent while numba compiles; then end successfully.
 finish() {
   [[ -n "$KERNEL_PID$KERNEL_ST" ]] || start_kernels
-  while ! kernels_ended; do sleep 1; done
+  kernels_ended wait || true
   log "done"
   exit 0
 }
@@ -157,12 +157,13 @@ stop_jobs() {
   done
 }
 
-# True once the kernel job has ended well (false while it runs or if none started); if it
-# failed: the running step stopped, one line, exit 1.
+# True once the kernel job has ended well (false while it runs or if none started; with
+# the argument "wait": once it has ended); if it failed: the running step stopped, one
+# line, exit 1.
 kernels_ended() {
   [[ -n "$KERNEL_ST" ]] && return 0
   [[ -n "$KERNEL_PID" ]] || return 1
-  kill -0 "$KERNEL_PID" 2>/dev/null && return 1
+  [[ "${1:-}" == wait ]] || ! kill -0 "$KERNEL_PID" 2>/dev/null || return 1
   set +e; wait "$KERNEL_PID"; KERNEL_ST=$?; set -e
   KERNEL_PID=""
   (( KERNEL_ST == 0 )) && return 0

@@ -133,7 +133,7 @@ def test_the_kernels_compile_beside_a_step_and_the_set_up_waits_for_them(tmp_pat
         f"{_DIE}\nVENV={tmp_path}/venv\nstart_kernels\n"
         f"with_progress 'msg_defs: build' {tmp_path}/b.log sleep 1\n"
         f"[[ ! -e {tmp_path}/k ]] && echo 'build done first'\n"
-        'while ! kernels_ended; do sleep 1; done; echo "kernels $KERNEL_ST"',
+        'kernels_ended wait; echo "kernels $KERNEL_ST"',
     )
     assert result.returncode == 0, result.stderr
     lines = [line for line in result.stdout.splitlines() if " s so far" not in line]
