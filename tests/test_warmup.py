@@ -15,7 +15,8 @@ import numba
 import pytest
 
 from brake_sim_ros.model.run_setup import BrakeSetup
-from brake_sim_ros.solvers import warmup
+from brake_sim_ros.solvers import kernel_parts as warmup  # the parts' machinery
+from brake_sim_ros.solvers import warmup as _registers_the_default_parts  # noqa: F401
 from brake_sim_ros.solvers.contact_regime import run_contact_regime
 from brake_sim_ros.solvers.reference import run_reference
 

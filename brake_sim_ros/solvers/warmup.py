@@ -22,33 +22,28 @@ features), so a cache is never loaded on a platform it was not built for;
 :mod:`brake_sim_ros.model` adds a directory per hash of the model's sources (numba checks
 only the file of each cached function, not the files of the functions it inlines).
 
+The machinery (markers, lock, progress lines) is :mod:`brake_sim_ros.solvers.kernel_parts`;
+this module registers the default parts and imports the drivers that register theirs.
 Run ``python -m brake_sim_ros.solvers.warmup`` to compile (or check) the default parts,
 ``... warmup --all`` for every part.
 """
 
 from __future__ import annotations
 
-import fcntl
-import os
-import subprocess
 import sys
-import threading
-import time
-from collections.abc import Callable, Iterable, Iterator
-from contextlib import contextmanager
-from pathlib import Path
 
-import numba
-
-import brake_sim_ros.model  # noqa: F401 - its import points numba's cache (CACHE_DIR)
-
-_MARKER = "brake_sim_compiled"
-TICK_S = 10.0  # s between two progress lines while the kernels compile
-# the child process's command (by the module's name: run as __main__, this one has another);
-# its parts are its arguments
-_CHILD = (
-    "import sys; from brake_sim_ros.solvers.warmup import compile_parts;"
-    " compile_parts(sys.argv[1:])"
+# the drivers whose parts compile at first use register them on import
+import brake_sim_ros.solvers.contact_regime
+import brake_sim_ros.solvers.reference  # noqa: F401
+from brake_sim_ros.solvers.kernel_parts import (  # noqa: F401 - this module's interface
+    DEFAULT_PARTS,
+    PARTS,
+    TICK_S,
+    compile_kernels,
+    compile_parts,
+    ensure_compiled,
+    is_compiled,
+    register,
 )
 
 
@@ -75,217 +70,13 @@ def _compile_sensors() -> None:
     SensorBank(default_sensor_set(), 25_600.0, 0).advance(block)
 
 
-def _compile_reference() -> None:
-    """The reference solver's right-hand side and sample evaluation."""
-    from brake_sim_ros.model.run_setup import BrakeSetup
-    from brake_sim_ros.solvers.reference import run_reference
-
-    run_reference(BrakeSetup(), 0.01, rtol=1e-6)
-
-
-def _compile_contact_regime() -> None:
-    """The contact-regime levels' quasi-static shoes."""
-    from brake_sim_ros.model.run_setup import BrakeSetup
-    from brake_sim_ros.solvers.contact_regime import run_contact_regime
-
-    run_contact_regime(BrakeSetup(), 0.01)
-
-
-# key -> (what the progress lines call it, what compiles it); the first is the longest
-PARTS: dict[str, tuple[str, Callable[[], None]]] = {
-    "stepping": ("fixed-step kernel", _compile_stepping),
-    "sensors": ("default sensors", _compile_sensors),
-    "reference": ("reference solver", _compile_reference),
-    "contact-regime": ("contact-regime levels", _compile_contact_regime),
-}
-DEFAULT_PARTS = ("stepping", "sensors")  # what the default paths run: compiled at set-up
-
-_compiling: set[str] = set()  # parts this process compiles now (their drivers run inside)
-# (cache directory, part) this process has seen compiled: no second look at the disk
-_known: set[tuple[str | None, str]] = set()
-
-
-def _marker(part: str) -> Path | None:
-    cache = numba.config.CACHE_DIR
-    return Path(cache) / f"{_MARKER}.{part}" if cache else None
-
-
-def is_compiled(parts: Iterable[str] = DEFAULT_PARTS) -> bool:
-    """Whether the kernels of ``parts`` (of this source version) are in the cache already."""
-    for part in parts:
-        marker = _marker(part)
-        if (numba.config.CACHE_DIR, part) in _known:
-            continue
-        if marker is None or not marker.exists():
-            return False
-    return True
-
-
-def compile_parts(parts: Iterable[str]) -> None:
-    """Run the tiny event of each of ``parts`` here (their drivers' own checks stand aside)."""
-    parts = list(parts)
-    _compiling.update(parts)
-    try:
-        for part in parts:
-            PARTS[part][1]()
-    finally:
-        _compiling.difference_update(parts)
-
-
-def _cached_functions() -> int:
-    """How many compiled functions the kernel cache holds (numba's index files)."""
-    cache = numba.config.CACHE_DIR
-    return sum(1 for _ in Path(cache).rglob("*.nbi")) if cache else 0
-
-
-class _Progress:
-    """A line to ``say`` every :data:`TICK_S` s from a daemon thread until stopped: the
-    time so far, the parts done, the functions cached so far and each part's state."""
-
-    def __init__(
-        self,
-        say: Callable[[str], None] | None,
-        parts: dict[str, str],
-        refresh: Callable[[], None] = lambda: None,
-    ) -> None:
-        self.say, self.parts, self.refresh = say, parts, refresh
-        self.start = time.perf_counter()
-        self.stopped = threading.Event()
-        self.thread = threading.Thread(target=self._tick, daemon=True)
-        if say is not None:
-            self.thread.start()
-
-    def _tick(self) -> None:
-        while not self.stopped.wait(TICK_S):
-            self.refresh()
-            states = ", ".join(f"{part}: {state}" for part, state in self.parts.items())
-            done = sum(state == "done" for state in self.parts.values())
-            self.say(  # type: ignore[misc]
-                f"brake-sim: compiling the physics kernels: {time.perf_counter() - self.start:.0f}"
-                f" s so far, {done} of {len(self.parts)} parts done, {_cached_functions()}"
-                f" functions in the cache; {states}"
-            )
-
-    def stop(self) -> None:
-        self.stopped.set()
-        if self.thread.is_alive():
-            self.thread.join()
-
-
-def compile_kernels(
-    say: Callable[[str], None] | None = None, parts: Iterable[str] = DEFAULT_PARTS
-) -> float:
-    """Run each of ``parts`` once on a tiny event, telling ``say`` how far it is every
-    :data:`TICK_S` s (None: silent); returns the wall time taken, s.
-
-    On a machine with more than one core and more than one part, the first part compiles
-    here and the others at once in a child process (numba compiles one function on one
-    core; the cache takes both). Should the child fail, its parts compile here after all,
-    where an error shows in full."""
-    start = time.perf_counter()
-    keys = list(parts)
-    first, others = keys[:1], keys[1:]
-    states = {PARTS[key][0]: "waiting" for key in keys}
-    child = None
-    if others and (os.cpu_count() or 1) > 1:
-        child = subprocess.Popen(
-            [sys.executable, "-c", _CHILD, *others],
-            stdin=subprocess.DEVNULL,
-            stdout=subprocess.DEVNULL,
-            stderr=subprocess.DEVNULL,
-        )
-        for key in others:
-            states[PARTS[key][0]] = "compiling in another process"
-
-    def refresh() -> None:  # the child's parts are done as soon as it ended well
-        if child is not None and child.poll() == 0:
-            states.update({PARTS[key][0]: "done" for key in others})
-
-    progress = _Progress(say, states, refresh)
-    try:
-        for key in first:
-            states[PARTS[key][0]] = "compiling"
-            compile_parts([key])
-            states[PARTS[key][0]] = "done"
-        if child is not None:
-            child.wait()
-        if child is None or child.returncode != 0:
-            for key in others:
-                states[PARTS[key][0]] = "compiling"
-                compile_parts([key])
-                states[PARTS[key][0]] = "done"
-        for key in others:
-            states[PARTS[key][0]] = "done"
-    finally:
-        progress.stop()
-        if child is not None and child.poll() is None:
-            child.kill()
-            child.wait()
-    return time.perf_counter() - start
-
-
-@contextmanager
-def _turn() -> Iterator[None]:
-    """Hold the kernel cache's lock file: one process compiles at a time, the others wait
-    and then find the parts in the cache (no lock without a cache directory one may write
-    to: numba then compiles without caching, as it does without this module)."""
-    cache = numba.config.CACHE_DIR
-    try:
-        Path(cache).mkdir(parents=True, exist_ok=True)
-        lock = open(Path(cache) / f"{_MARKER}.lock", "w")  # noqa: SIM115 - closed below
-    except (OSError, TypeError):
-        yield
-        return
-    with lock:
-        fcntl.flock(lock, fcntl.LOCK_EX)
-        try:
-            yield
-        finally:
-            fcntl.flock(lock, fcntl.LOCK_UN)
-
-
-def ensure_compiled(
-    say: Callable[[str], None] | None = None, parts: Iterable[str] = DEFAULT_PARTS
-) -> None:
-    """Compile the kernels of ``parts`` unless this source version's are cached, telling
-    ``say`` (default: stderr) how far it is; a part this process compiles now is taken as
-    done (its driver runs inside its compile)."""
-    wanted = [part for part in parts if part not in _compiling]
-    if is_compiled(wanted):
-        return
-    say = say or (lambda line: print(line, file=sys.stderr, flush=True))
-    with _turn():
-        missing = [part for part in wanted if not is_compiled([part])]
-        if missing:
-            _compile_announced(say, missing)
-    _known.update((numba.config.CACHE_DIR, part) for part in wanted)
-
-
-def _compile_announced(say: Callable[[str], None], parts: list[str]) -> None:
-    """Compile ``parts`` with a line before, the progress lines and a line after; then
-    mark each done."""
-    names = ", ".join(PARTS[part][0] for part in parts)
-    say(
-        f"brake-sim: compiling the physics kernels ({names}; once per installed version:"
-        f" a line every {TICK_S:.0f} s says how far)"
-    )
-    took = compile_kernels(say, parts)
-    for part in parts:
-        marker = _marker(part)
-        if marker is not None:
-            try:
-                marker.parent.mkdir(parents=True, exist_ok=True)
-                marker.write_text(f"compiled in {took:.1f} s\n", encoding="utf-8")
-            except OSError:  # a cache one may not write to: compiled again next time
-                pass
-    say(f"brake-sim: kernels compiled in {took:.1f} s ({names})")
+register("stepping", "fixed-step kernel", _compile_stepping)
+register("sensors", "default sensors", _compile_sensors)
 
 
 if __name__ == "__main__":
-    # the module by its name, whose state the drivers' own calls share (not this __main__)
-    from brake_sim_ros.solvers import warmup
-
     every = "--all" in sys.argv[1:]
-    warmup.ensure_compiled(
-        lambda line: print(line, flush=True), tuple(warmup.PARTS) if every else DEFAULT_PARTS
+    rest = tuple(part for part in PARTS if part not in DEFAULT_PARTS)
+    ensure_compiled(
+        lambda line: print(line, flush=True), DEFAULT_PARTS + rest if every else DEFAULT_PARTS
     )
