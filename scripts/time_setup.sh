@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # Time a fresh clone's set-up: clone this repository's HEAD into a temporary directory, run
 # scripts/setup.sh there with an empty kernel cache (and, with --no-pip-cache, without
-# pip's download cache), and print the time of each phase and in all.
+# pip's download cache), and print the time of each phase and in all, and the CPU time
+# (user + sys, of the set-up and every process it started: on a shared machine the wall
+# time says how loaded it was as much as how long the set-up takes).
 #
 #   bash scripts/time_setup.sh                 # pip may reuse its download cache
 #   bash scripts/time_setup.sh --no-pip-cache  # every wheel downloaded again
@@ -36,13 +38,19 @@ unset NUMBA_CACHE_DIR
 if [[ $NO_PIP_CACHE == 1 ]]; then export PIP_NO_CACHE_DIR=1; fi
 LOG="$TMP/setup.out"
 t1=$SECONDS
+CPU="$TMP/cpu.txt"
+TIMER=(); [[ -x /usr/bin/time ]] && TIMER=(/usr/bin/time -o "$CPU" -f "cpu %U %S")
 # the set-up's own lines, stamped with the seconds since it started
-bash "$TMP/clone/scripts/setup.sh" 2>&1 | while IFS= read -r line; do
+"${TIMER[@]}" bash "$TMP/clone/scripts/setup.sh" 2>&1 | while IFS= read -r line; do
   printf '%4d s  %s\n' "$((SECONDS - t1))" "$line"
 done | tee "$LOG"
 status=${PIPESTATUS[0]}
 total=$((SECONDS - t1))
 echo "time_setup: phases (from the set-up's lines):"
 grep -E "done in [0-9]+ s|kernels compiled in" "$LOG" | sed -E 's/^ *[0-9]+ s  /  /' || true
-echo "time_setup: set-up $total s in all (exit $status); load average after $(cut -d' ' -f1-3 /proc/loadavg)"
+cpu="(no /usr/bin/time: CPU time not measured)"
+if [[ -s "$CPU" ]]; then
+  cpu="$(awk '$1 == "cpu" { printf "CPU %.0f s (user %.0f s + sys %.0f s)", $2 + $3, $2, $3 }' "$CPU")"
+fi
+echo "time_setup: set-up $total s in all (exit $status), $cpu; load average after $(cut -d' ' -f1-3 /proc/loadavg)"
 exit "$status"

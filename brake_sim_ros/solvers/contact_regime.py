@@ -15,6 +15,7 @@ from brake_sim_ros.model.assembly import indentation_at, pack
 from brake_sim_ros.model.catalogue import KIND_BY_NAME
 from brake_sim_ros.model.fidelity import GROWTH_LEVELS, defect_levels, levels_representing
 from brake_sim_ros.model.run_setup import BrakeSetup, SampleBlock
+from brake_sim_ros.solvers.kernel_parts import ensure_compiled, register
 
 SAMPLE_COLUMNS: tuple[str, ...] = (*L.COLUMNS, "braking_torque_n_m")
 # Macro step of the contact-regime model. With the torsional coupling: this many steps per
@@ -94,6 +95,7 @@ def run_contact_regime(
             f" {setup.defects.growing_kinds[0]!r} changing during the run (an onset after"
             f" 0 s or a growth law): allowed levels for it: {sorted(GROWTH_LEVELS)}"
         )
+    ensure_compiled(parts=("contact-regime",))  # compiled at first use, saying how far
     p = pack(setup.params, setup.defects, setup.options)
     h = macro_step(setup, accuracy)
     n = max(1, round(duration_s / h))
@@ -126,3 +128,13 @@ def run_contact_regime(
         n_substeps=int(kstate[2]),
         step_s=h,
     )
+
+
+def _compile_part() -> None:
+    """The contact-regime levels' quasi-static shoes, compiled on a tiny event
+    (:mod:`brake_sim_ros.solvers.warmup`)."""
+    run_contact_regime(BrakeSetup(), 0.01)
+
+
+# compiled at first use, not at set-up (its ensure_compiled call above)
+register("contact-regime", "contact-regime levels", _compile_part)

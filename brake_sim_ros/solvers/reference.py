@@ -25,6 +25,7 @@ from brake_sim_ros.model.assembly import indentation_at, initial_state, pack
 from brake_sim_ros.model.layout import SIDES
 from brake_sim_ros.model.run_setup import BrakeSetup, SampleBlock
 from brake_sim_ros.model.thermal import pack_thermal
+from brake_sim_ros.solvers.kernel_parts import ensure_compiled, register
 
 SHOE_BASES = (L.P_SHOE_BASE, L.P_SHOE_BASE + L.SHOE_STRIDE)
 # A shoe in contact is declared separated only once the lining is this far off the drum.
@@ -123,6 +124,7 @@ def run_reference(
             " allowed with a fixed-step"
             " method (rk4-located, rk4, semi-implicit-euler)"
         )
+    ensure_compiled(parts=("reference",))  # compiled at first use, saying how far
     p = pack(setup.params, setup.defects, setup.options)
     pack_thermal(p, setup)  # the temperature the run is held at, recorded
     y = initial_state(setup.params, setup.defects)
@@ -293,3 +295,13 @@ def _shoe_event(p: np.ndarray, base: int, index: int, offset_m: float):
 
     shoe_contact_event.shoe_index = index
     return shoe_contact_event
+
+
+def _compile_part() -> None:
+    """The reference solver's right-hand side and sample evaluation, compiled on a tiny event
+    (:mod:`brake_sim_ros.solvers.warmup`)."""
+    run_reference(BrakeSetup(), 0.01, rtol=1e-6)
+
+
+# compiled at first use, not at set-up (its ensure_compiled call above)
+register("reference", "reference solver", _compile_part)
