@@ -71,14 +71,14 @@ def pytest_addoption(parser, pluginmanager):
 # behind them, so no long file is left to run alone at the end (longest processing time
 # first). Paths from tests/.
 LONGEST_FILES = (
-    "test_sweep_fuzz.py",
-    "test_units.py",
+    "datasets/test_sweep_fuzz.py",
+    "fleet/test_units.py",
     "ros/test_replay.py",
-    "test_detector_fuzz.py",
+    "detection/test_detector_fuzz.py",
     "ros/test_node_hostile.py",
-    "test_scenario_fuzz.py",
-    "test_campaigns.py",
-    "test_docs.py",
+    "scenarios/test_scenario_fuzz.py",
+    "campaigns/test_campaigns.py",
+    "project/test_docs.py",
 )
 
 
@@ -91,6 +91,9 @@ def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
     tests last, alone on one worker while the other idles): the long files start at once
     and the many short ones fill in around them."""
     here = Path(__file__).parent
+    gone = [name for name in LONGEST_FILES if not (here / name).is_file()]
+    if gone:  # a file moved or renamed: its rank would be lost without a word
+        raise pytest.UsageError(f"tests/conftest.py LONGEST_FILES names no file: {gone}")
     rank = {here / name: i for i, name in enumerate(LONGEST_FILES)}
     slow = {item.path for item in items if item.get_closest_marker("slow")}
 

@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 
 PACKAGE = "brake_sim_ros"
-ROOT = Path(__file__).resolve().parents[1] / PACKAGE
+ROOT = Path(__file__).resolve().parents[2] / PACKAGE
 
 _BASE = {"errors", "identifiers", "__init__"}  # errors.py, identifiers.py, the package's __init__
 _CORE = _BASE | {"model"}
