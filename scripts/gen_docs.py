@@ -22,7 +22,7 @@ Usage (from the repository root)::
     PYTHONPATH=. .venv/bin/python scripts/gen_docs.py --all    # and brake-sim validate
     PYTHONPATH=. .venv/bin/python scripts/gen_docs.py --check  # exit 1 if a block is stale
 
-``tests/test_docs.py`` checks that every cheap block equals what its source prints now.
+``tests/project/test_docs.py`` checks that every cheap block equals what its source prints now.
 """
 
 from __future__ import annotations

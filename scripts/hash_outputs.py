@@ -29,7 +29,7 @@ from brake_sim_ros.model.assembly import ModelOptions
 from brake_sim_ros.scenarios import Scenario, load_scenario, parse_scenario
 from brake_sim_ros.sensing.sensors import SensorBank, SensorSet
 from brake_sim_ros.solvers.fixed_step import FixedStepStepper
-from tests.sample_blocks import faulted_set  # the sensor set tests/test_sensors.py runs
+from tests.sample_blocks import faulted_set  # the sensor set tests/sensing/test_sensors.py runs
 
 BUILTIN = Path(__file__).resolve().parents[1] / "brake_sim_ros" / "scenarios" / "builtin"
 OVAL = (

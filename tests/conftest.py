@@ -66,15 +66,43 @@ def pytest_addoption(parser, pluginmanager):
     )
 
 
+# The longest files, longest first (their tests' summed durations, -p no:xdist
+# --durations=0): on two workers each takes one at the start and the shorter ones fill in
+# behind them, so no long file is left to run alone at the end (longest processing time
+# first). Paths from tests/.
+LONGEST_FILES = (
+    "datasets/test_sweep_fuzz.py",
+    "fleet/test_units.py",
+    "ros/test_replay.py",
+    "detection/test_detector_fuzz.py",
+    "ros/test_node_hostile.py",
+    "scenarios/test_scenario_fuzz.py",
+    "campaigns/test_campaigns.py",
+    "project/test_docs.py",
+)
+
+
 def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
-    """The files that hold a ``slow`` test first, each file's tests in their order.
+    """The :data:`LONGEST_FILES` first, then the other files that hold a ``slow`` test,
+    then the rest; each file's tests in their order.
 
     loadfile hands out whole files in collection order (``--no-loadscope-reorder``; by
     default it would sort them by their number of tests, which puts a long file of few
     tests last, alone on one worker while the other idles): the long files start at once
     and the many short ones fill in around them."""
+    here = Path(__file__).parent
+    gone = [name for name in LONGEST_FILES if not (here / name).is_file()]
+    if gone:  # a file moved or renamed: its rank would be lost without a word
+        raise pytest.UsageError(f"tests/conftest.py LONGEST_FILES names no file: {gone}")
+    rank = {here / name: i for i, name in enumerate(LONGEST_FILES)}
     slow = {item.path for item in items if item.get_closest_marker("slow")}
-    items.sort(key=lambda item: item.path not in slow)  # stable: the order within a file
+
+    def order(item: pytest.Item) -> tuple[int, int]:
+        if item.path in rank:
+            return (0, rank[item.path])
+        return (1 if item.path in slow else 2, 0)
+
+    items.sort(key=order)  # stable: the order within a file and among the rest
 
 
 def pytest_configure(config):

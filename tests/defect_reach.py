@@ -1,7 +1,8 @@
 """Where a defect kind of the catalogue must reach with no edit of its own: the scenario
 loader, the node's parameters, a campaign's defect axis, the label columns and
 ``brake-sim defects``. Shared by the completeness test over every entry
-(tests/test_catalogue.py) and the kind a test registers (tests/test_defect_registry.py)."""
+(tests/model/test_catalogue.py) and the kind a test registers
+(tests/model/test_defect_registry.py)."""
 
 from __future__ import annotations
 

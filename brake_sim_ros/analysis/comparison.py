@@ -2,7 +2,7 @@
 
 The work-precision study (``brake-sim bench accuracy``), the fidelity study (``brake-sim
 bench fidelity``) and the presets' error bounds (``solvers/presets.py``, checked by
-``tests/test_presets.py``) all compare metrics this way:
+``tests/solvers/test_presets.py``) all compare metrics this way:
 
 * relative error: ``|value / reference - 1|``, a fraction; NaN where either is missing
   (None or not finite);

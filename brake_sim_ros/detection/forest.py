@@ -18,7 +18,7 @@ read them; at each split ``x[feature] <= threshold`` (float32 value against the 
 threshold) goes left; a tree's output is its leaf's value row (class fractions or the
 regression target); the forest adds the trees' outputs one at a time in tree order to
 zeros and divides by the number of trees. A test checks it against scikit-learn's own on a
-real dataset (``tests/test_saved.py``).
+real dataset (``tests/detection/test_saved.py``).
 """
 
 from __future__ import annotations

@@ -4,7 +4,7 @@ An entry names the detector, says in one line what it judges (the CLI's help for
 ``score``, ``fit`` and ``monitor`` is generated from these lines), builds it, says whether
 it learns (a detector that learns cannot run unfitted: ``monitor`` asks for ``--fit`` or
 ``--model``) and whether it has a saved form (``brake-sim fit``: :mod:`.saved` holds the
-codec of each class, and ``tests/test_registry.py`` checks every entry against it).
+codec of each class, and ``tests/detection/test_registry.py`` checks every entry against it).
 
 Adding a built-in detector: its class, its entry here, its codec in :mod:`.saved`; the
 completeness test fails on an entry that lacks a part.

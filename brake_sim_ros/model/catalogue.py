@@ -478,15 +478,33 @@ KINDS: list[DefectKind] = [
 KIND_BY_NAME: dict[str, DefectKind] = {k.name: k for k in KINDS}
 
 
+# per location: the catalogue it was built from, the kinds there and their fields. A shoe's
+# or the drum's defects ask for them at every field they read (a campaign's plan builds
+# thousands); a kind (un)registered since (kind_check) makes them built again.
+_AT: dict[str, tuple[tuple[DefectKind, ...], tuple[DefectKind, ...], tuple[DefectField, ...]]] = {}
+
+
+def _at(
+    location: str,
+) -> tuple[tuple[DefectKind, ...], tuple[DefectKind, ...], tuple[DefectField, ...]]:
+    catalogue = tuple(KINDS)
+    built = _AT.get(location)
+    if built is None or built[0] != catalogue:  # same kinds: compared by identity, fast
+        kinds = tuple(k for k in catalogue if location in k.locations)
+        built = (catalogue, kinds, tuple(f for k in kinds for f in k.fields()))
+        _AT[location] = built
+    return built
+
+
 def kinds_at(location: str) -> tuple[DefectKind, ...]:
     """The kinds that can sit at ``location`` (a side or ``drum``), in catalogue order."""
-    return tuple(k for k in KINDS if location in k.locations)
+    return _at(location)[1]
 
 
 def fields_at(location: str) -> tuple[DefectField, ...]:
     """Every number that sets a defect at ``location``, in catalogue order: the fields
     of a shoe (``left``/``right``) or of the drum, less its tables (the harmonics)."""
-    return tuple(f for k in kinds_at(location) for f in k.fields())
+    return _at(location)[2]
 
 
 def kind_of_field(location: str, name: str) -> DefectKind:

@@ -69,7 +69,7 @@ in-plane axis at the backing plate, the wheel speed (48 teeth: TESTBED 40-50) an
 pressure (a 19.05 mm, 3/4 in, wheel-cylinder piston: a common passenger-car rear drum size,
 assumed; the published 1300 N is then 46 bar).
 
-What they give in the published event (``brake-sim bench sensors``, tests/test_sensors.py):
+What they give in the published event (``brake-sim bench sensors``, tests/sensing/test_sensors.py):
 a noise floor of about 2.8 mg rms per accelerometer axis; first impacts that exceed the
 +-50 g range at the backing plate (the y axis reaches about 93 g before the sensor), so
 they are reported clipped for a few samples, as a real ADXL1002 there would (the

@@ -12,7 +12,7 @@ DOP853 reference at the default sample rate, 25.6 kHz: the largest error ``brake
 presets`` measured over five onset phases (the ramp's start moved by 0 to 32 us; the
 first-impact error of a scheme depends on where the onset falls inside a step, most of all
 for the first-order ``fast``), rounded up with a margin of 1.4x to 50x. All runs are
-deterministic. ``tests/test_presets.py`` runs every preset on the published event against
+deterministic. ``tests/solvers/test_presets.py`` runs every preset on the published event against
 the reference sampled on the same grid and checks these bounds. The real-time factor is measured
 at the default sample rate (``brake-sim bench core``, best of 3) on one core of the
 project's 2-core machine while shared with other jobs; cost is checked by the benchmark,

@@ -737,7 +737,7 @@ def notes(fig: dict, params: BrakeParameters) -> str:
   The study's "both pivot forces become equal when the drum stops" holds where the
   coupling torque that static friction carries is zero: the two forces swing about their
   common value with the rocking (1.65 Hz, decaying over about 7 s with the published
-  coupling damping) and are equal at each zero of that torque (tests/test_standstill.py).
+  coupling damping) and are equal at each zero of that torque (tests/solvers/test_standstill.py).
 """
     return _reflow(text)
 

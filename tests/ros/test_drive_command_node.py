@@ -27,7 +27,7 @@ from brake_sim_ros.scenarios import load_scenario
 from brake_sim_ros.stream import conversion
 from brake_sim_ros.stream.build import stepper_for
 from tests.bag_helpers import rosbags_timed
-from tests.test_drive_command import RATE, RIG  # the rig and its sample rate
+from tests.stream.test_drive_command import RATE, RIG  # the rig and its sample rate
 
 # a ~/step call is bounded by the node's measured wall cost per sample
 pytestmark = pytest.mark.realtime

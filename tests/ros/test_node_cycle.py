@@ -12,7 +12,7 @@ from brake_sim_ros.model.layout import COL
 from brake_sim_ros.ros.harness import domain_id_for
 from brake_sim_ros.scenarios import load_scenario, parse_scenario
 from brake_sim_ros.stream.build import stepper_for
-from tests.test_cycle_load import LAPS
+from tests.model.test_cycle_load import LAPS
 
 DOMAIN = domain_id_for(23)
 RUN_S = 1.0

@@ -25,8 +25,8 @@ from brake_sim_ros.model.cycle import LiveDrive
 from brake_sim_ros.ros.harness import SimClient, domain_id_for
 from brake_sim_ros.scenarios import parse_scenario
 from brake_sim_ros.stream.build import stepper_for
-from tests.test_drive_command import RATE, RIG
-from tests.test_resim_cli import pivot_arrays, resim, run_record
+from tests.recording.test_resim_cli import pivot_arrays, resim, run_record
+from tests.stream.test_drive_command import RATE, RIG
 
 LOSSLESS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
 LIMIT_N_M = 200.0  # the node's max_drive_torque_n_m (the rig's own: the default 120)

@@ -61,7 +61,7 @@ def _swept(folder, campaign: str, files: dict[str, str]):
 
 
 def test_scores_of_a_detector_that_always_alarms(dataset):
-    detector = make_detector("tests.test_evaluate:AlwaysAlarm")
+    detector = make_detector("tests.detection.test_evaluate:AlwaysAlarm")
     score = evaluate.score(detector, dataset, "test", hold_s=0.1)
     runs = dataset.runs("test")
     per_run = {r["run_id"]: r for r in score["per_run"]}

@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 
 PACKAGE = "brake_sim_ros"
-ROOT = Path(__file__).resolve().parents[1] / PACKAGE
+ROOT = Path(__file__).resolve().parents[2] / PACKAGE
 
 # the top-level modules errors.py, identifiers.py, regular_file.py and the package's __init__
 _BASE = {"errors", "identifiers", "regular_file", "__init__"}

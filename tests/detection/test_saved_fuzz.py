@@ -17,7 +17,7 @@ import pytest
 from brake_sim_ros.detection import saved
 from brake_sim_ros.detection.forest import LEAF, MAX_TREE_DEPTH, MAX_TREES, ForestArrays
 from brake_sim_ros.detection.learned import LearnedClassifier
-from tests.test_saved_file import FITTED_ON, _windows
+from tests.detection.test_saved_file import FITTED_ON, _windows
 
 
 @pytest.fixture(scope="module")

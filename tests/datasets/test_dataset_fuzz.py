@@ -28,7 +28,7 @@ from brake_sim_ros import cli
 from brake_sim_ros.campaigns import load_campaign
 from brake_sim_ros.datasets.sweep import LOCK_NAME, MANIFEST_NAME, sweep
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 CAMPAIGN = """
 name = "damaged"
 base = "symmetric"

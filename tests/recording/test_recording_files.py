@@ -281,7 +281,7 @@ def test_recover_refuses_what_is_not_mcap(tmp_path):
 @pytest.mark.slow
 def test_cli_simulate_mcap_and_recover(tmp_path):
     path = tmp_path / "cli.mcap"
-    env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[1])}
+    env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[2])}
     cli = [sys.executable, "-m", "brake_sim_ros.cli"]
     run = subprocess.run(
         [*cli, "simulate", "symmetric", "--duration", "0.5", "--quiet", "--mcap", str(path)],

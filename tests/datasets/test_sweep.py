@@ -31,7 +31,7 @@ from brake_sim_ros.datasets.reader import info_text
 from brake_sim_ros.datasets.sweep import DONE_DIR, LOCK_NAME, MANIFEST_NAME, sweep
 from brake_sim_ros.scenarios import parse_scenario
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 # 3 units x (healthy + 2 sides x 2 severities) x 2 forces = 30 short runs
 CAMPAIGN = """
 name = "small"

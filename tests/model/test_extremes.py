@@ -36,7 +36,7 @@ NOMINAL_FORCE_N = 1300.0
 IMPACT_REL = 0.01
 STOP_REL = 0.001
 # Energy books must close to 1e-6 of the energy that entered them, the requirement the
-# whole symmetric event meets at the default step (tests/test_physics.py).
+# whole symmetric event meets at the default step (tests/model/test_physics.py).
 ENERGY_REL = 1e-6
 RAMP_S = (0.01, 0.06)
 
@@ -323,7 +323,7 @@ def _momentum_stop_bound_s(setup: BrakeSetup, block) -> float:
 def test_drum_stops_and_stands_still(symmetric_rk4):
     """The published event: the stop respects the impulse-momentum bound, and after it the
     drum stays exactly at rest, held by static friction (no creep, no breakaway) while the
-    books still close. (The flywheel's motion after it: tests/test_standstill.py. Stop time
+    books still close. (The flywheel's motion after it: tests/solvers/test_standstill.py. Stop time
     under step refinement: test_step_at_the_limit_gives_the_converged_event.)"""
     block = symmetric_rk4.samples
     stop = symmetric_rk4.stop_time_s

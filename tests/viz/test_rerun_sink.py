@@ -220,7 +220,7 @@ def test_impacts_without_contact_events_at_full_state_rate(tmp_path: Path):
 def _schema_text(type_name: str) -> str:
     """ros2msg schema: the message's definition and those it uses (Header, Time)."""
     package, _, name = type_name.split("/")
-    root = Path(__file__).resolve().parents[1] / "msg_defs" / "msg"
+    root = Path(__file__).resolve().parents[2] / "msg_defs" / "msg"
     if package == "brake_sim_msgs":
         text = (root / f"{name}.msg").read_text()
     else:

@@ -26,7 +26,7 @@ from brake_sim_ros.recording.writer import McapRecorder
 from brake_sim_ros.scenarios import load_scenario, parse_scenario
 from brake_sim_ros.stream import conversion
 from brake_sim_ros.stream.offline import offline_messages
-from tests.test_drive_command import RIG
+from tests.stream.test_drive_command import RIG
 
 SECONDS = 0.25
 

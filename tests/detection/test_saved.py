@@ -244,6 +244,6 @@ def test_fit_writes_whole_files_never_over_an_input_or_through_a_link(dataset_di
         with pytest.raises(OSError, match="disk full"):
             main([*base, str(tmp_path / "rms.json")])
     # a user's detector has no saved form: refused before fitting, nothing written
-    user = ["fit", str(dataset_dir), "--detector", "tests.test_saved:SaysDrumAt"]
+    user = ["fit", str(dataset_dir), "--detector", "tests.detection.test_saved:SaysDrumAt"]
     assert main([*user, "--out", str(tmp_path / "user.json")]) == 2
     assert sorted(p.name for p in tmp_path.iterdir()) == ["link.json", "target.json"]

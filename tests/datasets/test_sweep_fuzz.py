@@ -21,7 +21,7 @@ from brake_sim_ros.datasets import open as open_dataset
 from brake_sim_ros.datasets.reader import check
 from brake_sim_ros.datasets.sweep import DONE_DIR, MANIFEST_NAME, sha256_file
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def _campaign(path: Path, name: str, units: int, force: float, duration_s: float) -> Path:

@@ -1,6 +1,6 @@
 """Contact onset detection is written once (:mod:`brake_sim_ros.analysis.onsets`): the rule
 on hand-made samples, and every consumer (impact metrics, contact events, BrakeState flags,
-the Rerun sink's state-rate fallback: ``tests/test_rerun_sink.py``) finding exactly the
+the Rerun sink's state-rate fallback: ``tests/viz/test_rerun_sink.py``) finding exactly the
 onsets the shared rule finds."""
 
 from __future__ import annotations

@@ -9,7 +9,7 @@ reproducible) and few; each event is 80 ms of simulated time.
 The sampled ranges are the parameters' valid ranges (``model/parameters.py``,
 ``model/defects.py``) narrowed to where a run at the step limit stays cheap: a step limit
 below MIN_STEP_S is an example the stepper would refuse at the default step anyway
-(``tests/test_extremes.py`` covers those edges one by one).
+(``tests/model/test_extremes.py`` covers those edges one by one).
 """
 
 from __future__ import annotations
@@ -33,7 +33,7 @@ DEFAULT_DT = 4e-5
 MIN_STEP_S = 4e-6  # at most 10x the default step's cost per simulated second
 DURATION_S = 0.08
 RAMP_S = (0.01, 0.06)  # force from 0 at 10 ms to its peak at 60 ms
-# The energy requirement of the whole symmetric event (tests/test_physics.py).
+# The energy requirement of the whole symmetric event (tests/model/test_physics.py).
 ENERGY_REL = 1e-6
 
 PROPERTY_SETTINGS = settings(

@@ -22,8 +22,8 @@ from brake_sim_ros.datasets.sweep import sweep
 from brake_sim_ros.detection.detector import Assessment, Detector
 from brake_sim_ros.ros.harness import domain_id_for, ros_environment
 
-ROOT = Path(__file__).resolve().parents[1]
-HERE = "tests.test_detector_fuzz"
+ROOT = Path(__file__).resolve().parents[2]
+HERE = "tests.detection.test_detector_fuzz"
 CAMPAIGN = """
 name = "users"
 base = "symmetric"

@@ -19,7 +19,7 @@ from brake_sim_ros.datasets.sweep import sweep
 from brake_sim_ros.detection import evaluate, saved
 from brake_sim_ros.detection.registry import make_detector
 
-EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "peak_detector.py"
+EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "peak_detector.py"
 EXAMPLE_SPEC = f"{EXAMPLE}:PeakAcceleration"
 
 CAMPAIGN = """

@@ -7,7 +7,7 @@ from pathlib import Path
 from brake_sim_ros.campaigns.loader import load_campaign
 from brake_sim_ros.scenarios import load_scenario
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 
 
 def test_demo_live_is_the_demo_campaigns_brake_at_its_sample_rate():

@@ -63,7 +63,7 @@ OPTIONS = {
     "zstd": RecordingOptions(compression="zstd", flush_interval_s=0.1, durable=False),
     "none": RecordingOptions(compression="none", flush_interval_s=0.1, durable=False),
 }
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 Key = tuple[str, int, bytes]  # topic, log time, payload
 
 

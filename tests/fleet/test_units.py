@@ -23,7 +23,7 @@ from brake_sim_ros.scenarios import builtin_names, load_scenario, parse_scenario
 from brake_sim_ros.sensing.sensors import default_sensor_set
 from brake_sim_ros.studies import units as fleet_study
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 SENSORS = default_sensor_set()
 
 
@@ -38,7 +38,8 @@ def test_same_unit_and_seed_give_identical_bits_in_another_process():
     here = _bits("VIN-0042", 7)
     assert here == _bits("VIN-0042", 7)
     code = (
-        "from tests.test_units import _bits; import json; print(json.dumps(_bits('VIN-0042', 7)))"
+        "from tests.fleet.test_units import _bits; import json;"
+        " print(json.dumps(_bits('VIN-0042', 7)))"
     )
     env = {**os.environ, "PYTHONPATH": str(ROOT), "PYTHONHASHSEED": "12345"}
     out = subprocess.run(
