@@ -1,7 +1,7 @@
 """Print the service brake's figures quoted in ``docs/model.md`` ("The service brake").
 
 The brake applied three times (1000 N per shoe in 50 ms, held 100 ms, released in 20 ms,
-from 100 km/h) as ``tests/test_service_brake.py`` runs it: each application's first
+from 100 km/h) as ``tests/model/test_service_brake.py`` runs it: each application's first
 contact after its start, each release's flight from the drum to the stop and the time to
 rest on the stop for good; the drag of a spring weakened past its hold point with no
 actuation; the energy books. Usage (a minute once the kernels are compiled)::
@@ -22,7 +22,7 @@ from brake_sim_ros.model.defects import Defects, ShoeDefect
 from brake_sim_ros.model.parameters import BrakeParameters
 from brake_sim_ros.scenarios.loader import parse_scenario
 from brake_sim_ros.stream.build import stepper_for
-from tests.test_service_brake import (  # the runs and hand bounds the tests check
+from tests.model.test_service_brake import (  # the runs and hand bounds the tests check
     APPLY_S,
     IDLE,
     SIDES,
