@@ -11,7 +11,7 @@ import sys
 import numpy as np
 import pytest
 
-from brake_sim_ros.cli import simulate_summary
+from brake_sim_ros.cli.simulate import simulate_summary
 from brake_sim_ros.model import catalogue
 from brake_sim_ros.scenarios import load_scenario
 from brake_sim_ros.scenarios.loader import parse_scenario

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
 import time
 
 import numba
@@ -23,6 +26,19 @@ def test_compilation_is_announced_once_per_version(tmp_path, monkeypatch):
     assert calls == [1] and len(said) == 2
     monkeypatch.setattr(numba.config, "CACHE_DIR", str(tmp_path / "v2"))  # another version
     assert not warmup.is_compiled()
+
+
+def test_the_marker_is_found_before_the_model_is_imported(tmp_path):
+    """A fresh interpreter that imports only the warm-up (as ``brake-sim simulate`` does
+    before the command's own imports) looks for the marker in the kernel cache directory,
+    not nowhere (which compiled the kernels again at every start)."""
+    code = "from brake_sim_ros.solvers import warmup; print(warmup._marker())"
+    env = {**os.environ, "BRAKE_SIM_CACHE_DIR": str(tmp_path)}
+    env.pop("NUMBA_CACHE_DIR", None)
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, env=env, check=True
+    ).stdout.strip()
+    assert out.startswith(str(tmp_path / "numba")) and out.endswith(warmup._MARKER), out
 
 
 def _compile(monkeypatch, tmp_path, cores: int, child_fails: bool = False):

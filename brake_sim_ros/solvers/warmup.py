@@ -31,6 +31,10 @@ from pathlib import Path
 
 import numba
 
+# sets numba's cache directory, which the marker lives in: without it a caller that has not
+# imported the model yet (the CLI starts light) would find no marker and compile again
+import brake_sim_ros.model  # noqa: F401
+
 _MARKER = "brake_sim_compiled"
 TICK_S = 10.0  # s between two progress lines while the kernels compile
 # what the child process runs (by the module's name: run as __main__, this one has another)
