@@ -1,13 +1,23 @@
-"""Scenarios as data: the paper's cases and user files, loaded strictly."""
+"""Scenarios as data: the paper's cases and user files, loaded strictly.
 
-from brake_sim_ros.scenarios.loader import (
-    Scenario,
-    SolverSettings,
-    builtin_names,
-    load_scenario,
-    parse_scenario,
-    read_scenario_file,
-)
+The loader's names are imported on first use (PEP 562): the loader imports the numerics,
+and a reader of this package's light modules (the defect catalogue's help,
+:mod:`.defect_help`, for ``brake-sim defects``) does not pay for them.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from brake_sim_ros.scenarios.loader import (
+        Scenario,
+        SolverSettings,
+        builtin_names,
+        load_scenario,
+        parse_scenario,
+        read_scenario_file,
+    )
 
 __all__ = [
     "Scenario",
@@ -17,3 +27,11 @@ __all__ = [
     "parse_scenario",
     "read_scenario_file",
 ]
+
+
+def __getattr__(name: str) -> Any:
+    if name in __all__:
+        from brake_sim_ros.scenarios import loader
+
+        return getattr(loader, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
