@@ -1,7 +1,7 @@
 """``brake-sim monitor``: run a detector as a ROS 2 node until interrupted.
 
 The composition root of the monitor node: ROS start-up and shutdown, and the spin loop.
-The command line (detector name, fitting, topics) is parsed by ``brake_sim_ros.cli``,
+The command line (detector name, fitting, topics) is parsed by ``brake_sim_ros.cli.ros``,
 which builds and fits the detector and hands it in with its chunk conversion: the node
 (:class:`brake_sim_ros.ros.monitor.MonitorNode`) and this module import nothing of
 ``detection``.

@@ -14,9 +14,10 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
-from brake_sim_ros.detection.baselines import VibrationThreshold
-from brake_sim_ros.detection.detector import Detector
+if TYPE_CHECKING:  # each detector's module is imported when it is made: the help is light
+    from brake_sim_ros.detection.detector import Detector
 
 USER_FORMS = "module:Class or path/to/file.py:Class"
 
@@ -42,6 +43,8 @@ class DetectorEntry:
 
 def _statistic(name: str) -> Callable[[], Detector]:
     def make() -> Detector:
+        from brake_sim_ros.detection.baselines import VibrationThreshold
+
         return VibrationThreshold(name)
 
     return make

@@ -1,13 +1,31 @@
-"""Scenarios as data: the paper's cases and user files, loaded strictly."""
+"""Scenarios as data: the paper's cases and user files, loaded strictly.
 
-from brake_sim_ros.scenarios.loader import (
-    builtin_names,
-    load_scenario,
-    parse_scenario,
-    read_scenario_file,
-)
-from brake_sim_ros.scenarios.types import Scenario, SolverSettings
+The loader's names are imported on first use (PEP 562): the loader imports the numerics,
+and a reader of this package's light modules (the defect catalogue's help,
+:mod:`.defect_help`, for ``brake-sim defects``) does not pay for them.
+"""
 
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from brake_sim_ros.scenarios.loader import (
+        builtin_names,
+        load_scenario,
+        parse_scenario,
+        read_scenario_file,
+    )
+    from brake_sim_ros.scenarios.types import Scenario, SolverSettings
+
+_HOMES = {
+    "Scenario": "types",
+    "SolverSettings": "types",
+    "builtin_names": "loader",
+    "load_scenario": "loader",
+    "parse_scenario": "loader",
+    "read_scenario_file": "loader",
+}
 __all__ = [
     "Scenario",
     "SolverSettings",
@@ -16,3 +34,11 @@ __all__ = [
     "parse_scenario",
     "read_scenario_file",
 ]
+
+
+def __getattr__(name: str) -> Any:
+    if name in _HOMES:
+        import importlib
+
+        return getattr(importlib.import_module(f"{__name__}.{_HOMES[name]}"), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -1,7 +1,7 @@
 """The Rerun parts of the command line: ``simulate --rerun ...``, ``view``, node ``--rerun``.
 
-Kept here so ``cli.py`` and the node's ``main`` only add an option and a call; imported
-lazily (Rerun is only loaded when it is used).
+Kept here so the CLI (``cli/simulate.py``, ``cli/recordings.py``) and the node's ``main``
+only add an option and a call; imported lazily (Rerun is only loaded when it is used).
 """
 
 from __future__ import annotations

@@ -11,7 +11,7 @@ import sys
 import numpy as np
 import pytest
 
-from brake_sim_ros.cli import simulate_summary
+from brake_sim_ros.cli.simulate import simulate_summary
 from brake_sim_ros.model import catalogue
 from brake_sim_ros.scenarios import load_scenario
 from brake_sim_ros.scenarios.loader import parse_scenario
@@ -27,6 +27,56 @@ def _cli(*args, cwd=None):
         cwd=cwd,
         timeout=600,
     )
+
+
+# what starting a command may not import unless the command needs it (each costs the test
+# suite's hundreds of CLI processes a start-up)
+HEAVY = (
+    "numpy", "numba", "scipy.signal", "scipy.stats", "scipy.linalg", "scipy.optimize",
+    "rclpy", "dask", "pyarrow", "sklearn", "mcap", "rerun", "matplotlib",
+    "brake_sim_ros.sensing", "brake_sim_ros.stream", "brake_sim_ros.scenarios.loader",
+    "brake_sim_ros.detection.baselines",
+)  # fmt: skip
+_IMPORTED = """
+import sys
+from brake_sim_ros.cli import main
+try:
+    main(sys.argv[2:])
+except SystemExit:
+    pass
+with open(sys.argv[1], "w") as f:
+    f.write("\\n".join(sys.modules))
+"""
+
+
+@pytest.mark.parametrize(
+    ("argv", "needs"),
+    [
+        (["--help"], ()),
+        (["--version"], ()),
+        (["nope"], ()),
+        (["score", "--help"], ()),
+        (["fit", "--help"], ()),
+        (["dataset", "info", "--help"], ()),
+        (["recover", "--help"], ()),
+        (["bench", "--help"], ()),
+        (["defects"], ("numpy", "numba")),  # the catalogue is the model's, which sets numba up
+    ],
+    ids=" ".join,
+)
+def test_a_command_imports_only_what_it_needs(tmp_path, argv, needs):
+    listing = tmp_path / "modules"
+    r = subprocess.run(
+        [sys.executable, "-c", _IMPORTED, str(listing), *argv],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert "Traceback" not in r.stderr, r.stderr
+    imported = listing.read_text().split()
+    heavy = [h for h in HEAVY if h not in needs]
+    loaded = {m for m in imported for h in heavy if m == h or m.startswith(h + ".")}
+    assert not loaded, sorted(loaded)
 
 
 @pytest.mark.slow

@@ -27,6 +27,7 @@ from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
 from brake_sim_ros import cli
+from brake_sim_ros.cli.simulate import MAX_SIMULATE_DURATION_S
 from brake_sim_ros.stream import run as run_module
 
 SMALL = 'name = "small"\nduration_s = 0.01\n'
@@ -314,7 +315,7 @@ def _runs_long(text: str) -> bool:
         value = float(text)
     except ValueError:
         return False
-    return 0.02 < value <= cli.MAX_SIMULATE_DURATION_S
+    return 0.02 < value <= MAX_SIMULATE_DURATION_S
 
 
 def _path(directories: list[str], names: list[str], suffixes: list[str]) -> st.SearchStrategy:

@@ -11,7 +11,8 @@ import pkgutil
 import pytest
 
 import brake_sim_ros.detection as detection_package
-from brake_sim_ros import cli
+from brake_sim_ros.cli import build_parser
+from brake_sim_ros.cli.ros import monitor_parser
 from brake_sim_ros.detection import saved
 from brake_sim_ros.detection.detector import Detector
 from brake_sim_ros.detection.registry import BUILTIN, ENTRIES, REGISTRY, help_text
@@ -20,9 +21,9 @@ from brake_sim_ros.detection.registry import BUILTIN, ENTRIES, REGISTRY, help_te
 def _help(argv: list[str], capsys) -> str:
     with pytest.raises(SystemExit):
         if argv[0] == "monitor":
-            cli._monitor_parser().parse_args(["--help"])
+            monitor_parser().parse_args(["--help"])
         else:
-            cli.build_parser().parse_args([*argv, "--help"])
+            build_parser().parse_args([*argv, "--help"])
     return " ".join(capsys.readouterr().out.split())
 
 

@@ -197,7 +197,7 @@ def test_the_drawn_conditions_are_ground_truth(tmp_path):
 
 
 def test_the_unit_command_shows_the_drawn_conditions(tmp_path):
-    from brake_sim_ros.cli import unit_text
+    from brake_sim_ros.cli.scenarios import unit_text
 
     text = unit_text(_scenario(5))
     drawn = dict(_scenario(5).conditions)

@@ -1,6 +1,9 @@
 """The package graph points one way: model <- sensing <- analysis <- solvers <- (fleet,
 scenarios) <- stream <- (ros, recording, viz), with app, studies and the CLI on top.
 
+A unit is a top-level module or package of ``brake_sim_ros``: every module of a package
+(the CLI's ``cli/simulate.py`` as much as ``cli/__init__.py``) counts as its package.
+
 Every ``import`` of every module counts, also those inside functions (lazy imports) and
 under ``if TYPE_CHECKING:``: a dependency deferred is still a dependency.
 """
@@ -108,16 +111,22 @@ def test_every_unit_is_in_the_allowed_graph():
     assert units <= ALLOWED.keys(), f"units missing from ALLOWED: {units - ALLOWED.keys()}"
 
 
-def test_no_package_imports_one_above_it():
+def _violations(graph: dict[str, set[str]]) -> list[str]:
+    """Every import in ``graph`` of a unit its importer's unit may not import."""
     bad = []
-    for module, imported in GRAPH.items():
+    for module, imported in graph.items():
         unit = _unit(module)
         for target in imported:
             other = _unit(target)
             if other == unit or other in ALLOWED[unit]:
                 continue
             bad.append(f"{module} imports {target} ({unit} may import {sorted(ALLOWED[unit])})")
-    assert not bad, "\n".join(sorted(bad))
+    return sorted(bad)
+
+
+def test_no_package_imports_one_above_it():
+    bad = _violations(GRAPH)
+    assert not bad, "\n".join(bad)
 
 
 def test_ros_imports_neither_recording_nor_viz():
@@ -170,3 +179,30 @@ def test_the_parser_sees_every_kind_of_import(tmp_path, source, expected):
     fake = tmp_path / "node.py"
     fake.write_text(source)
     assert expected in _imports("brake_sim_ros.ros.commands", fake)
+
+
+def test_the_cli_is_one_unit():
+    """The CLI is a package: each of its modules is checked as the unit ``cli``."""
+    cli_modules = {m for m in MODULES if m == f"{PACKAGE}.cli" or m.startswith(f"{PACKAGE}.cli.")}
+    assert {f"{PACKAGE}.cli", f"{PACKAGE}.cli.common", f"{PACKAGE}.cli.simulate"} <= cli_modules
+    assert {_unit(m) for m in cli_modules} == {"cli"}
+
+
+@pytest.mark.parametrize(
+    "source",
+    [
+        "from brake_sim_ros.cli import main",
+        "from brake_sim_ros import cli",
+        "def f():\n    from brake_sim_ros.cli.simulate import cmd_simulate",
+        "import brake_sim_ros.cli.common",
+        "from ..cli import common",
+    ],
+)
+def test_the_library_importing_the_cli_is_refused(tmp_path, source):
+    """The check can fail for the CLI package: the model importing any of its modules."""
+    fake = tmp_path / "kernel.py"
+    fake.write_text(source)
+    module = f"{PACKAGE}.model.kernel"
+    imported = _imports(module, fake)
+    assert {_unit(t) for t in imported} == {"cli"}
+    assert _violations({module: imported})

@@ -188,3 +188,19 @@ def test_the_lines_say_the_child_s_parts_are_done_as_soon_as_it_ended(cache, mon
     warmup.compile_kernels(said.append)
     assert "fixed-step kernel: compiling, default sensors: done" in said[-1]
     assert "1 of 2 parts done" in said[-1]
+
+
+def test_the_marker_is_found_before_the_model_is_imported(tmp_path):
+    """A fresh interpreter that imports only the warm-up (as ``brake-sim simulate`` does
+    before the command's own imports) looks for the markers in the kernel cache directory,
+    not nowhere (which compiled the kernels again at every start)."""
+    code = (
+        "from brake_sim_ros.solvers import kernel_parts, warmup\n"
+        "print(kernel_parts._marker(kernel_parts.DEFAULT_PARTS[0]))"
+    )
+    env = {**os.environ, "BRAKE_SIM_CACHE_DIR": str(tmp_path)}
+    env.pop("NUMBA_CACHE_DIR", None)
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, env=env, check=True
+    ).stdout.strip()
+    assert out.startswith(str(tmp_path / "numba")), out
