@@ -29,10 +29,11 @@ from brake_sim_ros.analysis import measured_features as mf
 from brake_sim_ros.analysis.impacts import EventMetrics
 from brake_sim_ros.model import contact
 from brake_sim_ros.model import layout as L
-from brake_sim_ros.model.assembly import contact_arms, pack, place_shoe
+from brake_sim_ros.model.assembly import contact_arms, pack
 from brake_sim_ros.model.defects import Defects, ShoeDefect
 from brake_sim_ros.model.layout import SIDES
 from brake_sim_ros.model.parameters import BrakeParameters
+from brake_sim_ros.model.placement import place_shoe
 from brake_sim_ros.recording.output import check_output, replace_output
 from brake_sim_ros.scenarios import load_scenario
 from brake_sim_ros.stream.run import RunResult, run_scenario
@@ -679,7 +680,7 @@ def notes(fig: dict, params: BrakeParameters) -> str:
   a {100 * (implied ** (2 / 3) - 1):+.0f} % peak and a {100 * (implied ** (1 / 3) - 1):+.0f} %
   period, close to the published {pub["peak_fr_change_pct"]:+.1f} % and
   {pub["period_change_pct"]:+.1f} %. In this model the shoe sits between two abutments, the
-  pin at its heel and the piston at its tip (model/assembly.py, `place_shoe`): a pin shift
+  pin at its heel and the piston at its tip (model/placement.py, `place_shoe`): a pin shift
   moves the lining only by turning the shoe about its tip, which closes the running
   clearance at the first contact by (pct/100) D a / L to first order, with `L` the tip-pin
   distance ({1e3 * geo.chord_m:.0f} mm), `D` the distance of the tip-pin line from the drum
