@@ -357,7 +357,7 @@ CONTACT_AUTO = -1
 CONTACT_OFF = 0
 CONTACT_ON = 1
 
-# fixed-step schemes of the compiled stepper (kernel.fixed_step_advance)
+# fixed-step schemes of the compiled stepper (advance.fixed_step_advance)
 SCHEME_RK4 = 0  # classical RK4, contact switched wherever a stage falls
 SCHEME_RK4_LOCATED = 1  # RK4 with contact onsets and separations located inside the step
 SCHEME_SEMI_IMPLICIT_EULER = 2  # symplectic (semi-implicit) Euler: speeds first, then angles
