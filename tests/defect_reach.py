@@ -1,12 +1,13 @@
 """Where a defect kind of the catalogue must reach with no edit of its own: the scenario
-loader, the node's parameters, a campaign's defect axis, the label columns and
-``brake-sim defects``. Shared by the completeness test over every entry
-(tests/model/test_catalogue.py) and the kind a test registers
+loader, the node's parameters, a campaign's defect axis, the label columns, ``brake-sim
+defects`` and the packing of the kernels' parameters. Shared by the completeness test over
+every entry (tests/model/test_catalogue.py) and the kind a test registers
 (tests/model/test_defect_registry.py)."""
 
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import io
 
 from pytest import approx
@@ -15,6 +16,8 @@ from brake_sim_ros.campaigns.axes import defect_choices, defects_table
 from brake_sim_ros.campaigns.campaign import plan_runs
 from brake_sim_ros.campaigns.loader import parse_campaign
 from brake_sim_ros.cli import main
+from brake_sim_ros.model import catalogue
+from brake_sim_ros.model.assembly import pack
 from brake_sim_ros.model.catalogue import DefectKind, label_column, label_columns
 from brake_sim_ros.model.defects import Defects
 from brake_sim_ros.model.parameters import BrakeParameters
@@ -106,9 +109,37 @@ def reaches_the_cli_help(kind: DefectKind) -> None:
         assert f.name in text
 
 
+@contextlib.contextmanager
+def _spied(kind: DefectKind) -> list:
+    """The kind's entry with its packing recorded: each call's (location, defect)."""
+    calls: list = []
+
+    def spy(site) -> None:
+        calls.append((site.location, site.defect))
+        kind.packing(site)
+
+    at = catalogue.KINDS.index(kind)
+    catalogue.KINDS[at] = catalogue.KIND_BY_NAME[kind.name] = dataclasses.replace(kind, packing=spy)
+    try:
+        yield calls
+    finally:
+        catalogue.KINDS[at] = catalogue.KIND_BY_NAME[kind.name] = kind
+
+
+def reaches_the_packing(kind: DefectKind) -> None:
+    """Packing a brake that carries the kind calls the entry's packing at its location,
+    with that location's defects (what a built-in packing writes: tests/model/test_catalogue.py)."""
+    for location in kind.locations:
+        defects = Defects.single(kind.name, location, 0.5 * kind.service_limit)
+        with _spied(kind) as calls:
+            pack(BrakeParameters(), defects)
+        assert (location, getattr(defects, location)) in calls, calls
+
+
 def reaches_everything(kind: DefectKind) -> None:
     reaches_labels(kind)
     reaches_the_loader(kind)
     reaches_the_node_parameters(kind)
     reaches_a_campaign_axis(kind)
     reaches_the_cli_help(kind)
+    reaches_the_packing(kind)

@@ -28,7 +28,7 @@ import pyarrow.parquet as pq
 
 from brake_sim_ros import regular_file
 from brake_sim_ros.campaigns.splits import SPLITS
-from brake_sim_ros.datasets.sweep import run_file
+from brake_sim_ros.datasets.sweep_output import run_file
 from brake_sim_ros.errors import BrakeSimError
 from brake_sim_ros.recording.mcap_format import describe_path
 from brake_sim_ros.regular_file import FileRefusedError, read_regular_file

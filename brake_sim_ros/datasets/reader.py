@@ -25,7 +25,7 @@ import pyarrow.dataset as pads
 from brake_sim_ros.campaigns.splits import SPLITS, HeldOut, leaks
 from brake_sim_ros.datasets import checked
 from brake_sim_ros.datasets.checked import DatasetError
-from brake_sim_ros.datasets.sweep import LOCK_NAME, MANIFEST_NAME, SAMPLES_DIR
+from brake_sim_ros.datasets.sweep_output import LOCK_NAME, MANIFEST_NAME, SAMPLES_DIR
 from brake_sim_ros.model.catalogue import label_columns
 from brake_sim_ros.recording.mcap_format import describe_path
 

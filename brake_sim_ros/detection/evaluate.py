@@ -63,7 +63,7 @@ from brake_sim_ros.datasets.reader import DatasetError, SweepDataset
 from brake_sim_ros.detection import metrics
 from brake_sim_ros.detection.detector import Assessment, Detector, SampleChunk, TrainingWindow
 from brake_sim_ros.detection.user_code import user_code
-from brake_sim_ros.detection.windows import held_out_figures, window_rows
+from brake_sim_ros.detection.windows import headline_figures, held_out_figures, window_rows
 from brake_sim_ros.model.catalogue import KIND_BY_NAME, KINDS, label_column
 
 SCHEMA_VERSION = 5
@@ -297,6 +297,20 @@ def assess_run(detector: Detector, run: RunSamples, chunk_s: float) -> list[Asse
         return [a for c in chunks(run, chunk_s) for a in detector.feed(c)]
 
 
+@dataclass
+class _Tally:
+    """What :func:`score` gathers over a split's runs, in run order."""
+
+    per_run: list[dict] = field(default_factory=list)  # the score's per_run entries
+    rows: list[dict] = field(default_factory=list)  # every window (windows.window_rows)
+    run_class: dict[str, list[float | None]] = field(default_factory=dict)  # class -> delays
+    true_class: list[str] = field(default_factory=list)  # per defective window after onset
+    diagnosed: list[str] = field(default_factory=list)  # its diagnosis ("none": none)
+    severities: dict[str, list[tuple[float, float]]] = field(default_factory=dict)
+    forecasts: list[tuple[float, float]] = field(default_factory=list)  # (forecast, true), s
+    longest: int = 0  # samples of the longest run
+
+
 def score(
     detector: Detector,
     dataset: SweepDataset,
@@ -309,112 +323,119 @@ def score(
     """Run ``detector`` (fitted) over ``split`` and score it (module docstring);
     ``windows``, when given, receives every assessed window's row
     (:func:`~.windows.window_rows`)."""
-    rows_out: list[dict] = [] if windows is None else windows
-    per_run, delays, missed = [], [], 0
-    fa_count, fa_hours = 0, 0.0
-    truth, index, true_class, diagnosed = [], [], [], []
-    severities: dict[str, list[tuple[float, float]]] = {}  # class -> (estimate, true)
-    forecasts: list[tuple[float, float]] = []  # (forecast, true) RUL, s
-    window_class: list[str] = []
-    run_class: dict[str, list[float | None]] = {}
-    longest = 0
+    tally = _Tally()
     for run_id in dataset.runs(split):
-        run = read_run(dataset, run_id)
-        longest = max(longest, run.time_s.size)
-        window_samples(detector, run.sample_rate_hz)  # checked before any sample is fed
-        found = assess_run(detector, run, chunk_s)
-        rows = np.array([a.sample_index for a in found], dtype=np.int64)
-        times = run.time_s[rows] if rows.size else np.zeros(0)
-        alarm = np.array([a.alarm for a in found], dtype=bool)
-        defective = np.any(run.labels[rows] != 0.0, axis=1) if rows.size else np.zeros(0, bool)
-        truth.extend(defective.tolist())
-        index.extend(a.health_index for a in found)
-        classes = [
-            ":".join(run.active(int(row))[0]) if bad else HEALTHY
-            for row, bad in zip(rows, defective, strict=True)
-        ]
-        window_class.extend(classes)
-        actives = [[":".join(x) for x in run.active(int(row))] for row in rows]
-        rows_out.extend(window_rows(run.run_id, run.unit_id, found, times, actives, classes))
-        if run.rul_s is not None:
-            for a, row in zip(found, rows, strict=True):
-                if math.isfinite(a.rul_s) and math.isfinite(run.rul_s[row]):
-                    forecasts.append((float(a.rul_s), float(run.rul_s[row])))
-        onset = run.onset_index
-        onset_s = None if onset is None else float(run.time_s[onset])
-        delay = None
-        count, hours = 0, 0.0
-        if rows.size:
-            count, hours = metrics.false_alarms_per_hour(alarm, times, ~defective, hold_s)
-            fa_count, fa_hours = fa_count + count, fa_hours + hours
-        if onset_s is not None:
-            delay = metrics.detection_delay(alarm, times, onset_s, hold_s) if rows.size else None
-            if delay is None:
-                missed += 1
-            else:
-                delays.append(delay)
-            final = run.active(run.time_s.size - 1)
-            run_class.setdefault(":".join(final[0]) if final else HEALTHY, []).append(delay)
-            for a, row, bad in zip(found, rows, defective, strict=True):
-                if not bad:
-                    continue
-                active = run.active(int(row))
-                true_class.append(":".join(active[0]))
-                d = a.diagnosis
-                label = "none" if d is None else f"{d.kind}:{d.location}"
-                diagnosed.append(label)
-                if d is not None and math.isfinite(d.severity) and label in map(":".join, active):
-                    true = float(run.labels[row, run.label_names.index(label)])
-                    severities.setdefault(label, []).append((d.severity, true))
-        per_run.append(
-            {
-                "run_id": run.run_id,
-                "unit_id": run.unit_id,
-                "defects": [":".join(x) for x in run.active(run.time_s.size - 1)],
-                "onset_s": onset_s,
-                "delay_s": delay,
-                "false_alarms": count,
-                "healthy_s": hours * 3600.0,
-            }
-        )
-    if not truth:
-        _no_window(detector, dataset, split, longest)
-    y = np.array(truth, dtype=bool)
-    h = np.array(index, dtype=np.float64)
-    classes = sorted(set(true_class) | set(diagnosed))
-    cls = np.array(window_class, dtype=object)
-    fpr, tpr = metrics.roc_points(y, h) if y.size else ([], [])
-    diagnoses = any(d != "none" for d in diagnosed)
+        _score_run(detector, read_run(dataset, run_id), tally, hold_s=hold_s, chunk_s=chunk_s)
+    if not tally.rows:
+        _no_window(detector, dataset, split, tally.longest)
+    if windows is not None:
+        windows.extend(tally.rows)
+    manifest = {r["run_id"]: r for r in dataset.manifest.to_pylist()}
     return {
         "schema_version": SCHEMA_VERSION,
         "detector": detector.name,
         "split": split,
         "hold_s": hold_s,
-        "runs": len(per_run),
-        "windows": int(y.size),
+        **_split_figures(tally),
+        "isolation": _isolation_figures(tally.true_class, tally.diagnosed),
+        "severity": _severity_figures(tally.severities) if tally.severities else None,
+        "forecast": _forecast_figures(tally.forecasts) if tally.forecasts else None,
+        "per_run": tally.per_run,
+        "held_out": held_out_figures(dataset.held_out, manifest, tally.per_run, tally.rows),
+    }
+
+
+def _score_run(
+    detector: Detector, run: RunSamples, tally: _Tally, *, hold_s: float, chunk_s: float
+) -> None:
+    """Assess ``run`` and add its windows, its per-run entry and its figures to ``tally``."""
+    tally.longest = max(tally.longest, run.time_s.size)
+    window_samples(detector, run.sample_rate_hz)  # checked before any sample is fed
+    found = assess_run(detector, run, chunk_s)
+    rows = np.array([a.sample_index for a in found], dtype=np.int64)
+    times = run.time_s[rows] if rows.size else np.zeros(0)
+    alarm = np.array([a.alarm for a in found], dtype=bool)
+    defective = np.any(run.labels[rows] != 0.0, axis=1) if rows.size else np.zeros(0, bool)
+    classes = [
+        ":".join(run.active(int(row))[0]) if bad else HEALTHY
+        for row, bad in zip(rows, defective, strict=True)
+    ]
+    actives = [[":".join(x) for x in run.active(int(row))] for row in rows]
+    tally.rows.extend(window_rows(run.run_id, run.unit_id, found, times, actives, classes))
+    if run.rul_s is not None:
+        for a, row in zip(found, rows, strict=True):
+            if math.isfinite(a.rul_s) and math.isfinite(run.rul_s[row]):
+                tally.forecasts.append((float(a.rul_s), float(run.rul_s[row])))
+    onset = run.onset_index
+    onset_s = None if onset is None else float(run.time_s[onset])
+    delay = None
+    count, hours = 0, 0.0
+    if rows.size:
+        count, hours = metrics.false_alarms_per_hour(alarm, times, ~defective, hold_s)
+    if onset_s is not None:
+        delay = metrics.detection_delay(alarm, times, onset_s, hold_s) if rows.size else None
+        final = run.active(run.time_s.size - 1)
+        tally.run_class.setdefault(":".join(final[0]) if final else HEALTHY, []).append(delay)
+        bad = [(a, int(row)) for a, row, d in zip(found, rows, defective, strict=True) if d]
+        _tally_diagnoses(run, bad, tally)
+    tally.per_run.append(
+        {
+            "run_id": run.run_id,
+            "unit_id": run.unit_id,
+            "defects": [":".join(x) for x in run.active(run.time_s.size - 1)],
+            "onset_s": onset_s,
+            "delay_s": delay,
+            "false_alarms": count,
+            "healthy_s": hours * 3600.0,
+        }
+    )
+
+
+def _tally_diagnoses(run: RunSamples, bad: list[tuple[Assessment, int]], tally: _Tally) -> None:
+    """Each defective window's (assessment, sample row) true class against its diagnosis,
+    and the severity estimate of a diagnosis that names a defect active there."""
+    for a, row in bad:
+        active = run.active(row)
+        tally.true_class.append(":".join(active[0]))
+        d = a.diagnosis
+        label = "none" if d is None else f"{d.kind}:{d.location}"
+        tally.diagnosed.append(label)
+        if d is not None and math.isfinite(d.severity) and label in map(":".join, active):
+            true = float(run.labels[row, run.label_names.index(label)])
+            tally.severities.setdefault(label, []).append((d.severity, true))
+
+
+def _split_figures(tally: _Tally) -> dict:
+    """``runs``, ``windows``, ``detection``, ``false_alarms`` and ``health_index`` over the
+    whole split: the headline figures (:func:`~.windows.headline_figures`, as for a
+    held-out rule's runs) with the split's own detail (delays, ROC, per class)."""
+    head = headline_figures(tally.per_run, tally.rows)
+    detection = head["detection"]
+    y = np.array([r["defective"] for r in tally.rows], dtype=bool)
+    h = np.array([r["health_index"] for r in tally.rows], dtype=np.float64)
+    cls = np.array([r["class"] for r in tally.rows], dtype=object)
+    fpr, tpr = metrics.roc_points(y, h) if y.size else ([], [])
+    return {
+        "runs": head["runs"],
+        "windows": head["windows"],
         "detection": {
-            "defective_runs": len(delays) + missed,
-            "detected": len(delays),
-            "missed": missed,
-            "delays_s": delays,
-            "median_delay_s": float(np.median(delays)) if delays else None,
+            "defective_runs": detection["defective_runs"],
+            "detected": detection["detected"],
+            "missed": detection["missed"],
+            "delays_s": [r["delay_s"] for r in tally.per_run if r["delay_s"] is not None],
+            "median_delay_s": detection["median_delay_s"],
             "per_class": {
                 c: {
                     "defective_runs": len(found_delays),
                     "detected": sum(x is not None for x in found_delays),
                     "median_delay_s": _median([x for x in found_delays if x is not None]),
                 }
-                for c, found_delays in sorted(run_class.items())
+                for c, found_delays in sorted(tally.run_class.items())
             },
         },
-        "false_alarms": {
-            "count": fa_count,
-            "healthy_hours": fa_hours,
-            "per_hour": fa_count / fa_hours if fa_hours > 0 else None,
-        },
+        "false_alarms": head["false_alarms"],
         "health_index": {
-            "auroc": metrics.auroc(y, h) if y.size else None,
-            "auprc": metrics.auprc(y, h) if y.size else None,
+            **head["health_index"],
             "roc": {"fpr": fpr, "tpr": tpr},
             "per_class": {
                 c: {
@@ -424,24 +445,18 @@ def score(
                         h[(cls == c) | (cls == HEALTHY)],
                     ),
                 }
-                for c in sorted(set(window_class) - {HEALTHY})
+                for c in sorted(set(cls.tolist()) - {HEALTHY})
             },
         },
-        "isolation": (
-            {
-                "classes": classes,
-                "matrix": metrics.confusion(true_class, diagnosed, classes).tolist(),
-            }
-            if diagnoses
-            else None
-        ),
-        "severity": _severity_figures(severities) if severities else None,
-        "forecast": _forecast_figures(forecasts) if forecasts else None,
-        "per_run": per_run,
-        "held_out": held_out_figures(
-            dataset.held_out,
-            {r["run_id"]: r for r in dataset.manifest.to_pylist()},
-            per_run,
-            rows_out,
-        ),
+    }
+
+
+def _isolation_figures(true_class: list[str], diagnosed: list[str]) -> dict | None:
+    """The score's ``isolation`` object, None when the detector never diagnoses."""
+    if not any(d != "none" for d in diagnosed):
+        return None
+    classes = sorted(set(true_class) | set(diagnosed))
+    return {
+        "classes": classes,
+        "matrix": metrics.confusion(true_class, diagnosed, classes).tolist(),
     }

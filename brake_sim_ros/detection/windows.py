@@ -6,10 +6,11 @@ assessed window, in run order, with the columns of :data:`COLUMNS`; any metric c
 computed from it (the score's AUROC is scikit-learn's over ``health_index`` against
 ``defective``).
 
-:func:`held_out_figures` gives the score JSON's ``held_out`` list: per held-out rule of
-the dataset (``[[split.held_out]]``: values run on test units only, since a detector is
-judged on what it never saw), the headline figures over the runs the rule matches and
-over the rest of the split.
+:func:`headline_figures` is the one rule for the score's headline figures over some runs
+and their windows: the whole split's (:func:`.evaluate.score`) and, in the score JSON's
+``held_out`` list (:func:`held_out_figures`), per held-out rule of the dataset
+(``[[split.held_out]]``: values run on test units only, since a detector is judged on what
+it never saw) those over the runs the rule matches and over the rest of the split.
 """
 
 from __future__ import annotations
@@ -83,8 +84,12 @@ def windows_table(rows: Sequence[Mapping[str, Any]]) -> Any:
     return pa.table({f.name: pa.array([r[f.name] for r in rows], f.type) for f in fields}, schema)
 
 
-def _figures(runs: Sequence[Mapping[str, Any]], rows: Sequence[Mapping[str, Any]]) -> dict:
-    """The headline figures over some runs (their ``per_run`` entries) and their windows."""
+def headline_figures(runs: Sequence[Mapping[str, Any]], rows: Sequence[Mapping[str, Any]]) -> dict:
+    """The headline figures over some runs (their score ``per_run`` entries) and their
+    windows (:func:`window_rows`): ``runs``, ``windows``, ``detection`` (a run is defective
+    from its onset; detected when it has a delay), ``false_alarms`` (over the healthy
+    time) and ``health_index`` (AUROC and AUPRC, defective windows positive). The one rule
+    for the whole split's figures (:func:`.evaluate.score`) and a held-out rule's."""
     delays = [r["delay_s"] for r in runs if r["onset_s"] is not None]
     detected = [d for d in delays if d is not None]
     count = sum(r["false_alarms"] for r in runs)
@@ -133,11 +138,11 @@ def held_out_figures(
                     "minimum": rule.minimum,
                     "maximum": rule.maximum,
                 },
-                "held_out": _figures(
+                "held_out": headline_figures(
                     [r for r in per_run if r["run_id"] in held],
                     [w for w in rows if w["run_id"] in held],
                 ),
-                "rest": _figures(
+                "rest": headline_figures(
                     [r for r in per_run if r["run_id"] not in held],
                     [w for w in rows if w["run_id"] not in held],
                 ),

@@ -9,18 +9,14 @@ import numpy as np
 from scipy.optimize import brentq
 
 from brake_sim_ros.errors import ParameterError
-from brake_sim_ros.model import growth, kernel, service, thermal
+from brake_sim_ros.model import kernel, service, thermal
 from brake_sim_ros.model import layout as L
 from brake_sim_ros.model.actuation import RESIDUAL_FORCE_N, RETURN_SPRING_PRELOAD_N
-from brake_sim_ros.model.catalogue import KIND_BY_NAME
-from brake_sim_ros.model.defects import (
-    MAX_DRUM_SLOPE,
-    SERVICE_RUNOUT_UM,
-    Defects,
-    DrumDefect,
-    ShoeDefect,
-)
+from brake_sim_ros.model.catalogue import KIND_BY_NAME, kinds_at
+from brake_sim_ros.model.defects import SERVICE_RUNOUT_UM, Defects, DrumDefect, ShoeDefect
+from brake_sim_ros.model.packing import PackSite
 from brake_sim_ros.model.parameters import BrakeParameters
+from brake_sim_ros.model.placement import lining_mid_rad
 
 SIDES = L.SIDES
 
@@ -38,119 +34,12 @@ class ModelOptions:
     shoes: tuple[str, ...] = SIDES
 
 
-@dataclass(frozen=True)
-class ShoePlacement:
-    """One shoe's assembled geometry at its symmetric rest angle (defects applied), in the
-    backing-plate frame (m, rad).
-
-    Attributes:
-        sign: +1 left shoe (outward = counter-clockwise), -1 right shoe (mirror image).
-        pivot_xy_m: the pin, the axis the shoe turns about in service.
-        lining_centre_xy_m, lining_radius_m, lining_mid_rad, lining_half_rad: the lining
-            arc (centre, radius, polar angle of its middle seen from the centre, half span).
-        tip_xy_m: where the piston pushes; it stays on the piston whatever the pin does.
-        actuation_dir: unit direction of the piston's push (fixed in the backing plate).
-        mass_centre_xy_m: the shoe's mass centre.
-        inertia_about_pivot_kg_m2: moment of inertia about the pin (parallel-axis theorem
-            from the nominal value, for the pin's place in the shoe's heel seat).
-        abutment_turn_rad: angle the shoe body turned about its tip abutment to follow
-            the pin, rad, in the shoe's own sense (counter-clockwise for the left shoe,
-            clockwise for the right one, as its angle).
-        heel_seat_offset_m: part of the pin's displacement along the tip-pin line, taken
-            up in the heel seat (positive: the pin moved away from the tip), m.
-    """
-
-    sign: float
-    pivot_xy_m: tuple[float, float]
-    lining_centre_xy_m: tuple[float, float]
-    lining_radius_m: float
-    lining_mid_rad: float
-    lining_half_rad: float
-    tip_xy_m: tuple[float, float]
-    actuation_dir: tuple[float, float]
-    mass_centre_xy_m: tuple[float, float]
-    inertia_about_pivot_kg_m2: float
-    abutment_turn_rad: float
-    heel_seat_offset_m: float
-
-
-def place_shoe(params: BrakeParameters, side: str, defect: ShoeDefect) -> ShoePlacement:
-    """Assemble a shoe between its two abutments: the pin at the heel, the piston at the tip.
-
-    The nominal geometry (:class:`ShoeGeometry`, left shoe) has the lining concentric with
-    the drum at rest. A pivot-radius defect moves the pin radially, ``delta = pct/100 * P``.
-    A rigid shoe at rest is held by two abutments and its return spring:
-
-    * the tip rests on the wheel-cylinder piston, retracted against its stop: the piston
-      holds it along its axis, the slot in its end across it. The tip stays where it is,
-      whatever the pin does;
-    * the heel rests in its seat on the pin. The seat is open along the shoe's tip-pin
-      line, as a heel on an anchor: it holds the heel across that line and lets it slide
-      along it. (A seat closed both ways would over-constrain a rigid shoe held at its tip:
-      a pin displaced along the line would have to stretch the shoe.)
-
-    So the part of ``delta`` across the tip-pin line carries the heel with the pin: the
-    shoe body turns about the tip ``T`` by the exact angle between ``P - T`` and ``P' - T``;
-    lining, mass centre and heel follow, the tip stays on the piston. The part along the
-    line is taken up in the seat: it does not move the body, but the shoe then turns on the
-    pin at its new place ``P'`` (its moment arms and its inertia about the pin follow).
-
-    To first order a radial pin shift thus closes the running clearance at the first
-    contact by ``pct/100 * D * a / L`` (``D`` the distance of the tip-pin line from the drum
-    centre, ``a`` the tip's distance from the contact normal, ``L`` the tip-pin distance):
-    opposite shifts move the lining by equal amounts in opposite directions. A pin at the
-    bottom of the drum moves mostly along the line (``D`` small), so it turns the shoe
-    little.
-
-    A worn lining's arc has the radius of the new one less the wear (its surface moves in).
-
-    The right shoe is the mirror image of the left one about the y axis, defect included.
-    """
-    g = params.shoe
-    # the compiled model re-places a shoe whose pin moves during a run with the same
-    # function (model/growth.py); here its Python source runs, so the assembled geometry
-    # keeps CPython's math to the last bit
-    px, py = g.pivot_xy_m
-    qx, qy, cx, cy, mid, mx, my, inertia, turn, seat = growth.shoe_placement.py_func(
-        defect.pivot_radius_change_pct / 100.0,
-        -1.0 if side == "right" else 1.0,
-        px,
-        py,
-        g.tip_x_m,
-        g.tip_y_m,
-        g.mass_centre_x_m,
-        g.mass_centre_y_m,
-        g.inertia_about_pivot_kg_m2,
-        g.mass_kg,
-        _lining_mid_rad(params),
-    )
-    m = -1.0 if side == "right" else 1.0
-    return ShoePlacement(
-        sign=m,
-        pivot_xy_m=(qx, qy),
-        lining_centre_xy_m=(cx, cy),
-        lining_radius_m=g.drum_radius_m - g.running_clearance_m - defect.lining_wear_mm * 1e-3,
-        lining_mid_rad=mid,
-        lining_half_rad=math.radians(0.5 * (g.lining_end_deg - g.lining_start_deg)),
-        tip_xy_m=(m * g.tip_x_m, g.tip_y_m),
-        actuation_dir=(-m, 0.0),
-        mass_centre_xy_m=(mx, my),
-        inertia_about_pivot_kg_m2=inertia,
-        abutment_turn_rad=turn,
-        heel_seat_offset_m=seat,
-    )
-
-
-def _lining_mid_rad(params: BrakeParameters) -> float:
-    """Polar angle of the nominal left shoe's lining middle, rad."""
-    g = params.shoe
-    return math.radians(0.5 * (g.lining_start_deg + g.lining_end_deg))
-
-
 def pack(
     params: BrakeParameters, defects: Defects, options: ModelOptions | None = None
 ) -> np.ndarray:
-    """Packed parameter vector for the kernels (layout.P_* / S_*), after validity checks."""
+    """Packed parameter vector for the kernels (layout.P_* / S_*), after validity checks:
+    the healthy brake's own slots, then every defect kind's packing (its catalogue entry's,
+    :mod:`.packing`) at each of its locations, the shoes before the drum."""
     options = options or ModelOptions()
     unknown = set(options.shoes) - set(SIDES)
     if unknown or not options.shoes:
@@ -169,52 +58,44 @@ def pack(
     p[L.P_FRICTION_COEFFICIENT] = params.friction.coefficient
     p[L.P_FRICTION_SMOOTHING_SPEED] = params.friction.smoothing_speed_m_s
     p[L.P_RIGID_COUPLING] = 1.0 if options.rigid_coupling else 0.0
-    for i, side in enumerate(SIDES):
+    for side in SIDES:
         defect: ShoeDefect = getattr(defects, side)
-        s = place_shoe(params, side, defect)
-        b = L.P_SHOE_BASE + i * L.SHOE_STRIDE
-        p[b + L.S_SIGN] = s.sign
-        growth.write_placement.py_func(
-            p,
-            b,
-            *s.pivot_xy_m,
-            *s.lining_centre_xy_m,
-            s.lining_mid_rad,
-            *s.mass_centre_xy_m,
-            s.inertia_about_pivot_kg_m2,
-        )
-        p[b + L.S_LINING_RADIUS] = s.lining_radius_m
-        p[b + L.S_LINING_HALF_ANGLE] = s.lining_half_rad
-        p[b + L.S_LINING_HALF_COS] = math.cos(s.lining_half_rad)
-        p[b + L.S_LINING_HALF_SIN] = math.sin(s.lining_half_rad)
-        p[b + L.S_TIP_X], p[b + L.S_TIP_Y] = s.tip_xy_m
-        p[b + L.S_ACTUATION_DIR_X], p[b + L.S_ACTUATION_DIR_Y] = s.actuation_dir
-        p[b + L.S_MASS] = params.shoe.mass_kg
-        p[b + L.S_ACTUATION_GAIN] = defect.actuation_gain
-        p[b + L.S_SHARE] = defect.actuation_share
-        p[b + L.S_PRESSURE_FACTOR] = 1.0 + defect.actuation_gain_change_pct / 100.0
-        p[b + L.S_ACTUATION_DELAY] = defect.actuation_delay_ms * 1e-3
-        p[b + L.S_ACTUATION_LAG] = defect.actuation_lag_ms * 1e-3
-        p[b + L.S_PULSATION_AMPLITUDE] = defect.actuation_pulsation_pct / 100.0
-        p[b + L.S_PULSATION_FREQUENCY] = defect.actuation_pulsation_hz
-        p[b + L.S_ACTUATION_SHAPED] = 1.0 if defect.force_shaped else 0.0
-        p[b + L.S_SPRING_RELEASE] = (
-            defect.return_spring_weakening_pct / 100.0 * RETURN_SPRING_PRELOAD_N
-        )
-        p[b + L.S_SPRING_MARGIN] = RETURN_SPRING_PRELOAD_N - RESIDUAL_FORCE_N
-        p[b + L.S_FRICTION_COEFFICIENT] = growth.lining_friction.py_func(
-            params.friction.coefficient, defect.friction_change_pct
-        )
-        p[b + L.S_ENABLED] = 1.0 if side in options.shoes else 0.0
-        lb = L.P_LINING_BASE + i * L.LINING_STRIDE
-        p[lb + L.LN_RADIUS] = params.shoe.drum_radius_m - params.shoe.running_clearance_m
-        p[lb + L.LN_WEAR] = defect.lining_wear_mm * 1e-3
-        _check_shoe(params, side, defect, s, p, b)
-    _pack_drum(params, defects, p)
+        site = PackSite(params, side, defect, p)
+        _pack_shoe(params, site, enabled=side in options.shoes)
+        for kind in kinds_at(side):
+            kind.packing(site)
+        _check_shoe(params, side, defect, p, site.shoe_base)
+    # the shoes at rest against the round drum: the gap a drum's runout must stay below
+    round_drum = p.copy()
+    site = PackSite(params, "drum", defects.drum, p)
+    for kind in kinds_at("drum"):
+        kind.packing(site)
+    _check_runout(defects, round_drum)
     _pack_growth(params, defects, p)
     thermal.pack_fade(p)
     _pack_service(params, defects, p)
     return p
+
+
+def _pack_shoe(params: BrakeParameters, site: PackSite, *, enabled: bool) -> None:
+    """The slots of a shoe that no defect kind changes: its side, tip, actuation
+    direction, lining span, mass, spring margin; whether it is in the model and whether
+    its force takes the shaped path (any kind with an actuation effect)."""
+    g = params.shoe
+    p, b, defect = site.p, site.shoe_base, site.defect
+    m = -1.0 if site.location == "right" else 1.0
+    half = math.radians(0.5 * (g.lining_end_deg - g.lining_start_deg))
+    p[b + L.S_SIGN] = m
+    p[b + L.S_LINING_HALF_ANGLE] = half
+    p[b + L.S_LINING_HALF_COS] = math.cos(half)
+    p[b + L.S_LINING_HALF_SIN] = math.sin(half)
+    p[b + L.S_TIP_X], p[b + L.S_TIP_Y] = m * g.tip_x_m, g.tip_y_m
+    p[b + L.S_ACTUATION_DIR_X], p[b + L.S_ACTUATION_DIR_Y] = -m, 0.0
+    p[b + L.S_MASS] = g.mass_kg
+    p[b + L.S_ACTUATION_SHAPED] = 1.0 if defect.force_shaped else 0.0
+    p[b + L.S_SPRING_MARGIN] = RETURN_SPRING_PRELOAD_N - RESIDUAL_FORCE_N
+    p[b + L.S_ENABLED] = 1.0 if enabled else 0.0
+    p[site.lining_base + L.LN_RADIUS] = g.drum_radius_m - g.running_clearance_m
 
 
 def _pack_service(params: BrakeParameters, defects: Defects, p: np.ndarray) -> None:
@@ -261,7 +142,7 @@ def _pack_growth(params: BrakeParameters, defects: Defects, p: np.ndarray) -> No
     p[nb + L.N_MASS_CENTRE_X], p[nb + L.N_MASS_CENTRE_Y] = g.mass_centre_x_m, g.mass_centre_y_m
     p[nb + L.N_INERTIA] = g.inertia_about_pivot_kg_m2
     p[nb + L.N_MASS] = g.mass_kg
-    p[nb + L.N_LINING_MID] = _lining_mid_rad(params)
+    p[nb + L.N_LINING_MID] = lining_mid_rad(params)
     entries = defects.growth
     if len(entries) > L.MAX_GROWTH_ENTRIES:
         raise ParameterError(
@@ -286,79 +167,44 @@ def _pack_growth(params: BrakeParameters, defects: Defects, p: np.ndarray) -> No
     p[L.P_GROWTH_COUNT] = float(len(entries))
 
 
-def _pack_drum(params: BrakeParameters, defects: Defects, p: np.ndarray) -> None:
-    """Pack the drum's radius harmonics (layout.P_DRUM_WAVE_*) after checking the limits
-    that need the assembled brake: the slope, and the peak runout against the rest gap.
-
-    A round drum (no harmonic of non-zero amplitude) packs no harmonic at all, so the
-    kernels take exactly the round drum's arithmetic.
-    """
+def _check_runout(defects: Defects, round_drum: np.ndarray) -> None:
+    """Refuse a drum whose peak runout reaches the gap between the resting shoes and the
+    round drum (``round_drum``: the vector packed before the drum's kinds): it would touch
+    the retracted shoes every revolution, whatever the harmonics' phases."""
     drum: DrumDefect = defects.drum
-    _pack_flat(params, drum, p)
-    waves = [h for h in drum.harmonics if h.amplitude_um > 0.0]
-    if not waves:
+    if not any(h.amplitude_um > 0.0 for h in drum.harmonics):
         return
-    radius = params.shoe.drum_radius_m
-    slope = drum.slope(radius)
-    if slope > MAX_DRUM_SLOPE:
-        raise ParameterError(
-            f"drum harmonics slope sum_k k a_k / R0 = {slope:.4f}: allowed at most"
-            f" {MAX_DRUM_SLOPE} (the contact geometry tilts the normal by a small slope)"
-        )
     # the gap between each resting shoe and the round drum (the running clearance for a
     # healthy shoe; the shoe defects change it)
     gaps = [
         -indentation_at(
-            p,
+            round_drum,
             L.P_SHOE_BASE + i * L.SHOE_STRIDE,
             math.radians(getattr(defects, side).initial_angle_deg),
         )
         for i, side in enumerate(SIDES)
     ]
-    runout_m = drum.peak_runout_um * 1e-6
     gap = min(gaps)
-    if runout_m >= gap:
+    if drum.peak_runout_um * 1e-6 >= gap:
         raise ParameterError(
             f"drum peak runout sum_k a_k = {drum.peak_runout_um:g} um: allowed below the"
             f" gap between the resting shoes and the drum, {gap * 1e6:.0f} um (the running"
             " clearance), or the drum touches the retracted shoes every revolution"
             f" (permanent contact); service drums run out by up to {SERVICE_RUNOUT_UM:g} um"
         )
-    p[L.P_DRUM_WAVE_COUNT] = float(len(waves))
-    for j, h in enumerate(waves):
-        b = L.P_DRUM_WAVE_BASE + j * L.DRUM_WAVE_STRIDE
-        p[b + L.W_ORDER] = float(h.order)
-        p[b + L.W_AMPLITUDE] = h.amplitude_um * 1e-6
-        p[b + L.W_PHASE] = math.radians(h.phase_deg)
-
-
-def _pack_flat(params: BrakeParameters, drum: DrumDefect, p: np.ndarray) -> None:
-    """Pack the drum's flat (layout.P_FLAT_*) after checking its slope against the drum's
-    radius; none (depth 0) leaves the round drum's arithmetic."""
-    if drum.flat_depth_um <= 0.0:
-        return
-    slope = drum.flat_slope(params.shoe.drum_radius_m)
-    if slope > MAX_DRUM_SLOPE:
-        raise ParameterError(
-            f"drum flat of {drum.flat_depth_um:g} um over {drum.flat_width_deg:g} deg: slope"
-            f" pi d / (2 w R0) = {slope:.4f}, allowed at most {MAX_DRUM_SLOPE} (the contact"
-            " geometry tilts the normal by a small slope): make it wider or shallower"
-        )
-    p[L.P_FLAT_DEPTH] = drum.flat_depth_um * 1e-6
-    p[L.P_FLAT_CENTRE] = math.radians(drum.flat_centre_deg)
-    p[L.P_FLAT_HALF_WIDTH] = math.radians(0.5 * drum.flat_width_deg)
 
 
 def _check_shoe(
     params: BrakeParameters,
     side: str,
     defect: ShoeDefect,
-    s: ShoePlacement,
     p: np.ndarray,
     base: int,
 ) -> None:
-    lining_radius = s.lining_radius_m
-    pivot_r = math.hypot(*s.pivot_xy_m)
+    """Refuse a packed shoe whose pin sits at or beyond its lining, that starts inside the
+    drum, or that self-locks when it leads."""
+    lining_radius = p[base + L.S_LINING_RADIUS]
+    pivot_r = math.hypot(p[base + L.S_PIVOT_X], p[base + L.S_PIVOT_Y])
     if pivot_r >= lining_radius:
         raise ParameterError(
             f"{side} pivot radius change {defect.pivot_radius_change_pct:+g} % puts the pivot"

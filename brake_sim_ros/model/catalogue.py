@@ -23,10 +23,12 @@ Pure data and logic: no files.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 from brake_sim_ros.errors import ParameterError
 from brake_sim_ros.model import layout as L
+from brake_sim_ros.model import packing
 from brake_sim_ros.model.growth_law import (  # noqa: F401 (re-exported: the catalogue's laws)
     DEFAULT_WEAR_RATE_MM_PER_MJ,
     GROWTH_KEYS,
@@ -144,6 +146,9 @@ class DefectKind:
         growth_id: its id in the compiled model's growth update (``layout.GK_*``,
             :func:`brake_sim_ros.model.growth.apply`), or None: it cannot change during a
             run (only a step at 0 s).
+        packing: how it enters the kernels' packed parameter vector: a function of a
+            :class:`.packing.PackSite` that writes its slots at one location, for any
+            severity (:mod:`.packing`; :func:`.assembly.pack` calls it).
         healthy_value: what ``scenario_key`` reads on a healthy brake (the value set is
             ``healthy_value + severity``).
         attributes: the other numbers that describe it (:class:`DefectField`), e.g. a
@@ -168,6 +173,7 @@ class DefectKind:
     service_limit: float
     levels: frozenset[str]
     growth_id: int | None
+    packing: Callable[[packing.PackSite], None]
     healthy_value: float = 0.0
     attributes: tuple[DefectField, ...] = ()
     laws: tuple[str, ...] = ("step", "linear", "exponential")
@@ -230,6 +236,7 @@ KINDS: list[DefectKind] = [
         service_limit=3.0,  # the study's cases: +-3 %
         levels=ALL_LEVELS,
         growth_id=L.GK_PIVOT,
+        packing=packing.pack_pivot,
     ),
     DefectKind(
         name="initial_angle",
@@ -246,6 +253,7 @@ KINDS: list[DefectKind] = [
         service_limit=-2.0,  # the study's cases: -2 deg
         levels=ALL_LEVELS,
         growth_id=None,
+        packing=packing.pack_nothing,
         initial_condition=True,
     ),
     DefectKind(
@@ -264,6 +272,7 @@ KINDS: list[DefectKind] = [
         healthy_value=0.5,
         levels=ALL_LEVELS,
         growth_id=L.GK_SHARE,
+        packing=packing.pack_share,
         tied=True,
     ),
     DefectKind(
@@ -285,6 +294,7 @@ KINDS: list[DefectKind] = [
         service_limit=-50.0,  # fade and contamination can halve mu (TESTBED.md)
         levels=ALL_LEVELS,  # a coefficient per lining: the same shoe balance
         growth_id=L.GK_FRICTION,
+        packing=packing.pack_friction,
     ),
     DefectKind(
         name="actuation_gain_change",
@@ -301,6 +311,7 @@ KINDS: list[DefectKind] = [
         service_limit=-27.0,  # graded efficiency down to 73 % (UCI hydraulic rig, TESTBED.md)
         levels=ALL_LEVELS,  # a gain, as the share's
         growth_id=L.GK_GAIN,
+        packing=packing.pack_gain_change,
     ),
     DefectKind(
         name="actuation_delay",
@@ -316,6 +327,7 @@ KINDS: list[DefectKind] = [
         # actuation holds, and a delayed, lagging or pulsating force does not hold
         levels=IMPACT_LEVELS,
         growth_id=None,
+        packing=packing.pack_delay,
         actuation="history",
     ),
     DefectKind(
@@ -332,6 +344,7 @@ KINDS: list[DefectKind] = [
         service_limit=120.0,  # 95 % of a step in 0.36 s, a car's response (TESTBED.md)
         levels=IMPACT_LEVELS,  # a shaped history (actuation_delay)
         growth_id=None,
+        packing=packing.pack_lag,
         actuation="history",
     ),
     DefectKind(
@@ -349,6 +362,7 @@ KINDS: list[DefectKind] = [
         service_limit=20.0,  # no service figure in TESTBED.md: a clearly felt pulsation
         levels=IMPACT_LEVELS,  # a shaped history (actuation_delay)
         growth_id=L.GK_PULSATION,
+        packing=packing.pack_pulsation,
         actuation="history",
         attributes=(
             DefectField(
@@ -381,6 +395,7 @@ KINDS: list[DefectKind] = [
         # contact-regime levels take the commanded history
         levels=IMPACT_LEVELS,
         growth_id=None,
+        packing=packing.pack_spring_release,
         actuation="release",
     ),
     DefectKind(
@@ -404,6 +419,7 @@ KINDS: list[DefectKind] = [
         service_limit=150.0,  # service runouts 50-150 um (about 50 um a common limit)
         levels=IMPACT_LEVELS,
         growth_id=L.GK_DRUM,
+        packing=packing.pack_harmonics,
         speed_dependent=True,
         table=True,
     ),
@@ -426,6 +442,7 @@ KINDS: list[DefectKind] = [
         # shoe balance; wear that grows is a growth (fidelity.GROWTH_LEVELS)
         levels=ALL_LEVELS,
         growth_id=L.GK_WEAR,
+        packing=packing.pack_lining_wear,
         laws=("step", "linear", "exponential", "friction_work"),
     ),
     DefectKind(
@@ -450,6 +467,7 @@ KINDS: list[DefectKind] = [
         # dynamics, as the harmonics
         levels=IMPACT_LEVELS,
         growth_id=L.GK_FLAT,
+        packing=packing.pack_flat,
         speed_dependent=True,
         attributes=(
             DefectField(

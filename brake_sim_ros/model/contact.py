@@ -5,7 +5,7 @@ the step-limit analysis and the assembly checks all call these functions.
 
 Contact geometry. A shoe is rigid and turns by ``phi = sign * theta`` about its pivot
 ``P``. Its lining is an arc of radius ``r`` around the point ``C`` (see
-:func:`brake_sim_ros.model.assembly.place_shoe` for where ``C`` sits in the assembled
+:func:`brake_sim_ros.model.placement.place_shoe` for where ``C`` sits in the assembled
 brake). The lining point farthest from the drum centre is on the ray from the origin
 through ``C`` when that ray crosses the arc, otherwise at the arc end angularly nearest to
 it; its distance from the centre minus ``R_d`` is the indentation ``eps`` (m, positive =
@@ -33,6 +33,11 @@ from numba import njit
 
 from brake_sim_ros.model import layout as L
 from brake_sim_ros.model.compiled import JIT
+
+# Largest surface slope of the drum, ``sum_k k a_k / R0`` (rad): the contact geometry tilts
+# the normal by the local slope at one contact point, a small-slope model; 0.05 (a tilt of
+# 2.9 deg) is far above service runouts (150 um of order 2 on a 180 mm drum: 0.0017).
+MAX_DRUM_SLOPE = 0.05
 
 # shoe_eval result slots (named so that callers never write a bare index)
 E_THETA_DDOT = 0  # shoe angular acceleration, rad/s^2 (positive outward)

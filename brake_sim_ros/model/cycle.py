@@ -59,7 +59,7 @@ cycle's): a torque command above the vehicle's largest drive torque is refused
 stays the actuation history's (live actuation commands), so a rig drives stops with both.
 
 Determinism: the controller runs inside the compiled stepping
-(:func:`brake_sim_ros.model.kernel.fixed_step_advance`) at the start of every physics
+(:func:`brake_sim_ros.model.advance.fixed_step_advance`) at the start of every physics
 step, from the state at that instant, and holds its drive torque over the step (a
 zero-order hold at the physics step); its state (segment, segment start, brake ramp, drag
 integrator, load factor and draw count) is carried between calls in the kernel's

@@ -39,7 +39,7 @@ class ShoeDefect(_FieldSet):
 
     The physics of the built-in kinds: a pivot moved outward (``pivot_radius_change_pct``)
     keeps the shoe on its piston at the tip, so the shoe turns about its tip and then on
-    the pin at its new place (:func:`brake_sim_ros.model.assembly.place_shoe`); the
+    the pin at its new place (:func:`brake_sim_ros.model.placement.place_shoe`); the
     actuation force is multiplied by ``2 share (1 + gain change/100)``
     (``actuation.shoe_gain``); a friction change scales the lining's coefficient
     ``mu (1 + pct/100)``; delay, lag and pulsation act on the commanded actuation history
@@ -90,10 +90,6 @@ class ShoeDefect(_FieldSet):
 # Largest order of a drum-radius harmonic (cycles per revolution): the service range of
 # drum waviness reaches 20-50 per revolution (``TESTBED.md``).
 MAX_DRUM_ORDER = 50
-# Largest surface slope of the drum, ``sum_k k a_k / R0`` (rad): the contact geometry tilts
-# the normal by the local slope at one contact point, a small-slope model; 0.05 (a tilt of
-# 2.9 deg) is far above service runouts (150 um of order 2 on a 180 mm drum: 0.0017).
-MAX_DRUM_SLOPE = 0.05
 # Service figures, for the documentation of the range (``TESTBED.md``): drum runout of
 # 50-150 um in service, about 50 um a common service limit, judder from 10-20 um.
 SERVICE_RUNOUT_UM = 150.0
@@ -157,7 +153,7 @@ class DrumDefect(_FieldSet):
 
     Limits (each refused with a one-line error): orders 1 to :data:`MAX_DRUM_ORDER`, each at
     most once, at most :data:`MAX_DRUM_HARMONICS` harmonics; finite amplitudes >= 0 and
-    phases; the surface slope ``sum_k k a_k / R0`` at most :data:`MAX_DRUM_SLOPE`; and the
+    phases; the surface slope ``sum_k k a_k / R0`` at most :data:`.contact.MAX_DRUM_SLOPE`; and the
     peak runout ``sum_k a_k`` below the gap between each resting shoe and the round drum
     (the running clearance, 3.5 mm nominal; checked where the brake is assembled,
     :func:`brake_sim_ros.model.assembly.pack`): a drum out of round by more would touch the
@@ -169,7 +165,7 @@ class DrumDefect(_FieldSet):
     ``d (1 + cos(pi x / w)) / 2`` for ``|x| < w``, ``x = psi - c`` (wrapped to [-pi, pi)),
     ``c`` the flat's centre and ``w`` half its width (:func:`brake_sim_ros.model.contact.
     drum_radius`); its slope is continuous and at most ``pi d / (2 w)``, refused at assembly
-    above :data:`MAX_DRUM_SLOPE` of ``R0``. A flat only lowers the surface: it never
+    above :data:`.contact.MAX_DRUM_SLOPE` of ``R0``. A flat only lowers the surface: it never
     touches a retracted shoe. Once per revolution it passes each shoe.
 
     Built as ``DrumDefect(harmonics, **fields)``: the radius harmonics (in any order;

@@ -18,8 +18,8 @@ import math
 from numba import njit
 
 from brake_sim_ros.model import layout as L
-from brake_sim_ros.model.catalogue import LAW_FRICTION_WORK, severity_at
 from brake_sim_ros.model.compiled import JIT
+from brake_sim_ros.model.growth_law import LAW_FRICTION_WORK, severity_at
 
 # mm of wear per MJ of friction work (the scenario's unit) -> m per J (the kernel's)
 _MM_PER_MJ_TO_M_PER_J = 1e-9
@@ -28,7 +28,7 @@ _MM_PER_MJ_TO_M_PER_J = 1e-9
 @njit(**JIT)
 def shoe_placement(shift, mirror, px, py, tx, ty, mcx, mcy, inertia0, mass, mid0):
     """Assemble a shoe whose pin sits ``shift`` (a fraction of its nominal radius) out of
-    place: the rule of :func:`brake_sim_ros.model.assembly.place_shoe` (documented there).
+    place: the rule of :func:`brake_sim_ros.model.placement.place_shoe` (documented there).
 
     Args:
         shift: the pin's radial displacement over its nominal distance from the drum

@@ -1,11 +1,13 @@
-"""Compiled (numba) right-hand side, sample evaluation and fixed-step stepping.
+"""Compiled (numba) equations of motion: the actuation force, the right-hand side, sample
+evaluation and the free-ride bound.
 
 Everything here takes plain floats and float64/int64 arrays laid out as in
 :mod:`brake_sim_ros.model.layout`; dataclasses are unpacked at the boundary
 (:mod:`brake_sim_ros.model.assembly`). The contact law and geometry live in
 :mod:`brake_sim_ros.model.contact`, the stick/slip rule at standstill in
 :mod:`brake_sim_ros.model.standstill`; this module assembles the equations of motion
-from them and steps them.
+from them. The RK4 step and the location of a contact switch within it are
+:mod:`brake_sim_ros.model.rk4`, the fixed-step loop over a block :mod:`brake_sim_ros.model.advance`.
 """
 
 from __future__ import annotations
@@ -15,16 +17,7 @@ import math
 import numpy as np
 from numba import njit
 
-from brake_sim_ros.model import (
-    actuation,
-    contact,
-    cycle,
-    growth,
-    service,
-    standstill,
-    thermal,
-    vehicle,
-)
+from brake_sim_ros.model import actuation, contact, service, standstill, thermal, vehicle
 from brake_sim_ros.model import layout as L
 from brake_sim_ros.model.compiled import JIT
 
@@ -32,7 +25,7 @@ _pwl = actuation.pwl
 
 
 @njit(inline="always", **JIT)
-def _force(p, base, t, ts, fs, gain):
+def force(p, base, t, ts, fs, gain):
     """Actuation force on the shoe at ``base`` at ``t`` (s), N: the commanded history
     (knots ``ts``, ``fs``) times ``gain``; shaped by the shoe's actuation defects
     (:func:`_shaped_force`) when it has any. The healthy path stays this one line: the
@@ -44,7 +37,7 @@ def _force(p, base, t, ts, fs, gain):
 
 @njit(**JIT)
 def _shaped_force(p, base, t, ts, fs, gain):
-    """:func:`_force` of a shoe with a delay, lag or pulsation (:func:`.actuation.shaped`)
+    """:func:`force` of a shoe with a delay, lag or pulsation (:func:`.actuation.shaped`)
     or a weakened return spring (:func:`.actuation.spring_release`)."""
     force = gain * actuation.shaped(
         t,
@@ -92,13 +85,11 @@ def evaluate(y, p, fe_left, fe_right, stuck, mode_left, mode_right, dydt, out, r
     kr = contact.kinematics(
         p, L.P_SHOE_BASE + L.SHOE_STRIDE, y[L.Y_RIGHT_ANGLE], y[L.Y_RIGHT_SPEED], wa, wd
     )
-    _evaluate_from(y, p, fe_left, fe_right, stuck, mode_left, mode_right, kl, kr, dydt, out, row, t)
+    evaluate_from(y, p, fe_left, fe_right, stuck, mode_left, mode_right, kl, kr, dydt, out, row, t)
 
 
 @njit(inline="always", **JIT)
-def _evaluate_from(
-    y, p, fe_left, fe_right, stuck, mode_left, mode_right, kl, kr, dydt, out, row, t
-):
+def evaluate_from(y, p, fe_left, fe_right, stuck, mode_left, mode_right, kl, kr, dydt, out, row, t):
     """:func:`evaluate` given the shoes' contact kinematics ``kl`` and ``kr``
     (:func:`.contact.kinematics` of ``y``, at the drum speed :func:`evaluate` uses)."""
     wd = 0.0 if stuck else y[L.Y_DRUM_SPEED]
@@ -290,13 +281,13 @@ def _derivatives(
 
 
 @njit(inline="always", **JIT)
-def _free_evaluate(y, p, dydt):
+def free_evaluate(y, p, dydt):
     """:func:`evaluate`'s derivative for a state whose shoes exert nothing: the drum
     slides, no actuation force, and neither shoe presses (its indentation is not positive
     and its contact is not forced on). Every shoe force is then an exact zero, so the
     shoes' accelerations, powers and drum torque are zeros (of either sign: they add to
     the state as +0.0 does) and the rest is the rotors' (same bits as :func:`evaluate`,
-    without the contact geometry; :func:`_rides_free` decides when it applies)."""
+    without the contact geometry; :func:`rides_free` decides when it applies)."""
     wd = y[L.Y_DRUM_SPEED]
     coupling = standstill.coupling_torque(
         p, y[L.Y_FLYWHEEL_ANGLE], y[L.Y_DRUM_ANGLE], y[L.Y_FLYWHEEL_SPEED], wd
@@ -304,12 +295,12 @@ def _free_evaluate(y, p, dydt):
     _derivatives(y, p, wd, 0, coupling, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, dydt)
 
 
-# a free-ride bound that never holds (:func:`_rides_free`): every stage evaluates in full
+# a free-ride bound that never holds (:func:`rides_free`): every stage evaluates in full
 NOT_FREE = np.ones(4)
 
 
 @njit(inline="always", **JIT)
-def _lining_reach(p, base):
+def lining_reach(p, base):
     """Largest distance of the shoe's lining from its pivot, m: at most that of the
     lining's arc centre plus the arc's radius."""
     dx = p[base + L.S_LINING_CENTRE_X] - p[base + L.S_PIVOT_X]
@@ -318,8 +309,8 @@ def _lining_reach(p, base):
 
 
 @njit(inline="always", **JIT)
-def _rides_free(y, y0, free_bound, stuck, ml, mr, fel, fer):
-    """Whether an RK4 stage at ``y`` of a step from ``y0`` may take :func:`_free_evaluate`:
+def rides_free(y, y0, free_bound, stuck, ml, mr, fel, fer):
+    """Whether an RK4 stage at ``y`` of a step from ``y0`` may take :func:`free_evaluate`:
     the drum slides, no force on either shoe's tip, neither contact forced on, and each
     shoe's indentation provably negative. ``free_bound`` (4,): the indentation at ``y0``
     (m) and the bound of its rate per radian of shoe angle (m/rad) for the left shoe, then
@@ -388,620 +379,6 @@ def _pivot_force(p, base, c, sn, omega, theta_ddot, fx, fy):
     ax = -a * gy - w * w * gx
     ay = a * gx - w * w * gy
     return m * ax - fx, m * ay - fy
-
-
-@njit(inline="always", **JIT)
-def _update_regime(kstate, k_regime, k_flag, k_change, touching, step, settle_steps):
-    if touching != kstate[k_flag]:
-        kstate[k_flag] = touching
-        kstate[k_change] = step
-    since = step - kstate[k_change]
-    regime = kstate[k_regime]
-    if touching:
-        if regime == L.REGIME_FREE:
-            regime = L.REGIME_IMPACTING
-        elif regime == L.REGIME_IMPACTING and since >= settle_steps:
-            regime = L.REGIME_CONTACT
-    else:
-        if regime == L.REGIME_CONTACT:
-            regime = L.REGIME_IMPACTING
-        elif regime == L.REGIME_IMPACTING and since >= settle_steps:
-            regime = L.REGIME_FREE
-    kstate[k_regime] = regime
-
-
-@njit(inline="always", **JIT)
-def _shoe_switch(p, shoe, y):
-    """:func:`contact.switching_function` of shoe 0 (left) or 1 (right) for the state ``y``."""
-    return contact.switching_function(
-        p,
-        L.P_SHOE_BASE + shoe * L.SHOE_STRIDE,
-        y[L.Y_LEFT_ANGLE + shoe],
-        y[L.Y_LEFT_SPEED + shoe],
-        y[L.Y_DRUM_ANGLE],
-        y[L.Y_DRUM_SPEED],
-    )
-
-
-@njit(inline="always", **JIT)
-def rk4_step(
-    y, k1, t0, h, p, gl, tl, fl, gr, tr, fr, stuck, ml, mr, k2, k3, k4, tmp, out, y_out, free
-):
-    """One classical RK4 step of ``h`` s from ``y`` at ``t0`` (``k1 = f(t0, y)`` given) with
-    the contact modes ``ml``/``mr`` into ``y_out`` (may be ``y`` itself). A stage where
-    the shoes provably exert nothing (``free``: :func:`_rides_free`'s bound, or
-    :data:`NOT_FREE`) skips their contact geometry (:func:`_free_evaluate`, same bits)."""
-    n = y.shape[0]
-    th = t0 + 0.5 * h
-    fel = _force(p, L.P_SHOE_BASE, th, tl, fl, gl)
-    fer = _force(p, L.P_SHOE_BASE + L.SHOE_STRIDE, th, tr, fr, gr)
-    for j in range(n):
-        tmp[j] = y[j] + 0.5 * h * k1[j]
-    if _rides_free(tmp, y, free, stuck, ml, mr, fel, fer):
-        _free_evaluate(tmp, p, k2)
-    else:
-        evaluate(tmp, p, fel, fer, stuck, ml, mr, k2, out, -1, t0)
-    for j in range(n):
-        tmp[j] = y[j] + 0.5 * h * k2[j]
-    if _rides_free(tmp, y, free, stuck, ml, mr, fel, fer):
-        _free_evaluate(tmp, p, k3)
-    else:
-        evaluate(tmp, p, fel, fer, stuck, ml, mr, k3, out, -1, t0)
-    t1 = t0 + h
-    fel = _force(p, L.P_SHOE_BASE, t1, tl, fl, gl)
-    fer = _force(p, L.P_SHOE_BASE + L.SHOE_STRIDE, t1, tr, fr, gr)
-    for j in range(n):
-        tmp[j] = y[j] + h * k3[j]
-    if _rides_free(tmp, y, free, stuck, ml, mr, fel, fer):
-        _free_evaluate(tmp, p, k4)
-    else:
-        evaluate(tmp, p, fel, fer, stuck, ml, mr, k4, out, -1, t0)
-    for j in range(n):
-        y_out[j] = y[j] + h / 6.0 * (k1[j] + 2.0 * k2[j] + 2.0 * k3[j] + k4[j])
-
-
-@njit(**JIT)
-def _rk4_step_call(
-    y, k1, t0, h, p, gl, tl, fl, gr, tr, fr, stuck, ml, mr, k2, k3, k4, tmp, out, y_out, free
-):
-    """:func:`rk4_step` as a call: the steps that locate a contact switch take it, the
-    plain step inlines it. Each inlined copy is compiled on its own, and the two locating
-    functions' three copies took a quarter of the kernels' compile time (212 s of CPU
-    against 158 s with this call) for a path a step takes at a switch only."""
-    rk4_step(
-        y, k1, t0, h, p, gl, tl, fl, gr, tr, fr, stuck, ml, mr, k2, k3, k4, tmp, out, y_out, free
-    )
-
-
-@njit(**JIT)
-def _locate_switch(
-    shoe, on, ya, ka, t0, rem, f_end, p, gl, tl, fl, gr, tr, fr, stuck, ml, mr, work, out, tol
-):
-    """Instant (s after ``t0``) where ``shoe`` leaves its contact mode ``on``.
-
-    The RK4 step from ``ya`` (with ``ka = f(ya)``) of length ``s`` and frozen modes is a
-    smooth function of ``s``, and so is the shoe's switching function along it. Its sign
-    change in ``(0, rem]`` (``f_end``: the mode-signed value at ``rem``, <= 0) is
-    bracketed by the Illinois variant of regula falsi to a width ``tol``; the right end of
-    the bracket (the first instant at or past the switch) is returned.
-    """
-    sign = 1.0 if on else -1.0
-    k2 = work[0]
-    k3 = work[1]
-    k4 = work[2]
-    tmp = work[3]
-    yb = work[4]
-    a = 0.0
-    fa = max(sign * _shoe_switch(p, shoe, ya)[1], 0.0)
-    b = rem
-    fb = f_end
-    side = 0
-    for _ in range(80):
-        if b - a <= tol:
-            break
-        s = 0.5 * (a + b)
-        if fa > 0.0 and fb < 0.0:
-            s = b - fb * (b - a) / (fb - fa)
-            if not (a < s < b):
-                s = 0.5 * (a + b)
-        _rk4_step_call(
-            ya,
-            ka,
-            t0,
-            s,
-            p,
-            gl,
-            tl,
-            fl,
-            gr,
-            tr,
-            fr,
-            stuck,
-            ml,
-            mr,
-            k2,
-            k3,
-            k4,
-            tmp,
-            out,
-            yb,
-            NOT_FREE,
-        )
-        fs = sign * _shoe_switch(p, shoe, yb)[1]
-        if fs > 0.0:
-            a = s
-            fa = fs
-            if side == 1:
-                fb *= 0.5
-            side = 1
-        else:
-            b = s
-            fb = fs
-            if side == -1:
-                fa *= 0.5
-            side = -1
-    return b
-
-
-@njit(**JIT)
-def _located_step(y, k1, t, dt, p, gl, tl, fl, gr, tr, fr, stuck, h_start, work, out, h_end):
-    """RK4 step of ``dt`` from ``y`` (in place) with contact switches located in the step.
-
-    The step runs with each shoe's contact mode frozen (the force law is then smooth); a
-    trial step whose end has a shoe on the wrong side of its switching function is cut at
-    the located switch, the mode flipped there, and the rest of the step taken with the new
-    mode: the Kelvin-Voigt jump at onset and the kink at separation never fall inside an RK4
-    stage, so RK4 keeps its fourth order. At most ``MAX_SWITCHES_PER_STEP`` switches are
-    located per step (a Zeno bounce sequence); beyond that the step finishes with the last
-    modes. ``h_start`` (2,) holds the switching functions at ``y``; ``h_end`` (4,) receives
-    (eps left, h left, eps right, h right) at the end of the step.
-    """
-    n = y.shape[0]
-    k2 = work[0]
-    k3 = work[1]
-    k4 = work[2]
-    tmp = work[3]
-    ya = work[5]
-    yb = work[6]
-    ka = work[7]
-    on_l = h_start[0] > 0.0
-    on_r = h_start[1] > 0.0
-    for j in range(n):
-        ya[j] = y[j]
-        ka[j] = k1[j]
-    tol = 1e-10 * dt
-    tau = 0.0
-    switches = 0
-    while True:
-        rem = dt - tau
-        ml = L.CONTACT_ON if on_l else L.CONTACT_OFF
-        mr = L.CONTACT_ON if on_r else L.CONTACT_OFF
-        _rk4_step_call(
-            ya,
-            ka,
-            t + tau,
-            rem,
-            p,
-            gl,
-            tl,
-            fl,
-            gr,
-            tr,
-            fr,
-            stuck,
-            ml,
-            mr,
-            k2,
-            k3,
-            k4,
-            tmp,
-            out,
-            yb,
-            NOT_FREE,
-        )
-        el, hl = _shoe_switch(p, 0, yb)
-        er, hr = _shoe_switch(p, 1, yb)
-        bad_l = (hl > 0.0) != on_l
-        bad_r = (hr > 0.0) != on_r
-        if not (bad_l or bad_r) or switches >= L.MAX_SWITCHES_PER_STEP:
-            break
-        s_l = 2.0 * rem
-        s_r = 2.0 * rem
-        if bad_l:
-            f_end = hl if on_l else -hl
-            s_l = _locate_switch(
-                0,
-                on_l,
-                ya,
-                ka,
-                t + tau,
-                rem,
-                f_end,
-                p,
-                gl,
-                tl,
-                fl,
-                gr,
-                tr,
-                fr,
-                stuck,
-                ml,
-                mr,
-                work,
-                out,
-                tol,
-            )
-        if bad_r:
-            f_end = hr if on_r else -hr
-            s_r = _locate_switch(
-                1,
-                on_r,
-                ya,
-                ka,
-                t + tau,
-                rem,
-                f_end,
-                p,
-                gl,
-                tl,
-                fl,
-                gr,
-                tr,
-                fr,
-                stuck,
-                ml,
-                mr,
-                work,
-                out,
-                tol,
-            )
-        s = min(s_l, s_r)
-        # shoes switching together (a symmetric brake's) flip together
-        flip_l = bad_l and s_l <= s + 2.0 * tol
-        flip_r = bad_r and s_r <= s + 2.0 * tol
-        _rk4_step_call(
-            ya,
-            ka,
-            t + tau,
-            s,
-            p,
-            gl,
-            tl,
-            fl,
-            gr,
-            tr,
-            fr,
-            stuck,
-            ml,
-            mr,
-            k2,
-            k3,
-            k4,
-            tmp,
-            out,
-            ya,
-            NOT_FREE,
-        )
-        tau += s
-        if flip_l:
-            on_l = not on_l
-        if flip_r:
-            on_r = not on_r
-        switches += 1
-        if dt - tau <= tol:
-            for j in range(n):
-                yb[j] = ya[j]
-            el, hl = _shoe_switch(p, 0, yb)
-            er, hr = _shoe_switch(p, 1, yb)
-            break
-        ml = L.CONTACT_ON if on_l else L.CONTACT_OFF
-        mr = L.CONTACT_ON if on_r else L.CONTACT_OFF
-        fel = _force(p, L.P_SHOE_BASE, t + tau, tl, fl, gl)
-        fer = _force(p, L.P_SHOE_BASE + L.SHOE_STRIDE, t + tau, tr, fr, gr)
-        evaluate(ya, p, fel, fer, stuck, ml, mr, ka, out, -1, t)
-    for j in range(n):
-        y[j] = yb[j]
-    h_end[0] = el
-    h_end[1] = hl
-    h_end[2] = er
-    h_end[3] = hr
-    return switches
-
-
-@njit(**JIT)
-def fixed_step_advance(
-    y,
-    step0,
-    dt,
-    n_steps,
-    p,
-    tl,
-    fl,
-    tr,
-    fr,
-    gain_override,
-    kstate,
-    fstate,
-    settle_steps,
-    record_every,
-    out,
-    scheme,
-):
-    """Advance ``y`` in place by ``n_steps`` fixed steps of ``dt`` seconds.
-
-    ``scheme`` (layout.SCHEME_*): classical RK4; RK4 with contact switches located inside
-    the step (:func:`_located_step`); or symplectic (semi-implicit) Euler, which updates the
-    speeds with the accelerations at the step start and the angles with the new speeds
-    (one evaluation per step, first order, the energy quadratures by explicit Euler).
-
-    Time is ``(step0 + i) * dt`` exactly, so runs are reproducible bit for bit.
-    Actuation: piecewise-linear knots (tl, fl) and (tr, fr), times in s; they are
-    evaluated at every stage time and multiplied by the shoes' gains (layout S_ACTUATION_GAIN)
-    unless ``gain_override`` is 0.
-
-    One sample (layout.COLUMNS) is written to ``out`` every ``record_every`` steps, at
-    the start of the step, from the same evaluation the scheme needs for its first stage,
-    so the output stays on the uniform grid whatever happens inside a step.
-    ``kstate`` (int64, layout.K_*) and ``fstate`` (float64, layout.F_*; F_STOP_TIME < 0
-    until the drum first sticks) carry the stick state and the regime bookkeeping between
-    calls. At the end of every step the drum's stick/slip rule
-    (:mod:`brake_sim_ros.model.standstill`) is applied.
-
-    Defects that change during the run (``p``'s growth entries, :mod:`.growth`) are set
-    at the start of every step, at its time, in a working copy of ``p`` (the actuation
-    gains with them); without entries ``p`` is used as it is.
-
-    A drive cycle (``p``'s P_CYCLE_COUNT > 0, :mod:`.cycle`) replaces the actuation knots
-    by its brake force ramp and sets the drive torque and the vehicle's load: its
-    controller runs at the start of every step, from the state then, in the working copy
-    (its state in kstate/fstate).
-    Without a cycle, a live target speed (P_LIVE_SPEED_CONTROL) sets the drive torque so,
-    by the same speed controller (:func:`.cycle.live_control`).
-
-    Returns the number of rows written. Stops early (status in kstate) on a non-finite state.
-    """
-    n = y.shape[0]
-    k1 = np.empty(n)
-    k2 = np.empty(n)
-    k3 = np.empty(n)
-    k4 = np.empty(n)
-    tmp = np.empty(n)
-    y_new = np.empty(n)
-    work = np.empty((8, n))
-    h_start = np.empty(2)
-    h_end = np.empty(4)
-    gl = p[L.P_SHOE_BASE + L.S_ACTUATION_GAIN]
-    gr = p[L.P_SHOE_BASE + L.SHOE_STRIDE + L.S_ACTUATION_GAIN]
-    growing = p[L.P_GROWTH_COUNT] > 0.0
-    # a vehicle's controller writes the step's drive torque into the working copy
-    cycling = p[L.P_CYCLE_COUNT] > 0.0
-    speed_held = p[L.P_LIVE_SPEED_CONTROL] > 0.0  # a live target speed (cycle.LiveDrive)
-    # the brake's temperature sets the linings' friction (model/thermal.py)
-    heating = n > L.Y_BRAKE_TEMPERATURE
-    pw = growth.working_copy(p) if growing or cycling or speed_held or heating else p
-    ramp_t = np.zeros(2)
-    ramp_f = np.zeros(2)
-    if cycling:  # the cycle commands both shoes' brake force (model/cycle.py)
-        tl = ramp_t
-        fl = ramp_f
-        tr = ramp_t
-        fr = ramp_f
-    if growing:
-        gl, gr, _ = growth.apply(p, pw, step0 * dt, y)
-    if gain_override != 0:
-        gl = 1.0
-        gr = 1.0
-    radius = p[L.P_DRUM_RADIUS]
-    rows = 0
-    auto = L.CONTACT_AUTO
-    located = scheme == L.SCHEME_RK4_LOCATED
-    if located:
-        h_end[0], h_end[1] = _shoe_switch(pw, 0, y)
-        h_end[2], h_end[3] = _shoe_switch(pw, 1, y)
-    # The located scheme tests the contact switches on the state that ends a step; the
-    # next step's first evaluation needs the same contact kinematics of the same state, so
-    # it takes them (kin_l, kin_r; same bits) while nothing changed the state or the
-    # geometry in between (held: a step without a located switch, no lock). Not with
-    # growing defects (they move the geometry each step) or a shoe removed (its switching
-    # function is not its kinematics'); the kinematics read the drum speed, which the
-    # evaluation takes as 0 while the drum sticks, only on an out-of-round drum. The
-    # other schemes take the contact flags from the first evaluation's kinematics.
-    bl = L.P_SHOE_BASE
-    br = L.P_SHOE_BASE + L.SHOE_STRIDE
-    can_hold = located and not growing and p[bl + L.S_ENABLED] > 0.0 and p[br + L.S_ENABLED] > 0.0
-    round_drum = p[L.P_DRUM_WAVE_COUNT] <= 0.0 and p[L.P_FLAT_DEPTH] <= 0.0
-    # a service brake's shoes are never free: the spring holds each on its stop
-    serviced = p[L.P_SERVICE] > 0.0
-    held = False
-    kin_l = contact.kinematics(pw, bl, 0.0, 0.0, 0.0, 0.0)
-    kin_r = kin_l
-    # RK4 stages skip the contact geometry where the shoes provably exert nothing
-    # (_rides_free): on a round drum with a fixed geometry, each shoe's indentation at the
-    # step's start and twice the largest distance of its lining from its pivot
-    free = NOT_FREE.copy()
-    free[1] = 2.0 * _lining_reach(pw, bl)
-    free[3] = 2.0 * _lining_reach(pw, br)
-    for i in range(n_steps):
-        step = step0 + i
-        t = step * dt
-        if growing and i > 0:
-            gl, gr, moved = growth.apply(p, pw, t, y)
-            if gain_override != 0:
-                gl = 1.0
-                gr = 1.0
-            if located and moved:  # the contact modes of the step follow the geometry now
-                h_end[0], h_end[1] = _shoe_switch(pw, 0, y)
-                h_end[2], h_end[3] = _shoe_switch(pw, 1, y)
-        if heating:
-            thermal.fade_linings(p, pw, y[L.Y_BRAKE_TEMPERATURE])
-        if cycling:
-            cycle.control(pw, p, y, kstate, fstate, t, dt)
-            ramp_t[0] = fstate[L.F_RAMP_T0]
-            ramp_t[1] = fstate[L.F_RAMP_T1]
-            ramp_f[0] = fstate[L.F_RAMP_F0]
-            ramp_f[1] = fstate[L.F_RAMP_F1]
-        elif speed_held:
-            cycle.live_control(pw, y)
-        stuck = kstate[L.K_STUCK]
-        fel = _force(pw, L.P_SHOE_BASE, t, tl, fl, gl)
-        fer = _force(pw, L.P_SHOE_BASE + L.SHOE_STRIDE, t, tr, fr, gr)
-        record = i % record_every == 0
-        if not (held and (round_drum or not stuck)):
-            wa = y[L.Y_DRUM_ANGLE]
-            wd = 0.0 if stuck else y[L.Y_DRUM_SPEED]
-            kin_l = contact.kinematics(pw, bl, y[L.Y_LEFT_ANGLE], y[L.Y_LEFT_SPEED], wa, wd)
-            kin_r = contact.kinematics(pw, br, y[L.Y_RIGHT_ANGLE], y[L.Y_RIGHT_SPEED], wa, wd)
-        held = False
-        row = rows if record else -1
-        _evaluate_from(y, pw, fel, fer, stuck, auto, auto, kin_l, kin_r, k1, out, row, t)
-        if located:
-            touching_l = 1 if h_end[0] > 0.0 else 0
-            touching_r = 1 if h_end[2] > 0.0 else 0
-            h_start[0] = h_end[1]
-            h_start[1] = h_end[3]
-        else:
-            # the indentation of the evaluation's kinematics: the switching function's
-            # (it does not read the drum speed), of a shoe in the model
-            touching_l = 1 if pw[bl + L.S_ENABLED] > 0.0 and kin_l[0] > 0.0 else 0
-            touching_r = 1 if pw[br + L.S_ENABLED] > 0.0 and kin_r[0] > 0.0 else 0
-        _update_regime(
-            kstate,
-            L.K_LEFT_REGIME,
-            L.K_LEFT_IN_CONTACT,
-            L.K_LEFT_LAST_CHANGE_STEP,
-            touching_l,
-            step,
-            settle_steps,
-        )
-        _update_regime(
-            kstate,
-            L.K_RIGHT_REGIME,
-            L.K_RIGHT_IN_CONTACT,
-            L.K_RIGHT_LAST_CHANGE_STEP,
-            touching_r,
-            step,
-            settle_steps,
-        )
-        if record:
-            o = out[rows]
-            rl = kstate[L.K_LEFT_REGIME]
-            rr = kstate[L.K_RIGHT_REGIME]
-            o[L.C_SHOE_REGIME] = rl
-            o[L.C_SHOE_REGIME + L.RIGHT_OF_SCALAR] = rr
-            if stuck:
-                o[L.C_REGIME] = L.REGIME_STOPPED
-            elif rl == L.REGIME_IMPACTING or rr == L.REGIME_IMPACTING:
-                o[L.C_REGIME] = L.REGIME_IMPACTING
-            elif rl == L.REGIME_CONTACT or rr == L.REGIME_CONTACT:
-                o[L.C_REGIME] = L.REGIME_CONTACT
-            else:
-                o[L.C_REGIME] = L.REGIME_FREE
-            o[L.C_LOCK_LOSS] = fstate[L.F_LOCK_LOSS]
-            if cycling:
-                o[L.C_PHASE] = kstate[L.K_SEGMENT]
-                o[L.C_LOAD_CHANGE_WORK] = fstate[L.F_LOAD_CHANGE_WORK]
-            rows += 1
-        surface_before = abs(y[L.Y_DRUM_SPEED]) * radius
-        if scheme == L.SCHEME_SEMI_IMPLICIT_EULER:
-            for j in range(4, 8):
-                y[j] += dt * k1[j]
-            for j in range(4):
-                y[j] += dt * y[j + 4]
-            for j in range(8, n):
-                y[j] += dt * k1[j]
-        else:
-            ml = auto
-            mr = auto
-            if located:
-                # modes frozen for the step; k1 (auto) equals k1 with these modes
-                ml = L.CONTACT_ON if h_start[0] > 0.0 else L.CONTACT_OFF
-                mr = L.CONTACT_ON if h_start[1] > 0.0 else L.CONTACT_OFF
-            if round_drum and not growing and not serviced:
-                free[0] = kin_l[0]
-                free[2] = kin_r[0]
-            rk4_step(
-                y,
-                k1,
-                t,
-                dt,
-                pw,
-                gl,
-                tl,
-                fl,
-                gr,
-                tr,
-                fr,
-                stuck,
-                ml,
-                mr,
-                k2,
-                k3,
-                k4,
-                tmp,
-                out,
-                y_new,
-                free,
-            )
-            accept = True
-            if located:
-                if can_hold:
-                    wa = y_new[L.Y_DRUM_ANGLE]
-                    wn = y_new[L.Y_DRUM_SPEED]
-                    kin_l = contact.kinematics(
-                        pw, bl, y_new[L.Y_LEFT_ANGLE], y_new[L.Y_LEFT_SPEED], wa, wn
-                    )
-                    kin_r = contact.kinematics(
-                        pw, br, y_new[L.Y_RIGHT_ANGLE], y_new[L.Y_RIGHT_SPEED], wa, wn
-                    )
-                    el, hl = contact.switching_of(pw, kin_l)
-                    er, hr = contact.switching_of(pw, kin_r)
-                else:
-                    el, hl = _shoe_switch(pw, 0, y_new)
-                    er, hr = _shoe_switch(pw, 1, y_new)
-                if (hl > 0.0) != (h_start[0] > 0.0) or (hr > 0.0) != (h_start[1] > 0.0):
-                    # a contact switches inside this step: redo it split at the switches
-                    fstate[L.F_SWITCHES] += _located_step(
-                        y, k1, t, dt, pw, gl, tl, fl, gr, tr, fr, stuck, h_start, work, out, h_end
-                    )
-                    accept = False
-                else:
-                    h_end[0] = el
-                    h_end[1] = hl
-                    h_end[2] = er
-                    h_end[3] = hr
-                    held = can_hold
-            if accept:
-                for j in range(n):
-                    y[j] = y_new[j]
-        if stuck:
-            if standstill.slips(pw, y):
-                kstate[L.K_STUCK] = 0
-                kstate[L.K_BREAKAWAYS] += 1
-        elif standstill.sticks(pw, y, surface_before):
-            t_stick = standstill.interpolated_stick_time(
-                t,
-                dt,
-                surface_before,
-                abs(y[L.Y_DRUM_SPEED]) * radius,
-                p[L.P_FRICTION_SMOOTHING_SPEED],
-            )
-            if fstate[L.F_WHEEL_LOCK_TIME] < 0.0:
-                fstate[L.F_WHEEL_LOCK_TIME] = t_stick
-            loss = standstill.stick(pw, y)
-            held = False
-            fstate[L.F_LOCK_LOSS] += loss
-            if heating:  # the kinetic energy the lock removes heats the brake
-                y[L.Y_BRAKE_TEMPERATURE] += loss / p[L.P_HEAT_CAPACITY]
-            kstate[L.K_STUCK] = 1
-            if fstate[L.F_STOP_TIME] < 0.0 and standstill.at_rest(pw, y):
-                fstate[L.F_STOP_TIME] = t_stick
-        if kstate[L.K_STUCK] and fstate[L.F_STOP_TIME] < 0.0 and standstill.at_rest(pw, y):
-            fstate[L.F_STOP_TIME] = t + dt
-        for j in range(8):
-            if not math.isfinite(y[j]):
-                kstate[L.K_STATUS] = 1
-                return rows
-    return rows
 
 
 # The shoe's force law is defined once, in model/contact.py; callers that evaluate a single

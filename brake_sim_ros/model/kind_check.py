@@ -73,6 +73,8 @@ def _behaviour_parts(kind: DefectKind) -> list[str]:
     for law, growth_id in _STATE_LAWS.items():
         if law in kind.laws and kind.growth_id != growth_id:
             out.append(f"growth law {law!r} only with the growth id the model integrates")
+    if not callable(kind.packing):
+        out.append("a packing: how it enters the kernels' parameters (model/packing.py)")
     if kind.actuation not in ACTUATION_EFFECTS:
         out.append(f"an actuation effect of {list(ACTUATION_EFFECTS)}")
     if kind.tied and not kind.on_shoes:
@@ -86,7 +88,8 @@ def missing_parts(kind: DefectKind) -> list[str]:
     """What ``kind``'s entry lacks, one phrase per part (empty: complete): a name, its
     locations (both shoes or the drum), a unit, range, limit, description, scenario key
     and service limit, its fields (each named, with a unit, a description and a default
-    in its range), fidelity levels, growth rules and actuation effect the model knows."""
+    in its range), fidelity levels, growth rules, its packing and an actuation effect the
+    model knows."""
     out = []
     if not _NAME.fullmatch(kind.name) or not _NAME.fullmatch(kind.scenario_key):
         out.append("a name and a scenario key of a-z 0-9 _")

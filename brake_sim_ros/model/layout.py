@@ -74,7 +74,7 @@ W_PHASE = 2
 MAX_DRUM_HARMONICS = 24  # most harmonics one drum carries (model/defects.py DrumDefect)
 
 # nominal (healthy) geometry of the LEFT shoe, from which model/growth.py re-places a shoe
-# whose pivot moves during the run (model/assembly.py place_shoe's inputs)
+# whose pivot moves during the run (model/placement.py place_shoe's inputs)
 P_NOMINAL_BASE = P_DRUM_WAVE_BASE + MAX_DRUM_HARMONICS * DRUM_WAVE_STRIDE
 N_PIVOT_X = 0
 N_PIVOT_Y = 1
@@ -103,7 +103,7 @@ G_START = 5
 G_FINAL = 6
 G_NOW = 7  # in the kernel's working copy: the severity last set (NaN: none yet)
 MAX_GROWTH_ENTRIES = 16
-GK_PIVOT = 0  # pivot_radius_change, %: the shoe is re-placed (assembly.place_shoe)
+GK_PIVOT = 0  # pivot_radius_change, %: the shoe is re-placed (placement.place_shoe)
 GK_SHARE = 1  # actuation_share_change: this shoe's gain 2 (0.5 + s), the other's 2 (0.5 - s)
 GK_DRUM = 2  # drum_out_of_round, um of peak runout: every harmonic scales with it
 GK_FRICTION = 3  # friction_change, %: the shoe's lining coefficient (growth.lining_friction)
@@ -374,7 +374,7 @@ CONTACT_AUTO = -1
 CONTACT_OFF = 0
 CONTACT_ON = 1
 
-# fixed-step schemes of the compiled stepper (kernel.fixed_step_advance)
+# fixed-step schemes of the compiled stepper (advance.fixed_step_advance)
 SCHEME_RK4 = 0  # classical RK4, contact switched wherever a stage falls
 SCHEME_RK4_LOCATED = 1  # RK4 with contact onsets and separations located inside the step
 SCHEME_SEMI_IMPLICIT_EULER = 2  # symplectic (semi-implicit) Euler: speeds first, then angles

@@ -88,7 +88,7 @@ class ShoeGeometry:
     # the symmetric brake and cases 1, 5 and 7 together, within what a leading-trailing drum
     # brake of this size allows: pins on an anchor at the bottom, tips at one wheel cylinder
     # at the top. How the shoe sits between its pin and its piston, and what a pivot
-    # defect does to it: brake_sim_ros.model.assembly.place_shoe.
+    # defect does to it: brake_sim_ros.model.placement.place_shoe.
     #
     # Pivot pin 148 mm from the drum centre, 25 deg left of bottom dead centre (x = -63 mm:
     # two pins 125 mm apart on one anchor plate). The shoe first touches the

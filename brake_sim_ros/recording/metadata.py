@@ -85,6 +85,7 @@ UNIT = "brake_sim_unit"
 ROS_PARAMETERS = "brake_sim_ros_parameters"
 PARAMETER_CHANGE = "brake_sim_parameter_change"
 ROSBAG2 = "rosbag2"
+RECOVERY = "brake_sim_recovery"  # written by brake-sim recover (recording/recover.py)
 ROS_DISTRO = "jazzy"
 BAG_METADATA_VERSION = 9  # rosbag2 Jazzy's BagMetadata::version
 TIME_BASE = "simulated time, ns since the start (or last ~/reset) of the run"

@@ -38,7 +38,7 @@ import math
 import numpy as np
 
 from brake_sim_ros.errors import ParameterError, SimulationError, StepSizeError
-from brake_sim_ros.model import kernel
+from brake_sim_ros.model import advance
 from brake_sim_ros.model import layout as L
 from brake_sim_ros.model.actuation import MAX_ACTUATION_FORCE_N
 from brake_sim_ros.model.assembly import initial_state, pack
@@ -492,7 +492,7 @@ class FixedStepStepper:
         tl, fl, tr, fr = knots
         first, sub = self._sample, self.substeps
         dt = self.physics_step_s
-        written = kernel.fixed_step_advance(
+        written = advance.fixed_step_advance(
             self._y,
             first * sub,
             dt,

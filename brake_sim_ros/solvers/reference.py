@@ -88,6 +88,51 @@ def run_reference(
             switches and the lock located as events.
         cpu_budget_s: give up (SimulationError) after this much process CPU time, s.
     """
+    _refuse_unsupported(setup)
+    ensure_compiled(parts=("reference",))  # compiled at first use, saying how far
+    times = default_sample_times(duration_s) if sample_times is None else np.asarray(sample_times)
+    deadline = None if cpu_budget_s is None else time.process_time() + cpu_budget_s
+    run = _ReferenceRun(setup, times, deadline, f"{method} at rtol {rtol:g}", cpu_budget_s)
+    knots = sorted({float(k) for k in np.concatenate([run.tl, run.tr]) if 0.0 < k < duration_s})
+    bounds = [*knots, duration_s]
+    # absolute tolerances per component: angles rad, speeds rad/s, energies J
+    atol = np.array([1e-10] * 4 + [1e-8] * 4 + [1e-6] * (L.N_STATE - 8)) * (rtol / 1e-9)
+    t = 0.0
+    segment_end = bounds.pop(0)
+    while t < duration_s:
+        events = run.events()
+        sol = solve_ivp(
+            run.fun,
+            (t, segment_end),
+            run.y,
+            method=method,
+            rtol=rtol,
+            atol=atol,
+            events=events,
+            dense_output=True,
+        )
+        if sol.status == -1:
+            raise SimulationError(
+                f"reference solver failed at t = {sol.t[-1]:.6f} s: {sol.message}"
+            )
+        t = float(sol.t[-1])
+        run.sample(sol, t, duration_s)
+        run.y = sol.y[:, -1].copy()
+        if sol.status == 1:  # an event fired
+            run.on_events(sol, events, t)
+        elif t >= segment_end and bounds:
+            segment_end = bounds.pop(0)
+    times = run.times
+    run.result.samples = SampleBlock(
+        run.out, 0, float(times[1] - times[0]) if times.size > 1 else 0.0
+    )
+    run.result.n_rhs = run.n_rhs
+    return run.result
+
+
+def _refuse_unsupported(setup: BrakeSetup) -> None:
+    """Refuse, in one line, what the reference solver does not model: a road load, drive
+    or cycle, a thermal state, defects that change during the run, a shaped actuation."""
     if setup.driven:
         raise ParameterError(
             "the reference solver has no road load, drive or cycle controller: a scenario"
@@ -124,54 +169,68 @@ def run_reference(
             " allowed with a fixed-step"
             " method (rk4-located, rk4, semi-implicit-euler)"
         )
-    ensure_compiled(parts=("reference",))  # compiled at first use, saying how far
-    p = pack(setup.params, setup.defects, setup.options)
-    pack_thermal(p, setup)  # the temperature the run is held at, recorded
-    y = initial_state(setup.params, setup.defects)
-    tl, fl, tr, fr = setup.actuation.as_arrays()
-    gains = (p[SHOE_BASES[0] + L.S_ACTUATION_GAIN], p[SHOE_BASES[1] + L.S_ACTUATION_GAIN])
-    radius = p[L.P_DRUM_RADIUS]
-    v_lock = p[L.P_FRICTION_SMOOTHING_SPEED]
-    times = default_sample_times(duration_s) if sample_times is None else np.asarray(sample_times)
-    out = np.zeros((times.size, L.N_COLUMNS))
-    knots = sorted({float(k) for k in np.concatenate([tl, tr]) if 0.0 < k < duration_s})
-    bounds = [*knots, duration_s]
-    # absolute tolerances per component: angles rad, speeds rad/s, energies J
-    atol = np.array([1e-10] * 4 + [1e-8] * 4 + [1e-6] * (L.N_STATE - 8)) * (rtol / 1e-9)
-    deadline = None if cpu_budget_s is None else time.process_time() + cpu_budget_s
-    modes = [L.CONTACT_OFF, L.CONTACT_OFF]
-    for i, base in enumerate(SHOE_BASES):
-        modes[i] = (
+
+
+class _ReferenceRun:
+    """One reference integration between its segments: the packed model, the commanded
+    actuation, each shoe's contact mode and the drum's stick state (fixed within a
+    segment), the samples written so far and what was located."""
+
+    def __init__(
+        self,
+        setup: BrakeSetup,
+        times: np.ndarray,
+        deadline: float | None,
+        name: str,
+        cpu_budget_s: float | None,
+    ) -> None:
+        self.p = p = pack(setup.params, setup.defects, setup.options)
+        pack_thermal(p, setup)  # the temperature the run is held at, recorded
+        self.y = y = initial_state(setup.params, setup.defects)
+        self.tl, self.fl, self.tr, self.fr = setup.actuation.as_arrays()
+        self.gains = (p[SHOE_BASES[0] + L.S_ACTUATION_GAIN], p[SHOE_BASES[1] + L.S_ACTUATION_GAIN])
+        self.times = times
+        self.out = np.zeros((times.size, L.N_COLUMNS))
+        self.deadline, self.name, self.cpu_budget_s = deadline, name, cpu_budget_s
+        self.modes = [
             L.CONTACT_ON
             if indentation_at(p, base, y[L.Y_LEFT_ANGLE + i], y[L.Y_DRUM_ANGLE]) > 0
             else L.CONTACT_OFF
+            for i, base in enumerate(SHOE_BASES)
+        ]
+        self.stuck = 0
+        self.lock_loss = 0.0
+        self.result = ReferenceResult(
+            SampleBlock(self.out, 0, 0.0), {"left": [], "right": []}, {"left": [], "right": []}
         )
-    stuck = 0
-    lock_loss = 0.0
-    result = ReferenceResult(
-        SampleBlock(out, 0, 0.0), {"left": [], "right": []}, {"left": [], "right": []}
-    )
-    dydt = np.zeros(L.N_STATE)
-    counter = [0]
+        self.dydt = np.zeros(L.N_STATE)
+        self.n_rhs = 0
+        self.sample_pos = 0
 
-    def forces(t: float) -> tuple[float, float]:
-        return gains[0] * np.interp(t, tl, fl), gains[1] * np.interp(t, tr, fr)
-
-    def fun(t: float, yy: np.ndarray) -> np.ndarray:
-        counter[0] += 1
-        if deadline is not None and counter[0] % 1000 == 0 and time.process_time() > deadline:
+    def fun(self, t: float, yy: np.ndarray) -> np.ndarray:
+        """The right-hand side in this segment's contact and stick states."""
+        self.n_rhs += 1
+        if (
+            self.deadline is not None
+            and self.n_rhs % 1000 == 0
+            and time.process_time() > self.deadline
+        ):
             raise SimulationError(
-                f"{method} at rtol {rtol:g} gave up at t = {t:.4f} s: over its CPU budget"
-                f" of {cpu_budget_s:g} s"
+                f"{self.name} gave up at t = {t:.4f} s: over its CPU budget"
+                f" of {self.cpu_budget_s:g} s"
             )
-        fe = forces(t)
-        kernel.rhs(yy, p, fe[0], fe[1], stuck, modes[0], modes[1], dydt)
-        return dydt.copy()
+        fe = (
+            self.gains[0] * np.interp(t, self.tl, self.fl),
+            self.gains[1] * np.interp(t, self.tr, self.fr),
+        )
+        kernel.rhs(yy, self.p, fe[0], fe[1], self.stuck, self.modes[0], self.modes[1], self.dydt)
+        return self.dydt.copy()
 
-    t = 0.0
-    sample_pos = 0
-    segment_end = bounds.pop(0)
-    while t < duration_s:
+    def events(self) -> list:
+        """The events that end this segment: each enabled shoe's contact switch; a held
+        drum's breakaway (and, before the stop, its coming to rest); a sliding drum in
+        contact, its stick."""
+        p, modes = self.p, self.modes
         events = []
         for i, base in enumerate(SHOE_BASES):
             if p[base + L.S_ENABLED] <= 0:
@@ -182,7 +241,7 @@ def run_reference(
             ev.terminal = True
             ev.direction = 1.0 if modes[i] == L.CONTACT_OFF else -1.0
             events.append(ev)
-        if stuck:
+        if self.stuck:
 
             def breakaway_event(_t: float, yy: np.ndarray) -> float:
                 coupling, capacity = standstill.hold_torques(p, yy)
@@ -193,7 +252,7 @@ def run_reference(
             breakaway_event.terminal = True
             breakaway_event.direction = 1.0
             events.append(breakaway_event)
-            if result.stop_time_s is None:
+            if self.result.stop_time_s is None:
 
                 def rest_event(_t: float, yy: np.ndarray) -> float:
                     return 0.5 if standstill.at_rest(p, yy) else -0.5
@@ -202,6 +261,8 @@ def run_reference(
                 rest_event.direction = 1.0
                 events.append(rest_event)
         elif L.CONTACT_ON in modes:
+            radius = p[L.P_DRUM_RADIUS]
+            v_lock = p[L.P_FRICTION_SMOOTHING_SPEED]
 
             def stick_event(_t: float, yy: np.ndarray) -> float:
                 return abs(yy[L.Y_DRUM_SPEED]) * radius - v_lock
@@ -209,74 +270,62 @@ def run_reference(
             stick_event.terminal = True
             stick_event.direction = -1.0
             events.append(stick_event)
-        sol = solve_ivp(
-            fun,
-            (t, segment_end),
-            y,
-            method=method,
-            rtol=rtol,
-            atol=atol,
-            events=events,
-            dense_output=True,
-        )
-        if sol.status == -1:
-            raise SimulationError(
-                f"reference solver failed at t = {sol.t[-1]:.6f} s: {sol.message}"
-            )
-        t_end = float(sol.t[-1])
-        # sample everything inside [t, t_end) with this segment's dense output
+        return events
+
+    def sample(self, sol, t_end: float, duration_s: float) -> None:
+        """Write every sample inside ``[t, t_end)`` from this segment's dense output."""
+        times, pos = self.times, self.sample_pos
         stop = np.searchsorted(times, t_end, side="left")
         if t_end >= duration_s:
             stop = times.size
-        if stop > sample_pos:
-            tk = times[sample_pos:stop]
+        if stop > pos:
+            tk = times[pos:stop]
             yk = np.ascontiguousarray(sol.sol(np.minimum(tk, t_end)).T)
-            fel = gains[0] * np.interp(tk, tl, fl)
-            fer = gains[1] * np.interp(tk, tr, fr)
-            kernel.evaluate_rows(yk, tk, p, fel, fer, stuck, out[sample_pos:stop])
-            out[sample_pos:stop, L.C_LOCK_LOSS] = lock_loss
-            out[sample_pos:stop, L.C_REGIME] = L.REGIME_STOPPED if stuck else -1
-        sample_pos = stop
-        y = sol.y[:, -1].copy()
-        t = t_end
-        if sol.status == 1:  # an event fired
-            for ev_index, ev_times in enumerate(sol.t_events):
-                if ev_times.size == 0:
-                    continue
-                ev = events[ev_index]
-                if ev.__name__ == "stick_event":
-                    # the crossing of v_s is where the fixed-step rule sticks, if it holds
-                    coupling, capacity = standstill.hold_torques(p, y)
-                    rigid = p[L.P_RIGID_COUPLING] > 0.0
-                    if capacity > 0.0 and (rigid or abs(coupling) <= capacity):
-                        stuck = 1
-                        lock_loss += standstill.stick(p, y)
-                        if result.wheel_lock_time_s is None:
-                            result.wheel_lock_time_s = t
-                        if result.stop_time_s is None and standstill.at_rest(p, y):
-                            result.stop_time_s = t
-                    continue
-                if ev.__name__ == "rest_event":
-                    result.stop_time_s = t
-                    continue
-                if ev.__name__ == "breakaway_event":
-                    stuck = 0
-                    result.breakaways_s.append(t)
-                    continue
-                _flip(modes, ev.shoe_index, t, result)
-            # Simultaneous events (a symmetric brake's shoes touch at the same instant) may
-            # be reported one at a time; re-sync every shoe with the geometry.
-            for i, base in enumerate(SHOE_BASES):
-                eps = indentation_at(p, base, y[L.Y_LEFT_ANGLE + i], y[L.Y_DRUM_ANGLE])
-                if (modes[i] == L.CONTACT_OFF and eps > 0.0) or (
-                    modes[i] == L.CONTACT_ON and eps < -SEPARATION_HYSTERESIS_M
-                ):
-                    _flip(modes, i, t, result)
-        elif t >= segment_end and bounds:
-            segment_end = bounds.pop(0)
-    result.samples = SampleBlock(out, 0, float(times[1] - times[0]) if times.size > 1 else 0.0)
-    result.n_rhs = counter[0]
-    return result
+            fel = self.gains[0] * np.interp(tk, self.tl, self.fl)
+            fer = self.gains[1] * np.interp(tk, self.tr, self.fr)
+            kernel.evaluate_rows(yk, tk, self.p, fel, fer, self.stuck, self.out[pos:stop])
+            self.out[pos:stop, L.C_LOCK_LOSS] = self.lock_loss
+            self.out[pos:stop, L.C_REGIME] = L.REGIME_STOPPED if self.stuck else -1
+        self.sample_pos = stop
+
+    def on_events(self, sol, events: list, t: float) -> None:
+        """Act on the events that ended the segment at ``t``: stick (where the fixed-step
+        rule sticks), rest, breakaway, a shoe's contact switch; then re-sync every shoe's
+        mode with the geometry."""
+        p, y, result = self.p, self.y, self.result
+        for ev_index, ev_times in enumerate(sol.t_events):
+            if ev_times.size == 0:
+                continue
+            ev = events[ev_index]
+            if ev.__name__ == "stick_event":
+                # the crossing of v_s is where the fixed-step rule sticks, if it holds
+                coupling, capacity = standstill.hold_torques(p, y)
+                rigid = p[L.P_RIGID_COUPLING] > 0.0
+                if capacity > 0.0 and (rigid or abs(coupling) <= capacity):
+                    self.stuck = 1
+                    self.lock_loss += standstill.stick(p, y)
+                    if result.wheel_lock_time_s is None:
+                        result.wheel_lock_time_s = t
+                    if result.stop_time_s is None and standstill.at_rest(p, y):
+                        result.stop_time_s = t
+                continue
+            if ev.__name__ == "rest_event":
+                result.stop_time_s = t
+                continue
+            if ev.__name__ == "breakaway_event":
+                self.stuck = 0
+                result.breakaways_s.append(t)
+                continue
+            _flip(self.modes, ev.shoe_index, t, result)
+        # Simultaneous events (a symmetric brake's shoes touch at the same instant) may
+        # be reported one at a time; re-sync every shoe with the geometry.
+        for i, base in enumerate(SHOE_BASES):
+            eps = indentation_at(p, base, y[L.Y_LEFT_ANGLE + i], y[L.Y_DRUM_ANGLE])
+            mode = self.modes[i]
+            if (mode == L.CONTACT_OFF and eps > 0.0) or (
+                mode == L.CONTACT_ON and eps < -SEPARATION_HYSTERESIS_M
+            ):
+                _flip(self.modes, i, t, result)
 
 
 def _flip(modes: list[int], shoe: int, t: float, result: ReferenceResult) -> None:

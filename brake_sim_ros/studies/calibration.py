@@ -42,7 +42,7 @@ from brake_sim_ros.model.parameters import BrakeParameters
 from brake_sim_ros.model.run_setup import BrakeSetup
 from brake_sim_ros.solvers.contact_regime import run_contact_regime
 from brake_sim_ros.solvers.fixed_step import FixedStepStepper
-from brake_sim_ros.studies.validation import (
+from brake_sim_ros.studies.validation_checks import (
     BANDS,
     PUBLISHED_CASES,
     PUBLISHED_FIRST_IMPACT_ACTUATION_N,

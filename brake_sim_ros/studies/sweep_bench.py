@@ -28,13 +28,8 @@ import pyarrow.parquet as pq
 from brake_sim_ros.campaigns import load_campaign
 from brake_sim_ros.campaigns.campaign import Campaign
 from brake_sim_ros.campaigns.loader import parse_campaign
-from brake_sim_ros.datasets.sweep import (
-    DONE_DIR,
-    MANIFEST_NAME,
-    SweepSummary,
-    start_pool_server,
-    sweep,
-)
+from brake_sim_ros.datasets.sweep import SweepSummary, start_pool_server, sweep
+from brake_sim_ros.datasets.sweep_output import DONE_DIR, MANIFEST_NAME
 from brake_sim_ros.datasets.threads import limit_threads
 
 # 3 units x (every catalogue defect at two severities + healthy): short runs, one force

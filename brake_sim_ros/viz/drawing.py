@@ -2,7 +2,7 @@
 
 Everything is in the ``brake_backing_plate`` frame (origin at the drum centre, x right,
 y up, metres) and computed from the core's parameters and defects with
-:func:`brake_sim_ros.model.assembly.place_shoe`, so the drawing is the geometry the
+:func:`brake_sim_ros.model.placement.place_shoe`, so the drawing is the geometry the
 physics uses. No Rerun here: :mod:`.scene` turns a :class:`Frame` into entities.
 
 The shoe outline (web and lining thickness) is illustrative: the model's shoe is a rigid
@@ -17,9 +17,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from brake_sim_ros.model.assembly import SIDES, place_shoe
 from brake_sim_ros.model.defects import Defects
+from brake_sim_ros.model.layout import SIDES
 from brake_sim_ros.model.parameters import BrakeParameters
+from brake_sim_ros.model.placement import place_shoe
 
 LINING_THICKNESS_M = 0.008  # drawn thickness of the lining (illustrative)
 TABLE_THICKNESS_M = 0.004  # drawn thickness of the shoe table under the lining (illustrative)
@@ -83,7 +84,7 @@ class BrakeDrawing:
     Args:
         params: parameters in force (drum radius, shoe geometry).
         defects: defects in force (a pivot-radius change turns the shoe about its tip:
-            :func:`brake_sim_ros.model.assembly.place_shoe`).
+            :func:`brake_sim_ros.model.placement.place_shoe`).
     """
 
     def __init__(self, params: BrakeParameters, defects: Defects) -> None:

@@ -107,7 +107,7 @@ def test_features_refuse_a_stop_too_short_for_the_window():
 def test_validation_section_names_the_separating_features_or_says_none():
     """The report's section on synthetic figures: a verdict for every case, the separating
     features named, a case that nothing separates said to be not separated."""
-    from brake_sim_ros.studies.validation import measured_markdown
+    from brake_sim_ros.studies.validation_report import measured_markdown
 
     def row(first: float, x: float, y: float) -> dict[str, float]:
         return {mf.FIRST_IMPACT: first, "band rms x": x, "band rms y": y, mf.CLIPPED: 3.0}

@@ -16,7 +16,7 @@ from brake_sim_ros.model import catalogue
 from brake_sim_ros.scenarios import load_scenario
 from brake_sim_ros.scenarios.loader import parse_scenario
 from brake_sim_ros.stream.run import run_scenario
-from brake_sim_ros.studies.validation import checks
+from brake_sim_ros.studies.validation_checks import checks
 
 
 def _cli(*args, cwd=None):

@@ -26,7 +26,8 @@ import pytest
 
 from brake_sim_ros import cli
 from brake_sim_ros.campaigns import load_campaign
-from brake_sim_ros.datasets.sweep import LOCK_NAME, MANIFEST_NAME, sweep
+from brake_sim_ros.datasets.sweep import sweep
+from brake_sim_ros.datasets.sweep_output import LOCK_NAME, MANIFEST_NAME
 
 ROOT = Path(__file__).resolve().parents[2]
 CAMPAIGN = """

@@ -28,7 +28,8 @@ from brake_sim_ros.campaigns import load_campaign
 from brake_sim_ros.datasets import open as open_dataset
 from brake_sim_ros.datasets.parquet import METADATA_KEY
 from brake_sim_ros.datasets.reader import info_text
-from brake_sim_ros.datasets.sweep import DONE_DIR, LOCK_NAME, MANIFEST_NAME, sweep
+from brake_sim_ros.datasets.sweep import sweep
+from brake_sim_ros.datasets.sweep_output import DONE_DIR, LOCK_NAME, MANIFEST_NAME
 from brake_sim_ros.scenarios import parse_scenario
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -271,7 +272,7 @@ def test_output_directories_are_refused_in_one_line(tmp_path, capsys, campaign_f
 
 
 def test_a_new_output_directory_is_made_with_its_parents(tmp_path):
-    from brake_sim_ros.datasets.sweep import SweepError, prepare_output
+    from brake_sim_ros.datasets.sweep_output import SweepError, prepare_output
 
     out = tmp_path / "data" / "sweeps" / "demo"
     prepare_output(out, "lock")

@@ -19,7 +19,7 @@ import pytest
 from brake_sim_ros import cli
 from brake_sim_ros.datasets import open as open_dataset
 from brake_sim_ros.datasets.reader import check
-from brake_sim_ros.datasets.sweep import DONE_DIR, MANIFEST_NAME, sha256_file
+from brake_sim_ros.datasets.sweep_output import DONE_DIR, MANIFEST_NAME, sha256_file
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -250,7 +250,7 @@ def test_unknown_output_columns_are_refused_before_the_directory_is_made(tmp_pat
 
 def test_a_path_spelled_differently_resumes_and_a_truncated_lock_is_damaged(tmp_path):
     from brake_sim_ros.campaigns import load_campaign
-    from brake_sim_ros.datasets.sweep import LOCK_NAME, SweepError, prepare_output
+    from brake_sim_ros.datasets.sweep_output import LOCK_NAME, SweepError, prepare_output
 
     path = _campaign(tmp_path / "c.toml", "c", 3, 1200.0, 0.1)
     out = tmp_path / "out"

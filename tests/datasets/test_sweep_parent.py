@@ -15,7 +15,8 @@ import pytest
 from brake_sim_ros.campaigns import load_campaign, parse_campaign
 from brake_sim_ros.campaigns.axes import DefectChoice, condition_points
 from brake_sim_ros.datasets.parquet import measured_column
-from brake_sim_ros.datasets.sweep import DONE_DIR, MANIFEST_NAME, sweep
+from brake_sim_ros.datasets.sweep import sweep
+from brake_sim_ros.datasets.sweep_output import DONE_DIR, MANIFEST_NAME
 from brake_sim_ros.errors import BrakeSimError
 from brake_sim_ros.fleet.scatter import unit_parameters, unit_sensors
 from brake_sim_ros.model.catalogue import KINDS

@@ -10,6 +10,7 @@ from hypothesis import strategies as st
 from brake_sim_ros.cli import main
 from brake_sim_ros.errors import ParameterError
 from brake_sim_ros.model import catalogue
+from brake_sim_ros.model.assembly import initial_state, pack
 from brake_sim_ros.model.defects import (
     DEFAULT_PULSATION_HZ,
     MAX_PULSATION_HZ,
@@ -17,6 +18,7 @@ from brake_sim_ros.model.defects import (
     ShoeDefect,
 )
 from brake_sim_ros.model.kind_check import missing_parts
+from brake_sim_ros.model.parameters import BrakeParameters
 from brake_sim_ros.scenarios.defect_help import catalogue_text
 from brake_sim_ros.stream.parameters import _RANGES as RANGES
 from tests.defect_reach import reaches_everything
@@ -29,6 +31,21 @@ def test_every_entry_is_complete_and_reaches_every_consumer(kind):
     CLI help from its entry alone."""
     assert missing_parts(kind) == []
     reaches_everything(kind)
+
+
+@pytest.mark.parametrize("kind", list(catalogue.KINDS), ids=lambda k: k.name)
+def test_every_built_in_kind_packs_its_severity(kind):
+    """A brake that carries the kind packs differently from the healthy brake (an initial
+    condition: it starts from another state), at each of its locations."""
+    params = BrakeParameters()
+    healthy = pack(params, Defects())
+    for location in kind.locations:
+        defects = Defects.single(kind.name, location, 0.5 * kind.service_limit)
+        if kind.initial_condition:
+            changed = initial_state(params, defects) != initial_state(params, Defects())
+        else:
+            changed = pack(params, defects) != healthy
+        assert changed.any(), f"{kind.name} at {location} reaches neither the packed vector nor y0"
 
 
 def test_the_drum_flat_is_one_entry_its_fields_written_there_once():

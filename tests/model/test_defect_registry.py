@@ -14,6 +14,7 @@ from brake_sim_ros.model import catalogue
 from brake_sim_ros.model.catalogue import ALL_LEVELS, DefectField, DefectKind
 from brake_sim_ros.model.defects import Defects, ShoeDefect
 from brake_sim_ros.model.kind_check import missing_parts, register, registered
+from brake_sim_ros.model.packing import pack_nothing
 from brake_sim_ros.scenarios import parse_scenario
 from tests.defect_reach import reaches_everything
 
@@ -31,6 +32,7 @@ GLAZING = DefectKind(
     service_limit=40.0,
     levels=ALL_LEVELS,
     growth_id=None,
+    packing=pack_nothing,
     attributes=(
         DefectField(
             "lining_glazing_arc_deg",
@@ -57,6 +59,7 @@ SCORING = DefectKind(
     service_limit=200.0,
     levels=frozenset({"rigid", "full"}),
     growth_id=None,
+    packing=pack_nothing,
 )
 
 
@@ -99,6 +102,7 @@ def test_a_registered_kind_is_ground_truth_with_its_attribute():
         ({"laws": ("linear",)}, "growth laws"),
         ({"laws": ("step", "friction_work")}, "'friction_work' only with"),
         ({"actuation": "squeal"}, "an actuation effect"),
+        ({"packing": None}, "a packing"),
         ({"table": True}, "one table"),
         ({"scenario_key": "Glazing Pct"}, "a scenario key"),
         (

@@ -1,7 +1,7 @@
 """RK4 stages where the shoes ride free skip the contact geometry: same bits, sound bound.
 
 The fixed-step kernel evaluates a stage with the rotors' derivatives only
-(``kernel._free_evaluate``) where ``kernel._rides_free`` proves that no shoe force acts:
+(``kernel.free_evaluate``) where ``kernel.rides_free`` proves that no shoe force acts:
 the drum slides, no tip force, no contact forced on and each indentation provably negative
 by the bound ``eps0 + 2 reach |theta - theta0|``. These tests step real states of the
 urban cycle both ways and require identical bits, and check the bound against the contact
@@ -17,7 +17,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from brake_sim_ros.model import contact, kernel
+from brake_sim_ros.model import contact, kernel, rk4
 from brake_sim_ros.model import layout as L
 from brake_sim_ros.scenarios import load_scenario
 from brake_sim_ros.stream.build import stepper_for
@@ -33,7 +33,7 @@ def _bound(p: np.ndarray, y: np.ndarray) -> np.ndarray:
             p, base, y[L.Y_LEFT_ANGLE + i], y[L.Y_LEFT_SPEED + i], y[L.Y_DRUM_ANGLE], 0.0
         )
         free[2 * i] = kin[0]
-        free[2 * i + 1] = 2.0 * kernel._lining_reach(p, base)
+        free[2 * i + 1] = 2.0 * kernel.lining_reach(p, base)
     return free
 
 
@@ -45,15 +45,15 @@ def _step(p, y, dt, free, mode, t_knots, f_knots):
     tmp, y_out = np.empty(n), np.empty(n)
     out = np.empty((1, L.N_COLUMNS))
     kernel.evaluate(y, p, 0.0, 0.0, 0, mode, mode, k[0], out, -1, 0.0)
-    kernel.rk4_step(
+    rk4.rk4_step(
         y, k[0], 0.0, dt, p, 1.0, t_knots, f_knots, 1.0, t_knots, f_knots, 0, mode, mode,
         k[1], k[2], k[3], tmp, out, y_out, free,
     )  # fmt: skip
     free_stages = 0
     for j, c in enumerate((0.5, 0.5, 1.0)):
         stage = y + c * dt * k[j]
-        force = kernel._force(p, L.P_SHOE_BASE, c * dt, t_knots, f_knots, 1.0)
-        free_stages += kernel._rides_free(stage, y, free, 0, mode, mode, force, force)
+        force = kernel.force(p, L.P_SHOE_BASE, c * dt, t_knots, f_knots, 1.0)
+        free_stages += kernel.rides_free(stage, y, free, 0, mode, mode, force, force)
     return y_out, free_stages
 
 
@@ -109,7 +109,7 @@ def test_the_bound_never_admits_a_penetrating_stage(side, theta0_mrad, turn_mrad
     theta = theta0 + turn_mrad * 1e-3
     eps0 = contact.kinematics(p, base, theta0, 0.0, 0.0, 0.0)[0]
     eps = contact.kinematics(p, base, theta, 0.0, 0.0, 0.0)[0]
-    reach = kernel._lining_reach(p, base)
+    reach = kernel.lining_reach(p, base)
     if eps0 + 2.0 * reach * abs(theta - theta0) < 0.0:
         assert eps < 0.0
     # the reach bounds the geometry's own rate: |d eps / d theta| <= reach

@@ -15,9 +15,10 @@ import pytest
 
 from brake_sim_ros.analysis.impacts import shoe_metrics
 from brake_sim_ros.model import layout as L
-from brake_sim_ros.model.assembly import contact_arms, indentation_at, pack, place_shoe
+from brake_sim_ros.model.assembly import contact_arms, indentation_at, pack
 from brake_sim_ros.model.defects import Defects, ShoeDefect
 from brake_sim_ros.model.parameters import BrakeParameters
+from brake_sim_ros.model.placement import place_shoe
 from brake_sim_ros.model.run_setup import BrakeSetup
 from brake_sim_ros.scenarios import load_scenario
 from brake_sim_ros.solvers.fixed_step import FixedStepStepper

@@ -7,7 +7,7 @@ import pytest
 
 from brake_sim_ros.model.parameters import BrakeParameters
 from brake_sim_ros.studies import calibration as cal
-from brake_sim_ros.studies.validation import (
+from brake_sim_ros.studies.validation_checks import (
     PUBLISHED_CASES,
     PUBLISHED_FIRST_IMPACT_ACTUATION_N,
     PUBLISHED_STOP_TIME_S,

@@ -1,0 +1,342 @@
+"""Compiled (numba) fixed-step loop: every scheme of the fixed-step stepper over a block of
+samples (:func:`fixed_step_advance`), with the contact regimes, the stick and slip at
+standstill, the growth of defects, a drive cycle's control and the thermal state.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from brake_sim_ros.model import (
+    contact,
+    cycle,
+    growth,
+    kernel,
+    rk4,
+    standstill,
+    thermal,
+)
+from brake_sim_ros.model import layout as L
+from brake_sim_ros.model.compiled import JIT
+
+# by name, not as kernel.NOT_FREE: numba cannot resolve a module's array attribute in a call
+from brake_sim_ros.model.kernel import NOT_FREE
+
+
+@njit(inline="always", **JIT)
+def _update_regime(kstate, k_regime, k_flag, k_change, touching, step, settle_steps):
+    if touching != kstate[k_flag]:
+        kstate[k_flag] = touching
+        kstate[k_change] = step
+    since = step - kstate[k_change]
+    regime = kstate[k_regime]
+    if touching:
+        if regime == L.REGIME_FREE:
+            regime = L.REGIME_IMPACTING
+        elif regime == L.REGIME_IMPACTING and since >= settle_steps:
+            regime = L.REGIME_CONTACT
+    else:
+        if regime == L.REGIME_CONTACT:
+            regime = L.REGIME_IMPACTING
+        elif regime == L.REGIME_IMPACTING and since >= settle_steps:
+            regime = L.REGIME_FREE
+    kstate[k_regime] = regime
+
+
+@njit(**JIT)
+def fixed_step_advance(
+    y,
+    step0,
+    dt,
+    n_steps,
+    p,
+    tl,
+    fl,
+    tr,
+    fr,
+    gain_override,
+    kstate,
+    fstate,
+    settle_steps,
+    record_every,
+    out,
+    scheme,
+):
+    """Advance ``y`` in place by ``n_steps`` fixed steps of ``dt`` seconds.
+
+    ``scheme`` (layout.SCHEME_*): classical RK4; RK4 with contact switches located inside
+    the step (:func:`.rk4.located_step`); or symplectic (semi-implicit) Euler, which updates the
+    speeds with the accelerations at the step start and the angles with the new speeds
+    (one evaluation per step, first order, the energy quadratures by explicit Euler).
+
+    Time is ``(step0 + i) * dt`` exactly, so runs are reproducible bit for bit.
+    Actuation: piecewise-linear knots (tl, fl) and (tr, fr), times in s; they are
+    evaluated at every stage time and multiplied by the shoes' gains (layout S_ACTUATION_GAIN)
+    unless ``gain_override`` is 0.
+
+    One sample (layout.COLUMNS) is written to ``out`` every ``record_every`` steps, at
+    the start of the step, from the same evaluation the scheme needs for its first stage,
+    so the output stays on the uniform grid whatever happens inside a step.
+    ``kstate`` (int64, layout.K_*) and ``fstate`` (float64, layout.F_*; F_STOP_TIME < 0
+    until the drum first sticks) carry the stick state and the regime bookkeeping between
+    calls. At the end of every step the drum's stick/slip rule
+    (:mod:`brake_sim_ros.model.standstill`) is applied.
+
+    Defects that change during the run (``p``'s growth entries, :mod:`.growth`) are set
+    at the start of every step, at its time, in a working copy of ``p`` (the actuation
+    gains with them); without entries ``p`` is used as it is.
+
+    A drive cycle (``p``'s P_CYCLE_COUNT > 0, :mod:`.cycle`) replaces the actuation knots
+    by its brake force ramp and sets the drive torque and the vehicle's load: its
+    controller runs at the start of every step, from the state then, in the working copy
+    (its state in kstate/fstate).
+    Without a cycle, a live target speed (P_LIVE_SPEED_CONTROL) sets the drive torque so,
+    by the same speed controller (:func:`.cycle.live_control`).
+
+    Returns the number of rows written. Stops early (status in kstate) on a non-finite state.
+    """
+    n = y.shape[0]
+    k1 = np.empty(n)
+    k2 = np.empty(n)
+    k3 = np.empty(n)
+    k4 = np.empty(n)
+    tmp = np.empty(n)
+    y_new = np.empty(n)
+    work = np.empty((8, n))
+    h_start = np.empty(2)
+    h_end = np.empty(4)
+    gl = p[L.P_SHOE_BASE + L.S_ACTUATION_GAIN]
+    gr = p[L.P_SHOE_BASE + L.SHOE_STRIDE + L.S_ACTUATION_GAIN]
+    growing = p[L.P_GROWTH_COUNT] > 0.0
+    # a vehicle's controller writes the step's drive torque into the working copy
+    cycling = p[L.P_CYCLE_COUNT] > 0.0
+    speed_held = p[L.P_LIVE_SPEED_CONTROL] > 0.0  # a live target speed (cycle.LiveDrive)
+    # the brake's temperature sets the linings' friction (model/thermal.py)
+    heating = n > L.Y_BRAKE_TEMPERATURE
+    pw = growth.working_copy(p) if growing or cycling or speed_held or heating else p
+    ramp_t = np.zeros(2)
+    ramp_f = np.zeros(2)
+    if cycling:  # the cycle commands both shoes' brake force (model/cycle.py)
+        tl = ramp_t
+        fl = ramp_f
+        tr = ramp_t
+        fr = ramp_f
+    if growing:
+        gl, gr, _ = growth.apply(p, pw, step0 * dt, y)
+    if gain_override != 0:
+        gl = 1.0
+        gr = 1.0
+    radius = p[L.P_DRUM_RADIUS]
+    rows = 0
+    auto = L.CONTACT_AUTO
+    located = scheme == L.SCHEME_RK4_LOCATED
+    if located:
+        h_end[0], h_end[1] = rk4.shoe_switch(pw, 0, y)
+        h_end[2], h_end[3] = rk4.shoe_switch(pw, 1, y)
+    # The located scheme tests the contact switches on the state that ends a step; the
+    # next step's first evaluation needs the same contact kinematics of the same state, so
+    # it takes them (kin_l, kin_r; same bits) while nothing changed the state or the
+    # geometry in between (held: a step without a located switch, no lock). Not with
+    # growing defects (they move the geometry each step) or a shoe removed (its switching
+    # function is not its kinematics'); the kinematics read the drum speed, which the
+    # evaluation takes as 0 while the drum sticks, only on an out-of-round drum. The
+    # other schemes take the contact flags from the first evaluation's kinematics.
+    bl = L.P_SHOE_BASE
+    br = L.P_SHOE_BASE + L.SHOE_STRIDE
+    can_hold = located and not growing and p[bl + L.S_ENABLED] > 0.0 and p[br + L.S_ENABLED] > 0.0
+    round_drum = p[L.P_DRUM_WAVE_COUNT] <= 0.0 and p[L.P_FLAT_DEPTH] <= 0.0
+    # a service brake's shoes are never free: the spring holds each on its stop
+    serviced = p[L.P_SERVICE] > 0.0
+    held = False
+    kin_l = contact.kinematics(pw, bl, 0.0, 0.0, 0.0, 0.0)
+    kin_r = kin_l
+    # RK4 stages skip the contact geometry where the shoes provably exert nothing
+    # (rides_free): on a round drum with a fixed geometry, each shoe's indentation at the
+    # step's start and twice the largest distance of its lining from its pivot
+    free = NOT_FREE.copy()
+    free[1] = 2.0 * kernel.lining_reach(pw, bl)
+    free[3] = 2.0 * kernel.lining_reach(pw, br)
+    for i in range(n_steps):
+        step = step0 + i
+        t = step * dt
+        if growing and i > 0:
+            gl, gr, moved = growth.apply(p, pw, t, y)
+            if gain_override != 0:
+                gl = 1.0
+                gr = 1.0
+            if located and moved:  # the contact modes of the step follow the geometry now
+                h_end[0], h_end[1] = rk4.shoe_switch(pw, 0, y)
+                h_end[2], h_end[3] = rk4.shoe_switch(pw, 1, y)
+        if heating:
+            thermal.fade_linings(p, pw, y[L.Y_BRAKE_TEMPERATURE])
+        if cycling:
+            cycle.control(pw, p, y, kstate, fstate, t, dt)
+            ramp_t[0] = fstate[L.F_RAMP_T0]
+            ramp_t[1] = fstate[L.F_RAMP_T1]
+            ramp_f[0] = fstate[L.F_RAMP_F0]
+            ramp_f[1] = fstate[L.F_RAMP_F1]
+        elif speed_held:
+            cycle.live_control(pw, y)
+        stuck = kstate[L.K_STUCK]
+        fel = kernel.force(pw, L.P_SHOE_BASE, t, tl, fl, gl)
+        fer = kernel.force(pw, L.P_SHOE_BASE + L.SHOE_STRIDE, t, tr, fr, gr)
+        record = i % record_every == 0
+        if not (held and (round_drum or not stuck)):
+            wa = y[L.Y_DRUM_ANGLE]
+            wd = 0.0 if stuck else y[L.Y_DRUM_SPEED]
+            kin_l = contact.kinematics(pw, bl, y[L.Y_LEFT_ANGLE], y[L.Y_LEFT_SPEED], wa, wd)
+            kin_r = contact.kinematics(pw, br, y[L.Y_RIGHT_ANGLE], y[L.Y_RIGHT_SPEED], wa, wd)
+        held = False
+        row = rows if record else -1
+        kernel.evaluate_from(y, pw, fel, fer, stuck, auto, auto, kin_l, kin_r, k1, out, row, t)
+        if located:
+            touching_l = 1 if h_end[0] > 0.0 else 0
+            touching_r = 1 if h_end[2] > 0.0 else 0
+            h_start[0] = h_end[1]
+            h_start[1] = h_end[3]
+        else:
+            # the indentation of the evaluation's kinematics: the switching function's
+            # (it does not read the drum speed), of a shoe in the model
+            touching_l = 1 if pw[bl + L.S_ENABLED] > 0.0 and kin_l[0] > 0.0 else 0
+            touching_r = 1 if pw[br + L.S_ENABLED] > 0.0 and kin_r[0] > 0.0 else 0
+        _update_regime(
+            kstate,
+            L.K_LEFT_REGIME,
+            L.K_LEFT_IN_CONTACT,
+            L.K_LEFT_LAST_CHANGE_STEP,
+            touching_l,
+            step,
+            settle_steps,
+        )
+        _update_regime(
+            kstate,
+            L.K_RIGHT_REGIME,
+            L.K_RIGHT_IN_CONTACT,
+            L.K_RIGHT_LAST_CHANGE_STEP,
+            touching_r,
+            step,
+            settle_steps,
+        )
+        if record:
+            o = out[rows]
+            rl = kstate[L.K_LEFT_REGIME]
+            rr = kstate[L.K_RIGHT_REGIME]
+            o[L.C_SHOE_REGIME] = rl
+            o[L.C_SHOE_REGIME + L.RIGHT_OF_SCALAR] = rr
+            if stuck:
+                o[L.C_REGIME] = L.REGIME_STOPPED
+            elif rl == L.REGIME_IMPACTING or rr == L.REGIME_IMPACTING:
+                o[L.C_REGIME] = L.REGIME_IMPACTING
+            elif rl == L.REGIME_CONTACT or rr == L.REGIME_CONTACT:
+                o[L.C_REGIME] = L.REGIME_CONTACT
+            else:
+                o[L.C_REGIME] = L.REGIME_FREE
+            o[L.C_LOCK_LOSS] = fstate[L.F_LOCK_LOSS]
+            if cycling:
+                o[L.C_PHASE] = kstate[L.K_SEGMENT]
+                o[L.C_LOAD_CHANGE_WORK] = fstate[L.F_LOAD_CHANGE_WORK]
+            rows += 1
+        surface_before = abs(y[L.Y_DRUM_SPEED]) * radius
+        if scheme == L.SCHEME_SEMI_IMPLICIT_EULER:
+            for j in range(4, 8):
+                y[j] += dt * k1[j]
+            for j in range(4):
+                y[j] += dt * y[j + 4]
+            for j in range(8, n):
+                y[j] += dt * k1[j]
+        else:
+            ml = auto
+            mr = auto
+            if located:
+                # modes frozen for the step; k1 (auto) equals k1 with these modes
+                ml = L.CONTACT_ON if h_start[0] > 0.0 else L.CONTACT_OFF
+                mr = L.CONTACT_ON if h_start[1] > 0.0 else L.CONTACT_OFF
+            if round_drum and not growing and not serviced:
+                free[0] = kin_l[0]
+                free[2] = kin_r[0]
+            rk4.rk4_step(
+                y,
+                k1,
+                t,
+                dt,
+                pw,
+                gl,
+                tl,
+                fl,
+                gr,
+                tr,
+                fr,
+                stuck,
+                ml,
+                mr,
+                k2,
+                k3,
+                k4,
+                tmp,
+                out,
+                y_new,
+                free,
+            )
+            accept = True
+            if located:
+                if can_hold:
+                    wa = y_new[L.Y_DRUM_ANGLE]
+                    wn = y_new[L.Y_DRUM_SPEED]
+                    kin_l = contact.kinematics(
+                        pw, bl, y_new[L.Y_LEFT_ANGLE], y_new[L.Y_LEFT_SPEED], wa, wn
+                    )
+                    kin_r = contact.kinematics(
+                        pw, br, y_new[L.Y_RIGHT_ANGLE], y_new[L.Y_RIGHT_SPEED], wa, wn
+                    )
+                    el, hl = contact.switching_of(pw, kin_l)
+                    er, hr = contact.switching_of(pw, kin_r)
+                else:
+                    el, hl = rk4.shoe_switch(pw, 0, y_new)
+                    er, hr = rk4.shoe_switch(pw, 1, y_new)
+                if (hl > 0.0) != (h_start[0] > 0.0) or (hr > 0.0) != (h_start[1] > 0.0):
+                    # a contact switches inside this step: redo it split at the switches
+                    fstate[L.F_SWITCHES] += rk4.located_step(
+                        y, k1, t, dt, pw, gl, tl, fl, gr, tr, fr, stuck, h_start, work, out, h_end
+                    )
+                    accept = False
+                else:
+                    h_end[0] = el
+                    h_end[1] = hl
+                    h_end[2] = er
+                    h_end[3] = hr
+                    held = can_hold
+            if accept:
+                for j in range(n):
+                    y[j] = y_new[j]
+        if stuck:
+            if standstill.slips(pw, y):
+                kstate[L.K_STUCK] = 0
+                kstate[L.K_BREAKAWAYS] += 1
+        elif standstill.sticks(pw, y, surface_before):
+            t_stick = standstill.interpolated_stick_time(
+                t,
+                dt,
+                surface_before,
+                abs(y[L.Y_DRUM_SPEED]) * radius,
+                p[L.P_FRICTION_SMOOTHING_SPEED],
+            )
+            if fstate[L.F_WHEEL_LOCK_TIME] < 0.0:
+                fstate[L.F_WHEEL_LOCK_TIME] = t_stick
+            loss = standstill.stick(pw, y)
+            held = False
+            fstate[L.F_LOCK_LOSS] += loss
+            if heating:  # the kinetic energy the lock removes heats the brake
+                y[L.Y_BRAKE_TEMPERATURE] += loss / p[L.P_HEAT_CAPACITY]
+            kstate[L.K_STUCK] = 1
+            if fstate[L.F_STOP_TIME] < 0.0 and standstill.at_rest(pw, y):
+                fstate[L.F_STOP_TIME] = t_stick
+        if kstate[L.K_STUCK] and fstate[L.F_STOP_TIME] < 0.0 and standstill.at_rest(pw, y):
+            fstate[L.F_STOP_TIME] = t + dt
+        for j in range(8):
+            if not math.isfinite(y[j]):
+                kstate[L.K_STATUS] = 1
+                return rows
+    return rows
