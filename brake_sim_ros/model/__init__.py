@@ -1,11 +1,11 @@
 """The physics core: parameters, geometry, contact, standstill and the compiled kernels.
 
 Importing this package points numba's on-disk kernel cache at a directory keyed by a hash
-of the compiled folders' sources (:data:`COMPILED_ROOMS`). numba checks only the file of
-each cached function, not the files of the functions it inlines, so after a change to
-``contact.py`` alone the kernels in ``kernel.py`` would otherwise be loaded stale from the
-cache. ``NUMBA_CACHE_DIR`` (numba's
-own setting) or ``BRAKE_SIM_CACHE_DIR`` override the location.
+of the compiled folders' sources (:data:`COMPILED_ROOMS`) and of the checkout's path.
+numba checks only the file of each cached function, not the files of the functions it
+inlines, so after a change to ``contact.py`` alone the kernels in ``kernel.py`` would
+otherwise be loaded stale from the cache. ``NUMBA_CACHE_DIR`` (numba's own setting) or
+``BRAKE_SIM_CACHE_DIR`` override the location.
 """
 
 from __future__ import annotations
@@ -24,6 +24,9 @@ COMPILED_ROOMS = ("model", "sensing")
 def _kernel_cache_dir() -> Path:
     digest = hashlib.sha256()
     package = Path(__file__).parent.parent
+    # numba files its cache under each source file's path: a second checkout of the same
+    # sources gets a directory (and compiled-part markers) of its own
+    digest.update(str(package.resolve()).encode())
     for room in COMPILED_ROOMS:
         for source in sorted((package / room).glob("*.py")):
             digest.update(f"{room}/{source.name}".encode())
