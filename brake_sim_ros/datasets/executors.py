@@ -66,6 +66,10 @@ class _Local:
                 yield future.result()
         except concurrent.futures.process.BrokenProcessPool:
             unfinished = sum(not f.done() or f.exception() is not None for f in futures)
+            # join the pool's manager thread now: left to interpreter exit, its closing of
+            # the wake-up pipe races the exit hook's write to it, which then printed an
+            # OSError traceback after the one-line error (seen once in a whole-suite run)
+            self.pool.shutdown(wait=True, cancel_futures=True)
             raise ExecutorError(DIED.format(n=unfinished)) from None
 
     def call(self, fn: Callable[[Any], T], item: Any, key: str) -> T:
