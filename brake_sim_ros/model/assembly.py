@@ -92,8 +92,11 @@ def _pack_shoe(params: BrakeParameters, site: PackSite, *, enabled: bool) -> Non
     p[b + L.S_TIP_X], p[b + L.S_TIP_Y] = m * g.tip_x_m, g.tip_y_m
     p[b + L.S_ACTUATION_DIR_X], p[b + L.S_ACTUATION_DIR_Y] = -m, 0.0
     p[b + L.S_MASS] = g.mass_kg
-    p[b + L.S_ACTUATION_SHAPED] = 1.0 if defect.force_shaped else 0.0
-    p[b + L.S_SPRING_MARGIN] = RETURN_SPRING_PRELOAD_N - RESIDUAL_FORCE_N
+    if site.params.service is None:  # the study brake's net-force spring shortcut
+        p[b + L.S_ACTUATION_SHAPED] = 1.0 if defect.force_shaped else 0.0
+        p[b + L.S_SPRING_MARGIN] = RETURN_SPRING_PRELOAD_N - RESIDUAL_FORCE_N
+    else:  # its springs act as springs (_pack_service): only a reshaped history shapes
+        p[b + L.S_ACTUATION_SHAPED] = 1.0 if defect.actuation_shaped else 0.0
     p[b + L.S_ENABLED] = 1.0 if enabled else 0.0
     p[site.lining_base + L.LN_RADIUS] = g.drum_radius_m - g.running_clearance_m
 
@@ -102,8 +105,9 @@ def _pack_service(params: BrakeParameters, defects: Defects, p: np.ndarray) -> N
     """Pack the service brake's springs and stops (layout.P_SERVICE, P_SPRING_*;
     :mod:`.service`); the study brake packs none. On the service brake a weakened return
     spring acts through its spring (preload and rate times ``1 - weakening``), not through
-    the study brake's net-force shortcut (actuation.spring_release), so the shoe's force
-    is shaped only by a reshaped history (delay, lag, pulsation)."""
+    the study brake's net-force shortcut (actuation.spring_release: its slots stay 0, see
+    _pack_shoe and packing.pack_spring_release), so the shoe's force is shaped only by a
+    reshaped history (delay, lag, pulsation)."""
     spec = params.service
     if spec is None:
         return
@@ -114,9 +118,6 @@ def _pack_service(params: BrakeParameters, defects: Defects, p: np.ndarray) -> N
     for i, side in enumerate(SIDES):
         defect: ShoeDefect = getattr(defects, side)
         b = L.P_SHOE_BASE + i * L.SHOE_STRIDE
-        p[b + L.S_SPRING_RELEASE] = 0.0
-        p[b + L.S_SPRING_MARGIN] = 0.0
-        p[b + L.S_ACTUATION_SHAPED] = 1.0 if defect.actuation_shaped else 0.0
         phi = p[b + L.S_SIGN] * math.radians(defect.initial_angle_deg)
         rest = service.tip_travel.py_func(p, b, math.cos(phi), math.sin(phi), 0.0)[0]
         kept = 1.0 - defect.return_spring_weakening_pct / 100.0

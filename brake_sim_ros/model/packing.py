@@ -124,7 +124,11 @@ def pack_pulsation(site: PackSite) -> None:
 
 
 def pack_spring_release(site: PackSite) -> None:
-    """The return spring's lost preload, N at the tip."""
+    """The return spring's lost preload, N at the tip, for the study brake's net-force
+    shortcut; the service brake's spring carries its weakening itself
+    (:func:`.assembly._pack_service`)."""
+    if site.params.service is not None:
+        return
     site.p[site.shoe_base + L.S_SPRING_RELEASE] = (
         site.defect.return_spring_weakening_pct / 100.0 * RETURN_SPRING_PRELOAD_N
     )

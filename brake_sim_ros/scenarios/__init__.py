@@ -18,14 +18,6 @@ if TYPE_CHECKING:
     )
     from brake_sim_ros.scenarios.types import Scenario, SolverSettings
 
-_HOMES = {
-    "Scenario": "types",
-    "SolverSettings": "types",
-    "builtin_names": "loader",
-    "load_scenario": "loader",
-    "parse_scenario": "loader",
-    "read_scenario_file": "loader",
-}
 __all__ = [
     "Scenario",
     "SolverSettings",
@@ -37,8 +29,8 @@ __all__ = [
 
 
 def __getattr__(name: str) -> Any:
-    if name in _HOMES:
-        import importlib
+    if name in __all__:
+        from brake_sim_ros.scenarios import loader, types
 
-        return getattr(importlib.import_module(f"{__name__}.{_HOMES[name]}"), name)
+        return getattr(types, name) if hasattr(types, name) else getattr(loader, name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
