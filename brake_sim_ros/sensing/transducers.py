@@ -11,7 +11,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import signal
 
 from brake_sim_ros.errors import ParameterError
 
@@ -89,6 +88,11 @@ class Transducer:
         ``resonance_factor`` scales the resonance frequency (a loose mount). The
         resonance's states are physical (``[z, z']``, ``z'' = wr^2 (u - z) - 2 zeta wr z'``),
         so a loose mount can change its frequency with the state kept."""
+        # scipy.signal costs about 1.5 s of CPU to import (it parses its docstrings): only
+        # a process that builds a filtered channel pays it, not every process that loads
+        # a scenario (the loader reaches this module through the fleet's sensor scatter)
+        from scipy import signal
+
         stages = []
         if self.resonance_hz is not None:
             wr = 2.0 * math.pi * self.resonance_hz * resonance_factor

@@ -16,7 +16,6 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.integrate import solve_ivp
 
 from brake_sim_ros.errors import ParameterError, SimulationError
 from brake_sim_ros.model import kernel, standstill
@@ -92,6 +91,10 @@ def run_reference(
     ensure_compiled(parts=("reference",))  # compiled at first use, saying how far
     times = default_sample_times(duration_s) if sample_times is None else np.asarray(sample_times)
     deadline = None if cpu_budget_s is None else time.process_time() + cpu_budget_s
+    # imported here: every physics command imports this module (its compiled part is
+    # registered on import), few run the reference solver
+    from scipy.integrate import solve_ivp
+
     run = _ReferenceRun(setup, times, deadline, f"{method} at rtol {rtol:g}", cpu_budget_s)
     knots = sorted({float(k) for k in np.concatenate([run.tl, run.tr]) if 0.0 < k < duration_s})
     bounds = [*knots, duration_s]

@@ -33,7 +33,7 @@ def _cli(*args, cwd=None):
 # suite's hundreds of CLI processes a start-up)
 HEAVY = (
     "numpy", "numba", "scipy.signal", "scipy.stats", "scipy.linalg", "scipy.optimize",
-    "rclpy", "dask", "pyarrow", "sklearn", "mcap", "rerun", "matplotlib",
+    "scipy.integrate", "rclpy", "dask", "pyarrow", "sklearn", "mcap", "rerun", "matplotlib",
     "brake_sim_ros.sensing", "brake_sim_ros.stream", "brake_sim_ros.scenarios.loader",
     "brake_sim_ros.detection.baselines",
 )  # fmt: skip
@@ -61,6 +61,18 @@ with open(sys.argv[1], "w") as f:
         (["recover", "--help"], ()),
         (["bench", "--help"], ()),
         (["defects"], ("numpy", "numba")),  # the catalogue is the model's, which sets numba up
+        # the scenarios load (their sensors' scatter too) but build no filter and run nothing
+        (
+            ["scenarios"],
+            (
+                "numpy",
+                "numba",
+                "scipy.linalg",
+                "scipy.optimize",
+                "brake_sim_ros.sensing",
+                "brake_sim_ros.scenarios.loader",
+            ),
+        ),
     ],
     ids=" ".join,
 )
