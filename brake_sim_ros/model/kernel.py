@@ -114,12 +114,12 @@ def evaluate_from(y, p, fe_left, fe_right, stuck, mode_left, mode_right, kl, kr,
         ffr = contact.sliding_friction(p, br, fnr, vr)
     tip_left = fe_left  # the net force along the cylinder axis at each tip, N
     tip_right = fe_right
-    serviced = p[L.P_SERVICE] > 0.0  # the service brake: springs, stops, residual force
+    serviced = p[L.P_SERVICE] > 0.0  # the service brake: springs, stops, hydraulics
     stop_loss = 0.0
-    rate_left = 0.0
-    rate_right = 0.0
+    service_power = 0.0
+    line_rate = 0.0
     if serviced:
-        fe_left, tip_left, stop_loss, rate_left, fe_right, tip_right, rate_right = _service_tips(
+        fe_left, tip_left, fe_right, tip_right, stop_loss, service_power, line_rate = _service_tips(
             p, y, kl, kr, fe_left, fe_right
         )
     sl = contact.shoe_forces(p, bl, y[L.Y_LEFT_SPEED], tip_left, kl, fnl, ffl, vl)
@@ -127,10 +127,11 @@ def evaluate_from(y, p, fe_left, fe_right, stuck, mode_left, mode_right, kl, kr,
     contact_power = sl[contact.E_CONTACT_POWER] + sr[contact.E_CONTACT_POWER]
     actuation_power = sl[contact.E_ACTUATION_POWER] + sr[contact.E_ACTUATION_POWER]
     if serviced:
-        # the stops' dampers lose energy as contacts do; the actuator's work is the
-        # cylinders' alone (the springs and stops store theirs: model/service.py)
+        # the stops' dampers and the line lose energy as contacts do; the actuator's work
+        # is the source's and the pistons' own (the springs, stops and the circuit's
+        # compliance store theirs: model/service.py)
         contact_power += stop_loss
-        actuation_power = fe_left * rate_left + fe_right * rate_right
+        actuation_power = service_power
     road = _derivatives(
         y,
         p,
@@ -146,6 +147,8 @@ def evaluate_from(y, p, fe_left, fe_right, stuck, mode_left, mode_right, kl, kr,
         sl[contact.E_DRUM_TORQUE] + sr[contact.E_DRUM_TORQUE],
         dydt,
     )
+    if serviced:
+        dydt[L.Y_LINE_PRESSURE] = line_rate
     if row < 0:
         return
     o = out[row]
@@ -209,17 +212,20 @@ def evaluate_from(y, p, fe_left, fe_right, stuck, mode_left, mode_right, kl, kr,
 @njit(**JIT)
 def _service_tips(p, y, kl, kr, fe_left, fe_right):
     """The service brake's tip forces (:mod:`.service`) of both shoes, given their contact
-    kinematics ``kl``/``kr`` and commanded forces (N, after their gains): (left cylinder
-    force N, left net force at the tip N, both stops' damper loss W, left tip speed m/s,
-    then the right shoe's cylinder force, net force and tip speed). A call, not inlined:
-    the study brake's path stays as it was."""
+    kinematics ``kl``/``kr`` and commanded forces (N, after their gains): (left piston
+    force N, left net force at the tip N, right piston force N, right net force N, the
+    stops' dampers' and the line's loss W, the actuation's power W, the line pressure's
+    rate Pa/s). A call, not inlined: the study brake's path stays as it was."""
     bl = L.P_SHOE_BASE
     br = L.P_SHOE_BASE + L.SHOE_STRIDE
     ul, rate_l, _ = service.tip_travel(p, bl, kl[8], kl[9], y[L.Y_LEFT_SPEED])
     ur, rate_r, _ = service.tip_travel(p, br, kr[8], kr[9], y[L.Y_RIGHT_SPEED])
-    cyl_l, net_l, loss_l = service.tip_forces(p, 0, fe_left, ul, rate_l)
-    cyl_r, net_r, loss_r = service.tip_forces(p, 1, fe_right, ur, rate_r)
-    return cyl_l, net_l, loss_l + loss_r, rate_l, cyl_r, net_r, rate_r
+    cyl_l, cyl_r, line_rate, line_loss, power = service.hydraulics(
+        p, y[L.Y_LINE_PRESSURE], fe_left, fe_right, rate_l, rate_r
+    )
+    net_l, loss_l = service.tip_forces(p, 0, cyl_l, ul, rate_l)
+    net_r, loss_r = service.tip_forces(p, 1, cyl_r, ur, rate_r)
+    return cyl_l, net_l, cyl_r, net_r, loss_l + loss_r + line_loss, power, line_rate
 
 
 @njit(inline="always", **JIT)
@@ -331,8 +337,8 @@ def rides_free(y, y0, free_bound, stuck, ml, mr, fel, fer):
 
 @njit(**JIT)
 def _service_rates(dydt):
-    """The rates of the service brake's states that nothing drives yet: the tyre's
-    deflection (reserved) and the line pressure, 0."""
+    """The rates of the service brake's states, 0 until set: the tyre's deflection
+    (reserved); the line pressure's, which :func:`evaluate_from` sets after."""
     dydt[L.Y_TYRE_DEFLECTION] = 0.0
     dydt[L.Y_LINE_PRESSURE] = 0.0
 

@@ -212,7 +212,14 @@ R_RATE = 1  # N/m at the tip, the healthy rate times (1 - weakening)
 R_REST_TRAVEL = 2  # tip travel (m, outward, from the tip's assembled place) at rest
 R_STOP_TRAVEL = 3  # tip travel (m) below which the shoe presses on its stop
 
-N_PARAMS = P_SPRING_BASE + 2 * SPRING_STRIDE
+# the service brake's hydraulic circuit (model/service.py): the wheel-cylinder piston's
+# area, m^2, the circuit's compliance seen from the wheel, m^3/Pa, and the line's flow
+# resistance, Pa s/m^3 (the line pressure is the state Y_LINE_PRESSURE)
+P_PISTON_AREA = P_SPRING_BASE + 2 * SPRING_STRIDE
+P_LINE_COMPLIANCE = P_PISTON_AREA + 1
+P_LINE_RESISTANCE = P_PISTON_AREA + 2
+
+N_PARAMS = P_LINE_RESISTANCE + 1
 
 # --- state vector ---------------------------------------------------------------------
 Y_FLYWHEEL_ANGLE = 0
