@@ -15,7 +15,7 @@ from brake_sim_ros.model import kernel
 from brake_sim_ros.model import layout as L
 from brake_sim_ros.model.actuation import Actuation, ForceProfile
 from brake_sim_ros.model.assembly import contact_arms
-from brake_sim_ros.model.defects import Defects, DrumDefect, DrumHarmonic
+from brake_sim_ros.model.defects import Defects, DrumDefect, DrumHarmonic, ShoeDefect
 from brake_sim_ros.model.parameters import WHEEL_CYLINDER_BORE_M, BrakeParameters
 from brake_sim_ros.model.placement import place_shoe
 from brake_sim_ros.model.run_setup import BrakeSetup
@@ -83,6 +83,27 @@ def test_the_pressure_rises_with_the_time_constant_r_c():
     assert -1.0 / slope == pytest.approx(R * C, rel=0.10)
     for side in SIDES:
         assert np.all(block[f"{side}_normal_force_n"] == 0.0)
+
+
+def test_a_shoes_actuation_defect_is_its_pistons_own():
+    """A per-shoe defect acts on its own piston, the line on both: with the left shoe's
+    command delayed by 20 ms and its gain 20 % down, the pistons' difference is the two
+    shoes' commanded difference at every sample (``0.8 F(t - 0.02) - F(t)``), their mean
+    the line pressure on the area; held, each pushes its own commanded force and the line
+    sits at their mean over the area (the sensor reads 9 % less than the healthy brake's)."""
+    ramp = ForceProfile((0.0, 0.05), (0.0, 1000.0))
+    defects = Defects(left=ShoeDefect(actuation_delay_ms=20.0, actuation_gain_change_pct=-20.0))
+    stepper = _stepper(Actuation(ramp, ramp), defects)
+    block = stepper.run(0.1 + 15 * R * C)
+    t = block.time_s
+    commanded = 0.8 * np.interp(t - 0.02, ramp.times_s, ramp.forces_n) - ramp(t)
+    left, right = block["left_actuation_force_n"], block["right_actuation_force_n"]
+    free = (left > SPEC.residual_force_n) & (right > SPEC.residual_force_n)
+    assert free.mean() > 0.8  # all but the start, where a piston is still at its floor
+    np.testing.assert_allclose((left - right)[free], commanded[free], rtol=1e-9, atol=1e-9)
+    assert left[-1] == pytest.approx(800.0, rel=1e-6)
+    assert right[-1] == pytest.approx(1000.0, rel=1e-6)
+    assert stepper.state[L.Y_LINE_PRESSURE] == pytest.approx(900.0 / AREA, rel=1e-6)
 
 
 def _order(signal: np.ndarray, drum_angle: np.ndarray, time_s: np.ndarray, k: int) -> complex:
