@@ -117,8 +117,8 @@ def spring_energy_j(block: SampleBlock, packed: np.ndarray, rows: list[int]) -> 
 
 def line_pressure_pa(block: SampleBlock, packed: np.ndarray) -> np.ndarray:
     """The service brake's line pressure at every row of ``block``, Pa: the pistons' mean
-    recorded force over the piston area (model/service.py: each piston pushes its own
-    commanded force plus ``A (p - p_s)``, and the source ``p_s`` is their mean over ``A``),
+    recorded force over the piston area (model/service.py: each piston pushes ``A p`` plus
+    its own commanded force's departure from the pistons' mean, so their mean is ``A p``),
     exact while neither piston sits at its residual force."""
     mean = 0.5 * (block["left_actuation_force_n"] + block["right_actuation_force_n"])
     return mean / packed[L.P_PISTON_AREA]
