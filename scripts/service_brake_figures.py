@@ -1,10 +1,11 @@
 """Print the service brake's figures quoted in ``docs/model.md`` ("The service brake").
 
-The brake applied three times (1000 N per shoe in 50 ms, held 100 ms, released in 20 ms,
-from 100 km/h) as ``tests/model/test_service_brake.py`` runs it: each application's first
-contact after its start, each release's flight from the drum to the stop and the time to
-rest on the stop for good; the drag of a spring weakened past its hold point with no
-actuation; the energy books. Usage (a minute once the kernels are compiled)::
+The brake applied three times, 0.6 s apart (1000 N per shoe in 50 ms, held 100 ms,
+released in 20 ms, from 100 km/h) as ``tests/model/test_service_brake.py`` runs it: each
+application's first contact after its start, each release's instant the shoes leave the
+drum, their flight from the drum to the stop (the springs pushing the fluid back through
+the line) and the time to rest on the stop for good; the drag of a spring weakened past
+its hold point with no actuation; the energy books. Usage (a minute once the kernels are compiled)::
 
     PYTHONPATH=. .venv/bin/python scripts/service_brake_figures.py
 """
@@ -24,11 +25,15 @@ from brake_sim_ros.scenarios.loader import parse_scenario
 from brake_sim_ros.stream.build import stepper_for
 from tests.model.test_service_brake import (  # the runs and hand bounds the tests check
     APPLY_S,
+    FLIGHT_ALLOWANCE,
+    HOLD_S,
     IDLE,
     SIDES,
+    _flight,
     _flights,
-    _return_window,
+    _leave_window,
     _settle_bound,
+    _soft_tip,
     _three_applications,
     _tip_mass,
 )
@@ -59,19 +64,19 @@ def _applications() -> None:
         spec, mass = scenario.setup.params.service, _tip_mass(tip)
         shown = ", ".join(f"{d * 1e3:.3f}" for d in delays)
         print(f"{side}: first contact after each application: {shown} ms")
-        for leave, gap, cylinder, speed, land, settled in flights:
-            fast, slow = _return_window(
-                mass,
-                gap,
-                cylinder,
-                speed,
-                spec.return_spring_preload_n,
-                spec.return_spring_rate_n_per_m,
+        soft = _soft_tip(scenario)
+        for k, (leave, gap, cylinder, _speed, land, settled) in enumerate(flights):
+            release = APPLY_S[k] + 0.05 + HOLD_S
+            early, late = _leave_window(cylinder, soft)
+            hand = _flight(
+                cylinder, spec.return_spring_preload_n, spec.return_spring_rate_n_per_m, 2
             )
+            slow = FLIGHT_ALLOWANCE * hand
             print(
-                f"{side}: leaves the drum at {cylinder:.1f} N of cylinder force, flight to"
-                f" the stop {(land - leave) * 1e3:.3f} ms (hand {fast * 1e3:.3f} to"
-                f" {slow * 1e3:.3f}), on it for good {(settled - leave) * 1e3:.2f} ms after"
+                f"{side}: leaves the drum {(leave - release) * 1e3:.2f} ms after the release"
+                f" starts (hand {early * 1e3:.2f} to {late * 1e3:.2f}) at {cylinder:.1f} N of"
+                f" cylinder force, flight to the stop {(land - leave) * 1e3:.3f} ms (hand"
+                f" {hand * 1e3:.3f}), on it for good {(settled - leave) * 1e3:.2f} ms after"
                 f" leaving (hand bound {_settle_bound(mass, gap, slow) * 1e3:.2f})"
             )
     books = energy_balance(block, scenario.setup.params, packed=stepper.packed_parameters)

@@ -16,8 +16,10 @@ kinetic energy with the inertia in force at each sample (``flywheel_inertia_kg_m
 is supplied the kinetic energy its load changes brought (``load_change_work_j``).
 The service brake (model/service.py) also stores energy in its return springs and rest
 stops (from the shoe angles and the packed parameters, which place them for the run's
-defects); its stops' dampers lose theirs into ``contact_loss_j``, and its actuator work
-is the wheel cylinders' alone.
+defects) and in its hydraulic circuit's compliance, ``C p^2 / 2`` (the line pressure
+``p`` read from the pistons' recorded forces, :func:`line_pressure_pa`); its stops'
+dampers and its line's resistance lose theirs into ``contact_loss_j``, and its actuator
+work is the source's (``p_s`` times the flow into the line) and the pistons' own.
 """
 
 from __future__ import annotations
@@ -26,6 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from brake_sim_ros.model import layout as L
 from brake_sim_ros.model import service
 from brake_sim_ros.model.assembly import SIDES
 from brake_sim_ros.model.parameters import BrakeParameters
@@ -112,6 +115,22 @@ def spring_energy_j(block: SampleBlock, packed: np.ndarray, rows: list[int]) -> 
     return [float(e) for e in service.stored_energy_rows(packed, left, right)]
 
 
+def line_pressure_pa(block: SampleBlock, packed: np.ndarray) -> np.ndarray:
+    """The service brake's line pressure at every row of ``block``, Pa: the pistons' mean
+    recorded force over the piston area (model/service.py: each piston pushes ``A p`` plus
+    its own commanded force's departure from the pistons' mean, so their mean is ``A p``),
+    exact while neither piston sits at its residual force."""
+    mean = 0.5 * (block["left_actuation_force_n"] + block["right_actuation_force_n"])
+    return mean / packed[L.P_PISTON_AREA]
+
+
+def line_energy_j(block: SampleBlock, packed: np.ndarray, rows: list[int]) -> list[float]:
+    """Energy the service brake's hydraulic circuit stores, ``C p^2 / 2`` (J), at
+    ``rows`` of ``block`` (:func:`line_pressure_pa`)."""
+    pressure = line_pressure_pa(block, packed)
+    return [float(0.5 * packed[L.P_LINE_COMPLIANCE] * pressure[r] ** 2) for r in rows]
+
+
 def energy_balance(
     block: SampleBlock, params: BrakeParameters, *, packed: np.ndarray | None = None
 ) -> EnergyBalance:
@@ -133,8 +152,10 @@ def energy_balance(
                 "energy_balance of a service brake needs packed= (the run's packed"
                 " parameters: where its springs and stops sit for its defects)"
             )
-        first, last = spring_energy_j(block, packed, [0, len(block) - 1])
-        start, end = start + first, end + last
+        rows = [0, len(block) - 1]
+        first, last = spring_energy_j(block, packed, rows)
+        line_first, line_last = line_energy_j(block, packed, rows)
+        start, end = start + first + line_first, end + last + line_last
     work = block["actuation_work_j"]
     supplied = float(work[-1] - work[0])
     spent = float(sum(block[name][-1] - block[name][0] for name in _LOSSES))

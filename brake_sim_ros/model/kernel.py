@@ -114,12 +114,12 @@ def evaluate_from(y, p, fe_left, fe_right, stuck, mode_left, mode_right, kl, kr,
         ffr = contact.sliding_friction(p, br, fnr, vr)
     tip_left = fe_left  # the net force along the cylinder axis at each tip, N
     tip_right = fe_right
-    serviced = p[L.P_SERVICE] > 0.0  # the service brake: springs, stops, residual force
+    serviced = p[L.P_SERVICE] > 0.0  # the service brake: springs, stops, hydraulics
     stop_loss = 0.0
-    rate_left = 0.0
-    rate_right = 0.0
+    service_power = 0.0
+    line_rate = 0.0
     if serviced:
-        fe_left, tip_left, stop_loss, rate_left, fe_right, tip_right, rate_right = _service_tips(
+        fe_left, tip_left, fe_right, tip_right, stop_loss, service_power, line_rate = _service_tips(
             p, y, kl, kr, fe_left, fe_right
         )
     sl = contact.shoe_forces(p, bl, y[L.Y_LEFT_SPEED], tip_left, kl, fnl, ffl, vl)
@@ -127,10 +127,11 @@ def evaluate_from(y, p, fe_left, fe_right, stuck, mode_left, mode_right, kl, kr,
     contact_power = sl[contact.E_CONTACT_POWER] + sr[contact.E_CONTACT_POWER]
     actuation_power = sl[contact.E_ACTUATION_POWER] + sr[contact.E_ACTUATION_POWER]
     if serviced:
-        # the stops' dampers lose energy as contacts do; the actuator's work is the
-        # cylinders' alone (the springs and stops store theirs: model/service.py)
+        # the stops' dampers and the line lose energy as contacts do; the actuator's work
+        # is the source's and the pistons' own (the springs, stops and the circuit's
+        # compliance store theirs: model/service.py)
         contact_power += stop_loss
-        actuation_power = fe_left * rate_left + fe_right * rate_right
+        actuation_power = service_power
     road = _derivatives(
         y,
         p,
@@ -146,6 +147,8 @@ def evaluate_from(y, p, fe_left, fe_right, stuck, mode_left, mode_right, kl, kr,
         sl[contact.E_DRUM_TORQUE] + sr[contact.E_DRUM_TORQUE],
         dydt,
     )
+    if serviced:
+        dydt[L.Y_LINE_PRESSURE] = line_rate
     if row < 0:
         return
     o = out[row]
@@ -199,9 +202,9 @@ def evaluate_from(y, p, fe_left, fe_right, stuck, mode_left, mode_right, kl, kr,
     o[L.C_DRIVE_WORK] = y[L.Y_DRIVE_WORK]
     o[L.C_ROAD_LOAD_WORK] = y[L.Y_ROAD_LOAD_WORK]
     o[L.C_PHASE] = -1.0  # no cycle; fixed_step_advance writes a cycle's segment
-    o[L.C_BRAKE_TEMPERATURE] = (
-        y[L.Y_BRAKE_TEMPERATURE] if y.shape[0] > L.Y_BRAKE_TEMPERATURE else p[L.P_HELD_TEMPERATURE]
-    )
+    # a service run carries the temperature slot without a thermal state (layout.P_THERMAL)
+    heating = y.shape[0] > L.Y_BRAKE_TEMPERATURE and p[L.P_THERMAL] > 0.0
+    o[L.C_BRAKE_TEMPERATURE] = y[L.Y_BRAKE_TEMPERATURE] if heating else p[L.P_HELD_TEMPERATURE]
     o[L.C_FLYWHEEL_INERTIA] = p[L.P_FLYWHEEL_INERTIA]
     o[L.C_LOAD_CHANGE_WORK] = 0.0  # no load change; fixed_step_advance writes a cycle's
 
@@ -209,17 +212,20 @@ def evaluate_from(y, p, fe_left, fe_right, stuck, mode_left, mode_right, kl, kr,
 @njit(**JIT)
 def _service_tips(p, y, kl, kr, fe_left, fe_right):
     """The service brake's tip forces (:mod:`.service`) of both shoes, given their contact
-    kinematics ``kl``/``kr`` and commanded forces (N, after their gains): (left cylinder
-    force N, left net force at the tip N, both stops' damper loss W, left tip speed m/s,
-    then the right shoe's cylinder force, net force and tip speed). A call, not inlined:
-    the study brake's path stays as it was."""
+    kinematics ``kl``/``kr`` and commanded forces (N, after their gains): (left piston
+    force N, left net force at the tip N, right piston force N, right net force N, the
+    stops' dampers' and the line's loss W, the actuation's power W, the line pressure's
+    rate Pa/s). A call, not inlined: the study brake's path stays as it was."""
     bl = L.P_SHOE_BASE
     br = L.P_SHOE_BASE + L.SHOE_STRIDE
     ul, rate_l, _ = service.tip_travel(p, bl, kl[8], kl[9], y[L.Y_LEFT_SPEED])
     ur, rate_r, _ = service.tip_travel(p, br, kr[8], kr[9], y[L.Y_RIGHT_SPEED])
-    cyl_l, net_l, loss_l = service.tip_forces(p, 0, fe_left, ul, rate_l)
-    cyl_r, net_r, loss_r = service.tip_forces(p, 1, fe_right, ur, rate_r)
-    return cyl_l, net_l, loss_l + loss_r, rate_l, cyl_r, net_r, rate_r
+    cyl_l, cyl_r, line_rate, line_loss, power = service.hydraulics(
+        p, y[L.Y_LINE_PRESSURE], fe_left, fe_right, rate_l, rate_r
+    )
+    net_l, loss_l = service.tip_forces(p, 0, cyl_l, ul, rate_l)
+    net_r, loss_r = service.tip_forces(p, 1, cyl_r, ur, rate_r)
+    return cyl_l, net_l, cyl_r, net_r, loss_l + loss_r + line_loss, power, line_rate
 
 
 @njit(inline="always", **JIT)
@@ -251,10 +257,15 @@ def _derivatives(
     dydt[L.Y_ACTUATION_WORK] = actuation_power
     if y.shape[0] > L.Y_LEFT_WEAR:  # a lining wears with its friction work (layout.Y_*_WEAR)
         _wear_rates(p, friction_left, friction_right, dydt)
-    if y.shape[0] > L.Y_BRAKE_TEMPERATURE:  # the brake's thermal state (model/thermal.py)
-        dydt[L.Y_BRAKE_TEMPERATURE] = thermal.heating_rate(
-            p, dydt[L.Y_FRICTION_WORK], wd, y[L.Y_BRAKE_TEMPERATURE]
-        )
+    if y.shape[0] > L.Y_BRAKE_TEMPERATURE:
+        if p[L.P_THERMAL] > 0.0:  # the brake's thermal state (model/thermal.py)
+            dydt[L.Y_BRAKE_TEMPERATURE] = thermal.heating_rate(
+                p, dydt[L.Y_FRICTION_WORK], wd, y[L.Y_BRAKE_TEMPERATURE]
+            )
+        else:  # a service run without one: its slot stays at the held temperature
+            dydt[L.Y_BRAKE_TEMPERATURE] = 0.0
+    if y.shape[0] > L.Y_TYRE_DEFLECTION:  # the service brake's states (layout.N_STATE_SERVICE)
+        _service_rates(dydt)
     dydt[L.Y_DRIVE_WORK] = 0.0
     dydt[L.Y_ROAD_LOAD_WORK] = 0.0
     road = 0.0  # N m, the road load of a driven flywheel
@@ -322,6 +333,14 @@ def rides_free(y, y0, free_bound, stuck, ml, mr, fel, fer):
     dl = abs(y[L.Y_LEFT_ANGLE] - y0[L.Y_LEFT_ANGLE])
     dr = abs(y[L.Y_RIGHT_ANGLE] - y0[L.Y_RIGHT_ANGLE])
     return free_bound[0] + free_bound[1] * dl < 0.0 and free_bound[2] + free_bound[3] * dr < 0.0
+
+
+@njit(**JIT)
+def _service_rates(dydt):
+    """The rates of the service brake's states, 0 until set: the tyre's deflection
+    (reserved); the line pressure's, which :func:`evaluate_from` sets after."""
+    dydt[L.Y_TYRE_DEFLECTION] = 0.0
+    dydt[L.Y_LINE_PRESSURE] = 0.0
 
 
 @njit(**JIT)

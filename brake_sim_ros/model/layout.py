@@ -212,7 +212,14 @@ R_RATE = 1  # N/m at the tip, the healthy rate times (1 - weakening)
 R_REST_TRAVEL = 2  # tip travel (m, outward, from the tip's assembled place) at rest
 R_STOP_TRAVEL = 3  # tip travel (m) below which the shoe presses on its stop
 
-N_PARAMS = P_SPRING_BASE + 2 * SPRING_STRIDE
+# the service brake's hydraulic circuit (model/service.py): the wheel-cylinder piston's
+# area, m^2, the circuit's compliance seen from the wheel, m^3/Pa, and the line's flow
+# resistance, Pa s/m^3 (the line pressure is the state Y_LINE_PRESSURE)
+P_PISTON_AREA = P_SPRING_BASE + 2 * SPRING_STRIDE
+P_LINE_COMPLIANCE = P_PISTON_AREA + 1
+P_LINE_RESISTANCE = P_PISTON_AREA + 2
+
+N_PARAMS = P_LINE_RESISTANCE + 1
 
 # --- state vector ---------------------------------------------------------------------
 Y_FLYWHEEL_ANGLE = 0
@@ -241,6 +248,14 @@ N_STATE_WEAR = 16
 # carries it, after the two wear states (which stay 0 unless a lining wears with work)
 Y_BRAKE_TEMPERATURE = 16
 N_STATE_THERMAL = 17
+# the service brake's states (P_SERVICE): a service run always carries all N_STATE_SERVICE
+# of them, so its wear slots (0 unless a lining wears with work) and its temperature slot
+# (held at P_HELD_TEMPERATURE, its rate 0, unless the run has a thermal state: P_THERMAL)
+# are there on every service run. The tyre's deflection, m (reserved: rate 0 until a tyre
+# is modelled), and the line pressure at the wheel cylinder, Pa.
+Y_TYRE_DEFLECTION = 17
+Y_LINE_PRESSURE = 18
+N_STATE_SERVICE = 19
 
 # --- recorded sample columns -------------------------------------------------------------
 COLUMNS: tuple[str, ...] = (

@@ -264,6 +264,11 @@ DEFAULT_BRAKE = "study"
 # (ShoeGeometry.running_clearance_m), as its calibration needs.
 SERVICE_RUNNING_CLEARANCE_M = 0.0003
 
+# Bore of the wheel cylinder, m: 19.05 mm (3/4 in), a common passenger-car rear drum size
+# (TESTBED). Written once: the service brake's pistons (ServiceBrakeParameters), the cycle's
+# pressures (model/cycle.py) and the line-pressure sensor (sensing/kinds.py) read it here.
+WHEEL_CYLINDER_BORE_M = 0.01905
+
 
 @dataclass(frozen=True)
 class ServiceBrakeParameters:
@@ -303,9 +308,45 @@ class ServiceBrakeParameters:
     # (estimate: a steel contact with the hold-down spring's friction), a coefficient of
     # restitution near 0.5 when the returning shoe lands.
     stop_damping_n_s_per_m: float = 1000.0
+    # The hydraulic circuit (model/service.py): one wheel cylinder, two pistons of this bore,
+    # fed through the line from the master cylinder. Bore: WHEEL_CYLINDER_BORE_M.
+    wheel_cylinder_bore_m: float = WHEEL_CYLINDER_BORE_M
+    # Compliance of the circuit seen from the wheel cylinder, m^3/Pa: the fluid it takes in
+    # per pascal (hoses, line, fluid, the other wheel of the circuit, and the pedal, booster
+    # and the driver's leg reflected through the master cylinder). Estimate from pedal feel:
+    # a car's pedal travels about 0.85 mm per bar past its dead travel (30 mm for 35 bar)
+    # at a pedal ratio of 3.5 on a 20.6 mm master cylinder (3.3 cm^2): 0.08 cm^3 per bar.
+    # The hydraulic stiffness at a tip, A^2/C = 1.0e5 N/m, is 0.3 % of the lining contact's
+    # (3.7e7 N/m) and 1 % of the rest stop's: the shoe follows the drum and pushes the fluid.
+    line_compliance_m3_per_pa: float = 8.0e-13
+    # Flow resistance of the line, Pa s/m^3, set for the pressure's rise time constant
+    # R C = 30 ms: first-order models of a car's brake pressure build-up at the wheel use
+    # 20-50 ms. The laminar resistance of 3 m of 3.2 mm steel line with fluid of 12 mPa s
+    # (128 mu l / pi d^4) is 1.4e10 Pa s/m^3; the hose, the master cylinder's ports and the
+    # valves make up the rest (stated estimate). The same resistance meters the fluid the
+    # return springs push back on release (model/service.py).
+    line_resistance_pa_s_per_m3: float = 3.75e10
 
     def __post_init__(self) -> None:
         _finite(self)
+        _require(
+            0.005 <= self.wheel_cylinder_bore_m <= 0.05,
+            "wheel_cylinder_bore_m",
+            self.wheel_cylinder_bore_m,
+            "5 to 50 mm",
+        )
+        _require(
+            1e-16 <= self.line_compliance_m3_per_pa <= 1e-10,
+            "line_compliance_m3_per_pa",
+            self.line_compliance_m3_per_pa,
+            "1e-16 to 1e-10 m^3/Pa",
+        )
+        _require(
+            1e7 <= self.line_resistance_pa_s_per_m3 <= 1e14,
+            "line_resistance_pa_s_per_m3",
+            self.line_resistance_pa_s_per_m3,
+            "1e7 to 1e14 Pa s/m^3",
+        )
         _require(
             0.0 < self.return_spring_preload_n <= 2000.0,
             "return_spring_preload_n",
@@ -337,6 +378,16 @@ class ServiceBrakeParameters:
             self.stop_damping_n_s_per_m,
             ">= 0",
         )
+
+    @property
+    def piston_area_m2(self) -> float:
+        """Area of one wheel-cylinder piston, m^2: ``pi bore^2 / 4``."""
+        return math.pi * self.wheel_cylinder_bore_m**2 / 4.0
+
+    @property
+    def line_time_constant_s(self) -> float:
+        """The line pressure's rise time constant ``R C``, s."""
+        return self.line_resistance_pa_s_per_m3 * self.line_compliance_m3_per_pa
 
     @property
     def hold_weakening_pct(self) -> float:
@@ -394,6 +445,8 @@ UNIT_SUFFIXES: tuple[tuple[str, str], ...] = (
     ("_n_m_s_per_rad", "N m s/rad"),
     ("_n_m_per_rad", "N m/rad"),
     ("_n_s_per_m", "N s/m"),
+    ("_pa_s_per_m3", "Pa s/m^3"),
+    ("_m3_per_pa", "m^3/Pa"),
     ("_kg_m2", "kg m^2"),
     ("_rad_s", "rad/s"),
     ("_m_s", "m/s"),

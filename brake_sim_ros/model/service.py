@@ -11,8 +11,24 @@ pivot, ``T(0)`` its assembled place. A force ``F`` along ``e`` at the tip does t
 ``F du`` as the shoe turns (``du/dtheta`` is its moment arm), so the tip forces add to the
 actuation's in the shoe's moment balance (:func:`brake_sim_ros.model.contact.shoe_forces`).
 
-* Wheel cylinder: never less than the residual line force ``F_r``,
-  ``F_cyl = max(F_commanded, F_r)`` (a check valve keeps the residual pressure).
+* Wheel cylinder and line (the hydraulic circuit): one cylinder, two pistons of area
+  ``A``, one line pressure ``p`` (Pa, the state layout.Y_LINE_PRESSURE). The line is fed
+  from the source pressure ``p_s = max((F_L + F_R) / 2, F_r) / A``: the pistons' mean
+  commanded force (each shoe's after its gain and shaping, model/actuation.py) over the
+  area, never below the residual pressure a check valve keeps. The volume balance
+  ``C p' = (p_s - p) / R - A (u_l' + u_r')`` (``C`` the circuit's compliance seen from
+  the wheel, ``R`` the line's resistance, ``u'`` each tip's outward speed): the pressure
+  rises with ``R C`` and a tip pushed back by the drum pushes fluid back. Each piston
+  pushes its tip with the line pressure plus its own commanded force's departure from the
+  pistons' mean, ``F_cyl = max(A p + F_i - (F_L + F_R) / 2, F_r)``: a held force gives
+  ``p = p_s`` and each shoe exactly the ideal source's ``max(F_i, F_r)`` (but for two
+  unequal commands whose mean is below the residual force); the pressure's rise and its
+  pulses act on both pistons alike; a per-shoe defect (gain, share, delay, lag, pulsation)
+  is that piston's own departure (a weak, sticking or pulsing piston). The pistons' mean
+  force over ``A`` is ``p`` (the line-pressure sensor's reading) while neither sits at
+  ``F_r``. Stored ``C p^2 / 2``;
+  the line loses ``(p_s - p)^2 / R``; the source works ``p_s (p_s - p) / R``, and a
+  piston's force beyond ``A p`` (its own departure, the residual floor) works at its tip.
 * Return spring (pulls inward): ``F_s = P + k (u - u_rest)``, ``P`` and ``k`` its preload and
   rate as weakened; stored energy ``P (u - u_rest) + k (u - u_rest)^2 / 2``.
 * Rest stop (pushes outward, one-sided): with ``delta = u_stop - u`` the shoe's press on
@@ -51,11 +67,29 @@ def tip_travel(p, base, c, sn, omega):
 
 
 @njit(inline="always", **JIT)
-def cylinder_force(p, commanded):
-    """The wheel cylinder's force on the tip, N: the commanded (after the shoe's gain), never
-    below the residual line force."""
+def line_source(p, commanded_left, commanded_right):
+    """The source pressure ``p_s`` the line is fed from, Pa: the pistons' mean commanded
+    force (N, after each shoe's gain and shaping) over the piston area, never below the
+    residual pressure."""
+    mean = 0.5 * (commanded_left + commanded_right)
     residual = p[L.P_RESIDUAL_FORCE]
-    return commanded if commanded > residual else residual
+    return (mean if mean > residual else residual) / p[L.P_PISTON_AREA]
+
+
+@njit(inline="always", **JIT)
+def piston_force(p, commanded, mean, pressure):
+    """A piston's force on its tip, N: the line pressure ``pressure`` (Pa) on its area plus
+    its own commanded force's departure from the pistons' mean, ``commanded - mean`` (N,
+    after the gains), never below the residual force."""
+    force = p[L.P_PISTON_AREA] * pressure + (commanded - mean)
+    residual = p[L.P_RESIDUAL_FORCE]
+    return force if force > residual else residual
+
+
+@njit(inline="always", **JIT)
+def line_inflow(p, source, pressure):
+    """The flow from the source into the line, m^3/s: ``(p_s - p) / R``."""
+    return (source - pressure) / p[L.P_LINE_RESISTANCE]
 
 
 @njit(inline="always", **JIT)
@@ -83,12 +117,37 @@ def stop_force(p, shoe, travel, rate):
 
 
 @njit(inline="always", **JIT)
-def tip_forces(p, shoe, commanded, travel, rate):
-    """(cylinder force N, net outward force at the tip N, stop damper loss W) of shoe
-    ``shoe`` for the commanded force ``commanded`` (N, after its gain)."""
-    cylinder = cylinder_force(p, commanded)
+def tip_forces(p, shoe, cylinder, travel, rate):
+    """(net outward force at the tip N, stop damper loss W) of shoe ``shoe`` pushed by its
+    piston with ``cylinder`` N (:func:`piston_force`)."""
     stop, loss = stop_force(p, shoe, travel, rate)
-    return cylinder, cylinder - spring_force(p, shoe, travel) + stop, loss
+    return cylinder - spring_force(p, shoe, travel) + stop, loss
+
+
+@njit(inline="always", **JIT)
+def hydraulics(p, pressure, commanded_left, commanded_right, rate_left, rate_right):
+    """The circuit at the line pressure ``pressure`` (Pa) for the pistons' commanded forces
+    (N, after their gains) and the tips' outward speeds (m/s): (left piston force N, right
+    piston force N, ``dp/dt`` Pa/s, the line's loss W, the actuation's power W: the
+    source's ``p_s`` times the inflow plus each piston's force beyond ``A p`` times its
+    tip's speed)."""
+    area = p[L.P_PISTON_AREA]
+    source = line_source(p, commanded_left, commanded_right)
+    mean = 0.5 * (commanded_left + commanded_right)
+    left = piston_force(p, commanded_left, mean, pressure)
+    right = piston_force(p, commanded_right, mean, pressure)
+    inflow = line_inflow(p, source, pressure)
+    rate = (inflow - area * (rate_left + rate_right)) / p[L.P_LINE_COMPLIANCE]
+    loss = (source - pressure) * inflow
+    power = source * inflow + (left - area * pressure) * rate_left
+    power += (right - area * pressure) * rate_right
+    return left, right, rate, loss, power
+
+
+@njit(inline="always", **JIT)
+def line_energy(p, pressure):
+    """Energy the circuit's compliance stores at the line pressure ``pressure`` (Pa), J."""
+    return 0.5 * p[L.P_LINE_COMPLIANCE] * pressure * pressure
 
 
 @njit(inline="always", **JIT)

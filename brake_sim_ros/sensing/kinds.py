@@ -25,6 +25,7 @@ import numpy as np
 
 from brake_sim_ros.errors import ParameterError
 from brake_sim_ros.model.layout import SIDES
+from brake_sim_ros.model.parameters import WHEEL_CYLINDER_BORE_M
 from brake_sim_ros.sensing import faults as sf
 from brake_sim_ros.sensing.transducers import (
     IDEAL,
@@ -47,7 +48,7 @@ LINE_PRESSURE_LOCATION = "wheel_cylinder"
 TONE_RING_LOCATION = "tone_ring"
 PA_PER_BAR = 1e5
 DEFAULT_TONE_RING_TEETH = 48
-DEFAULT_PISTON_DIAMETER_M = 0.01905
+DEFAULT_PISTON_DIAMETER_M = WHEEL_CYLINDER_BORE_M  # the model's wheel cylinder
 # where a kind may sit: a mount point of the structure (checked by the sensor set)
 ON_STRUCTURE = ("<a mount point of the structure>",)
 
@@ -110,7 +111,9 @@ _ACTUATION = ("left_actuation_force_n", "right_actuation_force_n")
 
 
 def _line_pressure(channel: Channel, columns: Columns, structure: np.ndarray | None):
-    # one wheel cylinder pushes both shoes: the mean force over the piston area
+    # one wheel cylinder pushes both shoes: the mean force over the piston area (on the
+    # service brake the mean piston force is the modelled line pressure times the area,
+    # model/service.py, unless a piston sits at the residual force)
     area_m2 = math.pi * channel.piston_diameter_m**2 / 4.0
     mean_force = 0.5 * (columns["left_actuation_force_n"] + columns["right_actuation_force_n"])
     return mean_force / area_m2 / PA_PER_BAR

@@ -14,6 +14,12 @@ stability region (for symplectic Euler: the spectral radius of its one-step matr
 linearised system at most 1), with a 10 % margin, and must resolve the fastest oscillation with at
 least ``STEPS_PER_PERIOD`` steps: past that, RK4 stays bounded but gives false impacts and
 wrong stopping times long before anything diverges.
+
+The service brake's line pressure is held at the source pressure of the forces in the
+Jacobian (each piston then pushes what the ideal source would): the circuit's own rate
+``1 / (R C)`` is tens per second, and its stiffness at a tip ``A^2 / C`` is a fraction of
+a percent of the lining contact's, so it moves no eigenvalue that limits the step
+(tests/model/test_hydraulics.py measures it with the pressure in the Jacobian).
 """
 
 from __future__ import annotations
@@ -24,7 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import brentq
 
-from brake_sim_ros.model import kernel
+from brake_sim_ros.model import kernel, service
 from brake_sim_ros.model import layout as L
 from brake_sim_ros.model.assembly import indentation_at, pack
 
@@ -98,8 +104,8 @@ def _jacobian(
 ) -> np.ndarray:
     n = 8
     jac = np.zeros((n, n))
-    f_plus = np.zeros(L.N_STATE)
-    f_minus = np.zeros(L.N_STATE)
+    f_plus = np.zeros(y.shape[0])
+    f_minus = np.zeros(y.shape[0])
     for j in range(n):
         h = 1e-7 * max(1.0, abs(y[j]))
         yp = y.copy()
@@ -183,6 +189,16 @@ def symplectic_euler_stable_step(jacs: list[np.ndarray]) -> float:
     return lo
 
 
+def _state(p: np.ndarray, serviced: bool, fe: tuple[float, float]) -> np.ndarray:
+    """A zero state of the run's size; a service brake's line at the source pressure of
+    the actuation forces ``fe`` (N), so that each piston pushes its ``fe``."""
+    if not serviced:
+        return np.zeros(L.N_STATE)
+    y = np.zeros(L.N_STATE_SERVICE)
+    y[L.Y_LINE_PRESSURE] = service.line_source.py_func(p, fe[0], fe[1])
+    return y
+
+
 def step_limit(
     setup,
     max_actuation_n: float,
@@ -210,7 +226,8 @@ def step_limit(
         max_actuation_n * g + p[b + L.S_SPRING_RELEASE]
         for g, b in zip(gains, (L.P_SHOE_BASE, L.P_SHOE_BASE + L.SHOE_STRIDE), strict=True)
     )
-    y = np.zeros(L.N_STATE)
+    serviced = p[L.P_SERVICE] > 0.0
+    y = _state(p, serviced, fe)
     bases = (L.P_SHOE_BASE, L.P_SHOE_BASE + L.SHOE_STRIDE)
     for i, base in enumerate(bases):
         # a small load still engages the contact stiffness
@@ -218,8 +235,8 @@ def step_limit(
     y[L.Y_DRUM_SPEED] = y[L.Y_FLYWHEEL_SPEED] = drum_speed
     on = (L.CONTACT_ON, L.CONTACT_ON)
     jacs = [_jacobian(y, p, fe, 0, on), _jacobian(y, p, fe, 1, on)]
-    if p[L.P_SERVICE] > 0.0:  # a service brake's shoes at rest on their stops (model/service.py)
-        rest = np.zeros(L.N_STATE)
+    if serviced:  # a service brake's shoes at rest on their stops (model/service.py)
+        rest = _state(p, serviced, (0.0, 0.0))
         rest[L.Y_DRUM_SPEED] = rest[L.Y_FLYWHEEL_SPEED] = drum_speed
         for i, side in enumerate(L.SIDES):
             rest[L.Y_LEFT_ANGLE + i] = math.radians(getattr(setup.defects, side).initial_angle_deg)

@@ -97,7 +97,7 @@ def main(argv: list[str] | None = None) -> int:
         for label, with_sensors in cases:
             times, ends, segments = _run(scenario, chunk, with_sensors)
             runs[label].append(times)
-    books = energy_balance(ends, scenario.setup.params)
+    books = energy_balance(ends, scenario.setup.params, packed=stepper.packed_parameters)
     kinds = scenario.setup.cycle.phase_names(np.array(segments))
     best = {label: min(times) for label, times in runs.items()}  # by the whole run's CPU
     for label, (cpu, stepping, sensing) in best.items():
