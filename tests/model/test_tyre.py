@@ -1,0 +1,196 @@
+"""The service brake's tyre (model/tyre.py): the lumped LuGre law with the road's friction
+limit, its parameters and the scenario's ``road_friction``. Each figure a test expects is
+computed by hand from the documented formulas and the parameters (written out below),
+never read off a run."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from brake_sim_ros.errors import ParameterError, ScenarioError
+from brake_sim_ros.model import layout as L
+from brake_sim_ros.model import tyre
+from brake_sim_ros.model.assembly import ModelOptions, pack
+from brake_sim_ros.model.cycle import pack_drive
+from brake_sim_ros.model.defects import Defects
+from brake_sim_ros.model.parameters import (
+    DRY_ROAD_FRICTION,
+    BrakeParameters,
+    TyreParameters,
+)
+from brake_sim_ros.scenarios.loader import parse_scenario
+
+G = 9.80665
+RADIUS_M = (100.0 / 3.6) / 103.5  # the default rolling radius, 0.268384 m
+LOAD_N = 17.1 / RADIUS_M**2 * G  # 237.40 kg times g: 2328.10 N
+# the default tyre on the dry road: sliding 0.8, peak 1.2, Stribeck 3 m/s, exponent 1,
+# sigma0 40 1/m, sigma1 2 sqrt(40 / g) = 4.03924 s/m, sigma2 0
+SIGMA0 = 40.0
+SIGMA1 = 2.0 * math.sqrt(40.0 / G)
+DRY = (SIGMA0, SIGMA1, 0.0, 0.8, 1.2, 3.0, 1.0)
+
+
+def _service_packed(road_friction: float | None = None) -> np.ndarray:
+    text = 'name = "t"\nbrake = "service"\n'
+    if road_friction is not None:
+        text += f"road_friction = {road_friction}\n"
+    setup = parse_scenario(text).setup
+    return pack(setup.params, setup.defects, setup.options)
+
+
+def test_the_stribeck_curve_matches_hand_values():
+    curve = tyre.stribeck.py_func
+    assert curve(0.0, 0.8, 1.2, 3.0, 1.0) == pytest.approx(1.2, rel=1e-15)
+    # 0.8 + 0.4 / e, either sign of slip
+    assert curve(-3.0, 0.8, 1.2, 3.0, 1.0) == pytest.approx(0.9471518, rel=1e-7)
+    assert curve(3.0, 0.8, 1.2, 3.0, 1.0) == pytest.approx(0.9471518, rel=1e-7)
+    # a locked tyre at 100 km/h: 0.8 + 0.4 exp(-9.259) = 0.8000381
+    assert curve(-100.0 / 3.6, 0.8, 1.2, 3.0, 1.0) == pytest.approx(0.8000381, rel=1e-7)
+    # exponent 0.5 at 12 m/s from 12.5: 0.5 + 0.4 exp(-sqrt(0.96)) = 0.6501551
+    assert curve(12.0, 0.5, 0.9, 12.5, 0.5) == pytest.approx(0.6501551, rel=1e-7)
+
+
+@pytest.mark.parametrize("slip", [-27.0, -3.0, -0.5, 0.2, 5.0])
+def test_the_steady_slip_law_is_the_curve_and_its_deflection_rests_there(slip):
+    law = tyre.law.py_func
+    g = 0.8 + 0.4 * math.exp(-abs(slip) / 3.0)
+    steady = math.copysign(g, slip) / SIGMA0
+    ratio, rate = law(steady, slip, *DRY)
+    assert rate == pytest.approx(0.0, abs=1e-12 * abs(slip))
+    assert ratio == pytest.approx(math.copysign(g, slip), rel=1e-12)
+    # from rest the tread deflects at the slip speed, the damper alone pushing
+    ratio0, rate0 = law(0.0, slip, *DRY)
+    assert rate0 == slip
+    assert ratio0 == pytest.approx(SIGMA1 * slip, rel=1e-12)
+    # integrated at a fixed slip, the deflection relaxes to the steady one with the rate
+    # sigma0 |v| / g: z(t) = z_ss (1 - exp(-sigma0 |v| t / g))
+    tau = g / (SIGMA0 * abs(slip))
+    z, dt = 0.0, tau / 2000.0
+    for _ in range(2000):  # RK4 on the law itself, one time constant
+        k1 = law(z, slip, *DRY)[1]
+        k2 = law(z + 0.5 * dt * k1, slip, *DRY)[1]
+        k3 = law(z + 0.5 * dt * k2, slip, *DRY)[1]
+        k4 = law(z + dt * k3, slip, *DRY)[1]
+        z += dt / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
+    assert z == pytest.approx(steady * (1.0 - math.exp(-1.0)), rel=1e-9)
+
+
+def test_a_held_tyre_is_a_spring_and_damper_and_holds_its_deflection():
+    law = tyre.law.py_func
+    for z in (-0.02, 0.0, 0.01):
+        ratio, rate = law(z, 0.0, *DRY)
+        assert rate == 0.0 and ratio == SIGMA0 * z
+    # small slip speeds: the tread follows the slip (dz/dt ~ v) below a tenth of the peak
+    ratio, rate = law(0.001, 0.01, *DRY)
+    g = 0.8 + 0.4 * math.exp(-0.01 / 3.0)
+    assert rate == pytest.approx(0.01 * (1.0 - SIGMA0 * 0.001 / g), rel=1e-12)
+    assert rate == pytest.approx(0.00967, abs=1e-5)
+
+
+def test_the_packed_tyre_couples_drum_and_flywheel_by_hand():
+    p = _service_packed()
+    assert tyre.wheel_load.py_func(p) == pytest.approx(LOAD_N, rel=1e-12)
+    assert tyre.wheel_load.py_func(p) == pytest.approx(2328.10, abs=0.01)
+    assert tyre.torsional_stiffness.py_func(p) == pytest.approx(SIGMA0 * LOAD_N * RADIUS_M**2)
+    assert tyre.grip_torque.py_func(p) == pytest.approx(1.2 * LOAD_N * RADIUS_M)
+    # held (equal speeds), tread 10 mm back: the road pushes the tyre forward with
+    # sigma0 Fz z = -931.24 N along the slip; the drum takes -R F, no loss
+    torque, loss, rate = tyre.coupling.py_func(p, -0.01, 50.0, 50.0)
+    assert torque == pytest.approx(RADIUS_M * SIGMA0 * LOAD_N * 0.01, rel=1e-12)
+    assert torque == pytest.approx(249.93, abs=0.01)
+    assert loss == 0.0 and rate == 0.0
+    # a locked wheel sliding at 100 km/h with its steady deflection: the drum is pushed
+    # forward by R Fz g(v) (g = 0.8000381), all the power F v is lost
+    v = 100.0 / 3.6
+    g = 0.8 + 0.4 * math.exp(-v / 3.0)
+    torque, loss, rate = tyre.coupling.py_func(p, -g / SIGMA0, v / RADIUS_M, 0.0)
+    assert rate == pytest.approx(0.0, abs=1e-12)
+    assert torque == pytest.approx(RADIUS_M * LOAD_N * g, rel=1e-12)
+    assert loss == pytest.approx(LOAD_N * g * v, rel=1e-12)
+    # what the rotors give (F v_r) is what the tread stores plus what it loses
+    for z, wf, wd in ((-0.005, 80.0, 70.0), (0.01, 10.0, 0.0), (-0.02, 5.0, 5.5)):
+        torque, loss, rate = tyre.coupling.py_func(p, z, wf, wd)
+        given = -torque * wd + torque * wf  # the drum takes torque, the flywheel -torque
+        stored = SIGMA0 * LOAD_N * z * rate
+        assert given == pytest.approx(stored + loss, rel=1e-12, abs=1e-9)
+    # the load follows the flywheel inertia in force (a cycle's load factor)
+    heavy = p.copy()
+    heavy[L.P_FLYWHEEL_INERTIA] *= 2.0
+    assert tyre.wheel_load.py_func(heavy) == pytest.approx(2.0 * LOAD_N, rel=1e-12)
+    z = np.array([0.0, -0.01, 0.02])
+    energies = tyre.stored_energy_rows(p, z, np.array([17.1, 17.1, 34.2]))
+    expected = 0.5 * SIGMA0 * LOAD_N * z**2 * np.array([1.0, 1.0, 2.0])
+    assert np.allclose(energies, expected, rtol=1e-12)
+
+
+def test_the_defaults_are_the_dry_road_with_a_critically_damped_presliding_mode():
+    t = TyreParameters()
+    assert t.road_friction == DRY_ROAD_FRICTION == 0.8
+    assert t.peak_friction == pytest.approx(1.2)
+    assert t.presliding_damping_s_per_m == pytest.approx(4.03924, abs=1e-5)
+    # the vehicle on its held tyre: m x'' + sigma1 m g x' + sigma0 m g x = 0, ratio 1
+    omega = math.sqrt(t.presliding_stiffness_per_m * G)
+    zeta = t.presliding_damping_s_per_m * G / (2.0 * omega)
+    assert zeta == pytest.approx(1.0, rel=1e-12)
+    assert BrakeParameters.of_brake("service").service.tyre == t
+    assert BrakeParameters.of_brake("study").service is None
+
+
+def test_the_scenario_sets_the_road_friction_and_packs_it():
+    wet = _service_packed(0.5)
+    assert wet[L.P_TYRE_SLIDING] == 0.5 and wet[L.P_TYRE_PEAK] == pytest.approx(0.75)
+    dry = _service_packed()
+    assert dry[L.P_TYRE_SLIDING] == 0.8 and dry[L.P_TYRE_PEAK] == pytest.approx(1.2)
+    assert dry[L.P_WHEEL_RADIUS] == RADIUS_M
+    # a vehicle's rolling radius replaces the default one
+    text = 'name = "t"\nbrake = "service"\n[vehicle]\nwheel_radius_m = 0.3\n'
+    setup = parse_scenario(text).setup
+    p = pack(setup.params, setup.defects, setup.options)
+    pack_drive(p, setup)
+    assert p[L.P_WHEEL_RADIUS] == 0.3
+    # the study brake packs no tyre
+    study = pack(BrakeParameters(), Defects())
+    assert study[L.P_TYRE_STIFFNESS] == 0.0 and study[L.P_WHEEL_RADIUS] == 0.0
+
+
+@pytest.mark.parametrize(
+    ("text", "words"),
+    [
+        ("road_friction = 0.5\n", 'only with brake = "service"'),
+        ('brake = "service"\nroad_friction = 0.0\n', ">= 0.05 and <= 1.2"),
+        ('brake = "service"\nroad_friction = 2.5\n', ">= 0.05 and <= 1.2"),
+        ('brake = "service"\nroad_friction = "wet"\n', "a number"),
+        ('brake = "service"\nroad_friction = nan\n', "road_friction"),
+        ('brake = "service"\n[model]\nrigid_coupling = true\n', "rigid_coupling"),
+    ],
+)
+def test_a_bad_road_or_a_rigid_service_coupling_is_refused_in_one_line(text, words):
+    with pytest.raises(ScenarioError) as info:
+        parse_scenario(f'name = "t"\n{text}')
+    message = str(info.value)
+    assert words in message and "\n" not in message
+
+
+@pytest.mark.parametrize(
+    ("field", "value"),
+    [
+        ("road_friction", 0.01),
+        ("peak_ratio", 0.9),
+        ("stribeck_speed_m_s", 0.0),
+        ("presliding_stiffness_per_m", -1.0),
+        ("presliding_damping_ratio", 0.0),
+        ("viscous_s_per_m", math.inf),
+    ],
+)
+def test_tyre_parameters_out_of_range_are_refused(field, value):
+    with pytest.raises(ParameterError, match=field):
+        TyreParameters(**{field: value})
+
+
+def test_a_rigid_coupling_on_the_service_brake_is_refused_by_the_packing():
+    params = BrakeParameters.of_brake("service")
+    with pytest.raises(ParameterError, match="rigid_coupling"):
+        pack(params, Defects(), ModelOptions(rigid_coupling=True))
