@@ -115,7 +115,8 @@ def fixed_step_advance(
     cycling = p[L.P_CYCLE_COUNT] > 0.0
     speed_held = p[L.P_LIVE_SPEED_CONTROL] > 0.0  # a live target speed (cycle.LiveDrive)
     # the brake's temperature sets the linings' friction (model/thermal.py)
-    heating = n > L.Y_BRAKE_TEMPERATURE
+    # (a service run carries the temperature slot without a thermal state: P_THERMAL 0)
+    heating = n > L.Y_BRAKE_TEMPERATURE and p[L.P_THERMAL] > 0.0
     pw = growth.working_copy(p) if growing or cycling or speed_held or heating else p
     ramp_t = np.zeros(2)
     ramp_f = np.zeros(2)

@@ -338,19 +338,68 @@ def indentation_at(
     return float(out[2])
 
 
+def state_size(params: BrakeParameters, defects: Defects, thermal_state: bool) -> int:
+    """Entries of a run's state vector (layout.Y_*): a service brake's always
+    ``N_STATE_SERVICE``; else ``N_STATE_THERMAL`` with a thermal state, ``N_STATE_WEAR``
+    when a lining wears with its friction work, ``N_STATE`` otherwise."""
+    if params.service is not None:
+        return L.N_STATE_SERVICE
+    if thermal_state:
+        return L.N_STATE_THERMAL
+    return L.N_STATE_WEAR if defects.wearing_with_work else L.N_STATE
+
+
 def initial_state(
-    params: BrakeParameters, defects: Defects, temperature_c: float | None = None
+    params: BrakeParameters,
+    defects: Defects,
+    temperature_c: float | None = None,
+    *,
+    held_temperature_c: float = thermal.DEFAULT_TEMPERATURE_C,
 ) -> np.ndarray:
-    """State at t = 0: flywheel and drum at the initial speed, shoes at rest; with the
-    linings' wear states (layout ``N_STATE_WEAR``, from 0) when a lining wears with its
-    friction work; with the brake's temperature ``temperature_c`` (deg C, layout
-    ``N_STATE_THERMAL``) when the run has a thermal state (model/thermal.py)."""
-    size = L.N_STATE_WEAR if defects.wearing_with_work else L.N_STATE
-    y = np.zeros(L.N_STATE_THERMAL if temperature_c is not None else size)
-    if temperature_c is not None:
-        y[L.Y_BRAKE_TEMPERATURE] = temperature_c
+    """State at t = 0 (:func:`state_size` entries): flywheel and drum at the initial speed,
+    shoes at rest; the linings' wear states (layout ``N_STATE_WEAR``) from 0; the brake's
+    temperature ``temperature_c`` (deg C, layout ``N_STATE_THERMAL``) when the run has a
+    thermal state (model/thermal.py), else, on a service brake, which carries the slot
+    anyway, the temperature the run is held at, ``held_temperature_c`` (deg C)."""
+    y = np.zeros(state_size(params, defects, temperature_c is not None))
+    if y.shape[0] > L.Y_BRAKE_TEMPERATURE:
+        y[L.Y_BRAKE_TEMPERATURE] = held_temperature_c if temperature_c is None else temperature_c
     y[L.Y_FLYWHEEL_SPEED] = params.driveline.initial_speed_rad_s
     y[L.Y_DRUM_SPEED] = params.driveline.initial_speed_rad_s
     y[L.Y_LEFT_ANGLE] = math.radians(defects.left.initial_angle_deg)
     y[L.Y_RIGHT_ANGLE] = math.radians(defects.right.initial_angle_deg)
     return y
+
+
+def resized_state(
+    y: np.ndarray,
+    params: BrakeParameters,
+    defects: Defects,
+    *,
+    was_thermal: bool,
+    start_temperature_c: float | None,
+    held_temperature_c: float,
+) -> np.ndarray:
+    """The state ``y`` of a run carried over to new parameters (``params``, ``defects``):
+    a lining that starts wearing with its work gets its wear states (from 0); a thermal
+    state that ends is dropped (a service brake's slot then holds ``held_temperature_c``),
+    one that starts begins at ``start_temperature_c`` (deg C); a service brake keeps its
+    ``N_STATE_SERVICE`` entries. ``was_thermal``: whether the run had a thermal state."""
+    if params.service is None and y.shape[0] > L.N_STATE_THERMAL:  # was a service brake
+        y = y[: L.N_STATE_THERMAL if was_thermal else L.N_STATE_WEAR]
+    size = L.N_STATE_SERVICE if params.service is not None else y.shape[0]
+    if defects.wearing_with_work and size < L.N_STATE_WEAR:
+        size = L.N_STATE_WEAR  # a lining starts wearing with its friction work: from 0
+    if start_temperature_c is None and params.service is None:  # no thermal state
+        size = min(size, L.N_STATE_THERMAL - 1)
+    elif start_temperature_c is not None:
+        size = max(size, L.N_STATE_THERMAL)
+    grown = np.zeros(size)
+    kept = min(size, y.shape[0])
+    grown[:kept] = y[:kept]
+    if size > L.Y_BRAKE_TEMPERATURE:
+        if start_temperature_c is None:
+            grown[L.Y_BRAKE_TEMPERATURE] = held_temperature_c
+        elif not was_thermal or y.shape[0] <= L.Y_BRAKE_TEMPERATURE:
+            grown[L.Y_BRAKE_TEMPERATURE] = start_temperature_c
+    return grown

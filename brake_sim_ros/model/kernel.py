@@ -199,9 +199,9 @@ def evaluate_from(y, p, fe_left, fe_right, stuck, mode_left, mode_right, kl, kr,
     o[L.C_DRIVE_WORK] = y[L.Y_DRIVE_WORK]
     o[L.C_ROAD_LOAD_WORK] = y[L.Y_ROAD_LOAD_WORK]
     o[L.C_PHASE] = -1.0  # no cycle; fixed_step_advance writes a cycle's segment
-    o[L.C_BRAKE_TEMPERATURE] = (
-        y[L.Y_BRAKE_TEMPERATURE] if y.shape[0] > L.Y_BRAKE_TEMPERATURE else p[L.P_HELD_TEMPERATURE]
-    )
+    # a service run carries the temperature slot without a thermal state (layout.P_THERMAL)
+    heating = y.shape[0] > L.Y_BRAKE_TEMPERATURE and p[L.P_THERMAL] > 0.0
+    o[L.C_BRAKE_TEMPERATURE] = y[L.Y_BRAKE_TEMPERATURE] if heating else p[L.P_HELD_TEMPERATURE]
     o[L.C_FLYWHEEL_INERTIA] = p[L.P_FLYWHEEL_INERTIA]
     o[L.C_LOAD_CHANGE_WORK] = 0.0  # no load change; fixed_step_advance writes a cycle's
 
@@ -251,10 +251,15 @@ def _derivatives(
     dydt[L.Y_ACTUATION_WORK] = actuation_power
     if y.shape[0] > L.Y_LEFT_WEAR:  # a lining wears with its friction work (layout.Y_*_WEAR)
         _wear_rates(p, friction_left, friction_right, dydt)
-    if y.shape[0] > L.Y_BRAKE_TEMPERATURE:  # the brake's thermal state (model/thermal.py)
-        dydt[L.Y_BRAKE_TEMPERATURE] = thermal.heating_rate(
-            p, dydt[L.Y_FRICTION_WORK], wd, y[L.Y_BRAKE_TEMPERATURE]
-        )
+    if y.shape[0] > L.Y_BRAKE_TEMPERATURE:
+        if p[L.P_THERMAL] > 0.0:  # the brake's thermal state (model/thermal.py)
+            dydt[L.Y_BRAKE_TEMPERATURE] = thermal.heating_rate(
+                p, dydt[L.Y_FRICTION_WORK], wd, y[L.Y_BRAKE_TEMPERATURE]
+            )
+        else:  # a service run without one: its slot stays at the held temperature
+            dydt[L.Y_BRAKE_TEMPERATURE] = 0.0
+    if y.shape[0] > L.Y_TYRE_DEFLECTION:  # the service brake's states (layout.N_STATE_SERVICE)
+        _service_rates(dydt)
     dydt[L.Y_DRIVE_WORK] = 0.0
     dydt[L.Y_ROAD_LOAD_WORK] = 0.0
     road = 0.0  # N m, the road load of a driven flywheel
@@ -322,6 +327,14 @@ def rides_free(y, y0, free_bound, stuck, ml, mr, fel, fer):
     dl = abs(y[L.Y_LEFT_ANGLE] - y0[L.Y_LEFT_ANGLE])
     dr = abs(y[L.Y_RIGHT_ANGLE] - y0[L.Y_RIGHT_ANGLE])
     return free_bound[0] + free_bound[1] * dl < 0.0 and free_bound[2] + free_bound[3] * dr < 0.0
+
+
+@njit(**JIT)
+def _service_rates(dydt):
+    """The rates of the service brake's states that nothing drives yet: the tyre's
+    deflection (reserved) and the line pressure, 0."""
+    dydt[L.Y_TYRE_DEFLECTION] = 0.0
+    dydt[L.Y_LINE_PRESSURE] = 0.0
 
 
 @njit(**JIT)

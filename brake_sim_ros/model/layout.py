@@ -255,6 +255,14 @@ N_STATE_WEAR = 16
 # carries it, after the two wear states (which stay 0 unless a lining wears with work)
 Y_BRAKE_TEMPERATURE = 16
 N_STATE_THERMAL = 17
+# the service brake's states (P_SERVICE): a service run always carries all N_STATE_SERVICE
+# of them, so its wear slots (0 unless a lining wears with work) and its temperature slot
+# (held at P_HELD_TEMPERATURE, its rate 0, unless the run has a thermal state: P_THERMAL)
+# are there on every service run. The tyre's deflection, m (reserved: rate 0 until a tyre
+# is modelled), and the line pressure at the wheel cylinder, Pa.
+Y_TYRE_DEFLECTION = 17
+Y_LINE_PRESSURE = 18
+N_STATE_SERVICE = 19
 
 # --- recorded sample columns -------------------------------------------------------------
 COLUMNS: tuple[str, ...] = (

@@ -41,7 +41,7 @@ from brake_sim_ros.errors import ParameterError, SimulationError, StepSizeError
 from brake_sim_ros.model import advance
 from brake_sim_ros.model import layout as L
 from brake_sim_ros.model.actuation import MAX_ACTUATION_FORCE_N
-from brake_sim_ros.model.assembly import initial_state, pack
+from brake_sim_ros.model.assembly import initial_state, pack, resized_state
 from brake_sim_ros.model.cycle import LiveDrive, pack_drive, pack_live_drive, torque_refusal
 from brake_sim_ros.model.run_setup import BrakeSetup, SampleBlock
 from brake_sim_ros.model.thermal import pack_thermal
@@ -211,7 +211,10 @@ class FixedStepStepper:
             )
         self.substeps = self._substeps_for(self.limit, "these parameters")
         self._y = initial_state(
-            self.setup.params, self.setup.defects, self.setup.start_temperature_c
+            self.setup.params,
+            self.setup.defects,
+            self.setup.start_temperature_c,
+            held_temperature_c=self.setup.held_temperature_c,
         )
         self._histories: list[CommandHistory | None] = [None, None]
         self._live_n: tuple[float, float] | None = None  # the live forces in force, N
@@ -296,7 +299,7 @@ class FixedStepStepper:
     def set_state(self, y: np.ndarray) -> None:
         """Replace the state vector (layout.Y_*), e.g. to start from a twisted coupling."""
         y = np.asarray(y, dtype=float)
-        size = self._y.shape[0]  # N_STATE, N_STATE_WEAR (wear with work), N_STATE_THERMAL
+        size = self._y.shape[0]  # assembly.state_size's
         if y.shape != (size,) or not np.all(np.isfinite(y)):
             raise ParameterError(f"state of shape {y.shape}: allowed {size} finite values")
         self._y = y.copy()
@@ -343,22 +346,20 @@ class FixedStepStepper:
         force = max(self.limit_force_n, _peak_n(setup))
         limit = step_limit(setup, force, packed=p, scheme=self.scheme)
         substeps = self._substeps_for(limit, "the new parameters")
+        was_thermal = self.setup.thermal is not None
         self.setup, self._p, self.limit, self.limit_force_n = setup, p, limit, force
         self._base_force_n = max(self._base_force_n, _peak_n(setup))
         self._profile = setup.actuation.as_arrays()
         self._pack_live_drive()  # the command in force holds on the new parameters
         self._use_substeps(substeps)
-        if setup.defects.wearing_with_work and self._y.shape[0] < L.N_STATE_WEAR:
-            # a lining starts wearing with its friction work: its wear state starts at 0
-            self._y = np.concatenate([self._y, np.zeros(L.N_STATE_WEAR - self._y.shape[0])])
-        start = setup.start_temperature_c
-        if start is None:  # the brake no longer carries a thermal state
-            self._y = self._y[: min(self._y.shape[0], L.N_STATE_THERMAL - 1)].copy()
-        elif self._y.shape[0] < L.N_STATE_THERMAL:  # it starts to, at its start temperature
-            grown = np.zeros(L.N_STATE_THERMAL)
-            grown[: self._y.shape[0]] = self._y
-            grown[L.Y_BRAKE_TEMPERATURE] = start
-            self._y = grown
+        self._y = resized_state(
+            self._y,
+            setup.params,
+            setup.defects,
+            was_thermal=was_thermal,
+            start_temperature_c=setup.start_temperature_c,
+            held_temperature_c=setup.held_temperature_c,
+        )
 
     def drive_refusal(self, command: LiveDrive | None = None) -> str | None:
         """Why this run takes no live drive commands (or not ``command``: a torque above
