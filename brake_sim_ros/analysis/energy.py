@@ -17,7 +17,10 @@ is supplied the kinetic energy its load changes brought (``load_change_work_j``)
 The service brake (model/service.py) also stores energy in its return springs and rest
 stops (from the shoe angles and the packed parameters, which place them for the run's
 defects); its stops' dampers lose theirs into ``contact_loss_j``, and its actuator work
-is the wheel cylinders' alone.
+is the wheel cylinders' alone. Its flywheel and drum are coupled by its tyre
+(model/tyre.py), not by the coupling spring: ``coupling_damper_loss_j`` is the tyre's
+work, what the rotors gave it (its tread's stored energy, at most 42 J on a dry road,
+and its losses), and no coupling spring is stored.
 """
 
 from __future__ import annotations
@@ -96,8 +99,10 @@ def stored_energy_j(block: SampleBlock, params: BrakeParameters, row: int) -> fl
         + 0.5 * i_s * (at("left_speed_rad_s") ** 2 + at("right_speed_rad_s") ** 2)
     )
     twist = at("flywheel_angle_rad") - at("drum_angle_rad")
+    # the service brake's tyre replaces the coupling spring (its work is booked whole)
+    k_s = d.coupling_stiffness_n_m_per_rad if params.service is None else 0.0
     k_c = params.contact_stiffness_n_per_m
-    elastic = 0.5 * d.coupling_stiffness_n_m_per_rad * twist**2 + sum(
+    elastic = 0.5 * k_s * twist**2 + sum(
         0.5 * k_c * max(float(at(f"{s}_indentation_m")), 0.0) ** 2 for s in SIDES
     )
     return float(kinetic + elastic)
