@@ -348,3 +348,26 @@ def test_the_step_limit_sees_the_tyres_presliding_damper():
     assert default.stiffest_rate_per_s < stiff / 2.0
     assert stiff <= limit.stiffest_rate_per_s <= stiff + default.stiffest_rate_per_s
     assert limit.stability_step_s < 2.8 / stiff < default.stability_step_s
+
+
+def test_a_run_may_draw_its_road_and_the_study_brake_refuses_one():
+    """``[conditions] road_friction``: each run draws its road within the range (the
+    drawn value packed as the tyre's sliding friction, its peak 1.5 times it); on the
+    study brake the range is refused in one line."""
+    text = 'name = "t"\nbrake = "service"\n[conditions]\nroad_friction = [0.4, 0.6]\n'
+    scenario = parse_scenario(text)
+    seen = set()
+    for seed in range(4):
+        run = scenario.with_unit(seed=seed)
+        drawn = dict(run.conditions)["road_friction"]
+        assert 0.4 <= drawn <= 0.6
+        p = pack(run.setup.params, run.setup.defects, run.setup.options)
+        assert p[L.P_TYRE_SLIDING] == drawn
+        assert p[L.P_TYRE_PEAK] == pytest.approx(1.5 * drawn, rel=1e-15)
+        seen.add(drawn)
+    assert len(seen) == 4
+    with pytest.raises(ScenarioError) as info:
+        parse_scenario('name = "t"\n[conditions]\nroad_friction = [0.4, 0.6]\n')
+    assert "study brake has no tyre" in str(info.value) and "\n" not in str(info.value)
+    with pytest.raises(ScenarioError, match="road_friction"):
+        parse_scenario('name = "t"\nbrake = "service"\n[conditions]\nroad_friction = [0.0, 2.0]\n')
