@@ -19,7 +19,10 @@ stops (from the shoe angles and the packed parameters, which place them for the 
 defects) and in its hydraulic circuit's compliance, ``C p^2 / 2`` (the line pressure
 ``p`` read from the pistons' recorded forces, :func:`line_pressure_pa`); its stops'
 dampers and its line's resistance lose theirs into ``contact_loss_j``, and its actuator
-work is the source's (``p_s`` times the flow into the line) and the pistons' own.
+work is the source's (``p_s`` times the flow into the line) and the pistons' own. Its
+flywheel and drum are coupled by its tyre (model/tyre.py), not by the coupling spring:
+``coupling_damper_loss_j`` is the tyre's work, what the rotors gave it (its tread's stored
+energy, at most 42 J on a dry road, and its losses), and no coupling spring is stored.
 """
 
 from __future__ import annotations
@@ -99,8 +102,10 @@ def stored_energy_j(block: SampleBlock, params: BrakeParameters, row: int) -> fl
         + 0.5 * i_s * (at("left_speed_rad_s") ** 2 + at("right_speed_rad_s") ** 2)
     )
     twist = at("flywheel_angle_rad") - at("drum_angle_rad")
+    # the service brake's tyre replaces the coupling spring (its work is booked whole)
+    k_s = d.coupling_stiffness_n_m_per_rad if params.service is None else 0.0
     k_c = params.contact_stiffness_n_per_m
-    elastic = 0.5 * d.coupling_stiffness_n_m_per_rad * twist**2 + sum(
+    elastic = 0.5 * k_s * twist**2 + sum(
         0.5 * k_c * max(float(at(f"{s}_indentation_m")), 0.0) ** 2 for s in SIDES
     )
     return float(kinetic + elastic)

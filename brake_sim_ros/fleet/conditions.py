@@ -27,6 +27,9 @@ scenario's value. What each one sets:
   cools to. Below the fade law's onset a temperature leaves the friction as it is, so the
   ambient alone changes no physics of a held brake: it is ground truth for a detector's
   features (and sets a cold brake's temperature).
+* ``road_friction``: the road's sliding friction coefficient under the service brake's
+  tyre (model/tyre.py; the scenario's top-level ``road_friction`` otherwise, dry asphalt
+  0.8 by default); refused on the study brake, which has no tyre.
 
 Fade and contamination can halve a lining's friction (``TESTBED.md``); the fade law and
 its assumption are in model/thermal.py. A lining whose curve is known is better given as
@@ -45,6 +48,7 @@ from dataclasses import dataclass
 from brake_sim_ros.errors import ParameterError
 from brake_sim_ros.fleet.scatter import keyed_uniform
 from brake_sim_ros.model.actuation import MAX_ACTUATION_FORCE_N, Actuation, ForceProfile
+from brake_sim_ros.model.parameters import ROAD_FRICTION_RANGE, BrakeParameters
 from brake_sim_ros.model.run_setup import BrakeSetup
 from brake_sim_ros.model.thermal import FADE
 from brake_sim_ros.model.vehicle import LOAD_FACTOR_RANGE
@@ -105,6 +109,12 @@ CONDITIONS: tuple[Condition, ...] = (
         50.0,
         "air temperature; the brake's too when brake_temperature_c is not drawn",
     ),
+    Condition(
+        "road_friction",
+        "1",
+        *ROAD_FRICTION_RANGE,
+        "the road's sliding friction under the service brake's tyre (dry asphalt 0.8)",
+    ),
 )
 CONDITION_BY_NAME: dict[str, Condition] = {c.name: c for c in CONDITIONS}
 
@@ -137,6 +147,16 @@ def _scaled(profile: ForceProfile, factor: float) -> ForceProfile:
     return ForceProfile(profile.times_s, tuple(f * factor for f in profile.forces_n))
 
 
+def _on_road(params: BrakeParameters, friction: float) -> BrakeParameters:
+    """``params`` with the service brake's tyre on a road of sliding ``friction``."""
+    if params.service is None:
+        raise ParameterError(
+            'condition road_friction: the study brake has no tyre: allowed with brake = "service"'
+        )
+    tyre = dataclasses.replace(params.service.tyre, road_friction=friction)
+    return dataclasses.replace(params, service=dataclasses.replace(params.service, tyre=tyre))
+
+
 def apply(setup: BrakeSetup, drawn: Mapping[str, float]) -> BrakeSetup:
     """``setup`` under the drawn conditions (see the module doc); ``setup`` itself when
     none is drawn.
@@ -153,6 +173,8 @@ def apply(setup: BrakeSetup, drawn: Mapping[str, float]) -> BrakeSetup:
     if "load_factor" in drawn:
         changes["flywheel_inertia_kg_m2"] = driveline.flywheel_inertia_kg_m2 * drawn["load_factor"]
     params = dataclasses.replace(setup.params, driveline=dataclasses.replace(driveline, **changes))
+    if "road_friction" in drawn:
+        params = _on_road(params, drawn["road_friction"])
     temperature = drawn.get("brake_temperature_c", drawn.get("ambient_temperature_c"))
     held = setup.held_temperature_c if temperature is None else temperature
     thermal = setup.thermal

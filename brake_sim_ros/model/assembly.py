@@ -17,6 +17,7 @@ from brake_sim_ros.model.defects import SERVICE_RUNOUT_UM, Defects, DrumDefect, 
 from brake_sim_ros.model.packing import PackSite
 from brake_sim_ros.model.parameters import BrakeParameters, ServiceBrakeParameters
 from brake_sim_ros.model.placement import lining_mid_rad
+from brake_sim_ros.model.vehicle import DEFAULT_WHEEL_RADIUS_M
 
 SIDES = L.SIDES
 
@@ -74,6 +75,7 @@ def pack(
     _pack_growth(params, defects, p)
     thermal.pack_fade(p)
     _pack_service(params, defects, p)
+    _pack_tyre(params, options, p)
     return p
 
 
@@ -133,6 +135,28 @@ def _pack_service(params: BrakeParameters, defects: Defects, p: np.ndarray) -> N
         # preload less the residual force there
         healthy_press = spec.return_spring_preload_n - spec.residual_force_n
         p[r + L.R_STOP_TRAVEL] = rest + healthy_press / spec.stop_stiffness_n_per_m
+
+
+def _pack_tyre(params: BrakeParameters, options: ModelOptions, p: np.ndarray) -> None:
+    """Pack the service brake's tyre (layout.P_TYRE_*, :mod:`.tyre`) and the default
+    rolling radius it rolls on (a vehicle's replaces it: vehicle.pack_vehicle); the study
+    brake packs none. A rigid coupling leaves no place for a tyre: refused."""
+    if params.service is None:
+        return
+    if options.rigid_coupling:
+        raise ParameterError(
+            "model rigid_coupling with the service brake: not allowed (its tyre, with the"
+            " road's friction limit, couples wheel and vehicle: allowed on the study brake)"
+        )
+    tyre = params.service.tyre
+    p[L.P_WHEEL_RADIUS] = DEFAULT_WHEEL_RADIUS_M
+    p[L.P_TYRE_STIFFNESS] = tyre.presliding_stiffness_per_m
+    p[L.P_TYRE_DAMPING] = tyre.presliding_damping_s_per_m
+    p[L.P_TYRE_VISCOUS] = tyre.viscous_s_per_m
+    p[L.P_TYRE_SLIDING] = tyre.road_friction
+    p[L.P_TYRE_PEAK] = tyre.peak_friction
+    p[L.P_TYRE_STRIBECK_SPEED] = tyre.stribeck_speed_m_s
+    p[L.P_TYRE_STRIBECK_EXPONENT] = tyre.stribeck_exponent
 
 
 def _pack_growth(params: BrakeParameters, defects: Defects, p: np.ndarray) -> None:

@@ -99,9 +99,9 @@ def evaluate_from(y, p, fe_left, fe_right, stuck, mode_left, mode_right, kl, kr,
     fnr = contact.normal_force(p, br, kr[0], kr[1], mode_right)
     vl = contact.sliding_speed(kl, wd)
     vr = contact.sliding_speed(kr, wd)
-    coupling = standstill.coupling_torque(
-        p, y[L.Y_FLYWHEEL_ANGLE], y[L.Y_DRUM_ANGLE], y[L.Y_FLYWHEEL_SPEED], wd
-    )
+    # the study brake's torsional coupling, or the service brake's tyre (its work and
+    # deflection rate: model/tyre.py)
+    coupling, tyre_work, tyre_rate = standstill.rotor_coupling(p, y, wd)
     if stuck:
         share = standstill.stuck_share(
             standstill.held_torque(coupling, fnl, kl, fnr, kr),
@@ -145,6 +145,8 @@ def evaluate_from(y, p, fe_left, fe_right, stuck, mode_left, mode_right, kl, kr,
         contact_power,
         actuation_power,
         sl[contact.E_DRUM_TORQUE] + sr[contact.E_DRUM_TORQUE],
+        tyre_work,
+        tyre_rate,
         dydt,
     )
     if serviced:
@@ -242,12 +244,17 @@ def _derivatives(
     contact_power,
     actuation_power,
     drum_torque,
+    tyre_work,
+    tyre_rate,
     dydt,
 ):
     """Write ``dydt`` from the shoes' results: their angular accelerations (rad/s^2), each
     one's friction power and their summed contact and actuation powers (W), their summed
     torque on the drum and the coupling's (N m), for the drum speed ``wd`` the evaluation
-    uses (0 while it sticks). Returns the road load of a driven flywheel, N m (0 else)."""
+    uses (0 while it sticks); on the service brake the coupling is its tyre's, whose work
+    rate (W, what the rotors give it: :func:`.tyre.coupling`) the coupling loss books and
+    whose deflection rate (m/s) is ``tyre_rate``. Returns the road load of a driven
+    flywheel, N m (0 else)."""
     dydt[L.Y_LEFT_ANGLE] = y[L.Y_LEFT_SPEED]
     dydt[L.Y_RIGHT_ANGLE] = y[L.Y_RIGHT_SPEED]
     dydt[L.Y_LEFT_SPEED] = accel_left
@@ -288,6 +295,9 @@ def _derivatives(
         dydt[L.Y_DRUM_ANGLE] = wd
         dydt[L.Y_DRUM_SPEED] = 0.0 if stuck else (coupling + drum_torque) / p[L.P_DRUM_INERTIA]
         dydt[L.Y_COUPLING_DAMPER_LOSS] = p[L.P_COUPLING_DAMPING] * slip * slip
+    if p[L.P_SERVICE] > 0.0:  # the tyre couples them (model/tyre.py): its work and state
+        dydt[L.Y_COUPLING_DAMPER_LOSS] = tyre_work
+        dydt[L.Y_TYRE_DEFLECTION] = tyre_rate
     return road
 
 
@@ -300,10 +310,10 @@ def free_evaluate(y, p, dydt):
     the state as +0.0 does) and the rest is the rotors' (same bits as :func:`evaluate`,
     without the contact geometry; :func:`rides_free` decides when it applies)."""
     wd = y[L.Y_DRUM_SPEED]
-    coupling = standstill.coupling_torque(
-        p, y[L.Y_FLYWHEEL_ANGLE], y[L.Y_DRUM_ANGLE], y[L.Y_FLYWHEEL_SPEED], wd
+    coupling, tyre_work, tyre_rate = standstill.rotor_coupling(p, y, wd)
+    _derivatives(
+        y, p, wd, 0, coupling, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, tyre_work, tyre_rate, dydt
     )
-    _derivatives(y, p, wd, 0, coupling, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, dydt)
 
 
 # a free-ride bound that never holds (:func:`rides_free`): every stage evaluates in full
@@ -337,8 +347,9 @@ def rides_free(y, y0, free_bound, stuck, ml, mr, fel, fer):
 
 @njit(**JIT)
 def _service_rates(dydt):
-    """The rates of the service brake's states, 0 until set: the tyre's deflection
-    (reserved); the line pressure's, which :func:`evaluate_from` sets after."""
+    """The rates of the service brake's states, 0 until set: the tyre's deflection, which
+    :func:`_derivatives` sets after on the service brake; the line pressure's, which
+    :func:`evaluate_from` sets after."""
     dydt[L.Y_TYRE_DEFLECTION] = 0.0
     dydt[L.Y_LINE_PRESSURE] = 0.0
 

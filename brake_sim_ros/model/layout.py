@@ -219,7 +219,21 @@ P_PISTON_AREA = P_SPRING_BASE + 2 * SPRING_STRIDE
 P_LINE_COMPLIANCE = P_PISTON_AREA + 1
 P_LINE_RESISTANCE = P_PISTON_AREA + 2
 
-N_PARAMS = P_LINE_RESISTANCE + 1
+# the service brake's tyre (model/tyre.py; parameters.TyreParameters), read when P_SERVICE:
+# the LuGre law's presliding stiffness sigma0 1/m, its damping sigma1 s/m and viscous term
+# sigma2 s/m (each per newton of the wheel's load), the road's friction coefficients of
+# the Stribeck curve, sliding (a locked tyre's) and peak (at zero slip speed), and the
+# curve's speed m/s and exponent. The rolling radius is P_WHEEL_RADIUS (the vehicle's, or
+# the default one), the wheel's load the mass the flywheel stands for times g.
+P_TYRE_STIFFNESS = P_LINE_RESISTANCE + 1
+P_TYRE_DAMPING = P_TYRE_STIFFNESS + 1
+P_TYRE_VISCOUS = P_TYRE_STIFFNESS + 2
+P_TYRE_SLIDING = P_TYRE_STIFFNESS + 3
+P_TYRE_PEAK = P_TYRE_STIFFNESS + 4
+P_TYRE_STRIBECK_SPEED = P_TYRE_STIFFNESS + 5
+P_TYRE_STRIBECK_EXPONENT = P_TYRE_STIFFNESS + 6
+
+N_PARAMS = P_TYRE_STIFFNESS + 7
 
 # --- state vector ---------------------------------------------------------------------
 Y_FLYWHEEL_ANGLE = 0

@@ -268,6 +268,96 @@ SERVICE_RUNNING_CLEARANCE_M = 0.0003
 # (TESTBED). Written once: the service brake's pistons (ServiceBrakeParameters), the cycle's
 # pressures (model/cycle.py) and the line-pressure sensor (sensing/kinds.py) read it here.
 WHEEL_CYLINDER_BORE_M = 0.01905
+# The road's friction coefficient by default (TyreParameters.road_friction, the scenario's
+# top-level ``road_friction``): a locked tyre sliding on dry asphalt, and on wet asphalt
+# (the figures a scenario names in the docs). Sliding (locked-wheel) coefficients of car
+# tyres: dry asphalt about 0.7-0.85, wet 0.45-0.6 (Burckhardt's asphalt curves at 100 %
+# slip give 0.76 dry and 0.51 wet, as tabulated in Kiencke and Nielsen, *Automotive
+# Control Systems*, 2nd ed. 2005, ch. 7; skid-test tables of accident reconstruction
+# agree). Their peaks are about 1.5 times these (below).
+DRY_ROAD_FRICTION = 0.8
+WET_ROAD_FRICTION = 0.5
+# The limits of a road's sliding friction: glare ice (about 0.05) to a dry, high-grip
+# surface (1.2).
+ROAD_FRICTION_RANGE = (0.05, 1.2)
+_G = 9.80665  # standard gravity, m/s^2 (model/vehicle.py GRAVITY_M_S2)
+
+
+@dataclass(frozen=True)
+class TyreParameters:
+    """The service brake's tyre between vehicle (flywheel) and wheel (drum): a lumped
+    LuGre law with the road's Stribeck curve (model/tyre.py). Its presliding stiffness
+    replaces the study brake's torsional coupling (DrivelineParameters' coupling
+    stiffness and damping are not read on the service brake).
+
+    The friction coefficients are the road's: ``road_friction`` the sliding one (a locked
+    tyre's at speed), ``road_friction x peak_ratio`` the peak (at zero slip speed). The
+    LuGre coefficients are per newton of the wheel's load, as in Canudas-de-Wit et al.
+    (2003).
+    """
+
+    # The road's sliding (locked-wheel) friction coefficient: dry asphalt by default
+    # (DRY_ROAD_FRICTION, sources there). The scenario's ``road_friction`` sets it.
+    road_friction: float = DRY_ROAD_FRICTION
+    # Peak over sliding friction: Burckhardt's asphalt curves peak at 1.17 (dry) and 0.80
+    # (wet) at 13-17 % slip against 0.76 and 0.51 locked: 1.54 and 1.57; 1.5 for both.
+    # The lumped law puts its peak at zero slip speed (the breakaway of a held tyre).
+    peak_ratio: float = 1.5
+    # Stribeck curve: the friction falls from its peak to the sliding value over slip
+    # speeds of a few m/s. Estimate: at 100 km/h Burckhardt's peaks lie at 3.6-4.7 m/s of
+    # slip speed; 3 m/s with an exponent of 1 (an exponential) leaves 5 % of the peak's
+    # excess at 9 m/s, so a locked tyre from highway speed slides at the sliding value
+    # until the last few m/s.
+    stribeck_speed_m_s: float = 3.0
+    stribeck_exponent: float = 1.0
+    # Presliding stiffness of the tread, 1/m (sigma0, N/m per N of load): Canudas-de-Wit
+    # et al. (2003), the lumped model's parameters (sigma0 40 1/m, sigma1 4.9487 s/m,
+    # sigma2 0.0018 s/m). On this wheel's 2328 N (237 kg, the mass the published flywheel
+    # inertia stands for at the 0.268 m rolling radius, times g) it is 93 kN/m, 6710 N
+    # m/rad between flywheel and drum (3.7 times the study's coupling of 1835 N m/rad);
+    # the dry road's peak (1.2) deflects it 30 mm.
+    presliding_stiffness_per_m: float = 40.0
+    # Damping ratio of the vehicle's presliding mode (the vehicle on its held tyres,
+    # ``sqrt(sigma0 g)`` = 19.8 rad/s, 3.2 Hz, whatever the load): 1, critical, so a car
+    # that stops does not rock on its tyres (the study's coupling rocks at 0.014) and
+    # returns to rest the fastest without overshoot. sigma1 = 2 zeta sqrt(sigma0 / g) =
+    # 4.04 s/m (Canudas-de-Wit et al.'s 4.95 s/m is zeta = 1.22).
+    presliding_damping_ratio: float = 1.0
+    # Viscous term sigma2, s/m per N of load: 0. The sliding coefficient is a locked
+    # tyre's as measured, speed dependence included (the Stribeck curve carries it); the
+    # paper's 0.0018 s/m would add 0.05 to it at 100 km/h.
+    viscous_s_per_m: float = 0.0
+
+    def __post_init__(self) -> None:
+        _finite(self)
+        lo, hi = ROAD_FRICTION_RANGE
+        _require(
+            lo <= self.road_friction <= hi, "road_friction", self.road_friction, f"{lo:g} to {hi:g}"
+        )
+        for name, low, high in _TYRE_LIMITS:
+            value = getattr(self, name)
+            _require(low <= value <= high, name, value, f"{low:g} to {high:g}")
+
+    @property
+    def peak_friction(self) -> float:
+        """The road's peak friction coefficient (at zero slip speed)."""
+        return self.road_friction * self.peak_ratio
+
+    @property
+    def presliding_damping_s_per_m(self) -> float:
+        """sigma1, s/m per N of load: ``2 zeta sqrt(sigma0 / g)``."""
+        return 2.0 * self.presliding_damping_ratio * math.sqrt(self.presliding_stiffness_per_m / _G)
+
+
+# (field, low, high) of TyreParameters besides the road friction
+_TYRE_LIMITS: tuple[tuple[str, float, float], ...] = (
+    ("peak_ratio", 1.0, 3.0),
+    ("stribeck_speed_m_s", 0.1, 50.0),
+    ("stribeck_exponent", 0.25, 4.0),
+    ("presliding_stiffness_per_m", 1.0, 1000.0),
+    ("presliding_damping_ratio", 0.05, 10.0),
+    ("viscous_s_per_m", 0.0, 0.1),
+)
 
 
 @dataclass(frozen=True)
@@ -326,6 +416,8 @@ class ServiceBrakeParameters:
     # valves make up the rest (stated estimate). The same resistance meters the fluid the
     # return springs push back on release (model/service.py).
     line_resistance_pa_s_per_m3: float = 3.75e10
+    # The tyre between vehicle and wheel (model/tyre.py), with the road's friction.
+    tyre: TyreParameters = field(default_factory=TyreParameters)
 
     def __post_init__(self) -> None:
         _finite(self)

@@ -36,15 +36,24 @@ the first instant the drum is held and the rotor's remaining energy, flywheel ki
 plus coupling spring, ``I_f w_f^2 / 2 + K_s (th_f - th_d)^2 / 2``, is at most
 ``C^2 / (2 K_s)`` with ``C`` the static capacity: the rocking of the vehicle on the
 coupling that follows can then never exceed what the brake holds (the coupling damper only
-shrinks it). With a rigid coupling both instants coincide. The model has no tyre-road
-slip: a wheel lock holds the tyre, it does not skid.
+shrinks it). With a rigid coupling both instants coincide. On the study brake a wheel
+lock holds the tyre, it does not skid.
+
+The service brake couples flywheel and drum by its tyre (model/tyre.py) instead: the
+torque the shoes hold is the tyre's on the drum (:func:`rotor_coupling`), and a locked
+wheel whose tyre slides is the drum held by the shoes while the vehicle slides on, its
+tyre's force limited by the road. Its vehicle stop: the drum held and the vehicle's kinetic
+energy plus the tread's, ``I_f w_f^2 / 2 + sigma0 F_z z^2 / 2``, at most ``T^2 / (2 K)``
+with ``K = sigma0 F_z R^2`` the tread's torsional stiffness and ``T`` the smaller of the
+static capacity and the tyre's grip ``mu_s F_z R``: the vehicle settling on its tread can
+then neither slide the tyre nor break the drum loose.
 """
 
 from __future__ import annotations
 
 from numba import njit
 
-from brake_sim_ros.model import contact
+from brake_sim_ros.model import contact, tyre
 from brake_sim_ros.model import layout as L
 from brake_sim_ros.model.compiled import JIT
 
@@ -58,6 +67,22 @@ def coupling_torque(p, flywheel_angle, drum_angle, flywheel_speed, drum_speed):
     twist = flywheel_angle - drum_angle
     slip = flywheel_speed - drum_speed
     return p[L.P_COUPLING_STIFFNESS] * twist + p[L.P_COUPLING_DAMPING] * slip
+
+
+@njit(inline="always", **JIT)
+def rotor_coupling(p, y, drum_speed):
+    """(torque on the drum N m, positive counter-clockwise; the power the rotors give the
+    tyre W, or 0 (the kernel books the coupling damper's loss itself); the tyre's
+    deflection rate m/s, or 0) of
+    what couples flywheel and drum in the state ``y`` at the drum speed ``drum_speed``
+    (rad/s, 0 while it is held): the service brake's tyre (:func:`.tyre.coupling`), else
+    the study brake's torsional coupling (:func:`coupling_torque`)."""
+    if p[L.P_SERVICE] > 0.0:
+        return tyre.coupling(p, y[L.Y_TYRE_DEFLECTION], y[L.Y_FLYWHEEL_SPEED], drum_speed)
+    torque = coupling_torque(
+        p, y[L.Y_FLYWHEEL_ANGLE], y[L.Y_DRUM_ANGLE], y[L.Y_FLYWHEEL_SPEED], drum_speed
+    )
+    return torque, 0.0, 0.0
 
 
 @njit(inline="always", **JIT)
@@ -106,9 +131,7 @@ def hold_torques(p, y):
     fnl = contact.normal_force(p, bl, kl[0], kl[1], L.CONTACT_AUTO)
     fnr = contact.normal_force(p, br, kr[0], kr[1], L.CONTACT_AUTO)
     capacity = static_capacity(p, fnl, kl[5], fnr, kr[5])
-    coupling = coupling_torque(
-        p, y[L.Y_FLYWHEEL_ANGLE], y[L.Y_DRUM_ANGLE], y[L.Y_FLYWHEEL_SPEED], 0.0
-    )
+    coupling = rotor_coupling(p, y, 0.0)[0]
     return held_torque(coupling, fnl, kl, fnr, kr), capacity
 
 
@@ -140,10 +163,27 @@ def at_rest(p, y):
     _coupling, capacity = hold_torques(p, y)
     if p[L.P_RIGID_COUPLING] > 0.0:
         return capacity > 0.0
+    if p[L.P_SERVICE] > 0.0:
+        return _tyre_at_rest(p, y, capacity)
     k_s = p[L.P_COUPLING_STIFFNESS]
     twist = y[L.Y_FLYWHEEL_ANGLE] - y[L.Y_DRUM_ANGLE]
     energy = 0.5 * p[L.P_FLYWHEEL_INERTIA] * y[L.Y_FLYWHEEL_SPEED] ** 2 + 0.5 * k_s * twist**2
     return energy <= 0.5 * capacity * capacity / k_s
+
+
+@njit(**JIT)
+def _tyre_at_rest(p, y, capacity):
+    """:func:`at_rest` on the service brake: the vehicle's kinetic energy plus the tread's
+    (``I_f w_f^2 / 2 + sigma0 F_z z^2 / 2``, the tread a torsional spring of ``sigma0 F_z
+    R^2`` N m/rad at the twist ``z / R``) fits below the smaller of the brake's capacity
+    and the tyre's grip ``mu_s F_z R``: the tyre then never slides again nor the brake
+    lets go as the vehicle settles on its tread."""
+    k = tyre.torsional_stiffness(p)
+    limit = min(capacity, tyre.grip_torque(p))
+    energy = 0.5 * p[L.P_FLYWHEEL_INERTIA] * y[L.Y_FLYWHEEL_SPEED] ** 2 + tyre.stored_energy(
+        p, y[L.Y_TYRE_DEFLECTION]
+    )
+    return energy <= 0.5 * limit * limit / k
 
 
 @njit(inline="always", **JIT)

@@ -190,6 +190,7 @@ def _parse(data: dict[str, Any], text: str, source: str) -> Scenario:
             "name",
             "description",
             "brake",
+            "road_friction",
             "duration_s",
             "sample_rate_hz",
             "seed",

@@ -25,6 +25,7 @@ from brake_sim_ros.model.parameters import (
     BRAKES,
     DEFAULT_BRAKE,
     PARAMETER_GROUPS,
+    ROAD_FRICTION_RANGE,
     BrakeParameters,
 )
 from brake_sim_ros.model.thermal import LIMITS as THERMAL_LIMITS
@@ -50,7 +51,9 @@ def parse_brake(ctx: Checker, top: dict[str, Any]) -> BrakeParameters:
     """The top-level key ``brake`` (default "study"): the brake whose default parameters
     the scenario's ``[parameters]`` override (``BrakeParameters.of_brake``). The fidelity
     levels below the full model represent the study brake only, so the service brake
-    refuses a ``[needs]`` table."""
+    refuses a ``[needs]`` table. The top-level ``road_friction`` (the service brake's
+    only) is the road's sliding friction coefficient under its tyre (TyreParameters;
+    dry asphalt by default)."""
     name = ctx.string(top.get("brake", DEFAULT_BRAKE), "brake", BRAKES)
     if name == "service" and "needs" in top:
         raise ctx.fail(
@@ -60,7 +63,20 @@ def parse_brake(ctx: Checker, top: dict[str, Any]) -> BrakeParameters:
             " brake's shoes, without return springs and rest stops: the service brake runs"
             " the full model)",
         )
-    return BrakeParameters.of_brake(name)
+    params = BrakeParameters.of_brake(name)
+    if "road_friction" not in top:
+        return params
+    if params.service is None:
+        raise ctx.fail(
+            "road_friction",
+            top["road_friction"],
+            'road_friction only with brake = "service" (the study brake has no tyre: its'
+            " wheel and vehicle are coupled by a spring that never slides)",
+        )
+    lo, hi = ROAD_FRICTION_RANGE
+    friction = ctx.number(top["road_friction"], "road_friction", lo, hi)
+    tyre = dataclasses.replace(params.service.tyre, road_friction=friction)
+    return dataclasses.replace(params, service=dataclasses.replace(params.service, tyre=tyre))
 
 
 def parse_parameters(ctx: Checker, data: Any, base: BrakeParameters) -> BrakeParameters:

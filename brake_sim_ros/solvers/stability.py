@@ -8,6 +8,10 @@ Two operating points bound the stiffness of the model:
 * locked: the drum held at rest, the shoes still free to move on it, where the smoothed
   friction acts on the shoes as a viscous damper of slope mu Fn / v_s.
 
+On the service brake, its shoes at rest on their stops and its tyre (model/tyre.py) where
+it is stiffest: rolling with the wheel (the tread's presliding damper between drum and
+flywheel) and a locked wheel sliding at :data:`TYRE_TOP_SPEED_RAD_S`.
+
 At each, the Jacobian of the right-hand side (central differences, contact held on) gives
 the eigenvalues ``lambda``. The step must keep every ``lambda dt`` inside the RK4
 stability region (for symplectic Euler: the spectral radius of its one-step matrix of the
@@ -30,12 +34,15 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import brentq
 
-from brake_sim_ros.model import kernel, service
+from brake_sim_ros.model import kernel, service, tyre
 from brake_sim_ros.model import layout as L
 from brake_sim_ros.model.assembly import indentation_at, pack
 
 STEPS_PER_PERIOD = 16
 STABILITY_MARGIN = 0.9
+# the service brake's tyre is linearised at this speed (rad/s): the largest initial speed
+# a scenario may set (DrivelineParameters), where a locked tyre's deflection relaxes fastest
+TYRE_TOP_SPEED_RAD_S = 400.0
 
 
 @dataclass(frozen=True)
@@ -100,13 +107,21 @@ def _loaded_angle(p: np.ndarray, base: int, force_n: float, drum_speed: float) -
 
 
 def _jacobian(
-    y: np.ndarray, p: np.ndarray, fe: tuple[float, float], locked: int, modes: tuple[int, int]
+    y: np.ndarray,
+    p: np.ndarray,
+    fe: tuple[float, float],
+    locked: int,
+    modes: tuple[int, int],
+    index: tuple[int, ...] = tuple(range(8)),
 ) -> np.ndarray:
-    n = 8
+    """Jacobian of the right-hand side at ``y`` over the states ``index`` (the angles and
+    speeds by default; with the drum ``locked``, the shoes' only)."""
+    n = len(index)
     jac = np.zeros((n, n))
     f_plus = np.zeros(y.shape[0])
     f_minus = np.zeros(y.shape[0])
-    for j in range(n):
+    rows = list(index)
+    for col, j in enumerate(index):
         h = 1e-7 * max(1.0, abs(y[j]))
         yp = y.copy()
         ym = y.copy()
@@ -114,8 +129,8 @@ def _jacobian(
         ym[j] -= h
         kernel.rhs(yp, p, fe[0], fe[1], locked, modes[0], modes[1], f_plus)
         kernel.rhs(ym, p, fe[0], fe[1], locked, modes[0], modes[1], f_minus)
-        jac[:, j] = (f_plus[:n] - f_minus[:n]) / (2 * h)
-    if locked:
+        jac[:, col] = (f_plus[rows] - f_minus[rows]) / (2 * h)
+    if locked and n == 8:
         keep = [L.Y_LEFT_ANGLE, L.Y_RIGHT_ANGLE, L.Y_LEFT_SPEED, L.Y_RIGHT_SPEED]
         jac = jac[np.ix_(keep, keep)]
     return jac
@@ -199,6 +214,40 @@ def _state(p: np.ndarray, serviced: bool, fe: tuple[float, float]) -> np.ndarray
     return y
 
 
+def _tyre_jacobians(p: np.ndarray, direction: float) -> list[np.ndarray]:
+    """The service brake's tyre (model/tyre.py), linearised where it is stiffest: rolling
+    with the wheel (the tread's presliding spring and damper between drum and flywheel,
+    over their speeds and the deflection), and a locked wheel sliding at
+    :data:`TYRE_TOP_SPEED_RAD_S` (the deflection relaxing at ``sigma0 |v_r| / g``, over
+    the flywheel speed and the deflection)."""
+    rolling = np.zeros(L.N_STATE_SERVICE)
+    rolling[L.Y_FLYWHEEL_SPEED] = rolling[L.Y_DRUM_SPEED] = direction * TYRE_TOP_SPEED_RAD_S
+    off = (L.CONTACT_OFF, L.CONTACT_OFF)
+    index = (L.Y_FLYWHEEL_SPEED, L.Y_DRUM_SPEED, L.Y_TYRE_DEFLECTION)
+    sliding = rolling.copy()
+    sliding[L.Y_DRUM_SPEED] = 0.0
+    slip = -direction * TYRE_TOP_SPEED_RAD_S * p[L.P_WHEEL_RADIUS]
+    g = tyre.stribeck.py_func(
+        slip,
+        p[L.P_TYRE_SLIDING],
+        p[L.P_TYRE_PEAK],
+        p[L.P_TYRE_STRIBECK_SPEED],
+        p[L.P_TYRE_STRIBECK_EXPONENT],
+    )
+    sliding[L.Y_TYRE_DEFLECTION] = math.copysign(g, slip) / p[L.P_TYRE_STIFFNESS]
+    return [
+        _jacobian(rolling, p, (0.0, 0.0), 0, off, index),
+        _jacobian(sliding, p, (0.0, 0.0), 1, off, (L.Y_FLYWHEEL_SPEED, L.Y_TYRE_DEFLECTION)),
+    ]
+
+
+def _euler_stable_step(eigs: np.ndarray) -> float:
+    """Largest step (s) keeping ``|1 + lambda h| <= 1`` for every eigenvalue: the
+    explicit Euler update symplectic Euler gives the states beyond angles and speeds."""
+    steps = [-2.0 * lam.real / abs(lam) ** 2 for lam in eigs if lam.real < 0.0]
+    return min(steps, default=math.inf)
+
+
 def step_limit(
     setup,
     max_actuation_n: float,
@@ -235,6 +284,7 @@ def step_limit(
     y[L.Y_DRUM_SPEED] = y[L.Y_FLYWHEEL_SPEED] = drum_speed
     on = (L.CONTACT_ON, L.CONTACT_ON)
     jacs = [_jacobian(y, p, fe, 0, on), _jacobian(y, p, fe, 1, on)]
+    tyre_jacs = _tyre_jacobians(p, direction) if serviced else []
     if serviced:  # a service brake's shoes at rest on their stops (model/service.py)
         rest = _state(p, serviced, (0.0, 0.0))
         rest[L.Y_DRUM_SPEED] = rest[L.Y_FLYWHEEL_SPEED] = drum_speed
@@ -242,9 +292,10 @@ def step_limit(
             rest[L.Y_LEFT_ANGLE + i] = math.radians(getattr(setup.defects, side).initial_angle_deg)
         off = (L.CONTACT_OFF, L.CONTACT_OFF)
         jacs.append(_jacobian(rest, p, (0.0, 0.0), 0, off))
-    eigs = np.concatenate([np.linalg.eigvals(j) for j in jacs])
+    tyre_eigs = np.concatenate([np.linalg.eigvals(j) for j in tyre_jacs or [np.zeros((0, 0))]])
+    eigs = np.concatenate([*(np.linalg.eigvals(j) for j in jacs), tyre_eigs])
     if scheme == "semi-implicit-euler":
-        stable = symplectic_euler_stable_step(jacs)
+        stable = min(symplectic_euler_stable_step(jacs), _euler_stable_step(tyre_eigs))
         scheme_name = "symplectic Euler"
     else:
         stable = min((rk4_stable_step(complex(lam)) for lam in eigs), default=math.inf)

@@ -470,7 +470,11 @@ def test_the_step_limit_resolves_the_rest_stop_mode():
     limit = step_limit(setup, 1000.0)
     assert limit.fastest_frequency_hz == pytest.approx(expected_hz, rel=0.02)
     assert limit.max_step_s <= 1.0 / (STEPS_PER_PERIOD * expected_hz) * 1.02
-    assert step_limit(BrakeSetup(params=base), 1000.0).max_step_s > 2 * limit.max_step_s
+    # the default stop rings sqrt(10) times lower (644 Hz): the stiffer stop is what
+    # lowered the step (the default's limit is set by other modes: friction and tyre)
+    default = step_limit(BrakeSetup(params=base), 1000.0)
+    assert default.fastest_frequency_hz < expected_hz / 3.0
+    assert default.max_step_s > 1.5 * limit.max_step_s
 
 
 def test_a_parameter_change_keeps_the_scenarios_brake():
