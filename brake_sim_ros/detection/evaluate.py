@@ -201,32 +201,40 @@ def chunks(run: RunSamples, chunk_s: float) -> Iterator[SampleChunk]:
         )
 
 
-def fit(detector: Detector, dataset: SweepDataset, split: str = "train") -> int:
-    """Fit ``detector`` on the windows of ``split`` (its window length); the number of
-    windows it saw. Records on the detector the sample rate and the units of the channels
-    it read (:attr:`Detector.fitted_rate_hz`, :attr:`Detector.fitted_channels`).
+class SplitRateError(DatasetError):
+    """A split's runs are at several sample rates: no detector is fitted on them."""
 
-    Raises:
-        ValueError: the split's runs are at several sample rates (one line).
-    """
-    windows: list[TrainingWindow] = []
-    rates: set[float] = set()
-    units: dict[str, str] = {}
-    longest = 0
-    for run_id in dataset.runs(split):
-        run = read_run(dataset, run_id)
-        rates.add(run.sample_rate_hz)
-        units.update(run.units)
-        if len(rates) > 1:
-            shown = ", ".join(f"{r:g}" for r in sorted(rates))
-            raise ValueError(
-                f"split {split}: runs at {shown} Hz; allowed one sample rate to fit a detector on"
-            )
-        n = window_samples(detector, run.sample_rate_hz)
-        longest = max(longest, run.time_s.size)
-        for start in range(0, run.time_s.size - n + 1, n):
-            windows.append(
-                TrainingWindow(
+
+class SplitWindows:
+    """The training windows of a split, read from the dataset run by run each time it is
+    iterated: a detector's fit holds one run's channels at a time, not the split's (a
+    detector that iterates twice reads the runs twice and sees the same windows). Counts
+    the windows of a whole pass and collects the runs' sample rate and channel units."""
+
+    def __init__(self, detector: Detector, dataset: SweepDataset, split: str) -> None:
+        self.detector, self.dataset, self.split = detector, dataset, split
+        self.windows = 0  # of the last whole pass
+        self.longest = 0  # samples of the longest run read
+        self.rates: set[float] = set()
+        self.units: dict[str, str] = {}
+
+    def __iter__(self) -> Iterator[TrainingWindow]:
+        count = 0
+        for run_id in self.dataset.runs(self.split):
+            run = read_run(self.dataset, run_id)
+            self.rates.add(run.sample_rate_hz)
+            self.units.update(run.units)
+            if len(self.rates) > 1:
+                shown = ", ".join(f"{r:g}" for r in sorted(self.rates))
+                raise SplitRateError(
+                    f"split {self.split}: runs at {shown} Hz; allowed one sample rate to fit"
+                    " a detector on"
+                )
+            n = window_samples(self.detector, run.sample_rate_hz)
+            self.longest = max(self.longest, run.time_s.size)
+            for start in range(0, run.time_s.size - n + 1, n):
+                count += 1
+                yield TrainingWindow(
                     {c: v[start : start + n] for c, v in run.channels.items()},
                     run.sample_rate_hz,
                     run.active(start + n - 1),
@@ -235,15 +243,28 @@ def fit(detector: Detector, dataset: SweepDataset, split: str = "train") -> int:
                     severities=run.severities(start + n - 1),
                     unit_id=run.unit_id,
                 )
-            )
-    if not windows:
-        _no_window(detector, dataset, split, longest)
-    with user_code(detector, "fit"):
+        self.windows = count
+
+
+def fit(detector: Detector, dataset: SweepDataset, split: str = "train") -> int:
+    """Fit ``detector`` on the windows of ``split`` (its window length), streamed run by
+    run (:class:`SplitWindows`); the number of windows it saw. Records on the detector the
+    sample rate and the units of the channels it read (:attr:`Detector.fitted_rate_hz`,
+    :attr:`Detector.fitted_channels`).
+
+    Raises:
+        SplitRateError: the split's runs are at several sample rates (one line).
+    """
+    windows = SplitWindows(detector, dataset, split)
+    if next(iter(windows), None) is None:  # reads runs up to the first window only
+        _no_window(detector, dataset, split, windows.longest)
+    with user_code(detector, "fit", passthrough=(SplitRateError,)):
         detector.fit(windows)
-    if rates:
-        detector.fitted_rate_hz = rates.pop()
+    if windows.rates:
+        detector.fitted_rate_hz = windows.rates.pop()
+        units = windows.units
         detector.fitted_channels = {c: units[c] for c in detector.channels if c in units}
-    return len(windows)
+    return windows.windows
 
 
 def window_samples(detector: Detector, sample_rate_hz: float) -> int:

@@ -53,7 +53,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from sklearn.covariance import LedoitWolf
@@ -252,7 +252,9 @@ class ImpactDetector(Detector):
             )
             for segment in finder.push(w.channels, last):
                 f, rate = event_features(segment, finder.shape, w.sample_rate_hz)
-                out.append((f, rate, w))
+                # the window's truth, not its channels: a stop's window is a view of its
+                # whole run, which a fit streamed run by run must not keep
+                out.append((f, rate, replace(w, channels={})))
         return out
 
     @staticmethod

@@ -235,3 +235,56 @@ def test_forecasts_are_scored_against_the_rul_label(tmp_path_factory):
     assert f["rul_score"] == pytest.approx(windows * np.expm1(LATE_S / 10.0), rel=1e-9)
     # a detector that never forecasts has no forecast figures
     assert evaluate.score(AlwaysAlarm(), data, "test")["forecast"] is None
+
+
+class TwoPasses(AlwaysAlarm):
+    """Iterates its training windows twice; in each pass it checks that the windows of a run
+    it has left are no longer held by anyone (the fit streams the split run by run)."""
+
+    def fit(self, windows) -> None:
+        import gc
+        import weakref
+
+        self.passes: list[list[tuple[str, int]]] = []
+        self.freed = 0
+        for _ in range(2):
+            seen: list[tuple[str, int]] = []
+            previous = None  # a weak reference to the last run's channel array
+            for w in windows:
+                if seen and w.run_id != seen[-1][0]:
+                    gc.collect()
+                    assert previous() is None, "an earlier run's samples are still held"
+                    self.freed += 1
+                seen.append((w.run_id, w.last_sample_index))
+                previous = weakref.ref(w.channels[self.channels[0]].base)
+                del w
+            self.passes.append(seen)
+
+
+def test_fit_streams_the_split_run_by_run_and_may_iterate_it_again(dataset):
+    detector = TwoPasses()
+    count = evaluate.fit(detector, dataset, "train")
+    first, second = detector.passes
+    assert first == second and count == len(first) > 0
+    runs = dataset.runs("train")
+    assert [r for r, _ in first[:: len(first) // len(runs)]] == runs  # run by run, in order
+    assert detector.freed == 2 * (len(runs) - 1)
+    assert detector.fitted_rate_hz == 2560.0
+
+
+def test_a_split_at_two_sample_rates_is_one_line_not_the_detectors_error(dataset, tmp_path):
+    other = _swept(tmp_path, "other.toml", {"other.toml": CAMPAIGN.replace("2560.0", "5120.0")})
+    mixed = [(dataset, r) for r in dataset.runs("train")[:1]]
+    mixed += [(other, r) for r in other.runs("train")[:1]]
+
+    class Mixed:  # a split whose runs come from both datasets, in that order
+        def runs(self, split):
+            return [f"{i}" for i in range(len(mixed))]
+
+    original = evaluate.read_run
+    try:
+        evaluate.read_run = lambda _, run_id: original(*mixed[int(run_id)])
+        with pytest.raises(evaluate.SplitRateError, match=r"^split train: runs at 2560, 5120 Hz"):
+            evaluate.fit(TwoPasses(), Mixed(), "train")
+    finally:
+        evaluate.read_run = original
