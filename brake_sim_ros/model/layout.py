@@ -218,8 +218,13 @@ R_STOP_TRAVEL = 3  # tip travel (m) below which the shoe presses on its stop
 P_PISTON_AREA = P_SPRING_BASE + 2 * SPRING_STRIDE
 P_LINE_COMPLIANCE = P_PISTON_AREA + 1
 P_LINE_RESISTANCE = P_PISTON_AREA + 2
+# the line's defects (catalogue location "line", model/line_kinds.py): the volume of air in
+# the circuit at atmospheric pressure, m^3 (0: none; it adds an isothermal gas's
+# compliance), and a leak's conductance to the reservoir, m^3/(s Pa) (0: none)
+P_LINE_AIR_VOLUME = P_PISTON_AREA + 3
+P_LINE_LEAK_CONDUCTANCE = P_PISTON_AREA + 4
 
-N_PARAMS = P_LINE_RESISTANCE + 1
+N_PARAMS = P_LINE_LEAK_CONDUCTANCE + 1
 
 # --- state vector ---------------------------------------------------------------------
 Y_FLYWHEEL_ANGLE = 0
