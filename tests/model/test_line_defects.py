@@ -11,7 +11,7 @@ import math
 import numpy as np
 import pytest
 
-from brake_sim_ros.analysis.energy import line_pressure_pa
+from brake_sim_ros.analysis.energy import energy_balance, line_pressure_pa
 from brake_sim_ros.campaigns.campaign import CampaignError
 from brake_sim_ros.campaigns.loader import parse_campaign
 from brake_sim_ros.errors import ParameterError, ScenarioError
@@ -186,3 +186,59 @@ def test_a_node_on_the_study_brake_refuses_a_line_parameter_and_keeps_its_model(
     assert "\n" not in str(caught.value) and "study brake" in str(caught.value)
     assert np.array_equal(session.stepper.packed_parameters, before)
     assert session.model["defects.line.air_in_line_ml"] == 0.0
+
+
+def test_energy_closes_through_the_lines_air_and_leak():
+    """The three applications of the service brake's tests with 1 ml of air and a 20 %
+    leak: the books (the air's stored ``V_a p_a (ln(1 + x) - x / (1 + x))``, the leak's
+    loss ``G p^2``) close to 1e-6 of the turnover, as the sound line's do."""
+    from tests.model.test_service_brake import _run as run_text
+    from tests.model.test_service_brake import _three_applications
+
+    line = LineDefect(air_in_line_ml=1.0, line_leak_pct=20.0)
+    scenario, stepper, block = run_text(_three_applications(), Defects(line=line))
+    assert scenario.setup.defects.line == line
+    books = energy_balance(block, scenario.setup.params, packed=stepper.packed_parameters)
+    assert abs(books.residual_j) < 1e-6 * books.turnover_j
+
+
+def test_the_airs_stored_energy_is_the_work_of_the_pressure_on_its_volume():
+    """``line_energy`` (the books' circuit term) is ``integral p dV`` from 0 gauge with the
+    circuit's and the air's take-up ``dV = (C + V_a p_a / (p_a + p)^2) dp``: at 0.7, 10 and
+    100 bar, by the trapezoid rule on a fine grid (1e-6)."""
+    from brake_sim_ros.model.service import line_energy
+
+    p = pack(SERVICE, Defects(line=LineDefect(air_in_line_ml=2.0)))
+    for bar in (0.7, 10.0, 100.0):
+        grid = np.linspace(0.0, bar * 1e5, 200_001)
+        take_up = C + 2e-6 * ATMOSPHERIC_PA / (ATMOSPHERIC_PA + grid) ** 2
+        work = np.trapezoid(grid * take_up, grid)
+        assert line_energy.py_func(p, bar * 1e5) == pytest.approx(work, rel=1e-6)
+
+
+def test_air_softens_the_pedal_pulsation_of_an_oval_drum_at_a_light_application():
+    """A 50 um oval drum under a held 200 N (7 bar): the tips push fluid back at order 2,
+    and the line's pressure answers with ``|P/U| = A w R / sqrt(1 + (w R C')^2)``; 1 ml of
+    air adds ``V_a p_a / (p_a + p)^2`` (0.2 C at 7 bar) to C', so the pulsation is smaller
+    than the sound line's, each within 5 % of its hand gain times the tips' measured U."""
+    from brake_sim_ros.model.defects import DrumDefect, DrumHarmonic
+    from tests.model.test_hydraulics import PULSE_S, SETTLE_S, SIDES, _held, _order, _tip_travel
+    from tests.model.test_hydraulics import _stepper as stepper_with
+
+    drum = DrumDefect((DrumHarmonic(2, 50.0, 0.0),))
+    amplitudes = []
+    for ml in (0.0, 1.0):
+        stepper = stepper_with(_held(200.0), Defects(drum=drum, line=LineDefect(air_in_line_ml=ml)))
+        block = stepper.run(PULSE_S)
+        w = block.time_s >= SETTLE_S
+        phi, t = block["drum_angle_rad"][w], block.time_s[w]
+        pressure = line_pressure_pa(block, stepper.packed_parameters)[w]
+        travel = sum(_tip_travel(side, block[f"{side}_angle_rad"][w]) for side in SIDES)
+        p_amp, u_amp = abs(_order(pressure, phi, t, 2)), abs(_order(travel, phi, t, 2))
+        omega = 2.0 * float(np.mean(block["drum_speed_rad_s"][w]))
+        mean = float(np.mean(pressure))
+        compliance = C + 1e-6 * ml * ATMOSPHERIC_PA / (ATMOSPHERIC_PA + mean) ** 2
+        gain = AREA * omega * R / math.sqrt(1.0 + (omega * R * compliance) ** 2)
+        assert p_amp == pytest.approx(gain * u_amp, rel=0.05)
+        amplitudes.append(p_amp)
+    assert amplitudes[1] < 0.9 * amplitudes[0]
