@@ -9,6 +9,8 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import io
+import tempfile
+from pathlib import Path
 
 from pytest import approx
 
@@ -20,6 +22,7 @@ from brake_sim_ros.model import catalogue
 from brake_sim_ros.model.assembly import pack
 from brake_sim_ros.model.catalogue import DefectKind, label_column, label_columns
 from brake_sim_ros.model.defects import Defects
+from brake_sim_ros.model.line_kinds import LINE
 from brake_sim_ros.model.parameters import BrakeParameters
 from brake_sim_ros.scenarios import parse_scenario
 from brake_sim_ros.stream import parameters as ros_params
@@ -37,6 +40,16 @@ defects = ["{kind}"]
 severities = [0.5]
 healthy = false
 """
+
+
+def brake_of(kind: DefectKind) -> str:
+    """The brake that carries ``kind``: the service brake for a kind of the hydraulic line
+    (the study brake has no circuit and refuses it), else the study brake."""
+    return "service" if LINE in kind.locations else "study"
+
+
+def _params(kind: DefectKind) -> BrakeParameters:
+    return BrakeParameters.of_brake(brake_of(kind))
 
 
 def _toml(table: dict, prefix: str) -> str:
@@ -65,7 +78,8 @@ def reaches_the_loader(kind: DefectKind) -> None:
     severity = 0.5 * kind.service_limit
     for location in kind.locations:
         defects = Defects.single(kind.name, location, severity)
-        text = 'name = "reach"\nduration_s = 0.2\n' + _toml(defects_table(defects), "defects")
+        text = f'name = "reach"\nbrake = "{brake_of(kind)}"\nduration_s = 0.2\n'
+        text += _toml(defects_table(defects), "defects")
         loaded = parse_scenario(text, "reach.toml").setup.defects
         assert loaded == defects, text
         assert loaded.severities()[label_column(kind, location)] == approx(severity, abs=1e-12)
@@ -74,7 +88,8 @@ def reaches_the_loader(kind: DefectKind) -> None:
 def reaches_the_node_parameters(kind: DefectKind) -> None:
     """Each of its fields is a node parameter with the field's range, and a value set
     there builds the defect."""
-    specs = {s.name: s for s in ros_params.model_parameter_specs(BrakeParameters(), Defects())}
+    params = _params(kind)
+    specs = {s.name: s for s in ros_params.model_parameter_specs(params, Defects())}
     if kind.table:
         assert not any(kind.scenario_key in name for name in specs)
         return
@@ -84,7 +99,7 @@ def reaches_the_node_parameters(kind: DefectKind) -> None:
             assert spec.range == (f.low, f.high)
             assert kind.name in spec.description
         defects = Defects.single(kind.name, location, 0.5 * kind.service_limit)
-        values = ros_params.model_values(BrakeParameters(), defects)
+        values = ros_params.model_values(params, defects)
         assert ros_params.build_model(values)[1] == defects
 
 
@@ -92,7 +107,11 @@ def reaches_a_campaign_axis(kind: DefectKind) -> None:
     """A campaign's defect axis over the kind plans runs that carry it and its labels."""
     choices = defect_choices((kind.name,), (0.5,), healthy=False)
     assert {c.location for c in choices} == set(kind.locations)
-    runs = plan_runs(parse_campaign(CAMPAIGN.format(kind=kind.name), "reach.toml"))
+    with tempfile.TemporaryDirectory() as directory:  # the base scenario on its brake
+        base = Path(directory, "base.toml")
+        base.write_text(f'name = "base"\nbrake = "{brake_of(kind)}"\nduration_s = 1.0\n')
+        text = CAMPAIGN.format(kind=kind.name).replace('"symmetric"', '"base.toml"')
+        runs = plan_runs(parse_campaign(text, "reach.toml", Path(directory)))
     assert {r.columns["defect_location"] for r in runs} == set(kind.locations)
     for run in runs:
         column = label_column(kind, run.columns["defect_location"])
@@ -132,7 +151,7 @@ def reaches_the_packing(kind: DefectKind) -> None:
     for location in kind.locations:
         defects = Defects.single(kind.name, location, 0.5 * kind.service_limit)
         with _spied(kind) as calls:
-            pack(BrakeParameters(), defects)
+            pack(_params(kind), defects)
         assert (location, getattr(defects, location)) in calls, calls
 
 

@@ -130,10 +130,10 @@ def line_pressure_pa(block: SampleBlock, packed: np.ndarray) -> np.ndarray:
 
 
 def line_energy_j(block: SampleBlock, packed: np.ndarray, rows: list[int]) -> list[float]:
-    """Energy the service brake's hydraulic circuit stores, ``C p^2 / 2`` (J), at
-    ``rows`` of ``block`` (:func:`line_pressure_pa`)."""
+    """Energy the service brake's hydraulic circuit stores, ``C p^2 / 2`` and its air's
+    (J, :func:`.service.line_energy`), at ``rows`` of ``block`` (:func:`line_pressure_pa`)."""
     pressure = line_pressure_pa(block, packed)
-    return [float(0.5 * packed[L.P_LINE_COMPLIANCE] * pressure[r] ** 2) for r in rows]
+    return [float(service.line_energy.py_func(packed, float(pressure[r]))) for r in rows]
 
 
 def energy_balance(

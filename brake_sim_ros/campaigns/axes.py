@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from brake_sim_ros.model.catalogue import KIND_BY_NAME, fields_at, kinds_at
+from brake_sim_ros.model.catalogue import KIND_BY_NAME, LINE, fields_at, kinds_at
 from brake_sim_ros.model.defects import Defects
 
 DEFECT_AXIS = "defect"
@@ -122,7 +122,8 @@ def defect_choices(
 def defects_table(defects: Defects) -> dict[str, Any]:
     """``defects`` as a scenario's ``[defects]`` table (the inverse of the scenario
     loader's reading): each shoe's catalogue fields that differ from a healthy shoe, the
-    drum's harmonics and the fields of each drum defect present (``fields_at``)."""
+    drum's harmonics and the fields of each drum defect present, and the line's fields
+    that differ from a sound line (``fields_at``)."""
     table: dict[str, Any] = {}
     for side in ("left", "right"):
         shoe = getattr(defects, side)
@@ -145,6 +146,13 @@ def defects_table(defects: Defects) -> dict[str, Any]:
                 drum[f.name] = float(getattr(defects.drum, f.name))
     if drum:
         table["drum"] = drum
+    line = {
+        f.name: float(getattr(defects.line, f.name))
+        for f in fields_at(LINE)
+        if getattr(defects.line, f.name) != f.default
+    }
+    if line:
+        table[LINE] = line
     return table
 
 

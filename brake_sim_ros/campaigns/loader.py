@@ -46,7 +46,7 @@ from brake_sim_ros.campaigns.splits import (
     value_kind,
 )
 from brake_sim_ros.errors import BrakeSimError
-from brake_sim_ros.model.catalogue import KIND_BY_NAME, KINDS
+from brake_sim_ros.model.catalogue import KIND_BY_NAME, brake_kinds
 from brake_sim_ros.scenarios.checker import MISSING, Checker, show_value
 from brake_sim_ros.scenarios.files import MAX_SCENARIO_BYTES, is_path, read_scenario_text
 from brake_sim_ros.scenarios.loader import (
@@ -166,11 +166,12 @@ def _parse(data: dict[str, Any], text: str, source: str, directory: Path | None)
         raise ctx.fail("base", MISSING, "a base scenario (built-in name or .toml path)")
     base_text = _base_text(ctx, top["base"], directory)
     base_data = parse_toml(base_text, f"{source}: base {top['base']}")
-    parse_scenario(base_text, f"{source}: base scenario")  # refused here, not per run
+    base = parse_scenario(base_text, f"{source}: base scenario")  # refused here, not per run
+    circuit = base.setup.params.service is not None  # the line's kinds need its circuit
     seed = ctx.integer(top.get("seed", 0), "seed", 0, 2**63 - 1)
     unit_ids = _units(ctx, top)
     outputs = _outputs(ctx, top.get("outputs", {}))
-    axes = _axes(ctx, top.get("axes", []))
+    axes = _axes(ctx, top.get("axes", []), circuit)
     method, count = _draws(ctx, top.get("draws"), axes)
     fractions, held_out = _split(ctx, top.get("split", {}), axes)
     try:
@@ -280,14 +281,14 @@ def _values(ctx: Checker, values: Any, key: str) -> tuple[Value, ...]:
     return tuple(values)
 
 
-def _axes(ctx: Checker, data: Any) -> tuple[AnyAxis, ...]:
+def _axes(ctx: Checker, data: Any, circuit: bool) -> tuple[AnyAxis, ...]:
     if not isinstance(data, list) or len(data) > 32:
         raise ctx.fail("axes", data, "an array of at most 32 [[axes]] tables")
     axes: list[AnyAxis] = []
     for i, item in enumerate(data):
         where = f"axes[{i}]"
         if isinstance(item, dict) and "defects" in item:
-            axes.append(_defect_axis(ctx, item, where))
+            axes.append(_defect_axis(ctx, item, where, circuit))
             continue
         item = ctx.table(item, where, {"name", "key", "values", "linspace", "uniform"})
         key = item.get("key")
@@ -350,21 +351,28 @@ def _linspace(ctx: Checker, value: Any, key: str) -> tuple[Value, ...]:
     return values
 
 
-def _defect_axis(ctx: Checker, item: dict[str, Any], where: str) -> DefectAxis:
+def _defect_axis(ctx: Checker, item: dict[str, Any], where: str, circuit: bool) -> DefectAxis:
+    """A defect axis: ``defects`` "all" (every kind the base's brake carries: the line's
+    kinds only with its hydraulic circuit, the service brake's) or a list of them."""
     item = ctx.table(item, where, {"name", "defects", "severities", "healthy"})
     if item.get("name", DEFECT_AXIS) != DEFECT_AXIS:
         raise ctx.fail(f"{where}.name", item["name"], f"'{DEFECT_AXIS}' for the defect axis")
     kinds = item["defects"]
-    allowed = [k.name for k in KINDS]
+    allowed = [k.name for k in brake_kinds(circuit)]
     if kinds == "all":
         kinds = allowed
     if (
         not isinstance(kinds, list)
         or not kinds
-        or any(not isinstance(k, str) or k not in KIND_BY_NAME for k in kinds)
+        or any(not isinstance(k, str) or k not in allowed for k in kinds)
         or len(set(kinds)) != len(kinds)
     ):
-        raise ctx.fail(f"{where}.defects", kinds, f'"all" or distinct kinds from {allowed}')
+        why = (
+            ""
+            if circuit
+            else ' (the base is the study brake: the line\'s kinds need brake = "service")'
+        )
+        raise ctx.fail(f"{where}.defects", kinds, f'"all" or distinct kinds from {allowed}{why}')
     fractions = item.get("severities", [1.0])
     if not isinstance(fractions, list) or not 0 < len(fractions) <= 100:
         raise ctx.fail(

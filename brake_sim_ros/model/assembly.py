@@ -12,8 +12,9 @@ from brake_sim_ros.errors import ParameterError
 from brake_sim_ros.model import kernel, service, thermal
 from brake_sim_ros.model import layout as L
 from brake_sim_ros.model.actuation import RESIDUAL_FORCE_N, RETURN_SPRING_PRELOAD_N
-from brake_sim_ros.model.catalogue import KIND_BY_NAME, kinds_at
+from brake_sim_ros.model.catalogue import KIND_BY_NAME, LOCATIONS, kinds_at
 from brake_sim_ros.model.defects import SERVICE_RUNOUT_UM, Defects, DrumDefect, ShoeDefect
+from brake_sim_ros.model.line_kinds import LINE, refuse_without_circuit
 from brake_sim_ros.model.packing import PackSite
 from brake_sim_ros.model.parameters import BrakeParameters, ServiceBrakeParameters
 from brake_sim_ros.model.placement import lining_mid_rad
@@ -40,7 +41,8 @@ def pack(
 ) -> np.ndarray:
     """Packed parameter vector for the kernels (layout.P_* / S_*), after validity checks:
     the healthy brake's own slots, then every defect kind's packing (its catalogue entry's,
-    :mod:`.packing`) at each of its locations, the shoes before the drum."""
+    :mod:`.packing`) at each of its locations, the shoes before the drum, the hydraulic
+    line's last (refused on a brake without a circuit)."""
     options = options or ModelOptions()
     unknown = set(options.shoes) - set(SIDES)
     if unknown or not options.shoes:
@@ -76,6 +78,7 @@ def pack(
     thermal.pack_fade(p)
     _pack_service(params, defects, p)
     _pack_tyre(params, options, p)
+    _pack_line(params, defects, p)
     return p
 
 
@@ -101,6 +104,17 @@ def _pack_shoe(params: BrakeParameters, site: PackSite, *, enabled: bool) -> Non
         p[b + L.S_ACTUATION_SHAPED] = 1.0 if defect.actuation_shaped else 0.0
     p[b + L.S_ENABLED] = 1.0 if enabled else 0.0
     p[site.lining_base + L.LN_RADIUS] = g.drum_radius_m - g.running_clearance_m
+
+
+def _pack_line(params: BrakeParameters, defects: Defects, p: np.ndarray) -> None:
+    """The hydraulic line's defects (catalogue location ``line``), each kind's packing; a
+    brake without a circuit (the study brake) refuses any in one line."""
+    if params.service is None:
+        refuse_without_circuit(defects.line)
+        return
+    site = PackSite(params, LINE, defects.line, p)
+    for kind in kinds_at(LINE):
+        kind.packing(site)
 
 
 def _pack_service(params: BrakeParameters, defects: Defects, p: np.ndarray) -> None:
@@ -177,7 +191,7 @@ def _pack_growth(params: BrakeParameters, defects: Defects, p: np.ndarray) -> No
         raise ParameterError(
             f"defects: {len(entries)} change during the run: allowed at most {L.MAX_GROWTH_ENTRIES}"
         )
-    at = {loc: getattr(defects, loc).severities() for loc in ("left", "right", "drum")}
+    at = {loc: getattr(defects, loc).severities() for loc in LOCATIONS}
     for j, (kind, location, law) in enumerate(entries):
         growth_id = KIND_BY_NAME[kind].growth_id  # its id in growth.apply (the catalogue's)
         if growth_id is None:

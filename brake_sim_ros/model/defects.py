@@ -1,4 +1,5 @@
-"""Defects: deviations of the shoes and the drum from the symmetric, round brake."""
+"""Defects: deviations of the shoes, the drum and the hydraulic line from the symmetric,
+round, healthy brake."""
 
 from __future__ import annotations
 
@@ -16,6 +17,8 @@ from brake_sim_ros.model.catalogue import (
     DRUM_KIND,
     KIND_BY_NAME,
     KINDS,
+    LINE,
+    LOCATIONS,
     MAX_FLAT_WIDTH_DEG,  # noqa: F401 (re-exported)
     MAX_PULSATION_HZ,  # noqa: F401 (re-exported)
     ActiveDefect,
@@ -242,6 +245,17 @@ class DrumDefect(_FieldSet):
         return tuple(out)
 
 
+class LineDefect(_FieldSet):
+    """Defects of the service brake's hydraulic circuit (catalogue location ``line``,
+    :mod:`.line_kinds`): the catalogue's line fields (:func:`.catalogue.fields_at`
+    ``("line")``), e.g. ``LineDefect(air_in_line_ml=1.0)``, ``LineDefect(line_leak_pct=20.0)``.
+    The default is a sound, bled line. The study brake has no circuit and refuses any
+    (:func:`.line_kinds.refuse_without_circuit`)."""
+
+    _LOCATION = LINE
+    _WHAT = "line"
+
+
 def _attribute(name: str, unit: str) -> str:
     """An attribute name ending in ``unit`` (``%`` as ``pct``; none for a ratio)."""
     suffix = {"%": "pct", "1": ""}.get(unit, unit)
@@ -250,9 +264,10 @@ def _attribute(name: str, unit: str) -> str:
 
 @dataclass(frozen=True)
 class Defects:
-    """Defects of both shoes and of the drum, in any combination, and when each appears.
+    """Defects of both shoes, of the drum and of the hydraulic line (``line``: the service
+    brake's circuit), in any combination, and when each appears.
 
-    The shoe and drum fields hold each defect's final severity; ``growth`` holds, for
+    The shoe, drum and line fields hold each defect's final severity; ``growth`` holds, for
     defects that do not simply exist from the start, their onset and growth law
     (:class:`~brake_sim_ros.model.catalogue.Growth`) as ``(kind, location, growth)``
     entries. A defect without an entry is a step at 0 s (present from the start); an
@@ -267,6 +282,7 @@ class Defects:
     right: ShoeDefect = field(default_factory=ShoeDefect)
     drum: DrumDefect = field(default_factory=DrumDefect)
     growth: tuple[tuple[str, str, Growth], ...] = ()
+    line: LineDefect = field(default_factory=LineDefect)
 
     def __post_init__(self) -> None:
         total = self.left.actuation_share + self.right.actuation_share
@@ -336,7 +352,7 @@ class Defects:
 
     @property
     def is_healthy(self) -> bool:
-        return self.left.is_healthy and self.right.is_healthy and self.drum.is_healthy
+        return all(getattr(self, loc).is_healthy for loc in LOCATIONS)
 
     @property
     def is_static(self) -> bool:
@@ -371,7 +387,7 @@ class Defects:
         return Growth()
 
     def _by_location(self) -> dict[str, dict[str, float]]:
-        return {loc: getattr(self, loc).severities() for loc in ("left", "right", "drum")}
+        return {loc: getattr(self, loc).severities() for loc in LOCATIONS}
 
     def _attributes(self, kind: str, location: str, fraction: float) -> tuple:
         """Attributes of a defect in force: a drum's harmonics (amplitudes at ``fraction``
@@ -517,6 +533,8 @@ class Defects:
         entry = KIND_BY_NAME[kind]
         if location == "drum":
             return cls(drum=DrumDefect(**present_values(entry, severity)))
+        if location == LINE:
+            return cls(line=LineDefect(**present_values(entry, severity)))
         shoes = {side: ShoeDefect() for side in ("left", "right")}
         shoes[location] = ShoeDefect.from_severities({kind: severity})
         if entry.tied:  # the other shoe mirrors it (the shares sum to 1)

@@ -28,6 +28,7 @@ from brake_sim_ros.model.catalogue import (
     DefectKind,
 )
 from brake_sim_ros.model.fidelity import LEVEL_BY_NAME
+from brake_sim_ros.model.line_kinds import LINE
 
 _NAME = re.compile(r"[a-z][a-z0-9_]{0,63}")
 # the compiled model's growth ids (model/growth.py apply), by layout's GK_* names
@@ -86,15 +87,15 @@ def _behaviour_parts(kind: DefectKind) -> list[str]:
 
 def missing_parts(kind: DefectKind) -> list[str]:
     """What ``kind``'s entry lacks, one phrase per part (empty: complete): a name, its
-    locations (both shoes or the drum), a unit, range, limit, description, scenario key
+    locations (both shoes, the drum or the line), a unit, range, limit, description, scenario key
     and service limit, its fields (each named, with a unit, a description and a default
     in its range), fidelity levels, growth rules, its packing and an actuation effect the
     model knows."""
     out = []
     if not _NAME.fullmatch(kind.name) or not _NAME.fullmatch(kind.scenario_key):
         out.append("a name and a scenario key of a-z 0-9 _")
-    if kind.locations not in (tuple(L.SIDES), ("drum",)):
-        out.append(f"locations {list(L.SIDES)} or ['drum']")
+    if kind.locations not in (tuple(L.SIDES), ("drum",), (LINE,)):
+        out.append(f"locations {list(L.SIDES)}, ['drum'] or ['{LINE}']")
     if not kind.unit or not kind.limit or not kind.description:
         out.append("a unit, a limit (why the range ends there) and a description")
     out += _range_parts(kind)

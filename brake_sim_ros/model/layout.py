@@ -218,6 +218,11 @@ R_STOP_TRAVEL = 3  # tip travel (m) below which the shoe presses on its stop
 P_PISTON_AREA = P_SPRING_BASE + 2 * SPRING_STRIDE
 P_LINE_COMPLIANCE = P_PISTON_AREA + 1
 P_LINE_RESISTANCE = P_PISTON_AREA + 2
+# the line's defects (catalogue location "line", model/line_kinds.py): the volume of air in
+# the circuit at atmospheric pressure, m^3 (0: none; it adds an isothermal gas's
+# compliance), and a leak's conductance to the reservoir, m^3/(s Pa) (0: none)
+P_LINE_AIR_VOLUME = P_PISTON_AREA + 3
+P_LINE_LEAK_CONDUCTANCE = P_PISTON_AREA + 4
 
 # the service brake's tyre (model/tyre.py; parameters.TyreParameters), read when P_SERVICE:
 # the LuGre law's presliding stiffness sigma0 1/m, its damping sigma1 s/m and viscous term
@@ -225,7 +230,7 @@ P_LINE_RESISTANCE = P_PISTON_AREA + 2
 # the Stribeck curve, sliding (a locked tyre's) and peak (at zero slip speed), and the
 # curve's speed m/s and exponent. The rolling radius is P_WHEEL_RADIUS (the vehicle's, or
 # the default one), the wheel's load the mass the flywheel stands for times g.
-P_TYRE_STIFFNESS = P_LINE_RESISTANCE + 1
+P_TYRE_STIFFNESS = P_LINE_LEAK_CONDUCTANCE + 1
 P_TYRE_DAMPING = P_TYRE_STIFFNESS + 1
 P_TYRE_VISCOUS = P_TYRE_STIFFNESS + 2
 P_TYRE_SLIDING = P_TYRE_STIFFNESS + 3

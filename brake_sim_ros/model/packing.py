@@ -36,10 +36,10 @@ class PackSite:
 
     Attributes:
         params: the brake's parameters.
-        location: ``left``, ``right`` or ``drum``.
-        defect: that location's defects, a :class:`.defects.ShoeDefect` or
-            :class:`.defects.DrumDefect` (not imported: that module imports the catalogue,
-            which names these functions).
+        location: ``left``, ``right``, ``drum`` or ``line``.
+        defect: that location's defects, a :class:`.defects.ShoeDefect`,
+            :class:`.defects.DrumDefect` or :class:`.defects.LineDefect` (not imported:
+            that module imports the catalogue, which names these functions).
         p: the packed parameter vector being written (layout ``N_PARAMS``).
     """
 
@@ -181,3 +181,17 @@ def pack_flat(site: PackSite) -> None:
     site.p[L.P_FLAT_DEPTH] = drum.flat_depth_um * 1e-6
     site.p[L.P_FLAT_CENTRE] = math.radians(drum.flat_centre_deg)
     site.p[L.P_FLAT_HALF_WIDTH] = math.radians(0.5 * drum.flat_width_deg)
+
+
+def pack_line_air(site: PackSite) -> None:
+    """The line's air, m^3 at atmospheric pressure (:func:`.service.air_compliance`)."""
+    site.p[L.P_LINE_AIR_VOLUME] = site.defect.air_in_line_ml * 1e-6
+
+
+def pack_line_leak(site: PackSite) -> None:
+    """A leak's conductance to the reservoir, m^3/(s Pa): ``G = s / ((1 - s) R)`` for the
+    held pressure's shortfall ``s`` (a fraction) through the line's resistance ``R``, so
+    that a held source ``p_s`` holds ``p_s / (1 + G R) = (1 - s) p_s``."""
+    shortfall = site.defect.line_leak_pct / 100.0
+    resistance = site.params.service.line_resistance_pa_s_per_m3
+    site.p[L.P_LINE_LEAK_CONDUCTANCE] = shortfall / ((1.0 - shortfall) * resistance)

@@ -29,6 +29,15 @@ actuation's in the shoe's moment balance (:func:`brake_sim_ros.model.contact.sho
   ``F_r``. Stored ``C p^2 / 2``;
   the line loses ``(p_s - p)^2 / R``; the source works ``p_s (p_s - p) / R``, and a
   piston's force beyond ``A p`` (its own departure, the residual floor) works at its tip.
+* The line's defects (catalogue location ``line``, :mod:`.line_kinds`). Air: a volume
+  ``V_a`` (m^3 at the atmospheric pressure ``p_a``, absolute) compressed isothermally,
+  ``V = V_a p_a / (p_a + p)`` at the gauge pressure ``p``, adds the compliance
+  ``C_a(p) = V_a p_a / (p_a + p)^2`` to ``C`` (large at the residual pressure, small once
+  the pressure is high: the spongy pedal) and stores ``V_a p_a (ln(1 + x) - x / (1 + x))``,
+  ``x = p / p_a``. A leak: a flow ``G p`` out of the circuit to the reservoir (a laminar
+  leak past a seal), which the source makes up through the line, so that a held source
+  gives ``p = p_s / (1 + G R)`` and the pressure settles with ``R C / (1 + G R)``; the
+  leak loses ``G p^2``.
 * Return spring (pulls inward): ``F_s = P + k (u - u_rest)``, ``P`` and ``k`` its preload and
   rate as weakened; stored energy ``P (u - u_rest) + k (u - u_rest)^2 / 2``.
 * Rest stop (pushes outward, one-sided): with ``delta = u_stop - u`` the shoe's press on
@@ -124,6 +133,34 @@ def tip_forces(p, shoe, cylinder, travel, rate):
     return cylinder - spring_force(p, shoe, travel) + stop, loss
 
 
+# Atmospheric pressure, Pa (absolute): the air in a line is at it when the circuit is open
+# to the reservoir (bled, at rest); the line pressure ``p`` is a gauge pressure.
+ATMOSPHERIC_PA = 101_325.0
+# Lowest gauge pressure the air's law is evaluated at, as a fraction of -p_a: a line
+# pressure never falls this far below atmospheric (the fluid would boil off first).
+_AIR_FLOOR = -0.5
+
+
+@njit(inline="always", **JIT)
+def air_compliance(p, pressure):
+    """The compliance the line's air adds at the gauge pressure ``pressure`` (Pa),
+    m^3/Pa: ``V_a p_a / (p_a + p)^2`` (0 without air)."""
+    volume = p[L.P_LINE_AIR_VOLUME]
+    if volume <= 0.0:
+        return 0.0
+    x = pressure / ATMOSPHERIC_PA
+    if x < _AIR_FLOOR:
+        x = _AIR_FLOOR
+    return volume / (ATMOSPHERIC_PA * (1.0 + x) * (1.0 + x))
+
+
+@njit(inline="always", **JIT)
+def line_faults(p, pressure):
+    """The circuit's compliance beyond ``C`` at the line pressure ``pressure`` (Pa,
+    m^3/Pa: the air's) and the flow it loses to a leak (m^3/s, ``G p``)."""
+    return air_compliance(p, pressure), p[L.P_LINE_LEAK_CONDUCTANCE] * pressure
+
+
 @njit(inline="always", **JIT)
 def hydraulics(p, pressure, commanded_left, commanded_right, rate_left, rate_right):
     """The circuit at the line pressure ``pressure`` (Pa) for the pistons' commanded forces
@@ -137,8 +174,16 @@ def hydraulics(p, pressure, commanded_left, commanded_right, rate_left, rate_rig
     left = piston_force(p, commanded_left, mean, pressure)
     right = piston_force(p, commanded_right, mean, pressure)
     inflow = line_inflow(p, source, pressure)
-    rate = (inflow - area * (rate_left + rate_right)) / p[L.P_LINE_COMPLIANCE]
+    compliance = p[L.P_LINE_COMPLIANCE]
+    stored = inflow  # into the compliance: the source's flow less a leak's
     loss = (source - pressure) * inflow
+    # air or a leak (the healthy line's arithmetic stays as it was)
+    if p[L.P_LINE_AIR_VOLUME] > 0.0 or p[L.P_LINE_LEAK_CONDUCTANCE] > 0.0:
+        air, leak = line_faults(p, pressure)
+        compliance += air
+        stored -= leak
+        loss += pressure * leak
+    rate = (stored - area * (rate_left + rate_right)) / compliance
     power = source * inflow + (left - area * pressure) * rate_left
     power += (right - area * pressure) * rate_right
     return left, right, rate, loss, power
@@ -146,8 +191,16 @@ def hydraulics(p, pressure, commanded_left, commanded_right, rate_left, rate_rig
 
 @njit(inline="always", **JIT)
 def line_energy(p, pressure):
-    """Energy the circuit's compliance stores at the line pressure ``pressure`` (Pa), J."""
-    return 0.5 * p[L.P_LINE_COMPLIANCE] * pressure * pressure
+    """Energy the circuit's compliance (and its air) stores at the line pressure
+    ``pressure`` (Pa), J."""
+    energy = 0.5 * p[L.P_LINE_COMPLIANCE] * pressure * pressure
+    volume = p[L.P_LINE_AIR_VOLUME]
+    if volume > 0.0:
+        x = pressure / ATMOSPHERIC_PA
+        if x < _AIR_FLOOR:
+            x = _AIR_FLOOR
+        energy += volume * ATMOSPHERIC_PA * (np.log1p(x) - x / (1.0 + x))
+    return energy
 
 
 @njit(inline="always", **JIT)

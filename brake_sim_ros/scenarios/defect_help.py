@@ -20,10 +20,10 @@ from brake_sim_ros.model.catalogue import (
 
 
 def _where(k: DefectKind) -> str:
-    table = "[defects.drum]" if k.locations == ("drum",) else "[defects.<location>]"
+    location = k.locations[0] if len(k.locations) == 1 else "<location>"
+    table = f"[defects.{location}]"
     if k.table:
         return f"{table} (no node parameter: the scenario's)"
-    location = "drum" if k.locations == ("drum",) else "<location>"
     return f"{table} or the node's parameter defects.{location}.{k.scenario_key}"
 
 

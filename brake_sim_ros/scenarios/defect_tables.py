@@ -1,6 +1,7 @@
 """A scenario's ``[defects]`` tables, loaded strictly: each shoe's catalogue fields
 (``[defects.left]``, ``[defects.right]``), the drum's (``[defects.drum]`` and its
-harmonics), and how each defect grows (a key's table ``{value, onset_s, growth, ...}``).
+harmonics), the hydraulic line's (``[defects.line]``, the service brake's circuit), and
+how each defect grows (a key's table ``{value, onset_s, growth, ...}``).
 
 The fields, their growth laws and limits are the catalogue's
 (:mod:`brake_sim_ros.model.catalogue`); the values are checked by the model's defect
@@ -18,6 +19,7 @@ from brake_sim_ros.model.catalogue import (
     GROWTH_KEYS,
     GROWTH_LAWS,
     LAW_PARAMETERS,
+    LINE,
     MAX_GROWTH_TIME_S,
     DefectKind,
     Growth,
@@ -30,6 +32,7 @@ from brake_sim_ros.model.defects import (
     Defects,
     DrumDefect,
     DrumHarmonic,
+    LineDefect,
     ShoeDefect,
 )
 from brake_sim_ros.scenarios.checker import MISSING, Checker
@@ -145,6 +148,18 @@ def _drum(ctx: Checker, data: Any, growth: list[tuple[str, str, Growth]]) -> Dru
         raise ScenarioError(f"{ctx.source}: [defects.drum]: {exc}") from exc
 
 
+def _line(ctx: Checker, data: Any, growth: list[tuple[str, str, Growth]]) -> LineDefect:
+    """``[defects.line]``: the hydraulic circuit's catalogue fields (``fields_at("line")``,
+    e.g. ``air_in_line_ml``), each a number or a growth table as a shoe's keys. Whether the
+    brake has a circuit is the loader's check (the study brake refuses them)."""
+    d = ctx.table(data, f"defects.{LINE}", {f.name for f in fields_at(LINE)})
+    values = _location_values(ctx, d, LINE, growth)
+    try:
+        return LineDefect(**values)
+    except BrakeSimError as exc:
+        raise ScenarioError(f"{ctx.source}: [defects.{LINE}]: {exc}") from exc
+
+
 def parse_defects(ctx: Checker, data: Any) -> Defects:
     """``[defects.left]``, ``[defects.right]``: each key a catalogue field of a shoe
     (``brake-sim defects``): a kind's key is a number (the final value, present from the
@@ -152,8 +167,8 @@ def parse_defects(ctx: Checker, data: Any) -> Defects:
     (:data:`.catalogue.GROWTH_KEYS`: when it starts and how it grows toward ``value``;
     ``start`` and ``rate_per_s`` in the key's unit, e.g. 0.52 and 0.05 for a share); a
     tied kind's key given for one shoe only implies the other's (the actuation shares sum
-    to 1); ``[defects.drum]``: :func:`_drum`."""
-    data = ctx.table(data, "defects", {*SIDES, "drum"})
+    to 1); ``[defects.drum]``: :func:`_drum`; ``[defects.line]``: :func:`_line`."""
+    data = ctx.table(data, "defects", {*SIDES, "drum", LINE})
     growth: list[tuple[str, str, Growth]] = []
     shoes = {}
     for side in SIDES:
@@ -174,7 +189,8 @@ def parse_defects(ctx: Checker, data: Any) -> Defects:
         except BrakeSimError as exc:
             raise ScenarioError(f"{ctx.source}: [defects.{side}]: {exc}") from exc
     drum = _drum(ctx, data.get("drum", {}), growth)
+    line = _line(ctx, data.get(LINE, {}), growth)
     try:
-        return Defects(**built, drum=drum, growth=tuple(growth))
+        return Defects(**built, drum=drum, line=line, growth=tuple(growth))
     except BrakeSimError as exc:
         raise ScenarioError(f"{ctx.source}: [defects]: {exc}") from exc

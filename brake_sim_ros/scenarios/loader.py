@@ -29,7 +29,10 @@ from brake_sim_ros.errors import BrakeSimError, ScenarioError
 from brake_sim_ros.fleet.scatter import NOMINAL_UNIT
 from brake_sim_ros.model.assembly import SIDES, pack
 from brake_sim_ros.model.cycle import pack_drive
+from brake_sim_ros.model.defects import Defects
 from brake_sim_ros.model.fidelity import plan
+from brake_sim_ros.model.line_kinds import refuse_without_circuit
+from brake_sim_ros.model.parameters import BrakeParameters
 from brake_sim_ros.model.run_setup import BrakeSetup
 from brake_sim_ros.model.vehicle import DRIVE_LIMITS as VEHICLE_DRIVE_LIMITS
 from brake_sim_ros.scenarios.checker import MISSING, SHOWN_CHARS, Checker, show_value
@@ -181,6 +184,18 @@ def _name(ctx: Checker, value: Any) -> str:
     return value
 
 
+def _defects(ctx: Checker, top: dict[str, Any], params: BrakeParameters) -> Defects:
+    """``[defects]`` (:func:`.defect_tables.parse_defects`) for the brake ``params``: a brake
+    without a hydraulic circuit (the study brake) refuses the line's in one line."""
+    defects = parse_defects(ctx, top.get("defects", {}))
+    if params.service is None:  # the study brake: an ideal force source, no circuit
+        try:
+            refuse_without_circuit(defects.line)
+        except BrakeSimError as exc:
+            raise ScenarioError(f"{ctx.source}: [defects.line]: {exc}") from exc
+    return defects
+
+
 def _parse(data: dict[str, Any], text: str, source: str) -> Scenario:
     ctx = Checker(source)
     top = ctx.table(
@@ -217,7 +232,7 @@ def _parse(data: dict[str, Any], text: str, source: str) -> Scenario:
     for key, value in (("seed", seed), ("fleet_seed", fleet_seed)):
         ctx.seed(value, key)
     params = parse_parameters(ctx, top.get("parameters", {}), parse_brake(ctx, top))
-    defects = parse_defects(ctx, top.get("defects", {}))
+    defects = _defects(ctx, top, params)
     cycle = parse_cycle(ctx, top["cycle"]) if "cycle" in top else None
     if cycle is not None and "actuation" in top:
         raise ctx.fail(

@@ -9,7 +9,8 @@ building the core objects again and handing them to the stepper: the core's
 refusal reason. A change that needs a smaller physics step
 is not refused: the stepper re-picks its substeps per sample. Names are
 ``<group>.<field>`` (``friction.coefficient``, ``shoe.running_clearance_m``),
-``defects.<side>.<field>`` and ``defects.drum.<field>`` (:func:`defect_fields`: the
+``defects.<side>.<field>``, ``defects.drum.<field>`` and ``defects.line.<field>`` (the
+service brake's hydraulic circuit, refused by the study brake; :func:`defect_fields`: the
 catalogue's fields there; the drum's harmonics are the scenario's and have no parameter).
 
 The ``FloatingPointRange`` of each descriptor is an envelope for tools such as
@@ -38,12 +39,13 @@ from brake_sim_ros.model.actuation import MAX_ACTUATION_FORCE_N, NOMINAL_PEAK_AC
 from brake_sim_ros.model.catalogue import (
     KIND_BY_NAME,
     KINDS,
+    LINE,
     DefectField,
     fields_at,
     kind_of_field,
     label_column,
 )
-from brake_sim_ros.model.defects import Defects, DrumDefect, ShoeDefect
+from brake_sim_ros.model.defects import Defects, DrumDefect, LineDefect, ShoeDefect
 from brake_sim_ros.model.layout import SIDES
 from brake_sim_ros.model.parameters import PARAMETER_GROUPS, BrakeParameters, unit_of
 from brake_sim_ros.model.run_setup import BrakeSetup
@@ -171,6 +173,10 @@ def model_values(params: BrakeParameters, defects: Defects) -> dict[str, Any]:
             values[f"defects.{side}.{f.name}"] = getattr(shoe, f.name)
     for f in defect_fields("drum"):
         values[f"defects.drum.{f.name}"] = float(getattr(defects.drum, f.name))
+    # the line's on either brake (a node keeps its parameters across a ~/reset to a
+    # scenario on the other brake); the study brake refuses a value other than healthy
+    for f in defect_fields(LINE):
+        values[f"defects.{LINE}.{f.name}"] = float(getattr(defects.line, f.name))
     for group in PARAMETER_GROUPS:
         obj = getattr(params, group)
         for f in fields(obj):
@@ -186,7 +192,9 @@ def model_parameter_specs(params: BrakeParameters, defects: Defects) -> list[Par
         field_name = parts[-1]
         spec_range = _RANGES.get(name)
         if parts[0] == "defects":
-            where = "Drum" if parts[1] == "drum" else f"{parts[1].capitalize()} shoe"
+            where = {"drum": "Drum", LINE: "Hydraulic line"}.get(
+                parts[1], f"{parts[1].capitalize()} shoe"
+            )
             kind = kind_of_field(parts[1], field_name)
             f = next(f for f in kind.fields() if f.name == field_name)
             text = f"{where} defect {kind.name}, {field_name} ({f.unit}): {f.description}."
@@ -229,7 +237,8 @@ def build_model(
         shoes[side] = ShoeDefect(**kwargs)
     numbers = {f.name: values[f"defects.drum.{f.name}"] for f in defect_fields("drum")}
     drum = (drum or DrumDefect()).replace(**numbers)
-    defects = Defects(left=shoes["left"], right=shoes["right"], drum=drum)
+    line = LineDefect(**{f.name: values[f"defects.{LINE}.{f.name}"] for f in defect_fields(LINE)})
+    defects = Defects(left=shoes["left"], right=shoes["right"], drum=drum, line=line)
     groups = {}
     for group, cls in PARAMETER_GROUPS.items():
         groups[group] = cls(**{f.name: values[f"{group}.{f.name}"] for f in fields(cls)})

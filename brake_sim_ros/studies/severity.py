@@ -140,10 +140,14 @@ def sweep(
 def sweeps(
     duration_s: float,
     progress: Callable[[str], None] | None = None,
-    kinds: tuple[DefectKind, ...] = catalogue.KINDS,
+    kinds: tuple[DefectKind, ...] | None = None,
     steps: tuple[float, ...] = STEPS,
 ) -> list[dict[str, object]]:
-    """``kinds`` at every location, healthy runs shared per location."""
+    """``kinds`` (default: every kind the base scenario's brake carries) at every location,
+    healthy runs shared per location."""
+    if kinds is None:
+        circuit = load_scenario(BASE_SCENARIO).setup.params.service is not None
+        kinds = catalogue.brake_kinds(circuit)
     locations = list(dict.fromkeys(loc for k in kinds for loc in k.locations))
     healthy = {loc: features(Defects(), loc, duration_s) for loc in locations}
     return [
@@ -233,7 +237,7 @@ def write_report(
     out_dir: Path,
     duration_s: float,
     progress: Callable[[str], None] | None = None,
-    kinds: tuple[DefectKind, ...] = catalogue.KINDS,
+    kinds: tuple[DefectKind, ...] | None = None,
     steps: tuple[float, ...] = STEPS,
 ) -> Path:
     """Run the sweeps; write ``report.md``, a figure per kind and location and

@@ -19,8 +19,8 @@ from brake_sim_ros.datasets.sweep import sweep
 from brake_sim_ros.datasets.sweep_output import DONE_DIR, MANIFEST_NAME
 from brake_sim_ros.errors import BrakeSimError
 from brake_sim_ros.fleet.scatter import unit_parameters, unit_sensors
-from brake_sim_ros.model.catalogue import KINDS
-from brake_sim_ros.scenarios import load_scenario
+from brake_sim_ros.model.catalogue import brake_kinds
+from brake_sim_ros.scenarios import load_scenario, parse_scenario
 from brake_sim_ros.scenarios.unit_draws import unit_brake, unit_sensor_set
 from brake_sim_ros.sensing.sensors import default_sensor_set
 from brake_sim_ros.studies import fleet_bench, sweep_bench
@@ -83,6 +83,11 @@ def test_a_units_draws_are_remembered_and_the_same_as_drawn_afresh():
     assert repr(drawn) == repr(unit_sensors(sensors, "unit-0007", 3))
 
 
+def _kinds(campaign):
+    """Every kind the campaign's base brake carries (the line's only with a circuit)."""
+    return brake_kinds(parse_scenario(campaign.base_text).setup.params.service is not None)
+
+
 def test_the_fleet_campaign_is_every_kind_at_three_severities_and_healthy_on_20_units():
     campaign = load_campaign(fleet_bench.CAMPAIGN_FILE)
     assert len(campaign.unit_ids) == 20
@@ -91,7 +96,7 @@ def test_the_fleet_campaign_is_every_kind_at_three_severities_and_healthy_on_20_
         campaign.axes, campaign.draw_method, campaign.draw_count, campaign.seed
     )
     defects = {v for p in points for v in p.values() if isinstance(v, DefectChoice)}
-    for kind in KINDS:
+    for kind in _kinds(campaign):
         for location in kind.locations:
             severities = {
                 d.severity for d in defects if (d.kind, d.location) == (kind.name, location)
@@ -119,7 +124,7 @@ def test_the_fleet_slice_keeps_the_runs_settings():
 def test_the_sweep_benchmarks_short_campaign_is_short_runs_of_every_defect():
     campaign = sweep_bench.bench_campaign("short")
     runs = campaign.runs()
-    assert len(runs) == 3 * (2 * sum(len(k.locations) for k in KINDS) + 1)
+    assert len(runs) == 3 * (2 * sum(len(k.locations) for k in _kinds(campaign)) + 1)
     assert {r.duration_s for r in runs} == {0.5}
 
 

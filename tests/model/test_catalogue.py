@@ -21,7 +21,7 @@ from brake_sim_ros.model.kind_check import missing_parts
 from brake_sim_ros.model.parameters import BrakeParameters
 from brake_sim_ros.scenarios.defect_help import catalogue_text
 from brake_sim_ros.stream.parameters import _RANGES as RANGES
-from tests.defect_reach import reaches_everything
+from tests.defect_reach import brake_of, reaches_everything
 
 
 @pytest.mark.parametrize("kind", list(catalogue.KINDS), ids=lambda k: k.name)
@@ -37,7 +37,7 @@ def test_every_entry_is_complete_and_reaches_every_consumer(kind):
 def test_every_built_in_kind_packs_its_severity(kind):
     """A brake that carries the kind packs differently from the healthy brake (an initial
     condition: it starts from another state), at each of its locations."""
-    params = BrakeParameters()
+    params = BrakeParameters.of_brake(brake_of(kind))
     healthy = pack(params, Defects())
     for location in kind.locations:
         defects = Defects.single(kind.name, location, 0.5 * kind.service_limit)
@@ -57,7 +57,7 @@ def test_the_drum_flat_is_one_entry_its_fields_written_there_once():
     assert len(set(columns)) == len(columns) == sum(len(k.locations) for k in catalogue.KINDS)
 
 
-SHOE_KINDS = tuple(k for k in catalogue.KINDS if k.locations != ("drum",))
+SHOE_KINDS = tuple(k for k in catalogue.KINDS if k.on_shoes)
 # the one field of a shoe that is no kind's severity: a pulsation's frequency
 FREQUENCY = "actuation_pulsation_hz"
 

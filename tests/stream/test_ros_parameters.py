@@ -26,6 +26,8 @@ def test_every_core_field_is_a_parameter():
         for f in dataclasses.fields(cls)
     }
     expected |= {f"defects.drum.{f.name}" for f in ros_params.defect_fields("drum")}
+    # the hydraulic line's, declared on either brake (the study brake refuses a value)
+    expected |= {f"defects.line.{f.name}" for f in ros_params.defect_fields("line")}
     # the drum's flat, written once (its catalogue entry), is what the drum takes
     assert {f.name for f in ros_params.defect_fields("drum")} == {
         "flat_depth_um",
