@@ -68,5 +68,24 @@ def test_a_shoe_held_by_its_pin_and_piston_has_its_tip_on_the_piston():
 def test_the_shape_of_a_response():
     pcts = [-2.0, -1.0, 0.0, 1.0, 2.0]
     assert pr.shape([3.0, 2.0, 1.0, 0.0, -1.0], pcts) == "monotone, asymmetry 0.00"
-    assert pr.shape([1.0, 0.5, 0.0, 0.5, 1.0], pcts) == "kinked at 0, asymmetry 1.00"
+    assert pr.shape([1.0, 0.5, 0.0, 0.5, 1.0], pcts) == "both ends the same way, asymmetry 1.00"
     assert pr.shape([0.0, 2.0, 1.0, 3.0, 4.0], pcts).startswith("not monotone")
+
+
+def test_a_pin_held_shoe_reaches_case_1_in_the_calibrations_space():
+    """Under ``eye-piston`` the study's candidate geometry puts case 1's three figures, the
+    symmetric first impact and case 5 inside their published bands (the validation's
+    bands, band units <= 1), assembled clear of the drum and short of self-locking at
+    both ends of the sweep; the inward pin softens the first impact as well (an even
+    response: the first contact at the lining's toe end)."""
+    from brake_sim_ros.studies.pose_rule_sample import grid_point
+
+    params = pr.candidate_parameters(BrakeParameters())
+    point = grid_point(params, "eye-piston", 0.0, (0.0, 0.0, 0.0))
+    assert not point.admissible
+    assert set(point.misses) == {"sym.Fe", "5.peak", "5.T", "1.peak", "1.T", "1.Fe"}
+    assert all(abs(m) <= 1.0 for m in point.misses.values()), point.misses
+    assert point.case2_peak_pct < 0.0
+    # the model's rule with the same geometry leaves case 1 outside
+    model = grid_point(params, "tip-abutment", 0.0, (0.0, 0.0, 0.0))
+    assert any(abs(model.misses[k]) > 1.0 for k in ("1.peak", "1.T", "1.Fe"))
