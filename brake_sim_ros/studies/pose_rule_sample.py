@@ -24,6 +24,7 @@ from brake_sim_ros.studies.calibration import (
 from brake_sim_ros.studies.pose_rules import (
     RULES,
     _nominal,
+    _packed_as,
     _pct,
     geometry,
     impact,
@@ -229,4 +230,42 @@ def verify(point: GridPoint) -> list[str]:
         col = [v[i] for v in values]
         changes = " ".join(f"{_pct(v, col[3]):+.1f}" for v in col)
         lines.append(f"  sweep {label} %: {changes} ({shape(col, pcts)})")
+    return lines
+
+
+# The built-in scenarios of the cases the candidate's check runs, with the left shoe's defect.
+SCENARIO_CASES = (
+    ("case1_left_pivot_out", {"pivot_radius_change_pct": 3.0}),
+    ("case2_left_pivot_in", {"pivot_radius_change_pct": -3.0}),
+    ("case5_left_tilted", {"initial_angle_deg": -2.0}),
+)
+
+
+def scenario_check(params: BrakeParameters, name: str) -> list[str]:
+    """Cases 1, 2 and 5 and the symmetric brake run as the validation runs them (each
+    built-in scenario's own solver, 0.6 s), with ``params`` and the left shoe placed by
+    rule ``name``: the left shoe's first impact against the symmetric brake's."""
+    import dataclasses
+
+    from brake_sim_ros.scenarios import load_scenario
+    from brake_sim_ros.stream.run import run_scenario
+
+    rule, _held = RULES[name]
+
+    def left(scenario_name: str, defect: dict):
+        sc = load_scenario(scenario_name)
+        sc = dataclasses.replace(sc, setup=dataclasses.replace(sc.setup, params=params))
+        pct = defect.get("pivot_radius_change_pct", 0.0)
+        with _packed_as(packed(params, rule(params, pct), **defect)):
+            return run_scenario(sc, duration_s=0.6).metrics.left
+
+    sym = left("symmetric", {})
+    lines = [f"  scenarios: symmetric {sym.first_impact_actuation_n:.2f} N"]
+    for scenario_name, defect in SCENARIO_CASES:
+        m = left(scenario_name, defect)
+        lines.append(
+            f"  scenarios: {scenario_name} {m.first_impact_actuation_n:.2f} N, peak"
+            f" {_pct(m.first_impact_peak_n, sym.first_impact_peak_n):+.1f} %, T"
+            f" {_pct(m.period_s, sym.period_s):+.1f} %"
+        )
     return lines

@@ -352,16 +352,15 @@ def report_rule(params: BrakeParameters, name: str, crown_mm: float, pcts: list[
 
 @dataclass(frozen=True)
 class RuleFigures:
-    """One pose rule at the parameters in force, for the validation report's notes.
+    """One pose rule for the left pin moved 3 % out (case 1) and 3 % in (case 2).
 
     Attributes:
         rule, held_by: the rule's name and what holds the shoe at rest under it.
         rest_gap_mm: smallest lining-drum gap at rest, pin +3 % and -3 %, mm (negative:
             the lining would sit inside the drum, not admissible).
         contact_deg: polar angle of the first contact, pin +3 % and -3 %, deg.
-        case1: actuation at first impact (N), peak and period changes (%) with the pin
-            3 % out; None when the shoe cannot be assembled so.
-        case2_peak_pct: the peak's change with the pin 3 % in, %.
+        case1, case2: actuation at first impact (N), peak and period changes against the
+            symmetric brake (%); None when the shoe cannot be assembled so.
     """
 
     rule: str
@@ -369,29 +368,37 @@ class RuleFigures:
     rest_gap_mm: tuple[float, float]
     contact_deg: tuple[float, float]
     case1: tuple[float, float, float] | None
-    case2_peak_pct: float
+    case2: tuple[float, float, float] | None
 
 
-def rule_figures(params: BrakeParameters) -> list[RuleFigures]:
-    """Every rule of :data:`RULES` for the left shoe's pin moved by +3 and -3 %."""
+def rule_figures(params: BrakeParameters, names: tuple[str, ...] = tuple(RULES)):
+    """Each rule of ``names`` (:data:`RULES`) for the left pin moved by +3 and -3 %."""
     sym = impact(packed(params, _nominal(params)), {})
     out = []
-    for name, (rule, held) in RULES.items():
-        gaps, contacts, figs = [], [], {}
+    for name in names:
+        rule, held = RULES[name]
+        gaps, contacts, cases = [], [], []
         for pct in (3.0, -3.0):
             p = packed(params, rule(params, pct), pivot_radius_change_pct=pct)
             geo = geometry(p)
             gaps.append(geo.rest_gap_mm)
             contacts.append(geo.contact_deg)
+            fig = None
             if geo.rest_gap_mm > 0.0:
-                figs[pct] = impact(p, {"pivot_radius_change_pct": pct})
-        case1 = None
-        if 3.0 in figs:
-            fe, peak, period = figs[3.0]
-            case1 = (fe, _pct(peak, sym[1]), _pct(period, sym[2]))
-        case2 = _pct(figs[-3.0][1], sym[1]) if -3.0 in figs else math.nan
-        out.append(RuleFigures(name, held, tuple(gaps), tuple(contacts), case1, case2))
+                fe, peak, period = impact(p, {"pivot_radius_change_pct": pct})
+                fig = (fe, _pct(peak, sym[1]), _pct(period, sym[2]))
+            cases.append(fig)
+        out.append(RuleFigures(name, held, tuple(gaps), tuple(contacts), *cases))
     return out
+
+
+def reference_figures(params: BrakeParameters) -> tuple[float, float, float]:
+    """The symmetric brake's actuation at first impact (N) and case 5's peak and period
+    changes (%): no pin moves in them, so every rule gives these."""
+    sym = impact(packed(params, _nominal(params)), {})
+    tilt = {"initial_angle_deg": -2.0}
+    c5 = impact(packed(params, _nominal(params), **tilt), tilt)
+    return sym[0], _pct(c5[1], sym[1]), _pct(c5[2], sym[2])
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -406,13 +413,14 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     params = BrakeParameters()
     if args.candidate:
-        from brake_sim_ros.studies.pose_rule_sample import grid_point, verify
+        from brake_sim_ros.studies.pose_rule_sample import grid_point, scenario_check, verify
 
         found = candidate_parameters(params)
         point = grid_point(found, "eye-piston", 0.0, (0.0, 0.0, 0.0))
         cells = "  ".join(f"{k} {m:+.2f}" for k, m in point.misses.items())
         print(f"eye-piston candidate: misses in band units: {cells}")
         print("\n".join(verify(point)))
+        print("\n".join(scenario_check(found, "eye-piston")))
         return 0
     if args.sample:
         from brake_sim_ros.studies.pose_rule_sample import (
