@@ -408,10 +408,31 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--pcts", nargs="*", type=float, default=[-3.0, 3.0])
     parser.add_argument("--candidate", action="store_true", help="figures of EYE_PISTON_CANDIDATE")
     parser.add_argument(
+        "--validate-candidate",
+        action="store_true",
+        help="the validation's checks for EYE_PISTON_CANDIDATE under eye-piston",
+    )
+    parser.add_argument(
         "--sample", type=int, default=0, help="random geometries per rule (0: none)"
     )
     args = parser.parse_args(argv)
     params = BrakeParameters()
+    if args.validate_candidate:
+        import sys
+
+        from brake_sim_ros.studies.pose_rule_validation import validation_checks
+
+        found = candidate_parameters(params)
+        check_list = validation_checks(
+            found, "eye-piston", progress=lambda name: print(f"running {name}", file=sys.stderr)
+        )
+        for c in check_list:
+            print(
+                f"{'ok  ' if c.passed else 'MISS'} {c.what}: published {c.published},"
+                f" model {c.model} ({c.difference})"
+            )
+        print(f"{sum(c.passed for c in check_list)}/{len(check_list)} checks within their bands")
+        return 0
     if args.candidate:
         from brake_sim_ros.studies.pose_rule_sample import grid_point, scenario_check, verify
 

@@ -245,10 +245,12 @@ def _pose_note(params: BrakeParameters) -> str:
   {c5_period:+.1f} %; case 7 {_pct(lead7, lead):+.1f} % in the contact regime. Its price is
   the even response: case 2 gives {c2[0]:.1f} N, {c2[1]:+.1f} % peak, {c2[2]:+.1f} % period
   (first contact at the toe end, {eye.rest_gap_mm[1]:.2f} mm from the drum at rest), so the
-  pivot sweep is not monotone. The study brake keeps the tip-abutment pose and its
-  calibration until that trade is decided: the sweep's monotone checks are the project's
-  criterion, not a published figure, and another pose and geometry move every figure
-  computed with the study brake."""
+  pivot sweep is not monotone. Through this validation's cases and sweep with the pins
+  placed so (`--validate-candidate`) it passes every published check and misses the six
+  of the sweep's shape. The study brake keeps the tip-abutment pose and its calibration
+  until that trade is decided: the sweep's monotone checks are the project's criterion,
+  not a published figure, and another pose and geometry move every figure computed with
+  the shoe geometry."""
 
 
 def _case5_gap_range_deg() -> tuple[float, float]:

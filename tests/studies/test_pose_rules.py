@@ -89,3 +89,23 @@ def test_a_pin_held_shoe_reaches_case_1_in_the_calibrations_space():
     # the model's rule with the same geometry leaves case 1 outside
     model = grid_point(params, "tip-abutment", 0.0, (0.0, 0.0, 0.0))
     assert any(abs(model.misses[k]) > 1.0 for k in ("1.peak", "1.T", "1.Fe"))
+
+
+def test_a_rule_places_the_right_shoe_as_the_models_mirror_image():
+    """The validation of another pose places each shoe whose pin moved: with the model's
+    own rule the packed vector is the model's, for a pin moved on either shoe."""
+    import numpy as np
+
+    from brake_sim_ros.model.assembly import pack
+    from brake_sim_ros.model.defects import Defects
+    from brake_sim_ros.studies.pose_rule_validation import packed_by_rule
+
+    params = BrakeParameters()
+    for side, pct in (("left", 3.0), ("right", -3.0), ("right", 2.0)):
+        defects = Defects(**{side: ShoeDefect(pivot_radius_change_pct=pct)})
+        model = pack(params, defects)
+        study = packed_by_rule(params, defects, pr.tip_abutment)
+        np.testing.assert_allclose(study, model, rtol=0, atol=1e-15)
+        # another rule moves that shoe's tip, and only that shoe's
+        moved = packed_by_rule(params, defects, pr.eye_piston)
+        assert not np.array_equal(moved, model)
