@@ -23,12 +23,12 @@ from brake_sim_ros.studies.calibration import (
 )
 from brake_sim_ros.studies.pose_rules import (
     RULES,
-    _nominal,
-    _packed_as,
-    _pct,
     geometry,
     impact,
+    nominal_pose,
     packed,
+    packed_as,
+    pct_change,
     shape,
 )
 from brake_sim_ros.studies.validation_checks import (
@@ -65,15 +65,15 @@ class GridPoint:
 def reference_misses(params: BrakeParameters) -> tuple[tuple[float, float, float], dict]:
     """The symmetric first impact (Fe N, peak N, T s) and the misses (band units) of the
     symmetric first impact and case 5; no pose rule changes them (no pin moves)."""
-    sym = impact(packed(params, _nominal(params)), {})
+    sym = impact(packed(params, nominal_pose(params)), {})
     tilt = {"initial_angle_deg": -2.0}
-    c5 = impact(packed(params, _nominal(params), **tilt), tilt)
+    c5 = impact(packed(params, nominal_pose(params), **tilt), tilt)
     pub5, pts = PUBLISHED_CASES["5"], BANDS["change_points"]
     return sym, {
         "sym.Fe": (sym[0] / PUBLISHED_FIRST_IMPACT_ACTUATION_N - 1)
         / BANDS["first_impact_actuation_rel"],
-        "5.peak": (_pct(c5[1], sym[1]) - pub5["peak_fr_change_pct"]) / pts,
-        "5.T": (_pct(c5[2], sym[2]) - pub5["period_change_pct"]) / pts,
+        "5.peak": (pct_change(c5[1], sym[1]) - pub5["peak_fr_change_pct"]) / pts,
+        "5.T": (pct_change(c5[2], sym[2]) - pub5["period_change_pct"]) / pts,
     }
 
 
@@ -105,12 +105,12 @@ def grid_point(
     if 3.0 in figs:
         fe, pk, t = figs[3.0]
         misses |= {
-            "1.peak": (_pct(pk, sym[1]) - pub1["peak_fr_change_pct"]) / pts,
-            "1.T": (_pct(t, sym[2]) - pub1["period_change_pct"]) / pts,
+            "1.peak": (pct_change(pk, sym[1]) - pub1["peak_fr_change_pct"]) / pts,
+            "1.T": (pct_change(t, sym[2]) - pub1["period_change_pct"]) / pts,
             "1.Fe": (fe / pub1["first_impact_actuation_n"] - 1)
             / BANDS["first_impact_actuation_rel"],
         }
-    case2 = _pct(figs[-3.0][1], sym[1]) if -3.0 in figs else math.nan
+    case2 = pct_change(figs[-3.0][1], sym[1]) if -3.0 in figs else math.nan
     return GridPoint(name, *labels, crown_mm, "; ".join(why), misses, case2, params)
 
 
@@ -216,8 +216,8 @@ def verify(point: GridPoint) -> list[str]:
         f" {g.inertia_about_pivot_kg_m2:.4f} kg m^2, lining {g.lining_start_deg:g}-"
         f"{g.lining_end_deg:g} deg, contact damping {params.contact.damping_n_s_per_m:.0f} N s/m",
         f"  stop {stop:.3f} s ({100 * (stop / PUBLISHED_STOP_TIME_S - 1):+.1f} %), leading"
-        f" {lead:.0f} N vs trailing {trail:.0f} N, case 7 contact {_pct(lead7, lead):+.1f} %,"
-        f" case 7 first-impact peak {_pct(c7.peak_n, sym.peak_n):+.1f} %",
+        f" {lead:.0f} N vs trailing {trail:.0f} N, case 7 contact {pct_change(lead7, lead):+.1f} %,"
+        f" case 7 first-impact peak {pct_change(c7.peak_n, sym.peak_n):+.1f} %",
     ]
     pcts = [-3.0, -2.0, -1.0, 0.0, 1.0, 2.0, 3.0]
     values, gaps = [], []
@@ -228,7 +228,7 @@ def verify(point: GridPoint) -> list[str]:
     lines.append("  rest gap over the sweep: " + " ".join(f"{x:+.2f}" for x in gaps) + " mm")
     for i, label in enumerate(("Fe", "peak", "T")):
         col = [v[i] for v in values]
-        changes = " ".join(f"{_pct(v, col[3]):+.1f}" for v in col)
+        changes = " ".join(f"{pct_change(v, col[3]):+.1f}" for v in col)
         lines.append(f"  sweep {label} %: {changes} ({shape(col, pcts)})")
     return lines
 
@@ -256,7 +256,7 @@ def scenario_check(params: BrakeParameters, name: str) -> list[str]:
         sc = load_scenario(scenario_name)
         sc = dataclasses.replace(sc, setup=dataclasses.replace(sc.setup, params=params))
         pct = defect.get("pivot_radius_change_pct", 0.0)
-        with _packed_as(packed(params, rule(params, pct), **defect)):
+        with packed_as(packed(params, rule(params, pct), **defect)):
             return run_scenario(sc, duration_s=0.6).metrics.left
 
     sym = left("symmetric", {})
@@ -265,7 +265,7 @@ def scenario_check(params: BrakeParameters, name: str) -> list[str]:
         m = left(scenario_name, defect)
         lines.append(
             f"  scenarios: {scenario_name} {m.first_impact_actuation_n:.2f} N, peak"
-            f" {_pct(m.first_impact_peak_n, sym.first_impact_peak_n):+.1f} %, T"
-            f" {_pct(m.period_s, sym.period_s):+.1f} %"
+            f" {pct_change(m.first_impact_peak_n, sym.first_impact_peak_n):+.1f} %, T"
+            f" {pct_change(m.period_s, sym.period_s):+.1f} %"
         )
     return lines

@@ -4,8 +4,9 @@ runs them (each built-in scenario with its own solver and duration), with the pa
 given and each shoe with a pin defect placed by the rule; then the validation's own
 figures and checks (:mod:`.validation_checks`). The measured-acceleration part is left out.
 
-Run it with ``python -m brake_sim_ros.studies.pose_rules --validate-candidate`` (about as
-long as ``brake-sim validate``: a few minutes of CPU).
+Run it with ``python -m brake_sim_ros.studies.pose_rules --validate RULE ...`` (at the
+parameters in force; ``--on-candidate``: on the study's candidate geometry); about 10 s of
+CPU a rule.
 """
 
 from __future__ import annotations
@@ -17,16 +18,17 @@ from collections.abc import Callable
 import numpy as np
 
 from brake_sim_ros.analysis.impacts import EventMetrics
+from brake_sim_ros.errors import BrakeSimError, ParameterError
 from brake_sim_ros.model import growth
 from brake_sim_ros.model import layout as L
-from brake_sim_ros.model.assembly import pack
+from brake_sim_ros.model.assembly import indentation_at, pack
 from brake_sim_ros.model.defects import Defects, ShoeDefect
 from brake_sim_ros.model.layout import SIDES
 from brake_sim_ros.model.parameters import BrakeParameters
 from brake_sim_ros.scenarios import load_scenario
 from brake_sim_ros.scenarios.types import Scenario
 from brake_sim_ros.stream.run import RunResult, run_scenario
-from brake_sim_ros.studies.pose_rules import RULES, Pose, _packed_as
+from brake_sim_ros.studies.pose_rules import RULES, Pose, packed_as
 from brake_sim_ros.studies.validation_checks import (
     CASES,
     SWEEP_DURATION_S,
@@ -66,6 +68,12 @@ def packed_by_rule(
             pose.inertia_kg_m2,
         )
         p[b + L.S_TIP_X], p[b + L.S_TIP_Y] = m * pose.tip[0], pose.tip[1]
+        if indentation_at(p, b, 0.0) >= 0.0:
+            raise ParameterError(
+                f"{side} pivot radius change {pct:+g} % under this pose puts the lining"
+                f" {1e3 * indentation_at(p, b, 0.0):.2f} mm inside the drum at rest:"
+                " allowed only a shoe clear of the drum (another geometry)"
+            )
     return p
 
 
@@ -73,7 +81,7 @@ def _run(
     scenario: Scenario, params: BrakeParameters, rule, duration_s: float | None = None
 ) -> RunResult:
     sc = dataclasses.replace(scenario, setup=dataclasses.replace(scenario.setup, params=params))
-    with _packed_as(packed_by_rule(params, sc.setup.defects, rule)):
+    with packed_as(packed_by_rule(params, sc.setup.defects, rule)):
         return run_scenario(sc, duration_s=duration_s)
 
 
@@ -103,3 +111,24 @@ def validation_checks(
             )
             sweep[side][pct] = _run(sc, params, rule, SWEEP_DURATION_S).metrics
     return checks(figures(base.metrics, runs, sweep))
+
+
+def print_validation(params: BrakeParameters, rule_name: str) -> None:
+    """Print :func:`validation_checks` as ``brake-sim validate`` prints its checks, or the
+    one line why the rule cannot place the shoes of ``params``."""
+    import sys
+
+    print(f"== {rule_name}")
+    try:
+        check_list = validation_checks(
+            params, rule_name, progress=lambda name: print(f"running {name}", file=sys.stderr)
+        )
+    except BrakeSimError as exc:
+        print(f"   not admissible: {exc}")
+        return
+    for c in check_list:
+        print(
+            f"{'ok  ' if c.passed else 'MISS'} {c.what}: published {c.published},"
+            f" model {c.model} ({c.difference})"
+        )
+    print(f"{sum(c.passed for c in check_list)}/{len(check_list)} checks within their bands")

@@ -81,7 +81,8 @@ def _rotate(point: tuple[float, float], about: tuple[float, float], turn: float)
     return about[0] + c * dx - s * dy, about[1] + s * dx + c * dy
 
 
-def _nominal(params: BrakeParameters) -> Pose:
+def nominal_pose(params: BrakeParameters) -> Pose:
+    """The left shoe as the parameters assemble it, no pin moved."""
     g = params.shoe
     return Pose(
         g.pivot_xy_m,
@@ -145,7 +146,7 @@ def held_by_stop(
 ) -> Pose:
     """Heel in an eye on the moved pin; the shoe turned about it until the body point that
     rested at ``point`` is back on a stop whose face has the unit ``normal`` (m, 1)."""
-    nominal = _nominal(params)
+    nominal = nominal_pose(params)
     shift = _pin_shift(params, pct)
     q = (nominal.pivot[0] + shift[0], nominal.pivot[1] + shift[1])
     moved = (point[0] + shift[0], point[1] + shift[1])
@@ -161,7 +162,7 @@ def held_by_stop(
 
 def carried(params: BrakeParameters, pct: float) -> Pose:
     """The whole shoe moves with its pin."""
-    return _moved(_nominal(params), params, _pin_shift(params, pct), 0.0)
+    return _moved(nominal_pose(params), params, _pin_shift(params, pct), 0.0)
 
 
 def eye_piston(params: BrakeParameters, pct: float) -> Pose:
@@ -273,7 +274,9 @@ def geometry(p: np.ndarray) -> Geometry:
 
 
 @contextmanager
-def _packed_as(p: np.ndarray) -> Iterator[None]:
+def packed_as(p: np.ndarray) -> Iterator[None]:
+    """Within it, every fixed-step stepper built runs on ``p`` instead of its setup's
+    own packing (the study's placement; nothing else of the setup changes)."""
     # the fixed-step stepper packs its setup itself; the study hands it the shoe placed by
     # another rule (the step limit is computed on this vector as well)
     with mock.patch.object(fixed_step, "_packed", lambda setup: p.copy()):
@@ -283,13 +286,14 @@ def _packed_as(p: np.ndarray) -> Iterator[None]:
 def impact(p: np.ndarray, defect: dict) -> tuple[float, float, float]:
     """(actuation at first impact N, peak |F_pivot| N, period s) of the left shoe."""
     setup = BrakeSetup(defects=Defects(left=ShoeDefect(**defect)))
-    with _packed_as(p):
+    with packed_as(p):
         stepper = fixed_step.FixedStepStepper(setup, IMPACT_STEP_S, check_step=False)
     m = shoe_metrics(stepper.run(IMPACT_SPAN_S), "left", stop_time_s=None)
     return m.first_impact_actuation_n, m.first_impact_peak_n, m.period_s
 
 
-def _pct(v: float, base: float) -> float:
+def pct_change(v: float, base: float) -> float:
+    """Change of ``v`` against ``base``, %."""
     return 100.0 * (v / base - 1.0)
 
 
@@ -332,14 +336,14 @@ def report_rule(params: BrakeParameters, name: str, crown_mm: float, pcts: list[
             f"   pin {pct:+.0f} %: rest gap {geo.rest_gap_mm:+.3f} mm, gap ratio"
             f" {geo.gap_angle_rad / base_geo.gap_angle_rad:.3f}, contact {geo.contact_deg:.1f}"
             f" deg, d/h {geo.self_locking_mu:.2f}; Fe {fig[0]:.1f} N, peak"
-            f" {_pct(fig[1], base[1]):+.1f} %, T {_pct(fig[2], base[2]):+.1f} %"
+            f" {pct_change(fig[1], base[1]):+.1f} %, T {pct_change(fig[2], base[2]):+.1f} %"
         )
     if 3.0 in rows:
         pub = PUBLISHED_CASES["1"]
         fe, pk, t = rows[3.0]
         inside = (
-            abs(_pct(pk, base[1]) - pub["peak_fr_change_pct"]) <= BANDS["change_points"],
-            abs(_pct(t, base[2]) - pub["period_change_pct"]) <= BANDS["change_points"],
+            abs(pct_change(pk, base[1]) - pub["peak_fr_change_pct"]) <= BANDS["change_points"],
+            abs(pct_change(t, base[2]) - pub["period_change_pct"]) <= BANDS["change_points"],
             abs(fe / pub["first_impact_actuation_n"] - 1) <= BANDS["first_impact_actuation_rel"],
         )
         print(f"   case 1 in band (peak, period, Fe): {inside}")
@@ -373,7 +377,7 @@ class RuleFigures:
 
 def rule_figures(params: BrakeParameters, names: tuple[str, ...] = tuple(RULES)):
     """Each rule of ``names`` (:data:`RULES`) for the left pin moved by +3 and -3 %."""
-    sym = impact(packed(params, _nominal(params)), {})
+    sym = impact(packed(params, nominal_pose(params)), {})
     out = []
     for name in names:
         rule, held = RULES[name]
@@ -386,7 +390,7 @@ def rule_figures(params: BrakeParameters, names: tuple[str, ...] = tuple(RULES))
             fig = None
             if geo.rest_gap_mm > 0.0:
                 fe, peak, period = impact(p, {"pivot_radius_change_pct": pct})
-                fig = (fe, _pct(peak, sym[1]), _pct(period, sym[2]))
+                fig = (fe, pct_change(peak, sym[1]), pct_change(period, sym[2]))
             cases.append(fig)
         out.append(RuleFigures(name, held, tuple(gaps), tuple(contacts), *cases))
     return out
@@ -395,10 +399,10 @@ def rule_figures(params: BrakeParameters, names: tuple[str, ...] = tuple(RULES))
 def reference_figures(params: BrakeParameters) -> tuple[float, float, float]:
     """The symmetric brake's actuation at first impact (N) and case 5's peak and period
     changes (%): no pin moves in them, so every rule gives these."""
-    sym = impact(packed(params, _nominal(params)), {})
+    sym = impact(packed(params, nominal_pose(params)), {})
     tilt = {"initial_angle_deg": -2.0}
-    c5 = impact(packed(params, _nominal(params), **tilt), tilt)
-    return sym[0], _pct(c5[1], sym[1]), _pct(c5[2], sym[2])
+    c5 = impact(packed(params, nominal_pose(params), **tilt), tilt)
+    return sym[0], pct_change(c5[1], sym[1]), pct_change(c5[2], sym[2])
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -408,30 +412,28 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--pcts", nargs="*", type=float, default=[-3.0, 3.0])
     parser.add_argument("--candidate", action="store_true", help="figures of EYE_PISTON_CANDIDATE")
     parser.add_argument(
-        "--validate-candidate",
+        "--validate",
+        nargs="+",
+        default=[],
+        choices=list(RULES),
+        help="the validation's checks with the pins placed by these rules",
+    )
+    parser.add_argument(
+        "--on-candidate",
         action="store_true",
-        help="the validation's checks for EYE_PISTON_CANDIDATE under eye-piston",
+        help="--validate on EYE_PISTON_CANDIDATE's geometry, not the parameters in force",
     )
     parser.add_argument(
         "--sample", type=int, default=0, help="random geometries per rule (0: none)"
     )
     args = parser.parse_args(argv)
     params = BrakeParameters()
-    if args.validate_candidate:
-        import sys
+    if args.validate:
+        from brake_sim_ros.studies.pose_rule_validation import print_validation
 
-        from brake_sim_ros.studies.pose_rule_validation import validation_checks
-
-        found = candidate_parameters(params)
-        check_list = validation_checks(
-            found, "eye-piston", progress=lambda name: print(f"running {name}", file=sys.stderr)
-        )
-        for c in check_list:
-            print(
-                f"{'ok  ' if c.passed else 'MISS'} {c.what}: published {c.published},"
-                f" model {c.model} ({c.difference})"
-            )
-        print(f"{sum(c.passed for c in check_list)}/{len(check_list)} checks within their bands")
+        geometry_params = candidate_parameters(params) if args.on_candidate else params
+        for name in args.validate:
+            print_validation(geometry_params, name)
         return 0
     if args.candidate:
         from brake_sim_ros.studies.pose_rule_sample import grid_point, scenario_check, verify

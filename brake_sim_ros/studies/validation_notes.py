@@ -246,9 +246,9 @@ def _pose_note(params: BrakeParameters) -> str:
   the even response: case 2 gives {c2[0]:.1f} N, {c2[1]:+.1f} % peak, {c2[2]:+.1f} % period
   (first contact at the toe end, {eye.rest_gap_mm[1]:.2f} mm from the drum at rest), so the
   pivot sweep is not monotone. Through this validation's cases and sweep with the pins
-  placed so (`--validate-candidate`) it passes every published check and misses the six
-  of the sweep's shape. The study brake keeps the tip-abutment pose and its calibration
-  until that trade is decided: the sweep's monotone checks are the project's criterion,
+  placed so (`--validate eye-piston --on-candidate`) it passes every published check and
+  misses the six of the sweep's shape. The study brake keeps the tip-abutment pose and its
+  calibration until that trade is decided: the sweep's monotone checks are the project's criterion,
   not a published figure, and another pose and geometry move every figure computed with
   the shoe geometry."""
 

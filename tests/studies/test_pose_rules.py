@@ -96,6 +96,7 @@ def test_a_rule_places_the_right_shoe_as_the_models_mirror_image():
     own rule the packed vector is the model's, for a pin moved on either shoe."""
     import numpy as np
 
+    from brake_sim_ros.errors import ParameterError
     from brake_sim_ros.model.assembly import pack
     from brake_sim_ros.model.defects import Defects
     from brake_sim_ros.studies.pose_rule_validation import packed_by_rule
@@ -106,6 +107,12 @@ def test_a_rule_places_the_right_shoe_as_the_models_mirror_image():
         model = pack(params, defects)
         study = packed_by_rule(params, defects, pr.tip_abutment)
         np.testing.assert_allclose(study, model, rtol=0, atol=1e-15)
-        # another rule moves that shoe's tip, and only that shoe's
-        moved = packed_by_rule(params, defects, pr.eye_piston)
-        assert not np.array_equal(moved, model)
+    # another rule moves that shoe's tip; one that would put the lining in the drum at rest
+    # is refused in one line
+    defects = Defects(right=ShoeDefect(pivot_radius_change_pct=3.0))
+    moved = packed_by_rule(params, defects, pr.eye_piston)
+    assert moved[pr.L.P_SHOE_BASE + pr.L.SHOE_STRIDE + pr.L.S_TIP_Y] != params.shoe.tip_y_m
+    with pytest.raises(ParameterError, match=r"right pivot radius change -3 % .* inside the drum"):
+        packed_by_rule(
+            params, Defects(right=ShoeDefect(pivot_radius_change_pct=-3.0)), pr.eye_piston
+        )
