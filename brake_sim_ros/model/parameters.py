@@ -334,7 +334,7 @@ class TyreParameters:
         _require(
             lo <= self.road_friction <= hi, "road_friction", self.road_friction, f"{lo:g} to {hi:g}"
         )
-        for name, low, high in _TYRE_LIMITS:
+        for name, low, high in TYRE_LIMITS:
             value = getattr(self, name)
             _require(low <= value <= high, name, value, f"{low:g} to {high:g}")
 
@@ -350,7 +350,7 @@ class TyreParameters:
 
 
 # (field, low, high) of TyreParameters besides the road friction
-_TYRE_LIMITS: tuple[tuple[str, float, float], ...] = (
+TYRE_LIMITS: tuple[tuple[str, float, float], ...] = (
     ("peak_ratio", 1.0, 3.0),
     ("stribeck_speed_m_s", 0.1, 50.0),
     ("stribeck_exponent", 0.25, 4.0),
