@@ -537,6 +537,9 @@ UNIT_SUFFIXES: tuple[tuple[str, str], ...] = (
     ("_n_m_s_per_rad", "N m s/rad"),
     ("_n_m_per_rad", "N m/rad"),
     ("_n_s_per_m", "N s/m"),
+    ("_n_per_m", "N/m"),
+    ("_s_per_m", "s/m"),
+    ("_per_m", "1/m"),
     ("_pa_s_per_m3", "Pa s/m^3"),
     ("_m3_per_pa", "m^3/Pa"),
     ("_kg_m2", "kg m^2"),
@@ -551,6 +554,7 @@ UNIT_SUFFIXES: tuple[tuple[str, str], ...] = (
     ("_mm", "mm"),
     ("_um", "um"),
     ("_m", "m"),
+    ("_n", "N"),
 )
 
 

@@ -100,7 +100,10 @@ def test_a_scenario_unit_of_the_service_brake_scatters_around_the_files_values()
     d = scatter.deviations("VIN-3", 2, "service")["service.return_spring_preload_n"]
     assert scenario.setup.params.service.return_spring_preload_n == 80.0 * (1.0 + d)
     assert scenario.drawing_params.service.return_spring_preload_n == 80.0
-    keys = {v.key for v in scenario.unit_values()}
+    units = {v.key: v.unit for v in scenario.unit_values()}
+    assert units["service.return_spring_preload_n"] == "N"
+    assert units["service.tyre.presliding_stiffness_per_m"] == "1/m"  # per metre, not metres
+    keys = set(units)
     assert "service.tyre.presliding_stiffness_per_m" in keys
     assert not keys & set(COUPLING)
 

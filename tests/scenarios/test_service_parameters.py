@@ -81,6 +81,11 @@ def test_the_node_parameters_describe_the_service_brake_with_the_cores_bounds():
     assert "road_friction" in road.description
     assert specs["service.wheel_cylinder_bore_m"].range == (0.005, 0.05)
     assert specs["service.tyre.peak_ratio"].range == (1.0, 3.0)
+    assert specs["service.return_spring_preload_n"].description.startswith(
+        "return_spring_preload_n (N): "
+    )
+    assert "(N/m)" in specs["service.return_spring_rate_n_per_m"].description
+    assert "(1/m)" in specs["service.tyre.presliding_stiffness_per_m"].description
     names = set(ros_params.model_values(setup.params, setup.defects))
     assert set(specs) == names
 
