@@ -88,7 +88,8 @@ class Scatter:
     """The distribution of one parameter's deviation between units.
 
     Attributes:
-        key: ``<group>.<field>`` of :class:`BrakeParameters` (the node's parameter name),
+        key: ``<group>.<field>`` of :class:`BrakeParameters` (``service.<field>``,
+            ``service.tyre.<field>`` of the service brake; the node's parameter name),
             or for a sensor ``<field>`` of its :class:`SensorChannel` / transducer.
         mode: ``relative`` (value x (1 + d), d dimensionless) or ``absolute`` (value + d,
             d in the parameter's SI unit).
