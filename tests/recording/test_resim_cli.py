@@ -326,8 +326,8 @@ SERVICE_TEXT = (
     "[parameters.service]\nreturn_spring_preload_n = 80.0\nline_compliance_m3_per_pa = 1.2e-12\n"
     "[parameters.service.tyre]\npresliding_stiffness_per_m = 50.0\n"
 )
-SERVICE_SECONDS = 0.15
-ROAD_CHANGE_AT = 1280  # sample 0.05 s in: the road turns to ice under the braking wheel
+SERVICE_SECONDS = 0.08
+ROAD_CHANGE_AT = 768  # sample 0.03 s in: the road turns to ice under the braking wheel
 
 
 @pytest.mark.slow
