@@ -408,4 +408,11 @@ def changed_setup(setup: BrakeSetup, values: dict[str, Any]) -> BrakeSetup:
             "service.* parameters on the study brake: allowed only on a scenario with"
             ' brake = "service" (the study brake has no springs, hydraulics or tyre)'
         )
+    elif params.service.wheel_cylinder_bore_m != setup.params.service.wheel_cylinder_bore_m:
+        raise ParameterError(
+            f"service.wheel_cylinder_bore_m={params.service.wheel_cylinder_bore_m!r}: allowed"
+            f" only the scenario's {setup.params.service.wheel_cylinder_bore_m!r} while it"
+            " runs (a part of the brake, and the line-pressure sensors read with it): set"
+            " it in the scenario's [parameters.service]"
+        )
     return dataclasses.replace(setup, params=params, defects=defects)

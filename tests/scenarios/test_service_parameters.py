@@ -20,6 +20,8 @@ SERVICE = (
     'name = "t"\nbrake = "service"\nroad_friction = 0.5\n'
     "[parameters.service]\nreturn_spring_preload_n = 90.0\nline_compliance_m3_per_pa = 1.6e-12\n"
     "wheel_cylinder_bore_m = 0.022\n"
+    "[[sensors]]\n"  # the line-pressure sensor on the same bore
+    'name = "p"\nkind = "line_pressure"\nlocation = "wheel_cylinder"\npiston_diameter_m = 0.022\n'
     "[parameters.service.tyre]\npresliding_stiffness_per_m = 55.0\npeak_ratio = 1.3\n"
 )
 
@@ -52,6 +54,10 @@ def test_the_flat_values_carry_the_service_brake_and_rebuild_it():
     study = parse_scenario('name = "s"\n').setup
     study_values = ros_params.model_values(study.params, study.defects)
     assert not [k for k in study_values if k.startswith("service.")]
+    # the bore is fixed while the brake runs (the line-pressure sensors read with it)
+    with pytest.raises(ParameterError, match="while it runs") as info:
+        ros_params.changed_setup(setup, {**values, "service.wheel_cylinder_bore_m": 0.02})
+    assert "\n" not in str(info.value)
     # a change of the road under a running service brake, and one refused by the core
     wet = ros_params.changed_setup(setup, {**values, "service.tyre.road_friction": 0.3})
     assert wet.params.service.tyre.road_friction == 0.3
@@ -129,6 +135,19 @@ def test_the_node_parameters_describe_the_service_brake_with_the_cores_bounds():
             'brake = "service"\n[parameters.service.tyre]\npresliding_stiffness_per_m = 0.5\n',
             "[parameters.service.tyre]: parameter presliding_stiffness_per_m=0.5 is invalid:"
             " allowed 1 to 1000",
+        ),
+        # a bore the line-pressure sensor (its own piston diameter) would not read
+        (
+            'brake = "service"\n[parameters.service]\nwheel_cylinder_bore_m = 0.022\n',
+            "key 'parameters.service.wheel_cylinder_bore_m' = 0.022 is invalid: allowed the"
+            " piston_diameter_m of line-pressure channel 'line_pressure' (0.01905 m)",
+        ),
+        (
+            'brake = "service"\n[parameters.service]\nwheel_cylinder_bore_m = 0.022\n'
+            '[cycle]\nsegments = [{kind = "brake", pressure_bar = 20.0}]\n[[sensors]]\n'
+            'name = "p"\nkind = "line_pressure"\nlocation = "wheel_cylinder"\n'
+            "piston_diameter_m = 0.022\n",
+            "segments give pressure_bar",
         ),
         # the road's friction has one key, the top-level one
         (
