@@ -18,6 +18,12 @@ drawing's value, and its units scatter around it (a relative deviation keeps a p
 value positive; an absolute one near a limit of the model may leave it, and the unit is
 then refused in one line naming the parameter).
 
+**Each brake its table.** The study brake's is :data:`SCATTER`; the service brake's,
+:data:`SERVICE_SCATTER`, scatters what it reads: not the study coupling's stiffness and
+damping (its tyre replaces them), its running clearance around its own 0.3 mm with a
+self-adjuster's tolerance, and its return spring's preload, its circuit's compliance and
+its tyre's presliding stiffness. A key both tables hold draws the same uniform for a unit.
+
 **What does not scatter:** the flywheel inertia and the initial speed (the vehicle's load
 and speed: operating conditions, not the brake), the friction smoothing width (a numerical
 choice), Poisson's ratios (material constants), the lining arc's ends and the shoe's mass
@@ -82,7 +88,8 @@ class Scatter:
     """The distribution of one parameter's deviation between units.
 
     Attributes:
-        key: ``<group>.<field>`` of :class:`BrakeParameters` (the node's parameter name),
+        key: ``<group>.<field>`` of :class:`BrakeParameters` (``service.<field>``,
+            ``service.tyre.<field>`` of the service brake; the node's parameter name),
             or for a sensor ``<field>`` of its :class:`SensorChannel` / transducer.
         mode: ``relative`` (value x (1 + d), d dimensionless) or ``absolute`` (value + d,
             d in the parameter's SI unit).
@@ -222,6 +229,48 @@ SCATTER: tuple[Scatter, ...] = (
         "relative",
     ),
 )
+# The service brake's table (brake = "service"): what it reads. Not the study coupling's
+# stiffness and damping (its tyre replaces them); the running clearance around its own
+# 0.3 mm with a self-adjuster's tolerance; its return spring, circuit and tyre. Every other
+# entry is the study brake's, so a key common to both draws the same uniform for a unit.
+_NOT_READ_BY_SERVICE = (
+    "driveline.coupling_stiffness_n_m_per_rad",
+    "driveline.coupling_damping_n_m_s_per_rad",
+)
+_SERVICE_OWN: tuple[Scatter, ...] = (
+    _tolerance(
+        "shoe.running_clearance_m",
+        0.1e-3,
+        "assumed: a self-adjuster holds the clearance within about one step of its star"
+        " wheel (0.05-0.1 mm at the lining); +-0.1 mm around the 0.3 mm a shoe",
+    ),
+    _tolerance(
+        "service.return_spring_preload_n",
+        0.10,
+        "estimate: an extension spring's force at its installed length within +-10 % (a"
+        " commercial grade of spring-force tolerance, as remembered, not checked)",
+        "relative",
+    ),
+    _tolerance(
+        "service.line_compliance_m3_per_pa",
+        0.30,
+        "assumed: hose swell, the fluid's air and water and the pedal and booster spread"
+        " between cars; pedal travel per bar is known to no better than tens of percent",
+        "relative",
+    ),
+    _tolerance(
+        "service.tyre.presliding_stiffness_per_m",
+        0.20,
+        "assumed: tread stiffness with tyre make, inflation and tread depth between"
+        " vehicles of one model (the study coupling's 15 % widened for tread wear)",
+        "relative",
+    ),
+)
+_SERVICE_KEYS = {s.key for s in _SERVICE_OWN}
+SERVICE_SCATTER: tuple[Scatter, ...] = (
+    tuple(s for s in SCATTER if s.key not in _NOT_READ_BY_SERVICE and s.key not in _SERVICE_KEYS)
+    + _SERVICE_OWN
+)
 # Parameters that follow another's deviation rather than drawing their own.
 FOLLOWERS: dict[str, str] = {"shoe.inertia_about_pivot_kg_m2": "shoe.mass_kg"}
 
@@ -262,6 +311,15 @@ SENSOR_UNITS = {"sensitivity_ratio": "1", "resonance_hz": "Hz"}
 SCATTER_BY_KEY: dict[str, Scatter] = {s.key: s for s in SCATTER}
 
 
+def scatter_table(brake: str) -> tuple[Scatter, ...]:
+    """The scatter table of the brake named ``brake`` ("study": :data:`SCATTER`,
+    "service": :data:`SERVICE_SCATTER`; read at each call)."""
+    tables = {"study": SCATTER, "service": SERVICE_SCATTER}
+    if brake not in tables:
+        raise ParameterError(f"brake {brake!r}: allowed one of {list(tables)}")
+    return tables[brake]
+
+
 def _uniform(unit_id: str, seed: int, key: str) -> float:
     return keyed_uniform(seed, DOMAIN, unit_id, key)
 
@@ -273,18 +331,46 @@ def _check(unit_id: str, seed: int) -> None:
         raise ParameterError(f"unit seed {seed!r}: allowed an integer from 0 to 2^63 - 1")
 
 
-def deviations(unit_id: str, seed: int) -> dict[str, float]:
-    """The brake's deviations of unit ``unit_id`` drawn with ``seed``, per key of
-    :data:`SCATTER` (all 0 for :data:`NOMINAL_UNIT`), in each scatter's unit."""
+def deviations(unit_id: str, seed: int, brake: str = "study") -> dict[str, float]:
+    """The brake's deviations of unit ``unit_id`` drawn with ``seed``, per key of the
+    scatter table of ``brake`` (:func:`scatter_table`; all 0 for :data:`NOMINAL_UNIT`), in
+    each scatter's unit."""
     _check(unit_id, seed)
+    table = scatter_table(brake)
     if unit_id == NOMINAL_UNIT:
-        return {s.key: 0.0 for s in SCATTER}
-    return {s.key: s.draw(_uniform(unit_id, seed, s.key)) for s in SCATTER}
+        return {s.key: 0.0 for s in table}
+    return {s.key: s.draw(_uniform(unit_id, seed, s.key)) for s in table}
 
 
 def _field(params: BrakeParameters, key: str) -> float:
-    group, name = key.split(".")
-    return getattr(getattr(params, group), name)
+    """The value at a dotted key (``shoe.mass_kg``, ``service.tyre.<field>``)."""
+    value: Any = params
+    for name in key.split("."):
+        value = getattr(value, name)
+    return value
+
+
+def _with_values(params: BrakeParameters, values: Mapping[str, float]) -> BrakeParameters:
+    """``params`` with the value at each dotted key replaced (the core checks each group
+    built again: ParameterError for an invalid one)."""
+    nested: dict[str, Any] = {}
+    for key, value in values.items():
+        *path, name = key.split(".")
+        level = nested
+        for part in path:
+            level = level.setdefault(part, {})
+        level[name] = value
+
+    def rebuilt(obj: Any, changes: dict[str, Any]) -> Any:
+        return replace(
+            obj,
+            **{
+                k: rebuilt(getattr(obj, k), v) if isinstance(v, dict) else v
+                for k, v in changes.items()
+            },
+        )
+
+    return rebuilt(params, nested)
 
 
 def parameter_unit(key: str) -> str:
@@ -303,7 +389,7 @@ def unit_parameters(nominal: BrakeParameters, unit_id: str, seed: int) -> BrakeP
             possible when the scenario's values sit within a tolerance of a limit); one
             line naming the unit and the core's reason.
     """
-    drawn = deviations(unit_id, seed)
+    drawn = deviations(unit_id, seed, nominal.brake)
     if unit_id == NOMINAL_UNIT:
         return nominal
     try:
@@ -316,20 +402,25 @@ def unit_parameters(nominal: BrakeParameters, unit_id: str, seed: int) -> BrakeP
 
 
 def with_deviations(nominal: BrakeParameters, drawn: Mapping[str, float]) -> BrakeParameters:
-    """``nominal`` with deviations ``drawn`` (per key of :data:`SCATTER`, in each
-    scatter's unit; a missing key: none), and each :data:`FOLLOWERS` parameter scaled as
-    its leader. Raises ParameterError (the core's checks) for an invalid result."""
-    overrides: dict[str, dict[str, Any]] = {}
+    """``nominal`` with deviations ``drawn`` (per key of its brake's scatter table,
+    :func:`scatter_table`, in each scatter's unit; a missing key: none), and each
+    :data:`FOLLOWERS` parameter scaled as its leader. Raises ParameterError (the core's
+    checks) for an invalid result or a key its brake's table has not."""
+    by_key = {s.key: s for s in scatter_table(nominal.brake)}
+    values: dict[str, float] = {}
     for key, deviation in drawn.items():
-        s = SCATTER_BY_KEY[key]
-        group, name = key.split(".")
-        overrides.setdefault(group, {})[name] = s.apply(_field(nominal, key), deviation)
+        s = by_key.get(key)
+        if s is None:
+            raise ParameterError(
+                f"scatter {key!r}: not scattered on the {nominal.brake} brake (allowed"
+                f" {sorted(by_key)})"
+            )
+        values[key] = s.apply(_field(nominal, key), deviation)
         for follower, leader in FOLLOWERS.items():
             if leader == key:
-                f_group, f_name = follower.split(".")
-                ratio = overrides[group][name] / _field(nominal, key)
-                overrides.setdefault(f_group, {})[f_name] = _field(nominal, follower) * ratio
-    return nominal.with_overrides(overrides)
+                ratio = values[key] / _field(nominal, key)
+                values[follower] = _field(nominal, follower) * ratio
+    return _with_values(nominal, values)
 
 
 def _sensor_scatter(channel: SensorChannel) -> Iterator[tuple[str, Scatter]]:
@@ -422,13 +513,16 @@ def unit_values(
     unit_sensor_set: SensorSet,
 ) -> list[UnitValue]:
     """Every scattered value of a unit against its drawing, in table order: the brake's
-    (:data:`SCATTER`, then :data:`FOLLOWERS`), then each sensor channel's."""
+    (the scatter table of its brake, :func:`scatter_table`, then :data:`FOLLOWERS`), then
+    each sensor channel's."""
+    table = scatter_table(nominal.brake)
     out = [
         UnitValue(s.key, parameter_unit(s.key), _field(nominal, s.key), _field(unit, s.key), s)
-        for s in SCATTER
+        for s in table
     ]
+    by_key = {s.key: s for s in table}
     for key, leader in FOLLOWERS.items():
-        s = SCATTER_BY_KEY[leader]
+        s = by_key[leader]
         out.append(UnitValue(key, parameter_unit(key), _field(nominal, key), _field(unit, key), s))
     drawn = {c.name: c for c in unit_sensor_set.channels}
     for channel in nominal_sensors.channels:

@@ -334,7 +334,7 @@ class TyreParameters:
         _require(
             lo <= self.road_friction <= hi, "road_friction", self.road_friction, f"{lo:g} to {hi:g}"
         )
-        for name, low, high in _TYRE_LIMITS:
+        for name, low, high in TYRE_LIMITS:
             value = getattr(self, name)
             _require(low <= value <= high, name, value, f"{low:g} to {high:g}")
 
@@ -350,7 +350,7 @@ class TyreParameters:
 
 
 # (field, low, high) of TyreParameters besides the road friction
-_TYRE_LIMITS: tuple[tuple[str, float, float], ...] = (
+TYRE_LIMITS: tuple[tuple[str, float, float], ...] = (
     ("peak_ratio", 1.0, 3.0),
     ("stribeck_speed_m_s", 0.1, 50.0),
     ("stribeck_exponent", 0.25, 4.0),
@@ -537,6 +537,9 @@ UNIT_SUFFIXES: tuple[tuple[str, str], ...] = (
     ("_n_m_s_per_rad", "N m s/rad"),
     ("_n_m_per_rad", "N m/rad"),
     ("_n_s_per_m", "N s/m"),
+    ("_n_per_m", "N/m"),
+    ("_s_per_m", "s/m"),
+    ("_per_m", "1/m"),
     ("_pa_s_per_m3", "Pa s/m^3"),
     ("_m3_per_pa", "m^3/Pa"),
     ("_kg_m2", "kg m^2"),
@@ -551,6 +554,7 @@ UNIT_SUFFIXES: tuple[tuple[str, str], ...] = (
     ("_mm", "mm"),
     ("_um", "um"),
     ("_m", "m"),
+    ("_n", "N"),
 )
 
 

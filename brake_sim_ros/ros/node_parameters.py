@@ -83,6 +83,28 @@ class NodeParameters:
         setup = scenario.setup
         return self._declare(ros_params.model_parameter_specs(setup.params, setup.defects))
 
+    def _follow_brake(self, scenario: Scenario) -> None:
+        """The model parameters of ``scenario``'s brake, before its values are set: those
+        only the other brake has (a service brake's ``service.*``) undeclared, its own
+        declared (at the new scenario's values), so that ``ros2 param list`` never shows a
+        parameter the running brake does not read."""
+        setup = scenario.setup
+        specs = ros_params.model_parameter_specs(setup.params, setup.defects)
+        names = [spec.name for spec in specs]
+        self._internal_update = True
+        try:
+            for name in set(self._model_names) - set(names):
+                self.undeclare_parameter(name)
+                self._double_names.discard(name)
+            for spec in specs:
+                if spec.name not in self._model_names:
+                    self.declare_parameter(spec.name, spec.default, descriptor(spec))
+                    if isinstance(spec.default, float):
+                        self._double_names.add(spec.name)
+        finally:
+            self._internal_update = False
+        self._model_names = names
+
     def _set_internal(self, values: dict) -> None:
         """Set parameters from inside the node (not validated again, not counted)."""
         self._internal_update = True

@@ -163,6 +163,7 @@ class NodeServices:
                 raise BrakeSimError(f"cannot keep real time: {verdict.message}")
         self._budget.costs = costs
         session.switch(prepared)
+        self._follow_brake(scenario)
         values = {**session.model, "scenario": name_or_path}
         for name in ("max_actuation_force_n", "duration_s", *self._drive_names):
             values[name] = session.settings[name]

@@ -32,7 +32,7 @@ from brake_sim_ros.model.cycle import pack_drive
 from brake_sim_ros.model.defects import Defects
 from brake_sim_ros.model.fidelity import plan
 from brake_sim_ros.model.line_kinds import refuse_without_circuit
-from brake_sim_ros.model.parameters import BrakeParameters
+from brake_sim_ros.model.parameters import WHEEL_CYLINDER_BORE_M, BrakeParameters
 from brake_sim_ros.model.run_setup import BrakeSetup
 from brake_sim_ros.model.vehicle import DRIVE_LIMITS as VEHICLE_DRIVE_LIMITS
 from brake_sim_ros.scenarios.checker import MISSING, SHOWN_CHARS, Checker, show_value
@@ -295,7 +295,36 @@ def _parse(data: dict[str, Any], text: str, source: str) -> Scenario:
         sensors=parse_sensors(ctx, top.get("structure"), top.get("sensors")),
         condition_ranges=parse_conditions(ctx, top.get("conditions", {})),
     )
+    _check_bore(ctx, top, scenario)
     return scenario.with_unit()  # the file's values are the drawing; the unit scatters them
+
+
+def _check_bore(ctx: Checker, top: dict[str, Any], scenario: Scenario) -> None:
+    """Refuse a service brake's wheel-cylinder bore that the line-pressure sensors or the
+    cycle's pressures would not read: a channel converts the piston's force to pressure on
+    its own ``piston_diameter_m``, a cycle's ``pressure_bar`` on the default bore, so a bore
+    of another size would make them report or apply another pressure than the model's."""
+    spec = scenario.setup.params.service
+    if spec is None or spec.wheel_cylinder_bore_m == WHEEL_CYLINDER_BORE_M:
+        return
+    key, bore = "parameters.service.wheel_cylinder_bore_m", spec.wheel_cylinder_bore_m
+    for channel in scenario.sensors.channels:
+        if channel.kind == "line_pressure" and channel.piston_diameter_m != bore:
+            raise ctx.fail(
+                key,
+                bore,
+                f"the piston_diameter_m of line-pressure channel {show_value(channel.name)}"
+                f" ({channel.piston_diameter_m:g} m): give the channel the same bore in"
+                " [[sensors]], so that it reads the modelled pressure",
+            )
+    segments = top.get("cycle", {}).get("segments", [])
+    if any(isinstance(seg, dict) and "pressure_bar" in seg for seg in segments):
+        raise ctx.fail(
+            key,
+            bore,
+            f"the default bore ({WHEEL_CYLINDER_BORE_M:g} m) with a [cycle] whose segments"
+            " give pressure_bar (converted to force on the default bore): give them force_n",
+        )
 
 
 def _check_cycle_setup(ctx: Checker, top: dict[str, Any], setup: BrakeSetup) -> None:

@@ -27,6 +27,8 @@ from brake_sim_ros.model.parameters import (
     PARAMETER_GROUPS,
     ROAD_FRICTION_RANGE,
     BrakeParameters,
+    ServiceBrakeParameters,
+    TyreParameters,
 )
 from brake_sim_ros.model.thermal import LIMITS as THERMAL_LIMITS
 from brake_sim_ros.model.thermal import Thermal
@@ -80,18 +82,66 @@ def parse_brake(ctx: Checker, top: dict[str, Any]) -> BrakeParameters:
 
 
 def parse_parameters(ctx: Checker, data: Any, base: BrakeParameters) -> BrakeParameters:
-    """``[parameters.<group>]``: overrides of the default parameters, group by group."""
-    data = ctx.table(data, "parameters", set(PARAMETER_GROUPS))
+    """``[parameters.<group>]``: overrides of the default parameters, group by group;
+    ``[parameters.service]`` (and ``[parameters.service.tyre]``) on the service brake."""
+    data = ctx.table(data, "parameters", {*PARAMETER_GROUPS, "service"})
     overrides: dict[str, dict[str, float]] = {}
     for group, values in data.items():
+        if group == "service":
+            continue
         cls = PARAMETER_GROUPS[group]
         names = {f.name for f in dataclasses.fields(cls)}
         values = ctx.table(values, f"parameters.{group}", names)
         overrides[group] = {k: ctx.number(v, f"parameters.{group}.{k}") for k, v in values.items()}
     try:
-        return base.with_overrides(overrides)
+        params = base.with_overrides(overrides)
     except BrakeSimError as exc:
         raise ScenarioError(f"{ctx.source}: [parameters]: {exc}") from exc
+    return _parse_service(ctx, data["service"], params) if "service" in data else params
+
+
+def _numbers(ctx: Checker, data: dict[str, Any], table: str) -> dict[str, float]:
+    """Every value of ``data`` but a sub-table ``tyre``, as a number."""
+    return {k: ctx.number(v, f"{table}.{k}") for k, v in data.items() if k != "tyre"}
+
+
+def _parse_service(ctx: Checker, data: Any, params: BrakeParameters) -> BrakeParameters:
+    """``[parameters.service]``: overrides of the service brake's springs, stops and
+    hydraulics (ServiceBrakeParameters), and in ``[parameters.service.tyre]`` of its tyre
+    (TyreParameters) but the road's friction (the top-level ``road_friction``: the road's,
+    not the tyre's). Refused on the study brake, which reads none of them."""
+    if params.service is None:
+        raise ctx.fail(
+            "parameters.service",
+            data,
+            'a [parameters.service] table only with brake = "service" (the study brake has'
+            " no return springs, rest stops, hydraulics or tyre to read it)",
+        )
+    spec = params.service
+    names = {f.name for f in dataclasses.fields(ServiceBrakeParameters)}
+    data = ctx.table(data, "parameters.service", names)
+    values = _numbers(ctx, data, "parameters.service")
+    tyre = spec.tyre
+    if "tyre" in data:
+        given = data["tyre"]
+        if isinstance(given, dict) and "road_friction" in given:
+            raise ctx.fail(
+                "parameters.service.tyre.road_friction",
+                given["road_friction"],
+                "the road's friction as the top-level road_friction (a condition of the"
+                " road, not of the tyre; [conditions] road_friction draws it per run)",
+            )
+        tyre_names = {f.name for f in dataclasses.fields(TyreParameters)} - {"road_friction"}
+        given = ctx.table(given, "parameters.service.tyre", tyre_names)
+        try:
+            tyre = dataclasses.replace(tyre, **_numbers(ctx, given, "parameters.service.tyre"))
+        except BrakeSimError as exc:
+            raise ScenarioError(f"{ctx.source}: [parameters.service.tyre]: {exc}") from exc
+    try:
+        spec = dataclasses.replace(spec, **values, tyre=tyre)
+    except BrakeSimError as exc:
+        raise ScenarioError(f"{ctx.source}: [parameters.service]: {exc}") from exc
+    return dataclasses.replace(params, service=spec)
 
 
 def parse_options(ctx: Checker, data: Any) -> ModelOptions:

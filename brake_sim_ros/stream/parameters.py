@@ -47,7 +47,15 @@ from brake_sim_ros.model.catalogue import (
 )
 from brake_sim_ros.model.defects import Defects, DrumDefect, LineDefect, ShoeDefect
 from brake_sim_ros.model.layout import SIDES
-from brake_sim_ros.model.parameters import PARAMETER_GROUPS, BrakeParameters, unit_of
+from brake_sim_ros.model.parameters import (
+    PARAMETER_GROUPS,
+    ROAD_FRICTION_RANGE,
+    TYRE_LIMITS,
+    BrakeParameters,
+    ServiceBrakeParameters,
+    TyreParameters,
+    unit_of,
+)
 from brake_sim_ros.model.run_setup import BrakeSetup
 from brake_sim_ros.model.vehicle import DRIVE_LIMITS, Vehicle
 from brake_sim_ros.stream import run_parameters
@@ -95,6 +103,24 @@ _RANGES: dict[str, tuple[float, float]] = {
     "contact.damping_n_s_per_m": (0.0, 1e6),
     "friction.coefficient": (0.0, 1.0),  # [core]
     "friction.smoothing_speed_m_s": (1e-5, 1.0),  # [core]
+    "service.return_spring_preload_n": (0.0, 2000.0),  # [core]
+    "service.return_spring_rate_n_per_m": (0.0, 1e6),  # [core]
+    "service.residual_force_n": (0.0, 2000.0),
+    "service.stop_stiffness_n_per_m": (1e5, 1e9),  # [core]
+    "service.stop_damping_n_s_per_m": (0.0, 1e6),
+    "service.wheel_cylinder_bore_m": (0.005, 0.05),  # [core]
+    "service.line_compliance_m3_per_pa": (1e-16, 1e-10),  # [core]
+    "service.line_resistance_pa_s_per_m3": (1e7, 1e14),  # [core]
+    "service.tyre.road_friction": ROAD_FRICTION_RANGE,  # [core]
+    **{f"service.tyre.{name}": (lo, hi) for name, lo, hi in TYRE_LIMITS},  # [core]
+}
+# The service brake's groups under their node names, present only on the service brake
+# (BrakeParameters.service): ``service.<field>`` (its springs, stops and hydraulics) and
+# ``service.tyre.<field>`` (its tyre, the road's friction included): the scenario's
+# [parameters.service] and [parameters.service.tyre], and its top-level road_friction.
+SERVICE_GROUPS: dict[str, type] = {
+    "service": ServiceBrakeParameters,
+    "service.tyre": TyreParameters,
 }
 # the defects' ranges are their catalogue fields' (model/catalogue.py), in scenario terms
 
@@ -181,7 +207,47 @@ def model_values(params: BrakeParameters, defects: Defects) -> dict[str, Any]:
         obj = getattr(params, group)
         for f in fields(obj):
             values[f"{group}.{f.name}"] = getattr(obj, f.name)
+    if params.service is not None:
+        for f in fields(ServiceBrakeParameters):
+            if f.name != "tyre":
+                values[f"service.{f.name}"] = getattr(params.service, f.name)
+        for f in fields(TyreParameters):
+            values[f"service.tyre.{f.name}"] = getattr(params.service.tyre, f.name)
     return values
+
+
+def _service_from(values: dict[str, Any]) -> ServiceBrakeParameters | None:
+    """The service brake's parameters from flat values (every ``service.*`` field), or
+    None when they hold none (a study brake's).
+
+    Raises:
+        ParameterError: some of the service brake's fields given but not all, or the
+            core's reason for an invalid value.
+    """
+    given = {k for k in values if k.startswith("service.")}
+    if not given:
+        return None
+    names = {
+        f"{group}.{f.name}"
+        for group, cls in SERVICE_GROUPS.items()
+        for f in fields(cls)
+        if f.name != "tyre"
+    }
+    missing = sorted(names - given)
+    if missing:
+        raise ParameterError(
+            f"service brake parameters without {missing[0]!r} ({len(missing)} missing):"
+            " allowed all of the service brake's parameters or none"
+        )
+    tyre = TyreParameters(
+        **{f.name: values[f"service.tyre.{f.name}"] for f in fields(TyreParameters)}
+    )
+    spec = {
+        f.name: values[f"service.{f.name}"]
+        for f in fields(ServiceBrakeParameters)
+        if f.name != "tyre"
+    }
+    return ServiceBrakeParameters(**spec, tyre=tyre)
 
 
 def model_parameter_specs(params: BrakeParameters, defects: Defects) -> list[ParamSpec]:
@@ -200,7 +266,7 @@ def model_parameter_specs(params: BrakeParameters, defects: Defects) -> list[Par
             text = f"{where} defect {kind.name}, {field_name} ({f.unit}): {f.description}."
             spec_range = (f.low, f.high)
         else:
-            cls = PARAMETER_GROUPS[parts[0]]
+            cls = {**PARAMETER_GROUPS, **SERVICE_GROUPS}[name.rsplit(".", 1)[0]]
             doc = _attribute_doc(cls, field_name) or _first_line(cls.__doc__)
             text = f"{field_name} ({unit_of(field_name)}): {doc}."
         if name in INITIAL_CONDITIONS:
@@ -242,7 +308,7 @@ def build_model(
     groups = {}
     for group, cls in PARAMETER_GROUPS.items():
         groups[group] = cls(**{f.name: values[f"{group}.{f.name}"] for f in fields(cls)})
-    return BrakeParameters(**groups), defects
+    return BrakeParameters(**groups, service=_service_from(values)), defects
 
 
 def complete_actuation_share(changes: dict[str, Any]) -> dict[str, Any]:
@@ -342,6 +408,20 @@ def changed_setup(setup: BrakeSetup, values: dict[str, Any]) -> BrakeSetup:
         if at[label_column(KIND_BY_NAME[kind], loc)] != 0.0
     )
     defects = dataclasses.replace(defects, growth=kept)
-    # the brake itself (a service brake's springs and stops) is the scenario's choice
-    params = dataclasses.replace(params, service=setup.params.service)
+    # the brake itself is the scenario's choice: values without the service brake's
+    # parameters (a recording made before they were node parameters) keep the scenario's
+    if params.service is None:
+        params = dataclasses.replace(params, service=setup.params.service)
+    elif setup.params.service is None:
+        raise ParameterError(
+            "service.* parameters on the study brake: allowed only on a scenario with"
+            ' brake = "service" (the study brake has no springs, hydraulics or tyre)'
+        )
+    elif params.service.wheel_cylinder_bore_m != setup.params.service.wheel_cylinder_bore_m:
+        raise ParameterError(
+            f"service.wheel_cylinder_bore_m={params.service.wheel_cylinder_bore_m!r}: allowed"
+            f" only the scenario's {setup.params.service.wheel_cylinder_bore_m!r} while it"
+            " runs (a part of the brake, and the line-pressure sensors read with it): set"
+            " it in the scenario's [parameters.service]"
+        )
     return dataclasses.replace(setup, params=params, defects=defects)

@@ -21,6 +21,7 @@ from mcap.writer import Writer
 from mcap_ros2.decoder import DecoderFactory
 
 from brake_sim_ros import stream
+from brake_sim_ros.recording import metadata
 from brake_sim_ros.recording.record import record_offline
 from brake_sim_ros.recording.writer import McapRecorder
 from brake_sim_ros.scenarios import load_scenario, parse_scenario
@@ -316,3 +317,43 @@ def test_a_hostile_recorded_solver_is_one_line(text, says):
     with pytest.raises(ResimError, match=says) as caught:
         _recorded_solver(load_scenario("symmetric"), text, "x.mcap")
     assert "\n" not in str(caught.value) and str(caught.value).startswith("x.mcap: ")
+
+
+# a service brake with its own parameters from the file, braking from the first sample
+SERVICE_TEXT = (
+    'name = "service_stop"\nbrake = "service"\nroad_friction = 0.5\n'
+    "[actuation]\npeak_force_n = 3000.0\nstart_s = 0.001\nfull_s = 0.05\n"
+    "[parameters.service]\nreturn_spring_preload_n = 80.0\nline_compliance_m3_per_pa = 1.2e-12\n"
+    "[parameters.service.tyre]\npresliding_stiffness_per_m = 50.0\n"
+)
+SERVICE_SECONDS = 0.08
+ROAD_CHANGE_AT = 768  # sample 0.03 s in: the road turns to ice under the braking wheel
+
+
+@pytest.mark.slow
+def test_a_service_brake_recording_resimulates_to_the_same_bits(tmp_path):
+    """The service brake's parameters from the file are in the model record (rebuilt to
+    the scenario's), and a recorded change of the road under it (a node parameter) is
+    re-simulated at its sample, bit for bit; without the change the samples after it
+    differ, so the change is what the re-simulation reproduced."""
+    scenario = parse_scenario(SERVICE_TEXT, "service_stop.toml")
+    source, plain = tmp_path / "source.mcap", tmp_path / "plain.mcap"
+    change = {"service.tyre.road_friction": 0.1}
+    record_offline(scenario, source, duration_s=SERVICE_SECONDS, changes=[(ROAD_CHANGE_AT, change)])
+    record_offline(scenario, plain, duration_s=SERVICE_SECONDS)
+    with source.open("rb") as f:
+        records = {m.name: m.metadata for m in make_reader(f).iter_metadata()}
+    params, _defects = metadata.model_from_record(records[metadata.MODEL])
+    assert params == scenario.setup.params and params.service.return_spring_preload_n == 80.0
+    out = tmp_path / "again.mcap"
+    r = resim(source, "--out", out)
+    assert r.returncode == 0, r.stderr
+    n = round(SERVICE_SECONDS * 25_600)
+    assert f"{n} samples equal to the recording's, bit for bit" in r.stdout
+    a, b, c = pivot_arrays(source), pivot_arrays(out), pivot_arrays(plain)
+    assert np.abs(a["left_fx_n"]).max() > 100.0  # the shoes are on the drum
+    for name, values in a.items():
+        assert values.tobytes() == b[name].tobytes(), name
+    before, after = slice(0, ROAD_CHANGE_AT), slice(ROAD_CHANGE_AT + 1, None)
+    assert a["left_fx_n"][before].tobytes() == c["left_fx_n"][before].tobytes()
+    assert np.any(a["left_fx_n"][after] != c["left_fx_n"][after])
