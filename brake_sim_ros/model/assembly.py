@@ -12,9 +12,14 @@ from brake_sim_ros.errors import ParameterError
 from brake_sim_ros.model import kernel, service, thermal
 from brake_sim_ros.model import layout as L
 from brake_sim_ros.model.actuation import RESIDUAL_FORCE_N, RETURN_SPRING_PRELOAD_N
-from brake_sim_ros.model.catalogue import KIND_BY_NAME, LOCATIONS, kinds_at
+from brake_sim_ros.model.catalogue import (
+    KIND_BY_NAME,
+    LOCATIONS,
+    kinds_at,
+    refuse_without_circuit,
+)
 from brake_sim_ros.model.defects import SERVICE_RUNOUT_UM, Defects, DrumDefect, ShoeDefect
-from brake_sim_ros.model.line_kinds import LINE, refuse_without_circuit
+from brake_sim_ros.model.line_kinds import LINE
 from brake_sim_ros.model.packing import PackSite
 from brake_sim_ros.model.parameters import BrakeParameters, ServiceBrakeParameters
 from brake_sim_ros.model.placement import lining_mid_rad

@@ -26,6 +26,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from brake_sim_ros.errors import ParameterError
 from brake_sim_ros.model import layout as L
 from brake_sim_ros.model import packing
 from brake_sim_ros.model.defect_kind import DefectField, DefectKind
@@ -459,3 +460,18 @@ def label_column(kind: DefectKind, location: str) -> str:
 def label_columns() -> tuple[str, ...]:
     """Every label column, in catalogue order."""
     return tuple(label_column(k, loc) for k in KINDS for loc in k.locations)
+
+
+def refuse_without_circuit(line: object) -> None:
+    """Refuse, in one line, a line's defect (``line``: a :class:`.defects.LineDefect`) on a
+    brake without a hydraulic circuit (the study brake)."""
+    given = [
+        f"{k.scenario_key}={getattr(line, k.scenario_key):g}"
+        for k in kinds_at(LINE)
+        if getattr(line, k.scenario_key) != k.healthy_value
+    ]
+    if given:
+        raise ParameterError(
+            f"defect line {', '.join(given)} is invalid on the study brake (an ideal force"
+            ' source, no hydraulic circuit): allowed only with brake = "service"'
+        )

@@ -250,7 +250,7 @@ class LineDefect(_FieldSet):
     :mod:`.line_kinds`): the catalogue's line fields (:func:`.catalogue.fields_at`
     ``("line")``), e.g. ``LineDefect(air_in_line_ml=1.0)``, ``LineDefect(line_leak_pct=20.0)``.
     The default is a sound, bled line. The study brake has no circuit and refuses any
-    (:func:`.line_kinds.refuse_without_circuit`)."""
+    (:func:`.catalogue.refuse_without_circuit`)."""
 
     _LOCATION = LINE
     _WHAT = "line"

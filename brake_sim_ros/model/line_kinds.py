@@ -1,7 +1,7 @@
 """The hydraulic line's defect kinds (catalogue location ``line``): air in the circuit and a
 leak. They act on the service brake's circuit (:mod:`.service`), not on one shoe, so they
 sit at the line; the study brake has no circuit (an ideal force source) and refuses them
-(:func:`refuse_without_circuit`).
+(:func:`.catalogue.refuse_without_circuit`).
 
 * ``air_in_line``: air left in the circuit (a poorly bled line, a boiled fluid's vapour
   once it has cooled back). Modelled as a volume ``V_a`` of air at atmospheric pressure,
@@ -29,7 +29,6 @@ Pure data and logic: no files.
 
 from __future__ import annotations
 
-from brake_sim_ros.errors import ParameterError
 from brake_sim_ros.model import packing
 from brake_sim_ros.model.defect_kind import DefectKind
 
@@ -96,20 +95,3 @@ LINE_KINDS: tuple[DefectKind, ...] = (
         packing=packing.pack_line_leak,
     ),
 )
-
-
-def refuse_without_circuit(line: object) -> None:
-    """Refuse, in one line, a line's defect (``line``: a :class:`.defects.LineDefect`) on a
-    brake without a hydraulic circuit (the study brake)."""
-    from brake_sim_ros.model.catalogue import kinds_at  # the registry holds these kinds
-
-    given = [
-        f"{k.scenario_key}={getattr(line, k.scenario_key):g}"
-        for k in kinds_at(LINE)
-        if getattr(line, k.scenario_key) != k.healthy_value
-    ]
-    if given:
-        raise ParameterError(
-            f"defect line {', '.join(given)} is invalid on the study brake (an ideal force"
-            ' source, no hydraulic circuit): allowed only with brake = "service"'
-        )

@@ -28,10 +28,10 @@ from typing import Any
 from brake_sim_ros.errors import BrakeSimError, ScenarioError
 from brake_sim_ros.fleet.scatter import NOMINAL_UNIT
 from brake_sim_ros.model.assembly import SIDES, pack
+from brake_sim_ros.model.catalogue import refuse_without_circuit
 from brake_sim_ros.model.cycle import pack_drive
 from brake_sim_ros.model.defects import Defects
 from brake_sim_ros.model.fidelity import plan
-from brake_sim_ros.model.line_kinds import refuse_without_circuit
 from brake_sim_ros.model.parameters import WHEEL_CYLINDER_BORE_M, BrakeParameters
 from brake_sim_ros.model.run_setup import BrakeSetup
 from brake_sim_ros.model.vehicle import DRIVE_LIMITS as VEHICLE_DRIVE_LIMITS
