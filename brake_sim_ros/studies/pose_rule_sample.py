@@ -2,7 +2,7 @@
 geometries drawn from :data:`.calibration.FREE`, kept when the symmetric first impact and
 case 5 are in their bands, and case 1 judged under each pose rule there.
 
-Run it with ``python -m brake_sim_ros.studies.pose_rules --sample N``.
+Run it with ``python -m brake_sim_ros.studies.pose_rule_study --sample N``.
 """
 
 from __future__ import annotations

@@ -4,7 +4,7 @@ runs them (each built-in scenario with its own solver and duration), with the pa
 given and each shoe with a pin defect placed by the rule; then the validation's own
 figures and checks (:mod:`.validation_checks`). The measured-acceleration part is left out.
 
-Run it with ``python -m brake_sim_ros.studies.pose_rules --validate RULE ...`` (at the
+Run it with ``python -m brake_sim_ros.studies.pose_rule_study --validate RULE ...`` (at the
 parameters in force; ``--on-candidate``: on the study's candidate geometry); about 10 s of
 CPU a rule.
 """

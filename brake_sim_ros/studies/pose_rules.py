@@ -1,7 +1,7 @@
 """Pose-rule study: how a shoe sits when its pin is moved radially, and what each rule does
 to case 1 (left pin 3 % outward) and the pivot sweep (issue 28, "Also: case 1 ...").
 
-Run it with ``python -m brake_sim_ros.studies.pose_rules`` (seconds): every rule at the
+Run it with ``python -m brake_sim_ros.studies.pose_rule_study`` (seconds): every rule at the
 parameters in force for the left pin moved -3 and +3 % (``--pcts -3 -2 -1 1 2 3`` for the
 sweep, ``--crown-mm`` for a crowned lining). ``--sample N`` draws ``N`` geometries from the
 calibration's space (:mod:`.pose_rule_sample`; 1500: about 4 minutes of CPU), keeps those
@@ -40,7 +40,6 @@ The figures are computed as :mod:`.calibration` computes them (first two impacts
 
 from __future__ import annotations
 
-import argparse
 import math
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
@@ -403,72 +402,3 @@ def reference_figures(params: BrakeParameters) -> tuple[float, float, float]:
     tilt = {"initial_angle_deg": -2.0}
     c5 = impact(packed(params, nominal_pose(params), **tilt), tilt)
     return sym[0], pct_change(c5[1], sym[1]), pct_change(c5[2], sym[2])
-
-
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--rules", nargs="*", default=list(RULES), choices=list(RULES))
-    parser.add_argument("--crown-mm", nargs="*", type=float, default=[0.0])
-    parser.add_argument("--pcts", nargs="*", type=float, default=[-3.0, 3.0])
-    parser.add_argument("--candidate", action="store_true", help="figures of EYE_PISTON_CANDIDATE")
-    parser.add_argument(
-        "--validate",
-        nargs="+",
-        default=[],
-        choices=list(RULES),
-        help="the validation's checks with the pins placed by these rules",
-    )
-    parser.add_argument(
-        "--on-candidate",
-        action="store_true",
-        help="--validate on EYE_PISTON_CANDIDATE's geometry, not the parameters in force",
-    )
-    parser.add_argument(
-        "--sample", type=int, default=0, help="random geometries per rule (0: none)"
-    )
-    args = parser.parse_args(argv)
-    params = BrakeParameters()
-    if args.validate:
-        from brake_sim_ros.studies.pose_rule_validation import print_validation
-
-        geometry_params = candidate_parameters(params) if args.on_candidate else params
-        for name in args.validate:
-            print_validation(geometry_params, name)
-        return 0
-    if args.candidate:
-        from brake_sim_ros.studies.pose_rule_sample import grid_point, scenario_check, verify
-
-        found = candidate_parameters(params)
-        point = grid_point(found, "eye-piston", 0.0, (0.0, 0.0, 0.0))
-        cells = "  ".join(f"{k} {m:+.2f}" for k, m in point.misses.items())
-        print(f"eye-piston candidate: misses in band units: {cells}")
-        print("\n".join(verify(point)))
-        print("\n".join(scenario_check(found, "eye-piston")))
-        return 0
-    if args.sample:
-        from brake_sim_ros.studies.pose_rule_sample import (
-            print_sample,
-            sample_geometries,
-            sample_rule,
-            verify,
-        )
-
-        geometries = sample_geometries(params, args.sample)
-        print(
-            f"{len(geometries)} of {args.sample} random geometries of the calibration's space"
-            " have the symmetric first impact and case 5 in their bands"
-        )
-        for name in args.rules:
-            sample = sample_rule(name, geometries)
-            print_sample(sample)
-            for point in sample.case1_inside():
-                print("   case 1 in its bands: " + "\n   ".join(verify(point)))
-        return 0
-    for crown in args.crown_mm:
-        for name in args.rules:
-            report_rule(params, name, crown, sorted(args.pcts))
-    return 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())

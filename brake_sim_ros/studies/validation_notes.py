@@ -170,7 +170,7 @@ def notes(fig: dict, params: BrakeParameters) -> str:
 
 
 # The pose-rule study's search of the calibration's space (``python -m
-# brake_sim_ros.studies.pose_rules --sample 1500``, 2026-11-27; seed 28, friction held):
+# brake_sim_ros.studies.pose_rule_study --sample 1500``, 2026-11-27; seed 28, friction held):
 # (geometries drawn, those with the symmetric first impact and case 5 in their bands), and
 # per rule among the latter: (admissible: clear of the drum at rest and short of
 # self-locking with the pin 3 % out and in; of those with case 1's three figures in their
@@ -207,7 +207,7 @@ def _pose_note(params: BrakeParameters) -> str:
     c1, c2 = eye.case1, eye.case2
     return f"""* **Case 1 under other poses (issue 28).** A rigid shoe at rest is held by three
   contacts; which three is the pose rule, and the study does not say (`python -m
-  brake_sim_ros.studies.pose_rules` compares the rules, each stated there with what holds
+  brake_sim_ros.studies.pose_rule_study` compares the rules, each stated there with what holds
   the shoe). The model's tip abutment lets the heel slide in an open seat. The other
   physical choice keeps the heel in an eye on its pin, so the shoe moves with the pin, its
   turn about the pin set by a third contact: an adjuster on the web that the shift slides

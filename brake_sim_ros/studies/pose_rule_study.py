@@ -1,0 +1,83 @@
+"""The pose-rule study's command (issue 28, case 1): the rules of
+:mod:`brake_sim_ros.studies.pose_rule_study` compared at the parameters in force, the candidate
+geometry (:data:`~brake_sim_ros.studies.pose_rules.EYE_PISTON_CANDIDATE`), a random sample
+of the calibration's space (:mod:`.pose_rule_sample`) and the validation's checks under
+each rule (:mod:`.pose_rule_validation`).
+
+Run it with ``python -m brake_sim_ros.studies.pose_rule_study`` (seconds; ``--help``).
+"""
+
+from __future__ import annotations
+
+import argparse
+
+from brake_sim_ros.model.parameters import BrakeParameters
+from brake_sim_ros.studies import pose_rules
+from brake_sim_ros.studies.pose_rule_sample import (
+    grid_point,
+    print_sample,
+    sample_geometries,
+    sample_rule,
+    scenario_check,
+    verify,
+)
+from brake_sim_ros.studies.pose_rule_validation import print_validation
+from brake_sim_ros.studies.pose_rules import RULES, candidate_parameters, report_rule
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=pose_rules.__doc__.splitlines()[0])
+    parser.add_argument("--rules", nargs="*", default=list(RULES), choices=list(RULES))
+    parser.add_argument("--crown-mm", nargs="*", type=float, default=[0.0])
+    parser.add_argument("--pcts", nargs="*", type=float, default=[-3.0, 3.0])
+    parser.add_argument("--candidate", action="store_true", help="figures of EYE_PISTON_CANDIDATE")
+    parser.add_argument(
+        "--validate",
+        nargs="+",
+        default=[],
+        choices=list(RULES),
+        help="the validation's checks with the pins placed by these rules",
+    )
+    parser.add_argument(
+        "--on-candidate",
+        action="store_true",
+        help="--validate on EYE_PISTON_CANDIDATE's geometry, not the parameters in force",
+    )
+    parser.add_argument(
+        "--sample", type=int, default=0, help="random geometries per rule (0: none)"
+    )
+    args = parser.parse_args(argv)
+    params = BrakeParameters()
+    if args.validate:
+        geometry_params = candidate_parameters(params) if args.on_candidate else params
+        for name in args.validate:
+            print_validation(geometry_params, name)
+        return 0
+    if args.candidate:
+        found = candidate_parameters(params)
+        point = grid_point(found, "eye-piston", 0.0, (0.0, 0.0, 0.0))
+        cells = "  ".join(f"{k} {m:+.2f}" for k, m in point.misses.items())
+        print(f"eye-piston candidate: misses in band units: {cells}")
+        print("\n".join(verify(point)))
+        print("\n".join(scenario_check(found, "eye-piston")))
+        return 0
+    if args.sample:
+        geometries = sample_geometries(params, args.sample)
+        print(
+            f"{len(geometries)} of {args.sample} random geometries of the calibration's space"
+            " have the symmetric first impact and case 5 in their bands"
+        )
+        for name in args.rules:
+            sample = sample_rule(name, geometries)
+            print_sample(sample)
+            for point in sample.case1_inside():
+                print("   case 1 in its bands: " + "\n   ".join(verify(point)))
+        return 0
+    for crown in args.crown_mm:
+        for name in args.rules:
+            report_rule(params, name, crown, sorted(args.pcts))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
