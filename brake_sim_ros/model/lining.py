@@ -64,9 +64,18 @@ def node_angle(p, base, i):
 
 
 @njit(inline="always", **JIT)
-def lining_point(p, base, c, sn, beta):
-    """The lining point at arc angle ``beta`` (rad) from its middle, for the shoe turned by
-    ``phi`` (cos ``c``, sin ``sn``): (x, y), m."""
+def first_node(p, base):
+    """cos and sin of node 0's arc angle and of the nodes' spacing (rad): node ``i + 1``'s
+    are node ``i``'s turned by the spacing (two products, no trigonometry per node)."""
+    spacing = 2.0 * p[base + L.S_LINING_HALF_ANGLE] / NODES
+    beta = node_angle(p, base, 0)
+    return math.cos(beta), math.sin(beta), math.cos(spacing), math.sin(spacing)
+
+
+@njit(inline="always", **JIT)
+def lining_point(p, base, c, sn, cb, sb):
+    """The lining point at arc angle ``beta`` from its middle (cos ``cb``, sin ``sb``), for
+    the shoe turned by ``phi`` (cos ``c``, sin ``sn``): (x, y), m."""
     px = p[base + L.S_PIVOT_X]
     py = p[base + L.S_PIVOT_Y]
     dx = p[base + L.S_LINING_CENTRE_X] - px
@@ -75,8 +84,6 @@ def lining_point(p, base, c, sn, beta):
     cy = py + sn * dx + c * dy
     m0x = p[base + L.S_LINING_MID_COS]
     m0y = p[base + L.S_LINING_MID_SIN]
-    cb = math.cos(beta)
-    sb = math.sin(beta)
     ux0 = cb * m0x - sb * m0y
     uy0 = sb * m0x + cb * m0y
     r = p[base + L.S_LINING_RADIUS]
@@ -84,19 +91,24 @@ def lining_point(p, base, c, sn, beta):
 
 
 @njit(inline="always", **JIT)
-def node_state(p, base, c, sn, w, beta, drum_angle, drum_speed):
-    """One node's contact at arc angle ``beta`` of the shoe turned by ``phi`` (cos ``c``,
-    sin ``sn``) at ``w`` = d(phi)/dt rad/s, the drum at ``drum_angle`` turning at
-    ``drum_speed`` (rad): (delta m, delta' m/s, grad g x, grad g y, tangent x, tangent y,
-    friction arm m, sliding speed m/s, node x m, node y m, r' m/rad, d delta / d phi m/rad).
+def node_state(p, base, c, sn, w, cb, sb, drum_angle, drum_speed):
+    """One node's contact at arc angle ``beta`` (cos ``cb``, sin ``sb``) of the shoe
+    turned by ``phi`` (cos ``c``, sin ``sn``) at ``w`` = d(phi)/dt rad/s, the drum at
+    ``drum_angle`` turning at ``drum_speed`` (rad): (delta m, delta' m/s, grad g x,
+    grad g y, tangent x, tangent y, friction arm m, sliding speed m/s, node x m, node y
+    m, r' m/rad, d delta / d phi m/rad).
     """
     px = p[base + L.S_PIVOT_X]
     py = p[base + L.S_PIVOT_Y]
-    x, y = lining_point(p, base, c, sn, beta)
+    x, y = lining_point(p, base, c, sn, cb, sb)
     dist = math.sqrt(x * x + y * y)
     nx = x / dist
     ny = y / dist
-    radius, slope = contact.drum_radius(p, math.atan2(y, x) - drum_angle)
+    if p[L.P_DRUM_WAVE_COUNT] <= 0.0 and p[L.P_FLAT_DEPTH] <= 0.0:  # a round drum
+        radius = p[L.P_DRUM_RADIUS]
+        slope = 0.0
+    else:
+        radius, slope = contact.drum_radius(p, math.atan2(y, x) - drum_angle)
     delta = dist - radius
     tilt = slope / dist
     arm_r = (x - px) * ny - (y - py) * nx
@@ -146,17 +158,20 @@ def shoe_contact(p, base, theta, omega, drum_speed, actuation, mode, stuck, shar
     eps = -math.inf
     eps_dot = 0.0
     v_deep = 0.0
-    beta_deep = 0.0
-    for i in range(NODES):
-        beta = node_angle(p, base, i)
+    x_deep = 0.0
+    y_deep = 0.0
+    cb, sb, cd_, sd_ = first_node(p, base)
+    for _ in range(NODES):
         d, d_dot, gx, gy, tx, ty, arm, v, x, y, slope, _ = node_state(
-            p, base, c, sn, w, beta, drum_angle, drum_speed
+            p, base, c, sn, w, cb, sb, drum_angle, drum_speed
         )
+        cb, sb = cb * cd_ - sb * sd_, sb * cd_ + cb * sd_
         if d > eps:
             eps = d
             eps_dot = d_dot
             v_deep = v
-            beta_deep = beta
+            x_deep = x
+            y_deep = y
         f = 0.0
         if pressing and d > 0.0:
             f = k * d + cd * d_dot
@@ -181,7 +196,7 @@ def shoe_contact(p, base, theta, omega, drum_speed, actuation, mode, stuck, shar
     fn_rec, ff_rec, xr, yr = _equivalent(fx, fy, m_centre, p[L.P_DRUM_RADIUS])
     v_rec = v_sum / fn_sum if fn_sum > 0.0 else v_deep
     if fn_sum <= 0.0:
-        xr, yr = lining_point(p, base, c, sn, beta_deep)
+        xr, yr = x_deep, y_deep
     tdx = p[base + L.S_TIP_X] - px
     tdy = p[base + L.S_TIP_Y] - py
     tx = c * tdx - sn * tdy
@@ -244,8 +259,10 @@ def switching(p, base, theta, omega, drum_angle, drum_speed):
     tau = p[L.P_LINING_NODE_DAMPING] / p[L.P_LINING_NODE_STIFFNESS]
     eps = -math.inf
     h = -math.inf
-    for i in range(NODES):
-        st = node_state(p, base, c, sn, s * omega, node_angle(p, base, i), drum_angle, drum_speed)
+    cb, sb, cd_, sd_ = first_node(p, base)
+    for _ in range(NODES):
+        st = node_state(p, base, c, sn, s * omega, cb, sb, drum_angle, drum_speed)
+        cb, sb = cb * cd_ - sb * sd_, sb * cd_ + cb * sd_
         d = st[0]
         eps = max(eps, d)
         h = max(h, min(d, d + tau * st[1]))
@@ -266,8 +283,10 @@ def hold(p, base, theta, drum_angle):
     mu = p[base + L.S_FRICTION_COEFFICIENT]
     torque = 0.0
     capacity = 0.0
-    for i in range(NODES):
-        st = node_state(p, base, c, sn, 0.0, node_angle(p, base, i), drum_angle, 0.0)
+    cb, sb, cd_, sd_ = first_node(p, base)
+    for _ in range(NODES):
+        st = node_state(p, base, c, sn, 0.0, cb, sb, drum_angle, 0.0)
+        cb, sb = cb * cd_ - sb * sd_, sb * cd_ + cb * sd_
         if st[0] > 0.0:
             f = k * st[0]
             torque -= f * st[10]
@@ -290,8 +309,10 @@ def stored_energy_rows(p, left_angle, right_angle, drum_angle):
             phi = p[base + L.S_SIGN] * theta
             c = math.cos(phi)
             sn = math.sin(phi)
-            for i in range(NODES):
-                st = node_state(p, base, c, sn, 0.0, node_angle(p, base, i), drum_angle[row], 0.0)
+            cb, sb, cd_, sd_ = first_node(p, base)
+            for _ in range(NODES):
+                st = node_state(p, base, c, sn, 0.0, cb, sb, drum_angle[row], 0.0)
+                cb, sb = cb * cd_ - sb * sd_, sb * cd_ + cb * sd_
                 if st[0] > 0.0:
                     out[row] += 0.5 * k * st[0] * st[0]
     return out

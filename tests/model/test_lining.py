@@ -288,7 +288,9 @@ def _node_pattern(p: np.ndarray, block, side: str) -> np.ndarray:
         c, sn = math.cos(sign * theta[row]), math.sin(sign * theta[row])
         for i in range(lining.NODES):
             beta = lining.node_angle(p, base, i)
-            out[row, i] = lining.node_state(p, base, c, sn, 0.0, beta, drum[row], 0.0)[0] > 0.0
+            cb, sb = math.cos(beta), math.sin(beta)
+            state = lining.node_state(p, base, c, sn, 0.0, cb, sb, drum[row], 0.0)
+            out[row, i] = state[0] > 0.0
     return out
 
 
