@@ -32,7 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from brake_sim_ros.model import layout as L
-from brake_sim_ros.model import service
+from brake_sim_ros.model import lining, service
 from brake_sim_ros.model.assembly import SIDES
 from brake_sim_ros.model.parameters import BrakeParameters
 from brake_sim_ros.model.run_setup import SampleBlock
@@ -87,8 +87,12 @@ class EnergyBalance:
         return abs(self.residual_j) / self.stored_start_j
 
 
-def stored_energy_j(block: SampleBlock, params: BrakeParameters, row: int) -> float:
-    """Kinetic plus elastic energy at row ``row`` of ``block`` (columns read by name), J."""
+def stored_energy_j(
+    block: SampleBlock, params: BrakeParameters, row: int, *, point_contact: bool = True
+) -> float:
+    """Kinetic plus elastic energy at row ``row`` of ``block`` (columns read by name), J;
+    without the point contacts' ``k_c eps^2 / 2`` if not ``point_contact`` (a lining over
+    its arc stores :func:`lining_energy_j` instead)."""
     d = params.driveline
     i_s = params.shoe.inertia_about_pivot_kg_m2
 
@@ -104,7 +108,7 @@ def stored_energy_j(block: SampleBlock, params: BrakeParameters, row: int) -> fl
     twist = at("flywheel_angle_rad") - at("drum_angle_rad")
     # the service brake's tyre replaces the coupling spring (its work is booked whole)
     k_s = d.coupling_stiffness_n_m_per_rad if params.service is None else 0.0
-    k_c = params.contact_stiffness_n_per_m
+    k_c = params.contact_stiffness_n_per_m if point_contact else 0.0
     elastic = 0.5 * k_s * twist**2 + sum(
         0.5 * k_c * max(float(at(f"{s}_indentation_m")), 0.0) ** 2 for s in SIDES
     )
@@ -118,6 +122,16 @@ def spring_energy_j(block: SampleBlock, packed: np.ndarray, rows: list[int]) -> 
     left = np.array([block["left_angle_rad"][r] for r in rows], dtype=float)
     right = np.array([block["right_angle_rad"][r] for r in rows], dtype=float)
     return [float(e) for e in service.stored_energy_rows(packed, left, right)]
+
+
+def lining_energy_j(block: SampleBlock, packed: np.ndarray, rows: list[int]) -> list[float]:
+    """Elastic energy of the service brake's linings over their arcs (model/lining.py),
+    J, at ``rows`` of ``block``."""
+    left, right, drum = (
+        np.array([block[name][r] for r in rows], dtype=float)
+        for name in ("left_angle_rad", "right_angle_rad", "drum_angle_rad")
+    )
+    return [float(e) for e in lining.stored_energy_rows(packed, left, right, drum)]
 
 
 def line_pressure_pa(block: SampleBlock, packed: np.ndarray) -> np.ndarray:
@@ -149,18 +163,22 @@ def energy_balance(
     """
     if len(block) == 0:
         raise ValueError("energy_balance needs at least one sample")
-    start = stored_energy_j(block, params, 0)
-    end = stored_energy_j(block, params, -1)
+    if params.service is not None and packed is None:
+        raise ValueError(
+            "energy_balance of a service brake needs packed= (the run's packed"
+            " parameters: where its springs and stops sit for its defects)"
+        )
+    lined = packed is not None and packed[L.P_LINING_NODE_STIFFNESS] > 0.0
+    start = stored_energy_j(block, params, 0, point_contact=not lined)
+    end = stored_energy_j(block, params, -1, point_contact=not lined)
     if params.service is not None:
-        if packed is None:
-            raise ValueError(
-                "energy_balance of a service brake needs packed= (the run's packed"
-                " parameters: where its springs and stops sit for its defects)"
-            )
         rows = [0, len(block) - 1]
         first, last = spring_energy_j(block, packed, rows)
         line_first, line_last = line_energy_j(block, packed, rows)
         start, end = start + first + line_first, end + last + line_last
+    if lined:
+        lining_first, lining_last = lining_energy_j(block, packed, [0, len(block) - 1])
+        start, end = start + lining_first, end + lining_last
     work = block["actuation_work_j"]
     supplied = float(work[-1] - work[0])
     spent = float(sum(block[name][-1] - block[name][0] for name in _LOSSES))

@@ -148,6 +148,8 @@ def fixed_step_advance(
     bl = L.P_SHOE_BASE
     br = L.P_SHOE_BASE + L.SHOE_STRIDE
     can_hold = located and not growing and p[bl + L.S_ENABLED] > 0.0 and p[br + L.S_ENABLED] > 0.0
+    # the lining over its arc switches on its nodes' (rk4.shoe_switch), not the kinematics'
+    can_hold = can_hold and p[L.P_LINING_NODE_STIFFNESS] <= 0.0
     round_drum = p[L.P_DRUM_WAVE_COUNT] <= 0.0 and p[L.P_FLAT_DEPTH] <= 0.0
     # a service brake's shoes are never free: the spring holds each on its stop
     serviced = p[L.P_SERVICE] > 0.0

@@ -9,7 +9,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from brake_sim_ros.errors import ParameterError
-from brake_sim_ros.model import kernel, service, thermal
+from brake_sim_ros.model import kernel, lining, service, thermal
 from brake_sim_ros.model import layout as L
 from brake_sim_ros.model.actuation import RESIDUAL_FORCE_N, RETURN_SPRING_PRELOAD_N
 from brake_sim_ros.model.catalogue import (
@@ -140,6 +140,12 @@ def _pack_service(params: BrakeParameters, defects: Defects, p: np.ndarray) -> N
     p[L.P_PISTON_AREA] = spec.piston_area_m2
     p[L.P_LINE_COMPLIANCE] = spec.line_compliance_m3_per_pa
     p[L.P_LINE_RESISTANCE] = spec.line_resistance_pa_s_per_m3
+    if spec.distributed_lining:  # each node's share of the lining (model/lining.py)
+        g = params.shoe
+        arc = math.radians(g.lining_end_deg - g.lining_start_deg)
+        area = g.lining_width_m * (g.drum_radius_m - g.running_clearance_m) * arc / lining.NODES
+        p[L.P_LINING_NODE_STIFFNESS] = spec.lining_foundation_pa_per_m * area
+        p[L.P_LINING_NODE_DAMPING] = spec.lining_damping_time_s * p[L.P_LINING_NODE_STIFFNESS]
     for i, side in enumerate(SIDES):
         defect: ShoeDefect = getattr(defects, side)
         b = L.P_SHOE_BASE + i * L.SHOE_STRIDE

@@ -17,7 +17,7 @@ import math
 import numpy as np
 from numba import njit
 
-from brake_sim_ros.model import actuation, contact, service, standstill, thermal, vehicle
+from brake_sim_ros.model import actuation, contact, lining, service, standstill, thermal, vehicle
 from brake_sim_ros.model import layout as L
 from brake_sim_ros.model.compiled import JIT
 
@@ -95,35 +95,50 @@ def evaluate_from(y, p, fe_left, fe_right, stuck, mode_left, mode_right, kl, kr,
     wd = 0.0 if stuck else y[L.Y_DRUM_SPEED]
     bl = L.P_SHOE_BASE
     br = L.P_SHOE_BASE + L.SHOE_STRIDE
-    fnl = contact.normal_force(p, bl, kl[0], kl[1], mode_left)
-    fnr = contact.normal_force(p, br, kr[0], kr[1], mode_right)
-    vl = contact.sliding_speed(kl, wd)
-    vr = contact.sliding_speed(kr, wd)
-    # the study brake's torsional coupling, or the service brake's tyre (its work and
-    # deflection rate: model/tyre.py)
-    coupling, tyre_work, tyre_rate = standstill.rotor_coupling(p, y, wd)
-    if stuck:
-        share = standstill.stuck_share(
-            standstill.held_torque(coupling, fnl, kl, fnr, kr),
-            standstill.static_capacity(p, fnl, kl[5], fnr, kr[5]),
-        )
-        ffl = share * p[bl + L.S_FRICTION_COEFFICIENT] * fnl
-        ffr = share * p[br + L.S_FRICTION_COEFFICIENT] * fnr
-    else:
-        ffl = contact.sliding_friction(p, bl, fnl, vl)
-        ffr = contact.sliding_friction(p, br, fnr, vr)
-    tip_left = fe_left  # the net force along the cylinder axis at each tip, N
-    tip_right = fe_right
     serviced = p[L.P_SERVICE] > 0.0  # the service brake: springs, stops, hydraulics
     stop_loss = 0.0
     service_power = 0.0
     line_rate = 0.0
-    if serviced:
-        fe_left, tip_left, fe_right, tip_right, stop_loss, service_power, line_rate = _service_tips(
-            p, y, kl, kr, fe_left, fe_right
-        )
-    sl = contact.shoe_forces(p, bl, y[L.Y_LEFT_SPEED], tip_left, kl, fnl, ffl, vl)
-    sr = contact.shoe_forces(p, br, y[L.Y_RIGHT_SPEED], tip_right, kr, fnr, ffr, vr)
+    if p[L.P_LINING_NODE_STIFFNESS] > 0.0:
+        # the service brake's lining over its arc (model/lining.py)
+        (
+            sl,
+            sr,
+            coupling,
+            tyre_work,
+            tyre_rate,
+            fe_left,
+            fe_right,
+            stop_loss,
+            service_power,
+            line_rate,
+        ) = _lined_shoes(p, y, wd, stuck, mode_left, mode_right, kl, kr, fe_left, fe_right)
+    else:
+        fnl = contact.normal_force(p, bl, kl[0], kl[1], mode_left)
+        fnr = contact.normal_force(p, br, kr[0], kr[1], mode_right)
+        vl = contact.sliding_speed(kl, wd)
+        vr = contact.sliding_speed(kr, wd)
+        # the study brake's torsional coupling, or the service brake's tyre (its work and
+        # deflection rate: model/tyre.py)
+        coupling, tyre_work, tyre_rate = standstill.rotor_coupling(p, y, wd)
+        if stuck:
+            share = standstill.stuck_share(
+                standstill.held_torque(coupling, fnl, kl, fnr, kr),
+                standstill.static_capacity(p, fnl, kl[5], fnr, kr[5]),
+            )
+            ffl = share * p[bl + L.S_FRICTION_COEFFICIENT] * fnl
+            ffr = share * p[br + L.S_FRICTION_COEFFICIENT] * fnr
+        else:
+            ffl = contact.sliding_friction(p, bl, fnl, vl)
+            ffr = contact.sliding_friction(p, br, fnr, vr)
+        tip_left = fe_left  # the net force along the cylinder axis at each tip, N
+        tip_right = fe_right
+        if serviced:
+            fe_left, tip_left, fe_right, tip_right, stop_loss, service_power, line_rate = (
+                _service_tips(p, y, kl, kr, fe_left, fe_right)
+            )
+        sl = contact.shoe_forces(p, bl, y[L.Y_LEFT_SPEED], tip_left, kl, fnl, ffl, vl)
+        sr = contact.shoe_forces(p, br, y[L.Y_RIGHT_SPEED], tip_right, kr, fnr, ffr, vr)
     contact_power = sl[contact.E_CONTACT_POWER] + sr[contact.E_CONTACT_POWER]
     actuation_power = sl[contact.E_ACTUATION_POWER] + sr[contact.E_ACTUATION_POWER]
     if serviced:
@@ -228,6 +243,35 @@ def _service_tips(p, y, kl, kr, fe_left, fe_right):
     net_l, loss_l = service.tip_forces(p, 0, cyl_l, ul, rate_l)
     net_r, loss_r = service.tip_forces(p, 1, cyl_r, ur, rate_r)
     return cyl_l, net_l, cyl_r, net_r, loss_l + loss_r + line_loss, power, line_rate
+
+
+@njit(**JIT)
+def _lined_shoes(p, y, wd, stuck, mode_left, mode_right, kl, kr, fe_left, fe_right):
+    """Both shoes of the service brake with its lining distributed over the arc
+    (:func:`.lining.shoe_contact`), for the drum speed ``wd`` the evaluation uses: (left and
+    right :data:`.contact.N_EVAL` slots, the tyre's coupling N m, work rate W and deflection
+    rate m/s, then :func:`_service_tips`' left and right piston forces N, loss W, actuation
+    power W and line-pressure rate Pa/s). A call, not inlined: the study brake's path stays
+    as it was."""
+    bl = L.P_SHOE_BASE
+    br = L.P_SHOE_BASE + L.SHOE_STRIDE
+    wa = y[L.Y_DRUM_ANGLE]
+    coupling, tyre_work, tyre_rate = standstill.rotor_coupling(p, y, wd)
+    share = 0.0
+    if stuck:
+        tl, cl = lining.hold(p, bl, y[L.Y_LEFT_ANGLE], wa)
+        tr, cr = lining.hold(p, br, y[L.Y_RIGHT_ANGLE], wa)
+        share = standstill.stuck_share(coupling + tl + tr, cl + cr)
+    cyl_l, tip_l, cyl_r, tip_r, loss, power, line_rate = _service_tips(
+        p, y, kl, kr, fe_left, fe_right
+    )
+    sl = lining.shoe_contact(
+        p, bl, y[L.Y_LEFT_ANGLE], y[L.Y_LEFT_SPEED], wd, tip_l, mode_left, stuck, share, wa
+    )
+    sr = lining.shoe_contact(
+        p, br, y[L.Y_RIGHT_ANGLE], y[L.Y_RIGHT_SPEED], wd, tip_r, mode_right, stuck, share, wa
+    )
+    return sl, sr, coupling, tyre_work, tyre_rate, cyl_l, cyl_r, loss, power, line_rate
 
 
 @njit(inline="always", **JIT)

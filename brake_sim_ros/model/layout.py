@@ -238,7 +238,14 @@ P_TYRE_PEAK = P_TYRE_STIFFNESS + 4
 P_TYRE_STRIBECK_SPEED = P_TYRE_STIFFNESS + 5
 P_TYRE_STRIBECK_EXPONENT = P_TYRE_STIFFNESS + 6
 
-N_PARAMS = P_TYRE_STIFFNESS + 7
+# the service brake's lining contact distributed over the arc (model/lining.py), read when
+# P_LINING_NODE_STIFFNESS > 0 (the study brake: 0, its point contact): the stiffness of
+# one node of the arc's quadrature, N/m (the foundation's modulus E/t times the node's
+# share of the lining's area), and its damping, N s/m
+P_LINING_NODE_STIFFNESS = P_TYRE_STIFFNESS + 7
+P_LINING_NODE_DAMPING = P_TYRE_STIFFNESS + 8
+
+N_PARAMS = P_TYRE_STIFFNESS + 9
 
 # --- state vector ---------------------------------------------------------------------
 Y_FLYWHEEL_ANGLE = 0

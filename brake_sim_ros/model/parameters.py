@@ -416,6 +416,18 @@ class ServiceBrakeParameters:
     # valves make up the rest (stated estimate). The same resistance meters the fluid the
     # return springs push back on release (model/service.py).
     line_resistance_pa_s_per_m3: float = 3.75e10
+    # The lining over its arc (model/lining.py), an elastic foundation ``(E/t) (delta + tau
+    # delta')``. E, Pa, estimate: organic linings compress at 100-500 MPa in friction
+    # materials' compressibility tests (SAE J2468, ISO 6310); the low end of the study
+    # contact's 0.3-5 GPa, whose higher figures are bending and tensile moduli. t, m: car
+    # drum linings are 4-6 mm new. tau, s, estimate: 10 % of critical at the shoe's mode
+    # on its whole arc (2.6 kHz), ``2 zeta / omega``, as the study contact's 11 %.
+    lining_modulus_pa: float = 3.0e8
+    lining_thickness_m: float = 0.005
+    lining_damping_time_s: float = 1.2e-5
+    # False (until the service brake's figures are re-measured with the arc: docs/model.md):
+    # the study brake's point contact (Hertzian line) in place of the arc.
+    distributed_lining: bool = False
     # The tyre between vehicle and wheel (model/tyre.py), with the road's friction.
     tyre: TyreParameters = field(default_factory=TyreParameters)
 
@@ -464,6 +476,13 @@ class ServiceBrakeParameters:
             self.stop_stiffness_n_per_m,
             "1e5 to 1e9 N/m",
         )
+        for name, low, high, allowed in (
+            ("lining_modulus_pa", 1e6, 1e11, "1e6 to 1e11 Pa"),
+            ("lining_thickness_m", 0.001, 0.02, "1 to 20 mm"),
+            ("lining_damping_time_s", 0.0, 1e-3, "0 to 1e-3 s"),
+        ):
+            value = getattr(self, name)
+            _require(low <= value <= high, name, value, allowed)
         _require(
             self.stop_damping_n_s_per_m >= 0.0,
             "stop_damping_n_s_per_m",
@@ -475,6 +494,12 @@ class ServiceBrakeParameters:
     def piston_area_m2(self) -> float:
         """Area of one wheel-cylinder piston, m^2: ``pi bore^2 / 4``."""
         return math.pi * self.wheel_cylinder_bore_m**2 / 4.0
+
+    @property
+    def lining_foundation_pa_per_m(self) -> float:
+        """The lining's foundation modulus ``k_w = E / t``, Pa/m (pressure per metre of
+        penetration)."""
+        return self.lining_modulus_pa / self.lining_thickness_m
 
     @property
     def line_time_constant_s(self) -> float:

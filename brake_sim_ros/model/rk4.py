@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from numba import njit
 
-from brake_sim_ros.model import contact, kernel
+from brake_sim_ros.model import contact, kernel, lining
 from brake_sim_ros.model import layout as L
 from brake_sim_ros.model.compiled import JIT
 
@@ -17,7 +17,17 @@ from brake_sim_ros.model.kernel import NOT_FREE
 
 @njit(inline="always", **JIT)
 def shoe_switch(p, shoe, y):
-    """:func:`contact.switching_function` of shoe 0 (left) or 1 (right) for the state ``y``."""
+    """:func:`contact.switching_function` of shoe 0 (left) or 1 (right) for the state ``y``
+    (the service brake's lining over its arc: :func:`.lining.switching`, a call)."""
+    if p[L.P_LINING_NODE_STIFFNESS] > 0.0:
+        return lining.switching(
+            p,
+            L.P_SHOE_BASE + shoe * L.SHOE_STRIDE,
+            y[L.Y_LEFT_ANGLE + shoe],
+            y[L.Y_LEFT_SPEED + shoe],
+            y[L.Y_DRUM_ANGLE],
+            y[L.Y_DRUM_SPEED],
+        )
     return contact.switching_function(
         p,
         L.P_SHOE_BASE + shoe * L.SHOE_STRIDE,

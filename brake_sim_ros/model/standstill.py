@@ -53,7 +53,7 @@ from __future__ import annotations
 
 from numba import njit
 
-from brake_sim_ros.model import contact, tyre
+from brake_sim_ros.model import contact, lining, tyre
 from brake_sim_ros.model import layout as L
 from brake_sim_ros.model.compiled import JIT
 
@@ -126,6 +126,8 @@ def hold_torques(p, y):
     bl = L.P_SHOE_BASE
     br = L.P_SHOE_BASE + L.SHOE_STRIDE
     wa = y[L.Y_DRUM_ANGLE]
+    if p[L.P_LINING_NODE_STIFFNESS] > 0.0:
+        return _lined_hold_torques(p, y)
     kl = contact.kinematics(p, bl, y[L.Y_LEFT_ANGLE], y[L.Y_LEFT_SPEED], wa, 0.0)
     kr = contact.kinematics(p, br, y[L.Y_RIGHT_ANGLE], y[L.Y_RIGHT_SPEED], wa, 0.0)
     fnl = contact.normal_force(p, bl, kl[0], kl[1], L.CONTACT_AUTO)
@@ -133,6 +135,16 @@ def hold_torques(p, y):
     capacity = static_capacity(p, fnl, kl[5], fnr, kr[5])
     coupling = rotor_coupling(p, y, 0.0)[0]
     return held_torque(coupling, fnl, kl, fnr, kr), capacity
+
+
+@njit(**JIT)
+def _lined_hold_torques(p, y):
+    """:func:`hold_torques` of the service brake's lining over its arc (:func:`.lining.hold`).
+    A call: the point contact's path stays as it was."""
+    wa = y[L.Y_DRUM_ANGLE]
+    tl, cl = lining.hold(p, L.P_SHOE_BASE, y[L.Y_LEFT_ANGLE], wa)
+    tr, cr = lining.hold(p, L.P_SHOE_BASE + L.SHOE_STRIDE, y[L.Y_RIGHT_ANGLE], wa)
+    return rotor_coupling(p, y, 0.0)[0] + tl + tr, cl + cr
 
 
 @njit(inline="always", **JIT)

@@ -34,7 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import brentq
 
-from brake_sim_ros.model import kernel, service, tyre
+from brake_sim_ros.model import kernel, lining, service, tyre
 from brake_sim_ros.model import layout as L
 from brake_sim_ros.model.assembly import indentation_at, pack
 
@@ -96,6 +96,10 @@ def _loaded_angle(p: np.ndarray, base: int, force_n: float, drum_speed: float) -
     onset = brentq(eps, -0.2, hi, xtol=1e-14) if eps(-0.2) < 0.0 else -0.2
 
     def moment(theta: float) -> float:
+        if p[L.P_LINING_NODE_STIFFNESS] > 0.0:  # the service brake's lining over its arc
+            return lining.shoe_contact(
+                p, base, theta, 0.0, drum_speed, force_n, L.CONTACT_ON, 0, 0.0, 0.0
+            )[0]
         return kernel.shoe_eval(p, base, theta, 0.0, drum_speed, force_n, L.CONTACT_ON)[0]
 
     upper = onset + 1e-6
@@ -305,10 +309,14 @@ def step_limit(
     stiffest = max(abs(lam) for lam in eigs)
     limit = min(STABILITY_MARGIN * stable, resolution)
     if limit == resolution:
+        stiffness = (
+            f"lining nodes {lining.NODES} x {p[L.P_LINING_NODE_STIFFNESS]:.3g} N/m"
+            if p[L.P_LINING_NODE_STIFFNESS] > 0.0
+            else f"contact stiffness {p[L.P_CONTACT_STIFFNESS]:.3g} N/m"
+        )
         reason = (
-            f"the fastest oscillation ({fastest / (2 * math.pi):.0f} Hz, contact stiffness"
-            f" {p[L.P_CONTACT_STIFFNESS]:.3g} N/m) needs at least {STEPS_PER_PERIOD} steps"
-            " per period"
+            f"the fastest oscillation ({fastest / (2 * math.pi):.0f} Hz, {stiffness}) needs at"
+            f" least {STEPS_PER_PERIOD} steps per period"
         )
     else:
         reason = (
