@@ -138,7 +138,10 @@ def test_two_sweeps_at_once_on_one_dask_cluster_each_write_their_own(tmp_path):
 
 
 def test_two_sweeps_into_one_directory_the_second_is_refused(tmp_path, capsys):
-    campaign = _campaign(tmp_path / "c.toml", "c", 40, 1200.0, 0.5)
+    # runs of 5 s (about a second of CPU each): the first sweep still holds the directory
+    # when the second asks for it, however slowly the second starts on a loaded machine
+    # (with runs of 0.5 s the first could finish all 40 and let go of it before)
+    campaign = _campaign(tmp_path / "c.toml", "c", 40, 1200.0, 5.0)
     out = tmp_path / "out"
     first = _start(str(campaign), "--out", str(out), "--workers", "1")
     try:
