@@ -10,6 +10,7 @@ A message never echoes the file: a value or key is quoted only when short
 from __future__ import annotations
 
 import math
+from collections.abc import Set
 from typing import Any
 
 from brake_sim_ros.errors import ScenarioError
@@ -89,7 +90,7 @@ class Checker:
             f"{self.source}: key '{key}' = {show_value(value)} is invalid: allowed {allowed}"
         )
 
-    def table(self, data: Any, key: str, allowed_keys: set[str]) -> dict[str, Any]:
+    def table(self, data: Any, key: str, allowed_keys: Set[str]) -> dict[str, Any]:
         """``data``, a table whose keys are all in ``allowed_keys`` (``key`` "": the top)."""
         if not isinstance(data, dict):
             raise self.fail(key, data, "a table")

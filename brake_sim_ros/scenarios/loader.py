@@ -196,35 +196,37 @@ def _defects(ctx: Checker, top: dict[str, Any], params: BrakeParameters) -> Defe
     return defects
 
 
+# the keys a scenario file may hold at its top level
+TOP_KEYS = frozenset(
+    {
+        "name",
+        "description",
+        "brake",
+        "road_friction",
+        "duration_s",
+        "sample_rate_hz",
+        "seed",
+        "unit_id",
+        "fleet_seed",
+        "solver",
+        "actuation",
+        "defects",
+        "parameters",
+        "model",
+        "needs",
+        "structure",
+        "sensors",
+        "conditions",
+        "vehicle",
+        "cycle",
+        "thermal",
+    }
+)
+
+
 def _parse(data: dict[str, Any], text: str, source: str) -> Scenario:
     ctx = Checker(source)
-    top = ctx.table(
-        data,
-        "",
-        {
-            "name",
-            "description",
-            "brake",
-            "road_friction",
-            "duration_s",
-            "sample_rate_hz",
-            "seed",
-            "unit_id",
-            "fleet_seed",
-            "solver",
-            "actuation",
-            "defects",
-            "parameters",
-            "model",
-            "needs",
-            "structure",
-            "sensors",
-            "conditions",
-            "vehicle",
-            "cycle",
-            "thermal",
-        },
-    )
+    top = ctx.table(data, "", TOP_KEYS)
     if "name" not in top:
         raise ctx.fail("name", MISSING, "a scenario name (string); it is required")
     name = _name(ctx, top["name"])
