@@ -58,6 +58,17 @@ N_EVAL = 14
 
 
 @njit(inline="always", **JIT)
+def arc_centre(p, base, c, sn):
+    """Centre of the lining's arc for the shoe at ``base`` turned about its pivot by phi
+    (cos ``c``, sin ``sn``): (x, y), m."""
+    px = p[base + L.S_PIVOT_X]
+    py = p[base + L.S_PIVOT_Y]
+    dx = p[base + L.S_LINING_CENTRE_X] - px
+    dy = p[base + L.S_LINING_CENTRE_Y] - py
+    return px + c * dx - sn * dy, py + sn * dx + c * dy
+
+
+@njit(inline="always", **JIT)
 def contact_point(p, base, c, sn):
     """Lining point farthest from the drum centre for a shoe turned by phi (cos c, sin sn).
 
@@ -69,10 +80,7 @@ def contact_point(p, base, c, sn):
     """
     px = p[base + L.S_PIVOT_X]
     py = p[base + L.S_PIVOT_Y]
-    dx = p[base + L.S_LINING_CENTRE_X] - px
-    dy = p[base + L.S_LINING_CENTRE_Y] - py
-    cx = px + c * dx - sn * dy
-    cy = py + sn * dx + c * dy
+    cx, cy = arc_centre(p, base, c, sn)
     m0x = p[base + L.S_LINING_MID_COS]
     m0y = p[base + L.S_LINING_MID_SIN]
     mx = c * m0x - sn * m0y

@@ -76,12 +76,7 @@ def first_node(p, base):
 def lining_point(p, base, c, sn, cb, sb):
     """The lining point at arc angle ``beta`` from its middle (cos ``cb``, sin ``sb``), for
     the shoe turned by ``phi`` (cos ``c``, sin ``sn``): (x, y), m."""
-    px = p[base + L.S_PIVOT_X]
-    py = p[base + L.S_PIVOT_Y]
-    dx = p[base + L.S_LINING_CENTRE_X] - px
-    dy = p[base + L.S_LINING_CENTRE_Y] - py
-    cx = px + c * dx - sn * dy
-    cy = py + sn * dx + c * dy
+    cx, cy = contact.arc_centre(p, base, c, sn)
     m0x = p[base + L.S_LINING_MID_COS]
     m0y = p[base + L.S_LINING_MID_SIN]
     ux0 = cb * m0x - sb * m0y
