@@ -41,6 +41,9 @@ from brake_sim_ros.stream.topics import QosSpec
 NODE_NAME = "brake_sim_replay"
 _NS_PER_S = 1_000_000_000
 MAX_SLEEP_S = 0.05  # the replay loop wakes at least this often (Ctrl-C, shutdown)
+# after a publisher matches its subscribers, the time given their side of discovery to
+# match it back (loopback DDS: a few ms; a loaded machine: tens of ms)
+MATCH_SETTLE_S = 0.25
 
 
 class ReplayTopic(Protocol):
@@ -97,11 +100,17 @@ class ReplayNode(Node):
             self._publishers_by_topic[t.name] = publisher
 
     def wait_for_subscribers(self, count: int, timeout_s: float) -> bool:
-        """Wait until every topic has ``count`` matched subscriptions (True) or time out."""
+        """Wait until every topic has ``count`` matched subscriptions, then
+        :data:`MATCH_SETTLE_S` more (True), or time out (False).
+
+        The publisher's match is its side of discovery only: a subscriber that has not yet
+        matched the publisher back drops what arrives before, and a volatile topic does not
+        send it again, so the replay's first messages could be lost to it."""
         end = time.monotonic() + timeout_s
         while time.monotonic() < end:
             pubs = self._publishers_by_topic.values()
             if all(p.get_subscription_count() >= count for p in pubs):
+                time.sleep(MATCH_SETTLE_S)
                 return True
             time.sleep(0.02)
         return False
