@@ -228,12 +228,12 @@ def _write_history(job: SimulateJob, result: RunResult) -> None:
 def _write_stream(job: SimulateJob) -> list[str]:
     """The node's stream, produced offline once, into the MCAP file and the Rerun targets;
     the files are written under temporary names and renamed when complete."""
-    from brake_sim_ros.viz.targets import RerunTarget
-
     with contextlib.ExitStack() as stack:
         mcap = stack.enter_context(job.atomic("--mcap")) if "--mcap" in job.outputs else None
         targets = [
-            RerunTarget("save", str(stack.enter_context(job.atomic("--rerun save", Path(t.arg)))))
+            dataclasses.replace(
+                t, arg=str(stack.enter_context(job.atomic("--rerun save", Path(t.arg))))
+            )
             if t.kind == "save"
             else t
             for t in job.rerun
@@ -243,10 +243,12 @@ def _write_stream(job: SimulateJob) -> list[str]:
 
 
 def _stream(job: SimulateJob, mcap: Path | None, targets: list[RerunTarget]) -> list[str]:
-    from brake_sim_ros.viz.commands import finish_simulation_sinks, open_simulation_sinks
-
     scenario, lines = job.scenario, []
-    sinks = open_simulation_sinks(scenario, targets) if targets else []
+    sinks: list = []
+    if targets:  # rerun is imported only for a run that writes to it (1.3 s of CPU)
+        from brake_sim_ros.viz.commands import open_simulation_sinks
+
+        sinks = open_simulation_sinks(scenario, targets)
     try:
         if mcap is not None:
             from brake_sim_ros.recording.record import record_offline
@@ -267,6 +269,8 @@ def _stream(job: SimulateJob, mcap: Path | None, targets: list[RerunTarget]) -> 
             sink.close()
         raise
     if sinks:
+        from brake_sim_ros.viz.commands import finish_simulation_sinks
+
         lines.append(finish_simulation_sinks(sinks, list(job.rerun)))
     return lines
 

@@ -73,13 +73,18 @@ with open(sys.argv[1], "w") as f:
                 "brake_sim_ros.scenarios.loader",
             ),
         ),
+        # a run into an MCAP file: the physics, its sensors and the recorder, not Rerun
+        (
+            ["simulate", "symmetric", "--duration", "0.01", "--quiet", "--mcap", "{tmp}/r.mcap"],
+            tuple(h for h in HEAVY if h not in ("rerun", "rclpy", "dask", "sklearn")),
+        ),
     ],
     ids=" ".join,
 )
 def test_a_command_imports_only_what_it_needs(tmp_path, argv, needs):
     listing = tmp_path / "modules"
     r = subprocess.run(
-        [sys.executable, "-c", _IMPORTED, str(listing), *argv],
+        [sys.executable, "-c", _IMPORTED, str(listing), *(a.format(tmp=tmp_path) for a in argv)],
         capture_output=True,
         text=True,
         timeout=600,
