@@ -70,6 +70,7 @@ py_ok() {  # $1: interpreter; true if it runs and is Python >= 3.11
 # brake-sim command does not sit silent while numba compiles; then end successfully.
 finish() {
   [[ -n "$KERNEL_PID$KERNEL_ST" ]] || start_kernels
+  write_bytecode
   kernels_ended wait || true
   log "done"
   exit 0
@@ -169,6 +170,22 @@ kernels_ended() {
   (( KERNEL_ST == 0 )) && return 0
   stop_jobs
   die "compiling the physics kernels failed (exit $KERNEL_ST): $(grep -v '^\s*$' "$KERNEL_LOG" | tail -n 1 | cut -c1-160) (full log: $KERNEL_LOG)"
+}
+
+# The .pyc of every module brake-sim imports (scripts/compile_bytecode.py): pip installs
+# with --no-compile, and where PYTHONDONTWRITEBYTECODE is set nothing writes them later, so
+# that every brake-sim process would compile its imports from source (about 1 s of CPU).
+# Beside the kernels' compile; a few seconds when they are up to date.
+write_bytecode() {
+  local log="$REPO_ROOT/build/bytecode.log"
+  mkdir -p "$REPO_ROOT/build"
+  : >"$log"
+  if with_progress "writing the bytecode of what brake-sim imports" "$log" \
+      "$VPY" "$REPO_ROOT/scripts/compile_bytecode.py"; then
+    log "$(tail -n 1 "$log" | cut -c1-300)"
+  else
+    log "writing the bytecode failed (modules compile at their first use instead): $(tail -n 1 "$log" | cut -c1-160) (full log: $log)"
+  fi
 }
 
 # $1: what it does, $2: its log (appended), then the command. Prints a line every TICK s

@@ -7,6 +7,9 @@ from __future__ import annotations
 import fcntl
 import functools
 import os
+import signal
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -103,6 +106,38 @@ def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
         return (1 if item.path in slow else 2, 0)
 
     items.sort(key=order)  # stable: the order within a file and among the rest
+
+
+def pytest_sessionstart(session: pytest.Session) -> None:
+    """In the controller (or the one process): start compiling the kernels' parts that
+    compile at first use (solvers/warmup.py; a no-op when this source version's are cached)
+    in the background, so that they compile beside the first tests, in parallel, instead of
+    inside the first test that needs one while the other workers wait for it. A test that
+    needs a part meanwhile waits on the kernel cache's lock, as at any first use."""
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        return
+    from brake_sim_ros.solvers.warmup import PARTS, is_compiled
+
+    if is_compiled(PARTS):
+        return
+    session.config.stash[_WARMUP] = subprocess.Popen(
+        [sys.executable, "-m", "brake_sim_ros.solvers.warmup", "--all"],
+        stdin=subprocess.DEVNULL,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+        start_new_session=True,  # its own group: its compile child goes with it
+    )
+
+
+def pytest_sessionfinish(session: pytest.Session) -> None:
+    """Stop the background compile should the session end before it (``-x``, Ctrl-C)."""
+    proc = session.config.stash.get(_WARMUP, None)
+    if proc is not None and proc.poll() is None:
+        os.killpg(proc.pid, signal.SIGKILL)
+        proc.wait()
+
+
+_WARMUP = pytest.StashKey[subprocess.Popen]()
 
 
 def pytest_configure(config):

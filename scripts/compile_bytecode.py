@@ -1,0 +1,86 @@
+"""Write the bytecode (.pyc) of every module brake-sim imports, once, at set-up.
+
+pip installs with ``--no-compile`` (scripts/setup.sh: it halves pip's time), and where
+``PYTHONDONTWRITEBYTECODE`` is set Python never writes a .pyc on import either: every
+``brake-sim`` process then compiles numpy, scipy, numba, rclpy and the project from source
+as it imports them, about a second of CPU a process. This imports, with bytecode writing
+on, every module the project's sources name in an import statement (at module level or
+inside a function, found in their syntax trees) and the project's own modules, so that
+each writes its .pyc and those of what it imports.
+
+A module that cannot be imported here (an optional part missing, the ROS interfaces not
+built yet) is counted in the last line and left to compile at its first use, as before.
+"""
+
+from __future__ import annotations
+
+import ast
+import importlib
+import importlib.util
+import pkgutil
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+PACKAGE = "brake_sim_ros"
+
+
+def imported_names(root: Path) -> set[str]:
+    """Every absolute module name an import statement in the package's sources names:
+    ``import a.b`` names ``a.b``; ``from a import b`` names ``a`` and, where ``b`` is a
+    submodule (``from scipy import signal``), ``a.b``."""
+    names: set[str] = set()
+    for path in (root / PACKAGE).rglob("*.py"):
+        tree = ast.parse(path.read_text(encoding="utf-8"), str(path))
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Import):
+                names.update(alias.name for alias in node.names)
+            elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
+                names.add(node.module)
+                names.update(
+                    f"{node.module}.{alias.name}"
+                    for alias in node.names
+                    if _is_module(f"{node.module}.{alias.name}")
+                )
+    return names
+
+
+def _is_module(name: str) -> bool:
+    """Whether ``name`` is a module one could import (not a class or function of one)."""
+    try:
+        return importlib.util.find_spec(name) is not None
+    except (ImportError, ValueError):  # its parent is not a package, or not importable
+        return False
+
+
+def project_modules() -> list[str]:
+    """The package's modules, but its ``__main__`` ones (importing those runs them)."""
+    package = importlib.import_module(PACKAGE)
+    found = pkgutil.walk_packages(package.__path__, f"{PACKAGE}.")
+    return sorted(m.name for m in found if not m.name.endswith("__main__"))
+
+
+def main() -> int:
+    sys.dont_write_bytecode = False  # whatever PYTHONDONTWRITEBYTECODE says
+    sys.path.insert(0, str(ROOT))
+    start = time.process_time()
+    names = sorted(imported_names(ROOT) - {"__main__"}) + project_modules()
+    failed = []
+    for i, name in enumerate(names):
+        if i % 100 == 0:  # the set-up's progress lines show the latest
+            print(f"{i} of {len(names)} imported", flush=True)
+        try:
+            importlib.import_module(name)
+        except Exception:  # any failure: left to compile at its first use
+            failed.append(name)
+    left = f"; {len(failed)} could not be imported here: {', '.join(failed)}" if failed else ""
+    print(
+        f"bytecode of {len(sys.modules)} modules written or up to date"
+        f" ({time.process_time() - start:.1f} s of CPU){left}"
+    )
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
