@@ -10,7 +10,11 @@ structure's outputs. The runs: ``urban`` and ``symmetric`` with their default se
 ``symmetric`` with a faulted sensor set (every fault kind, a decimated IMU, a load pin) in
 chunks of 77 samples; the published cases, the downhill runs (thermal, wear), every
 fixed-step scheme, one shoe removed, an oval drum and the urban cycle on a drum with a
-flat (physics only). ``--quick``: the first three runs only.
+flat (physics only). The drive cycles (``urban``, the downhill runs) ran on the study
+brake until they moved to the service brake (issue 28): their lines keep their labels and
+meaning on the study brake (``tests/study_cycles.py``: the files with ``brake = "study"``),
+and the last lines are the built-in cycles as they ship, on the service brake.
+``--quick``: the first three runs only.
 
 Without the ROS message package: the stepper and the sensor bank are built as
 :mod:`brake_sim_ros.stream.build` builds them.
@@ -21,7 +25,6 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import hashlib
-from pathlib import Path
 
 import numpy as np
 
@@ -30,12 +33,13 @@ from brake_sim_ros.scenarios import Scenario, load_scenario, parse_scenario
 from brake_sim_ros.sensing.sensors import SensorBank, SensorSet
 from brake_sim_ros.solvers.fixed_step import FixedStepStepper
 from tests.sample_blocks import faulted_set  # the sensor set tests/sensing/test_sensors.py runs
+from tests.study_cycles import on_study_brake, study_text
 
-BUILTIN = Path(__file__).resolve().parents[1] / "brake_sim_ros" / "scenarios" / "builtin"
 OVAL = (
     'name = "oval"\nduration_s = 7.5\n[[defects.drum.harmonics]]\norder = 2\n'
     "amplitude_um = 50.0\nphase_deg = 0.0\n"
 )
+CYCLES = ("urban", "downhill", "downhill_fade", "downhill_wear")  # the built-in drive cycles
 FLAT = (
     "\n[defects.drum]\nflat_depth_um = 40.0\nflat_width_deg = 20.0\n"
     "[[defects.drum.harmonics]]\norder = 3\namplitude_um = 20.0\nphase_deg = 10.0\n"
@@ -92,21 +96,16 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="the sensor runs only")
     args = parser.parse_args()
-    urban, symmetric = load_scenario("urban"), load_scenario("symmetric")
+    urban, symmetric = on_study_brake("urban"), load_scenario("symmetric")
     print(run_hash("urban + default sensors", urban, 2560, sensors=urban.sensors), flush=True)
     print(run_hash("symmetric + default sensors", symmetric, 2560, sensors=symmetric.sensors))
     print(run_hash("symmetric + faulted sensors", symmetric, 77, sensors=faulted_set()))
     if args.quick:
         return
-    for name in (
-        "case1_left_pivot_out",
-        "case5_left_tilted",
-        "case7_left_actuation",
-        "downhill",
-        "downhill_fade",
-        "downhill_wear",
-    ):
+    for name in ("case1_left_pivot_out", "case5_left_tilted", "case7_left_actuation"):
         print(run_hash(name, load_scenario(name), 1000), flush=True)
+    for name in CYCLES[1:]:
+        print(run_hash(name, on_study_brake(name), 1000), flush=True)
     for name, scenario in (("symmetric", symmetric), ("urban 20 s", urban)):
         for scheme in ("rk4", "rk4-located", "semi-implicit-euler"):
             print(run_hash(name, scenario, 1000, scheme=scheme, duration_s=20.0), flush=True)
@@ -115,8 +114,12 @@ def main() -> None:
             label = f"{name}, {shoe} shoe only"
             print(run_hash(label, scenario, 1000, options=one, duration_s=20.0), flush=True)
     print(run_hash("oval drum", parse_scenario(OVAL), 1000), flush=True)
-    urban_text = (BUILTIN / "urban.toml").read_text()
-    print(run_hash("urban, drum with a flat", parse_scenario(urban_text + FLAT), 1000))
+    flat = parse_scenario(study_text("urban") + FLAT)
+    print(run_hash("urban, drum with a flat", flat, 1000), flush=True)
+    service = load_scenario("urban")
+    print(run_hash("urban (service) + default sensors", service, 2560, sensors=service.sensors))
+    for name in CYCLES[1:]:
+        print(run_hash(f"{name} (service)", load_scenario(name), 1000), flush=True)
 
 
 if __name__ == "__main__":

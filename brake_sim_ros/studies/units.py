@@ -4,9 +4,11 @@
 scenario (default the published event, fast preset) for units ``unit-0000`` ... of one
 seed and prints mean, standard deviation, minimum and maximum of the stop time and of the
 leading (left) shoe's first-impact peak pivot force, beside what a linear model of the
-scatter predicts: each parameter of :data:`~brake_sim_ros.fleet.scatter.SCATTER` moved by one
-standard deviation alone, the predicted standard deviation the root sum of squares of the
-effects times each truncated distribution's standard deviation over its sigma.
+scatter predicts: each parameter of the scenario's brake's scatter table
+(:func:`~brake_sim_ros.fleet.scatter.scatter_table`: the study brake's or the service
+brake's) moved by one standard deviation alone, the predicted standard deviation the root
+sum of squares of the effects times each truncated distribution's standard deviation over
+its sigma.
 """
 
 from __future__ import annotations
@@ -19,7 +21,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from brake_sim_ros.fleet.scatter import NOMINAL_UNIT, SCATTER, Scatter, with_deviations
+from brake_sim_ros.fleet.scatter import NOMINAL_UNIT, Scatter, scatter_table, with_deviations
 from brake_sim_ros.scenarios import Scenario, load_scenario
 from brake_sim_ros.stream.run import run_scenario
 
@@ -76,7 +78,7 @@ def linear_spread(
     distribution's standard deviation over sigma (a linear model around the nominal)."""
     base = figures(scenario.with_unit(NOMINAL_UNIT), duration_s)
     parts = {}
-    for s in SCATTER:
+    for s in scatter_table(scenario.drawing_params.brake):
         moved = figures(_shifted(scenario, s), duration_s)
         ratio = s.std / s.sigma
         parts[s.key] = UnitFigures(

@@ -5,7 +5,9 @@ The fixed-step kernel evaluates a stage with the rotors' derivatives only
 the drum slides, no tip force, no contact forced on and each indentation provably negative
 by the bound ``eps0 + 2 reach |theta - theta0|``. These tests step real states of the
 urban cycle both ways and require identical bits, and check the bound against the contact
-geometry itself near the drum, where it matters.
+geometry itself near the drum, where it matters. The states are the study brake's
+(the urban cycle with ``brake = "study"``, ``tests/study_cycles.py``): its shoes carry no
+tip force between stops, the service brake's carry their springs' and stops'.
 """
 
 from __future__ import annotations
@@ -19,8 +21,8 @@ from hypothesis import strategies as st
 
 from brake_sim_ros.model import contact, kernel, rk4
 from brake_sim_ros.model import layout as L
-from brake_sim_ros.scenarios import load_scenario
 from brake_sim_ros.stream.build import stepper_for
+from tests.study_cycles import on_study_brake
 
 BASES = (L.P_SHOE_BASE, L.P_SHOE_BASE + L.SHOE_STRIDE)
 
@@ -59,7 +61,7 @@ def _step(p, y, dt, free, mode, t_knots, f_knots):
 
 @pytest.mark.slow
 def test_free_stages_step_the_urban_cycle_with_the_same_bits():
-    scenario = load_scenario("urban")
+    scenario = on_study_brake("urban")
     stepper = stepper_for(scenario)
     dt = stepper.physics_step_s
     p = stepper.packed_parameters.copy()
@@ -85,7 +87,7 @@ def test_free_stages_step_the_urban_cycle_with_the_same_bits():
 
 
 def test_no_stage_rides_free_with_a_contact_forced_on():
-    stepper = stepper_for(load_scenario("urban"))
+    stepper = stepper_for(on_study_brake("urban"))
     stepper.advance(round(4.0 / stepper.sample_period_s))
     p, y = stepper.packed_parameters, stepper.state
     knots = (np.array([0.0, 1.0]), np.zeros(2))
@@ -103,7 +105,7 @@ def test_the_bound_never_admits_a_penetrating_stage(side, theta0_mrad, turn_mrad
     """Near and across the drum (a shoe from 3 mrad inside its clearance to 1 mrad into
     the drum, turning up to 2 mrad within the stage): wherever the bound says the shoe is
     clear, the contact geometry agrees."""
-    p = stepper_for(load_scenario("urban")).packed_parameters
+    p = stepper_for(on_study_brake("urban")).packed_parameters
     base = BASES[side]
     theta0 = theta0_mrad * 1e-3
     theta = theta0 + turn_mrad * 1e-3
