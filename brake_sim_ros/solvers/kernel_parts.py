@@ -174,10 +174,11 @@ def compile_kernels(
 
 
 @contextmanager
-def _turn() -> Iterator[None]:
+def turn() -> Iterator[None]:
     """Hold the kernel cache's lock file: one process compiles at a time, the others wait
-    and then find the parts in the cache (no lock without a cache directory one may write
-    to: numba then compiles without caching, as it does without this module)."""
+    and then find the parts in the cache; what must not run beside a compile (a test of
+    wall-clock behaviour) waits for it to end. No lock without a cache directory one may
+    write to: numba then compiles without caching, as it does without this module."""
     cache = numba.config.CACHE_DIR
     try:
         Path(cache).mkdir(parents=True, exist_ok=True)
@@ -203,7 +204,7 @@ def ensure_compiled(
     if is_compiled(wanted):
         return
     say = say or (lambda line: print(line, file=sys.stderr, flush=True))
-    with _turn():
+    with turn():
         missing = [part for part in wanted if not is_compiled([part])]
         if missing:
             _compile_announced(say, missing)
