@@ -21,8 +21,9 @@ from brake_sim_ros.model.catalogue import (
 from brake_sim_ros.model.defects import SERVICE_RUNOUT_UM, Defects, DrumDefect, ShoeDefect
 from brake_sim_ros.model.line_kinds import LINE
 from brake_sim_ros.model.packing import PackSite
-from brake_sim_ros.model.parameters import BrakeParameters, ServiceBrakeParameters
+from brake_sim_ros.model.parameters import BrakeParameters
 from brake_sim_ros.model.placement import lining_mid_rad
+from brake_sim_ros.model.service_parameters import ServiceBrakeParameters
 from brake_sim_ros.model.vehicle import DEFAULT_WHEEL_RADIUS_M
 
 SIDES = L.SIDES

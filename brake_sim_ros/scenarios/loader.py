@@ -32,8 +32,9 @@ from brake_sim_ros.model.catalogue import refuse_without_circuit
 from brake_sim_ros.model.cycle import pack_drive
 from brake_sim_ros.model.defects import Defects
 from brake_sim_ros.model.fidelity import plan
-from brake_sim_ros.model.parameters import WHEEL_CYLINDER_BORE_M, BrakeParameters
+from brake_sim_ros.model.parameters import BrakeParameters
 from brake_sim_ros.model.run_setup import BrakeSetup
+from brake_sim_ros.model.service_parameters import WHEEL_CYLINDER_BORE_M
 from brake_sim_ros.model.vehicle import DRIVE_LIMITS as VEHICLE_DRIVE_LIMITS
 from brake_sim_ros.scenarios.checker import MISSING, SHOWN_CHARS, Checker, show_value
 from brake_sim_ros.scenarios.defect_tables import parse_defects
