@@ -185,6 +185,15 @@ class ServiceBrakeParameters:
     # False (until the service brake's figures are re-measured with the arc: docs/model.md):
     # the study brake's point contact (Hertzian line) in place of the arc.
     distributed_lining: bool = False
+    # The self-adjuster (model/adjuster.py): a ratchet strut between the shoes at the wheel
+    # cylinder, as leading-trailing rear drums with the cylinder at the top carry (the
+    # Lucas-Girling and VW quadrant struts: a toothed quadrant on the leading shoe's web
+    # engages the strut and turns by a tooth when the shoe's travel on application exceeds
+    # the free play of its slot, which is set to the travel of the running clearance). The
+    # running clearance a tooth takes up at the lining, m. Estimate: a tooth lengthens the
+    # strut by about 0.2 mm, 0.1 mm at each tip, and the tip travels about twice the
+    # clearance it closes (0.6 mm for 0.3 mm: return_spring_rate_n_per_m), so 0.05 mm.
+    adjuster_step_m: float = 5.0e-5
     # The tyre between vehicle and wheel (model/tyre.py), with the road's friction.
     tyre: TyreParameters = field(default_factory=TyreParameters)
 
@@ -234,6 +243,7 @@ class ServiceBrakeParameters:
             "1e5 to 1e9 N/m",
         )
         for name, low, high, allowed in (
+            ("adjuster_step_m", 1e-6, 1e-3, "1 um to 1 mm"),
             ("lining_modulus_pa", 1e6, 1e11, "1e6 to 1e11 Pa"),
             ("lining_thickness_m", 0.001, 0.02, "1 to 20 mm"),
             ("lining_damping_time_s", 0.0, 1e-3, "0 to 1e-3 s"),

@@ -27,6 +27,7 @@ from typing import Any
 
 from brake_sim_ros.errors import BrakeSimError, ScenarioError
 from brake_sim_ros.fleet.scatter import NOMINAL_UNIT
+from brake_sim_ros.model.adjuster import refuse_on_study
 from brake_sim_ros.model.assembly import SIDES, pack
 from brake_sim_ros.model.catalogue import refuse_without_circuit
 from brake_sim_ros.model.cycle import pack_drive
@@ -194,6 +195,11 @@ def _defects(ctx: Checker, top: dict[str, Any], params: BrakeParameters) -> Defe
             refuse_without_circuit(defects.line)
         except BrakeSimError as exc:
             raise ScenarioError(f"{ctx.source}: [defects.line]: {exc}") from exc
+        for side in SIDES:  # nor a self-adjuster
+            try:
+                refuse_on_study(side, getattr(defects, side).adjuster_seized_mm)
+            except BrakeSimError as exc:
+                raise ScenarioError(f"{ctx.source}: [defects.{side}]: {exc}") from exc
     return defects
 
 
