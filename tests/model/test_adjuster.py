@@ -16,11 +16,13 @@ from scipy.optimize import brentq
 
 from brake_sim_ros.analysis.energy import energy_balance, line_pressure_pa
 from brake_sim_ros.errors import ParameterError, ScenarioError
+from brake_sim_ros.model import growth as growth_update
 from brake_sim_ros.model import layout as L
 from brake_sim_ros.model.adjuster import takeup_m
 from brake_sim_ros.model.assembly import indentation_at, pack
 from brake_sim_ros.model.catalogue import KIND_BY_NAME, brake_kinds
 from brake_sim_ros.model.defects import Defects, ShoeDefect
+from brake_sim_ros.model.growth_law import Growth
 from brake_sim_ros.model.parameters import BrakeParameters
 from brake_sim_ros.model.placement import place_shoe
 from brake_sim_ros.model.service_parameters import SERVICE_RUNNING_CLEARANCE_M
@@ -75,6 +77,31 @@ def test_a_seized_adjuster_leaves_the_whole_wear_in_the_clearance(wear_mm):
         - takeup_m((wear_mm - 0.2) * 1e-3, 0.0, STEP_M),
         abs=1e-9,
     )
+
+
+@pytest.mark.parametrize(
+    ("growth", "taken_mm"),
+    [
+        (Growth(law="linear", rate_per_s=2.0), 0.0),  # from 0 at the start: nothing yet
+        (Growth(law="exponential", doubling_time_s=0.5, start=0.52), 0.5),  # 0.52 at t = 0
+        (Growth(law="friction_work", wear_rate_mm_per_mj=1.0), 0.0),  # a state from 0
+    ],
+)
+def test_a_wear_that_grows_in_the_run_is_taken_up_only_as_it_was_at_the_start(growth, taken_mm):
+    """The adjuster holds its place during a run (the ratchet stepping within a run is
+    not modelled): it has taken up the wear the run starts with, in whole steps, and the
+    wear the run adds opens the clearance, to the final wear less that takeup."""
+    defects = Defects(
+        left=ShoeDefect(lining_wear_mm=1.0), growth=(("lining_wear", "left", growth),)
+    )
+    p = pack(SERVICE, defects)
+    unworn = SERVICE.shoe.drum_radius_m - SERVICE_RUNNING_CLEARANCE_M
+    assert p[L.P_LINING_BASE + L.LN_RADIUS] == pytest.approx(unworn + taken_mm * 1e-3, abs=1e-12)
+    if growth.follows_time:  # the radius the growth writes at the end: final wear applied
+        pw = growth_update.working_copy(p)
+        growth_update.apply(p, pw, 10.0, np.zeros(L.N_STATE_WEAR))
+        radius = pw[L.P_SHOE_BASE + L.S_LINING_RADIUS]
+        assert radius == pytest.approx(unworn + taken_mm * 1e-3 - 1e-3, abs=1e-12)
 
 
 def test_the_ratchet_takes_up_only_whole_steps():
