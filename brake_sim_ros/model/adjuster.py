@@ -14,11 +14,12 @@ t = 0) has been taken up by applications before it, in ``n = floor(w / s)`` whol
 of the clearance ``s`` a tooth takes up at the lining. The takeup ``n s`` is put back on
 the lining's radius at rest (the gap it closes), not on the shoe's rest angle: the
 clearance the piston closes is the same; the lining arc stays concentric with the drum at
-rest, where the real strut turns the shoe about its pin (1 mm at the lining tilts it by
-about 0.6 deg). The adjuster holds its place during a run: the wear a run adds (the
-friction-work law: about 1.5 um in a stop from 100 km/h at the default rate) stays far
-below a step (0.05 mm), which takes some thirty such stops, so it opens the clearance as it
-did before; the ratchet stepping within a run is not modelled.
+rest, where the real strut turns the shoe about its pin (1 mm at the lining, 1.92 mm at
+the tip 284 mm from the pin, tilts it by 0.39 deg). The adjuster holds its place during a
+run: the wear a run adds (the friction-work law: about 1.5 um in a stop from 100 km/h at
+the default rate) stays far below a step (0.05 mm), which takes some thirty such stops, so
+it opens the clearance as it did before; the ratchet stepping within a run is not
+modelled.
 
 A seized adjuster (``adjuster_seized``, a shoe's defect, service brake only) has failed to
 take up ``y`` mm of that wear: it takes up ``max(w - y, 0)`` in whole steps, and where
