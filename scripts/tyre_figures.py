@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from brake_sim_ros.analysis.energy import energy_balance
-from brake_sim_ros.model.parameters import DRY_ROAD_FRICTION, WET_ROAD_FRICTION
+from brake_sim_ros.model.service_parameters import DRY_ROAD_FRICTION, WET_ROAD_FRICTION
 from brake_sim_ros.solvers.stability import step_limit
 from tests.model.test_tyre import (  # the runs and hand figures the tests check
     RADIUS_M,

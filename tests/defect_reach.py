@@ -22,7 +22,6 @@ from brake_sim_ros.model import catalogue
 from brake_sim_ros.model.assembly import pack
 from brake_sim_ros.model.catalogue import DefectKind, label_column, label_columns
 from brake_sim_ros.model.defects import Defects
-from brake_sim_ros.model.line_kinds import LINE
 from brake_sim_ros.model.parameters import BrakeParameters
 from brake_sim_ros.scenarios import parse_scenario
 from brake_sim_ros.stream import parameters as ros_params
@@ -43,9 +42,10 @@ healthy = false
 
 
 def brake_of(kind: DefectKind) -> str:
-    """The brake that carries ``kind``: the service brake for a kind of the hydraulic line
-    (the study brake has no circuit and refuses it), else the study brake."""
-    return "service" if LINE in kind.locations else "study"
+    """The brake that carries ``kind``: the service brake for a kind only it has (the
+    hydraulic line's, the self-adjuster's: the study brake refuses them), else the study
+    brake."""
+    return "service" if kind.service_only else "study"
 
 
 def _params(kind: DefectKind) -> BrakeParameters:

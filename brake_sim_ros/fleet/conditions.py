@@ -48,8 +48,9 @@ from dataclasses import dataclass
 from brake_sim_ros.errors import ParameterError
 from brake_sim_ros.fleet.scatter import keyed_uniform
 from brake_sim_ros.model.actuation import MAX_ACTUATION_FORCE_N, Actuation, ForceProfile
-from brake_sim_ros.model.parameters import ROAD_FRICTION_RANGE, BrakeParameters
+from brake_sim_ros.model.parameters import BrakeParameters
 from brake_sim_ros.model.run_setup import BrakeSetup
+from brake_sim_ros.model.service_parameters import ROAD_FRICTION_RANGE
 from brake_sim_ros.model.thermal import FADE
 from brake_sim_ros.model.vehicle import LOAD_FACTOR_RANGE
 

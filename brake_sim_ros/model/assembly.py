@@ -9,20 +9,22 @@ import numpy as np
 from scipy.optimize import brentq
 
 from brake_sim_ros.errors import ParameterError
-from brake_sim_ros.model import kernel, lining, service, thermal
+from brake_sim_ros.model import adjuster, kernel, lining, service, thermal
 from brake_sim_ros.model import layout as L
 from brake_sim_ros.model.actuation import RESIDUAL_FORCE_N, RETURN_SPRING_PRELOAD_N
 from brake_sim_ros.model.catalogue import (
     KIND_BY_NAME,
     LOCATIONS,
+    WEAR_KIND,
     kinds_at,
     refuse_without_circuit,
 )
 from brake_sim_ros.model.defects import SERVICE_RUNOUT_UM, Defects, DrumDefect, ShoeDefect
 from brake_sim_ros.model.line_kinds import LINE
 from brake_sim_ros.model.packing import PackSite
-from brake_sim_ros.model.parameters import BrakeParameters, ServiceBrakeParameters
+from brake_sim_ros.model.parameters import BrakeParameters
 from brake_sim_ros.model.placement import lining_mid_rad
+from brake_sim_ros.model.service_parameters import ServiceBrakeParameters
 from brake_sim_ros.model.vehicle import DEFAULT_WHEEL_RADIUS_M
 
 SIDES = L.SIDES
@@ -72,6 +74,7 @@ def pack(
         _pack_shoe(params, site, enabled=side in options.shoes)
         for kind in kinds_at(side):
             kind.packing(site)
+        adjuster.pack_adjuster(params, defect, side, defects.growth_of(WEAR_KIND, side), p)
         _check_shoe(params, side, defect, p, site.shoe_base)
     # the shoes at rest against the round drum: the gap a drum's runout must stay below
     round_drum = p.copy()

@@ -29,6 +29,7 @@ from dataclasses import dataclass
 from brake_sim_ros.errors import ParameterError
 from brake_sim_ros.model import layout as L
 from brake_sim_ros.model import packing
+from brake_sim_ros.model.adjuster import ADJUSTER_KIND
 from brake_sim_ros.model.defect_kind import DefectField, DefectKind
 from brake_sim_ros.model.growth_law import (  # noqa: F401 (re-exported: the catalogue's laws)
     DEFAULT_WEAR_RATE_MM_PER_MJ,
@@ -46,7 +47,7 @@ from brake_sim_ros.model.growth_law import (  # noqa: F401 (re-exported: the cat
     severity_series,
 )
 from brake_sim_ros.model.layout import SIDES
-from brake_sim_ros.model.line_kinds import LINE, LINE_KINDS
+from brake_sim_ros.model.line_kinds import CIRCUIT_LEVELS, LINE, LINE_KINDS
 
 DRUM_KIND = "drum_out_of_round"
 WEAR_KIND = "lining_wear"
@@ -293,8 +294,10 @@ KINDS: list[DefectKind] = [
         limit=f"a new lining is {LINING_THICKNESS_MM:g} mm thick (a typical passenger-car figure)",
         description=(
             "lining thickness the shoe has lost, in mm: the lining surface moves in, the gap"
-            " to the drum grows by as much (the shoe turns further before it touches);"
-            " growth friction_work wears it with the shoe's own friction work"
+            " to the drum grows by as much (the shoe turns further before it touches), but"
+            " on the service brake, whose self-adjuster has taken the wear present at the"
+            " start up in whole steps (adjuster_seized: what it failed to); growth"
+            " friction_work wears it with the shoe's own friction work"
         ),
         scenario_key="lining_wear_mm",
         # replaced at 1.6 mm left of 5 mm (1/16 in above the table: a typical workshop limit)
@@ -305,6 +308,29 @@ KINDS: list[DefectKind] = [
         growth_id=L.GK_WEAR,
         packing=packing.pack_lining_wear,
         laws=("step", "linear", "exponential", "friction_work"),
+    ),
+    DefectKind(
+        name=ADJUSTER_KIND,
+        locations=SIDES,
+        unit="mm",
+        minimum=0.0,
+        maximum=LINING_THICKNESS_MM,
+        limit=(f"a new lining is {LINING_THICKNESS_MM:g} mm thick: no more wear to fall behind"),
+        description=(
+            "lining wear the shoe's self-adjuster has failed to take up (seized), in mm: the"
+            " running clearance at rest grows by as much, so the piston travels further and"
+            " the circuit takes more fluid before the lining touches (a low pedal, a later"
+            " and harder first contact; service brake only)"
+        ),
+        scenario_key="adjuster_seized_mm",
+        # 1 mm: the clearance 0.3 -> 1.3 mm a shoe, 1.9 mm more piston travel and 0.55 ml
+        # more fluid a wheel cylinder (scripts/adjuster_figures.py); an estimate of a pedal
+        # clearly low that still brakes (workshops adjust at about 1 mm on the diameter)
+        service_limit=1.0,
+        levels=CIRCUIT_LEVELS,  # the service brake runs the full model only
+        growth_id=None,
+        packing=packing.pack_adjuster_seized,
+        service_only=True,
     ),
     DefectKind(
         name=FLAT_KIND,
@@ -379,9 +405,10 @@ def _at(
 
 def brake_kinds(circuit: bool) -> tuple[DefectKind, ...]:
     """The kinds a brake can carry, in catalogue order: every kind on a brake with a
-    hydraulic circuit (the service brake), all but the line's without one (the study
-    brake, an ideal force source, refuses them)."""
-    return tuple(k for k in KINDS if circuit or LINE not in k.locations)
+    hydraulic circuit (the service brake), all but the service brake's own (the line's and
+    the self-adjuster's) without one (the study brake, an ideal force source with a fixed
+    clearance, refuses them)."""
+    return tuple(k for k in KINDS if circuit or not k.service_only)
 
 
 def kinds_at(location: str) -> tuple[DefectKind, ...]:

@@ -101,6 +101,8 @@ class DefectKind:
         speed_dependent: its effect on a shoe follows the drum speed (no one-shoe model).
         table: its severity is not one number but a table of the scenario (a drum's
             harmonics): no node parameter, read by :mod:`brake_sim_ros.scenarios.defect_tables`.
+        service_only: only the service brake has what it acts on (its hydraulic circuit,
+            its self-adjuster): the study brake refuses it (:func:`.catalogue.brake_kinds`).
     """
 
     name: str
@@ -123,6 +125,7 @@ class DefectKind:
     actuation: str = ""
     speed_dependent: bool = False
     table: bool = False
+    service_only: bool = False
 
     def check(self, severity: float, where: str = "") -> None:
         """Refuse a severity outside the range, in one line naming the limit."""

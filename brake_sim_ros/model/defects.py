@@ -53,8 +53,10 @@ class ShoeDefect(_FieldSet):
     20 N, so past 67 %) lets the residual pressure press the shoe on the drum without
     actuation: drag (on the service brake the spring itself is weakened, preload and rate
     times ``1 - pct/100``: :mod:`brake_sim_ros.model.service`); a worn lining's surface
-    moves in by the wear, so the running clearance grows (an adjuster that takes up wear
-    is not modelled).
+    moves in by the wear, so the running clearance grows on the study brake (no adjuster);
+    on the service brake its self-adjuster has taken the wear present at the start up in
+    whole steps, but for what a seized adjuster failed to take up
+    (``adjuster_seized_mm``: :mod:`brake_sim_ros.model.adjuster`).
     """
 
     @classmethod

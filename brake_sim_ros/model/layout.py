@@ -195,7 +195,7 @@ P_COOLING = P_THERMAL + 8
 P_COOLING_PER_SPEED = P_THERMAL + 9
 P_AMBIENT = P_THERMAL + 10
 
-# the service brake (model/service.py; parameters.ServiceBrakeParameters): P_SERVICE 1.0
+# the service brake (model/service.py; service_parameters.ServiceBrakeParameters): P_SERVICE 1.0
 # when the brake has return springs and rest stops (else the study brake: none of the
 # slots below is read); the residual line force under which the wheel cylinder never
 # pushes, N; the rest stop's stiffness N/m and damping N s/m at the tip; then per shoe
@@ -224,7 +224,7 @@ P_LINE_RESISTANCE = P_PISTON_AREA + 2
 P_LINE_AIR_VOLUME = P_PISTON_AREA + 3
 P_LINE_LEAK_CONDUCTANCE = P_PISTON_AREA + 4
 
-# the service brake's tyre (model/tyre.py; parameters.TyreParameters), read when P_SERVICE:
+# the service brake's tyre (model/tyre.py; service_parameters.TyreParameters), read when P_SERVICE:
 # the LuGre law's presliding stiffness sigma0 1/m, its damping sigma1 s/m and viscous term
 # sigma2 s/m (each per newton of the wheel's load), the road's friction coefficients of
 # the Stribeck curve, sliding (a locked tyre's) and peak (at zero slip speed), and the

@@ -75,6 +75,7 @@ LINE_KINDS: tuple[DefectKind, ...] = (
         levels=CIRCUIT_LEVELS,
         growth_id=None,
         packing=packing.pack_line_air,
+        service_only=True,
     ),
     DefectKind(
         name=LEAK_KIND,
@@ -93,5 +94,6 @@ LINE_KINDS: tuple[DefectKind, ...] = (
         levels=CIRCUIT_LEVELS,
         growth_id=None,
         packing=packing.pack_line_leak,
+        service_only=True,
     ),
 )

@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 
 from brake_sim_ros.errors import ParameterError
-from brake_sim_ros.model import growth
+from brake_sim_ros.model import adjuster, growth
 from brake_sim_ros.model import layout as L
 from brake_sim_ros.model.actuation import RETURN_SPRING_PRELOAD_N
 from brake_sim_ros.model.contact import MAX_DRUM_SLOPE
@@ -140,6 +140,15 @@ def pack_lining_wear(site: PackSite) -> None:
     wear_mm = site.defect.lining_wear_mm
     site.p[site.shoe_base + L.S_LINING_RADIUS] = worn_lining_radius(site.params, wear_mm)
     site.p[site.lining_base + L.LN_WEAR] = wear_mm * 1e-3
+
+
+def pack_adjuster_seized(site: PackSite) -> None:
+    """A seized self-adjuster: refused on the study brake (it has none); on the service
+    brake the adjuster is packed with the shoe's wear at the start of the run
+    (:func:`.adjuster.pack_adjuster`, called by :func:`.assembly.pack`: it reads the
+    wear's growth)."""
+    if site.params.service is None:
+        adjuster.refuse_on_study(site.location, site.defect.adjuster_seized_mm)
 
 
 def pack_harmonics(site: PackSite) -> None:

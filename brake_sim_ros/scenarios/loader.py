@@ -27,13 +27,15 @@ from typing import Any
 
 from brake_sim_ros.errors import BrakeSimError, ScenarioError
 from brake_sim_ros.fleet.scatter import NOMINAL_UNIT
+from brake_sim_ros.model.adjuster import refuse_on_study
 from brake_sim_ros.model.assembly import SIDES, pack
 from brake_sim_ros.model.catalogue import refuse_without_circuit
 from brake_sim_ros.model.cycle import pack_drive
 from brake_sim_ros.model.defects import Defects
 from brake_sim_ros.model.fidelity import plan
-from brake_sim_ros.model.parameters import WHEEL_CYLINDER_BORE_M, BrakeParameters
+from brake_sim_ros.model.parameters import BrakeParameters
 from brake_sim_ros.model.run_setup import BrakeSetup
+from brake_sim_ros.model.service_parameters import WHEEL_CYLINDER_BORE_M
 from brake_sim_ros.model.vehicle import DRIVE_LIMITS as VEHICLE_DRIVE_LIMITS
 from brake_sim_ros.scenarios.checker import MISSING, SHOWN_CHARS, Checker, show_value
 from brake_sim_ros.scenarios.defect_tables import parse_defects
@@ -193,6 +195,11 @@ def _defects(ctx: Checker, top: dict[str, Any], params: BrakeParameters) -> Defe
             refuse_without_circuit(defects.line)
         except BrakeSimError as exc:
             raise ScenarioError(f"{ctx.source}: [defects.line]: {exc}") from exc
+        for side in SIDES:  # nor a self-adjuster
+            try:
+                refuse_on_study(side, getattr(defects, side).adjuster_seized_mm)
+            except BrakeSimError as exc:
+                raise ScenarioError(f"{ctx.source}: [defects.{side}]: {exc}") from exc
     return defects
 
 

@@ -21,12 +21,9 @@ from brake_sim_ros.model.assembly import SIDES, ModelOptions
 from brake_sim_ros.model.cycle import LIMITS as CYCLE_LIMITS
 from brake_sim_ros.model.cycle import Cycle, Segment
 from brake_sim_ros.model.fidelity import ACCURACY_PRESETS, LEVEL_BY_NAME, OUTPUTS, Needs
-from brake_sim_ros.model.parameters import (
-    BRAKES,
-    DEFAULT_BRAKE,
-    PARAMETER_GROUPS,
+from brake_sim_ros.model.parameters import BRAKES, DEFAULT_BRAKE, PARAMETER_GROUPS, BrakeParameters
+from brake_sim_ros.model.service_parameters import (
     ROAD_FRICTION_RANGE,
-    BrakeParameters,
     ServiceBrakeParameters,
     TyreParameters,
 )

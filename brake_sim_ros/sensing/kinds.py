@@ -25,7 +25,7 @@ import numpy as np
 
 from brake_sim_ros.errors import ParameterError
 from brake_sim_ros.model.layout import SIDES
-from brake_sim_ros.model.parameters import WHEEL_CYLINDER_BORE_M
+from brake_sim_ros.model.service_parameters import WHEEL_CYLINDER_BORE_M
 from brake_sim_ros.sensing import faults as sf
 from brake_sim_ros.sensing.transducers import (
     IDEAL,

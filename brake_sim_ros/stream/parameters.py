@@ -47,16 +47,14 @@ from brake_sim_ros.model.catalogue import (
 )
 from brake_sim_ros.model.defects import Defects, DrumDefect, LineDefect, ShoeDefect
 from brake_sim_ros.model.layout import SIDES
-from brake_sim_ros.model.parameters import (
-    PARAMETER_GROUPS,
+from brake_sim_ros.model.parameters import PARAMETER_GROUPS, BrakeParameters, unit_of
+from brake_sim_ros.model.run_setup import BrakeSetup
+from brake_sim_ros.model.service_parameters import (
     ROAD_FRICTION_RANGE,
     TYRE_LIMITS,
-    BrakeParameters,
     ServiceBrakeParameters,
     TyreParameters,
-    unit_of,
 )
-from brake_sim_ros.model.run_setup import BrakeSetup
 from brake_sim_ros.model.vehicle import DRIVE_LIMITS, Vehicle
 from brake_sim_ros.stream import run_parameters
 from brake_sim_ros.stream.run_parameters import (  # noqa: F401 (re-exported)

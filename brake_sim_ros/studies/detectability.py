@@ -41,7 +41,7 @@ from brake_sim_ros.datasets.sweep import sweep
 from brake_sim_ros.detection import evaluate, metrics
 from brake_sim_ros.detection.registry import make_detector
 from brake_sim_ros.errors import BrakeSimError
-from brake_sim_ros.model.catalogue import KIND_BY_NAME, KINDS, LINE
+from brake_sim_ros.model.catalogue import KIND_BY_NAME, KINDS
 
 FRACTIONS = (0.1, 0.2, 0.35, 0.5, 0.75, 1.0)  # of each kind's service limit
 FORCES = (1150.0, 1400.0)  # N per shoe, around the published 1300 N
@@ -161,10 +161,10 @@ def table(result: dict) -> str:
         + " |",
         "|---|---|---|" + "---|" * len(FRACTIONS),
     ]
-    # every kind, but the line's only where runs carried them (a campaign on the study
-    # brake, which has no circuit, carries none: not "not detected")
+    # every kind, but the service brake's own (the line's, the seized adjuster) only where
+    # runs carried them (a campaign on the study brake carries none: not "not detected")
     carried = {key.split("@")[0] for n in names for key in result["detectors"][n]["counts"]}
-    for kind in (k for k in KINDS if LINE not in k.locations or k.name in carried):
+    for kind in (k for k in KINDS if not k.service_only or k.name in carried):
         for name in names:
             counts = result["detectors"][name]["counts"]
             shares, cells = {}, []

@@ -15,7 +15,7 @@ from brake_sim_ros.campaigns.axes import DefectChoice, defect_choices
 from brake_sim_ros.campaigns.campaign import run_seed
 from brake_sim_ros.campaigns.splits import SPLITS, HeldOut, leaks, unit_counts
 from brake_sim_ros.campaigns.toml_text import dumps
-from brake_sim_ros.model.catalogue import KINDS, LINE
+from brake_sim_ros.model.catalogue import KINDS
 from brake_sim_ros.scenarios import parse_scenario
 
 TINY = """
@@ -70,9 +70,9 @@ def test_the_demo_can_fit_and_score_every_baseline():
     healthy operation on test, and runs longer than the 1.5 s the orders baseline needs."""
     campaign = load_campaign("demo")
     runs = campaign.runs()
-    # the demo's base is the study brake: every kind but the line's (they need the
-    # service brake's circuit)
-    every = {(k.name, loc) for k in KINDS if LINE not in k.locations for loc in k.locations}
+    # the demo's base is the study brake: every kind but the service brake's own (the
+    # line's need its circuit, the seized adjuster its adjuster)
+    every = {(k.name, loc) for k in KINDS if not k.service_only for loc in k.locations}
     for split, units in (("train", 5), ("validation", 2), ("test", 2)):
         mine = [r for r in runs if r.split == split]
         assert len({r.unit_id for r in mine}) == units
@@ -252,9 +252,9 @@ def test_toml_text_round_trips(data):
     assert tomllib.loads(dumps(data)) == data
 
 
-# the kinds a campaign on the study brake ('symmetric') sweeps: the line's need the service
-# brake's circuit
-STUDY_KINDS = [k.name for k in KINDS if LINE not in k.locations]
+# the kinds a campaign on the study brake ('symmetric') sweeps: the service brake's own
+# (the line's, the seized adjuster) need its circuit or its adjuster
+STUDY_KINDS = [k.name for k in KINDS if not k.service_only]
 
 
 @st.composite

@@ -15,7 +15,8 @@ from brake_sim_ros.errors import ParameterError
 from brake_sim_ros.fleet import scatter
 from brake_sim_ros.model.assembly import pack
 from brake_sim_ros.model.defects import Defects
-from brake_sim_ros.model.parameters import SERVICE_RUNNING_CLEARANCE_M, BrakeParameters
+from brake_sim_ros.model.parameters import BrakeParameters
+from brake_sim_ros.model.service_parameters import SERVICE_RUNNING_CLEARANCE_M
 from brake_sim_ros.scenarios import parse_scenario
 from brake_sim_ros.sensing.sensors import default_sensor_set
 

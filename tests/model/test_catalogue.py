@@ -80,7 +80,7 @@ def test_the_shoes_drawn_set_every_field_of_a_shoe():
     """The strategy below draws every field: a new field of a shoe (a kind's key or an
     attribute, from the catalogue) fails here until the strategy draws it too."""
     keys = {k.scenario_key for k in SHOE_KINDS}
-    assert len(keys) == len(SHOE_KINDS) == 10
+    assert len(keys) == len(SHOE_KINDS) == 11
     assert set(ShoeDefect().values()) == keys | {FREQUENCY}
 
 

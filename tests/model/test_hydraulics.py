@@ -16,9 +16,10 @@ from brake_sim_ros.model import layout as L
 from brake_sim_ros.model.actuation import Actuation, ForceProfile
 from brake_sim_ros.model.assembly import contact_arms
 from brake_sim_ros.model.defects import Defects, DrumDefect, DrumHarmonic, ShoeDefect
-from brake_sim_ros.model.parameters import WHEEL_CYLINDER_BORE_M, BrakeParameters
+from brake_sim_ros.model.parameters import BrakeParameters
 from brake_sim_ros.model.placement import place_shoe
 from brake_sim_ros.model.run_setup import BrakeSetup
+from brake_sim_ros.model.service_parameters import WHEEL_CYLINDER_BORE_M
 from brake_sim_ros.sensing.kinds import LINE_PRESSURE_LOCATION, PA_PER_BAR
 from brake_sim_ros.sensing.sensors import SensorBank, SensorChannel, SensorSet
 from brake_sim_ros.solvers import stability

@@ -270,7 +270,7 @@ def test_the_step_limit_sees_the_shoe_on_its_whole_arc():
 )
 def test_a_bad_lining_parameter_is_refused_in_one_line(field, value):
     from brake_sim_ros.errors import ParameterError
-    from brake_sim_ros.model.parameters import ServiceBrakeParameters
+    from brake_sim_ros.model.service_parameters import ServiceBrakeParameters
 
     with pytest.raises(ParameterError, match=field) as info:
         ServiceBrakeParameters(**{field: value})

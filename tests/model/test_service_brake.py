@@ -15,12 +15,12 @@ from brake_sim_ros.analysis.energy import energy_balance
 from brake_sim_ros.errors import ScenarioError
 from brake_sim_ros.model.assembly import contact_arms
 from brake_sim_ros.model.defects import Defects, ShoeDefect
-from brake_sim_ros.model.parameters import (
+from brake_sim_ros.model.parameters import BrakeParameters
+from brake_sim_ros.model.placement import place_shoe
+from brake_sim_ros.model.service_parameters import (
     SERVICE_RUNNING_CLEARANCE_M,
-    BrakeParameters,
     ServiceBrakeParameters,
 )
-from brake_sim_ros.model.placement import place_shoe
 from brake_sim_ros.scenarios.loader import parse_scenario
 from brake_sim_ros.stream.build import stepper_for
 

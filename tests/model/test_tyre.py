@@ -18,12 +18,9 @@ from brake_sim_ros.model import tyre
 from brake_sim_ros.model.assembly import ModelOptions, pack
 from brake_sim_ros.model.cycle import pack_drive
 from brake_sim_ros.model.defects import Defects
-from brake_sim_ros.model.parameters import (
-    DRY_ROAD_FRICTION,
-    BrakeParameters,
-    TyreParameters,
-)
+from brake_sim_ros.model.parameters import BrakeParameters
 from brake_sim_ros.model.run_setup import BrakeSetup
+from brake_sim_ros.model.service_parameters import DRY_ROAD_FRICTION, TyreParameters
 from brake_sim_ros.scenarios.loader import parse_scenario
 from brake_sim_ros.solvers.stability import step_limit
 from brake_sim_ros.stream.build import stepper_for
