@@ -10,7 +10,10 @@ structure's outputs. The runs: ``urban`` and ``symmetric`` with their default se
 ``symmetric`` with a faulted sensor set (every fault kind, a decimated IMU, a load pin) in
 chunks of 77 samples; the published cases, the downhill runs (thermal, wear), every
 fixed-step scheme, one shoe removed, an oval drum and the urban cycle on a drum with a
-flat (physics only). ``--quick``: the first three runs only.
+flat (physics only); then the service brake (``brake = "service"``): the urban cycle with
+its default sensors, 20 s of it with every fixed-step scheme, three applications and
+releases (shoes leaving and landing on their rest stops) on a line with air and a leak, and
+a stop on a wet road. ``--quick``: the first three runs only.
 
 Without the ROS message package: the stepper and the sensor bank are built as
 :mod:`brake_sim_ros.stream.build` builds them.
@@ -36,6 +39,19 @@ OVAL = (
     'name = "oval"\nduration_s = 7.5\n[[defects.drum.harmonics]]\norder = 2\n'
     "amplitude_um = 50.0\nphase_deg = 0.0\n"
 )
+# three applications to 1000 N per shoe and their releases, 0.6 s apart: the shoes leave
+# their rest stops, brake, return and land on them (tests/model/test_service_brake.py)
+_KNOTS = (
+    "times_s = [0.0, 0.1, 0.15, 0.25, 0.27, 0.7, 0.75, 0.85, 0.87, 1.3, 1.35, 1.45, 1.47]\n"
+    "forces_n = [0.0, 0.0, 1000.0, 1000.0, 0.0, 0.0, 1000.0, 1000.0, 0.0, 0.0, 1000.0,"
+    " 1000.0, 0.0]\n"
+)
+SERVICE_APPLICATIONS = (
+    'name = "applications"\nbrake = "service"\nduration_s = 1.9\n[actuation]\n'
+    f'profile = "piecewise"\n[actuation.left]\n{_KNOTS}[actuation.right]\n{_KNOTS}'
+    "[defects.line]\nair_in_line_ml = 1.0\nline_leak_pct = 20.0\n"
+)
+SERVICE_WET = 'name = "wet"\nbrake = "service"\nroad_friction = 0.4\n'
 FLAT = (
     "\n[defects.drum]\nflat_depth_um = 40.0\nflat_width_deg = 20.0\n"
     "[[defects.drum.harmonics]]\norder = 3\namplitude_um = 20.0\nphase_deg = 10.0\n"
@@ -117,6 +133,22 @@ def main() -> None:
     print(run_hash("oval drum", parse_scenario(OVAL), 1000), flush=True)
     urban_text = (BUILTIN / "urban.toml").read_text()
     print(run_hash("urban, drum with a flat", parse_scenario(urban_text + FLAT), 1000))
+    service_hashes(urban_text)
+
+
+def service_hashes(urban_text: str) -> None:
+    """The service brake's lines: the urban cycle (sensors, schemes), applications and
+    releases on a line with defects, a stop on a wet road."""
+    urban = parse_scenario(urban_text.replace("\nseed = 0\n", '\nseed = 0\nbrake = "service"\n'))
+    assert urban.setup.params.brake == "service"
+    label = "urban, service brake + default sensors"
+    print(run_hash(label, urban, 2560, sensors=urban.sensors), flush=True)
+    for scheme in ("rk4", "rk4-located", "semi-implicit-euler"):
+        print(run_hash("urban 20 s, service brake", urban, 1000, scheme=scheme, duration_s=20.0))
+    applications = parse_scenario(SERVICE_APPLICATIONS)
+    label = "service brake, 3 applications, air and leak"
+    print(run_hash(label, applications, 77, sensors=applications.sensors), flush=True)
+    print(run_hash("service brake, wet road stop", parse_scenario(SERVICE_WET), 1000))
 
 
 if __name__ == "__main__":
