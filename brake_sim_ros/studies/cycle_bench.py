@@ -1,21 +1,21 @@
 """``brake-sim bench cycle``: a drive cycle's cost offline, and its energy books.
 
-The cycle scenario (default ``urban``) at its preset (``--preset``, default the
-scenario's: balanced) is stepped in chunks of ``--chunk-s`` simulated seconds, recording
-every sample, and its default sensor set (structure and channels, carrying their state
-from chunk to chunk as the node's measured stream does) processes every chunk; memory
+The cycle scenario (default ``urban``) on its brake or the one ``--brake`` names (study or
+service: the scenario with its top-level ``brake`` key set so) at its preset (``--preset``,
+default the scenario's: balanced) is stepped in chunks of ``--chunk-s`` simulated seconds,
+recording every sample, and its default sensor set (structure and channels, carrying their
+state from chunk to chunk as the node's measured stream does) processes every chunk; memory
 stays bounded by a chunk. Printed, best of ``--repeats`` (process CPU time, one core; the
-runs with and without sensors alternate, so a change of the machine's load hits both):
-the physics alone and physics plus sensors as multiples of real time, the latter split
-into the stepping, the sensors and the rest (the loop's own work; the benchmark's own
-records of segments are not counted), and each run's figure; then the issue's figure
-on one line (the cycle with the default sensors, at least 30x real time), the stops and
-phases the cycle went through, and
-the energy books over the whole cycle (drive work in against the losses, road load and the
-change of stored energy; :func:`brake_sim_ros.analysis.energy.energy_balance`); and what
-the vehicle costs per sample where the shoes ride free (4 s without braking, recording every
-sample): the published model, the same with a ``[vehicle]`` (road load), and with a
-``[cycle]`` (road load and the controller).
+runs with and without sensors alternate, so a change of the machine's load hits both): the
+physics alone and physics plus sensors as multiples of real time, the latter split into the
+stepping, the sensors and the rest (the loop's own work; the benchmark's own records of
+segments are not counted), and each run's figure; then the issue's figure on one line (the
+cycle with the default sensors, at least 30x real time), the stops and phases the cycle went
+through, and the energy books over the whole cycle (drive work in against the losses, road
+load and the change of stored energy; :func:`brake_sim_ros.analysis.energy.energy_balance`);
+and what the vehicle costs per sample where the shoes ride free (4 s without braking,
+recording every sample): the published model, the same with a ``[vehicle]`` (road load), and
+with a ``[cycle]`` (road load and the controller), on the ``--brake`` named.
 """
 
 from __future__ import annotations
@@ -26,8 +26,11 @@ import time
 import numpy as np
 
 from brake_sim_ros.analysis.energy import energy_balance
+from brake_sim_ros.errors import ScenarioError
+from brake_sim_ros.model.parameters import BRAKES
 from brake_sim_ros.model.run_setup import SampleBlock
-from brake_sim_ros.scenarios import load_scenario, parse_scenario
+from brake_sim_ros.scenarios import Scenario, load_scenario, parse_scenario
+from brake_sim_ros.scenarios.loader import parse_toml
 from brake_sim_ros.stream.build import sensor_bank_for, stepper_for
 
 TARGET_RTF = 30.0
@@ -75,21 +78,48 @@ def _run(scenario, chunk_samples: int, with_sensors: bool):
     return (cpu, stepping, sensing), SampleBlock.concatenate([first, end]), segments
 
 
+def on_brake(scenario: Scenario, brake: str) -> Scenario:
+    """``scenario`` on the brake ``brake`` (:data:`BRAKES`): its text with the top-level
+    ``brake`` key set so, parsed again (itself if it is on that brake already).
+
+    Raises:
+        ScenarioError: the scenario's text names another brake, or does not parse on this
+            one (one line).
+    """
+    if scenario.setup.params.brake == brake:
+        return scenario
+    if "brake" in parse_toml(scenario.text, scenario.source):
+        raise ScenarioError(
+            f"{scenario.source}: brake = {scenario.setup.params.brake!r}: allowed --brake"
+            " only for a scenario on its brake or without a brake key"
+        )
+    return parse_scenario(f"brake = {brake!r}\n" + scenario.text, scenario.source)
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="brake-sim bench cycle", description=__doc__)
     parser.add_argument("--scenario", default="urban")
+    parser.add_argument(
+        "--brake", choices=BRAKES, default=None, help="the brake (default the scenario's)"
+    )
     parser.add_argument("--preset", default=None, help="solver preset (default the scenario's)")
     parser.add_argument("--chunk-s", type=float, default=0.1, help="simulated s per chunk")
     parser.add_argument("--repeats", type=int, default=3)
     args = parser.parse_args(argv)
-    scenario = load_scenario(args.scenario).with_solver(preset=args.preset)
+    scenario = load_scenario(args.scenario)
+    if args.brake is not None:
+        scenario = on_brake(scenario, args.brake)
+    scenario = scenario.with_solver(preset=args.preset)
     if scenario.setup.cycle is None:
         parser.error(f"scenario {scenario.name!r} has no [cycle]: allowed a cycle scenario")
     stepper = stepper_for(scenario)
     chunk = max(1, round(args.chunk_s / stepper.sample_period_s))
     stepper.advance(10)  # compile, or load the compiled kernel from the cache
     duration = scenario.duration_s
-    print(f"scenario {scenario.name}, preset {scenario.solver.preset}: {stepper.describe_step()}")
+    print(
+        f"scenario {scenario.name}, {scenario.setup.params.brake} brake, preset"
+        f" {scenario.solver.preset}: {stepper.describe_step()}"
+    )
     print(f"  {duration:g} s cycle in chunks of {chunk} samples, best of {args.repeats}")
     cases = (("physics", False), ("physics + default sensors", True))
     runs: dict[str, list[tuple[float, float, float]]] = {label: [] for label, _ in cases}
@@ -115,7 +145,8 @@ def main(argv: list[str] | None = None) -> int:
     rtf = duration / best[cases[1][0]][0]
     verdict = "met" if rtf >= TARGET_RTF else "NOT met"
     print(
-        f"  {scenario.name} cycle, preset {scenario.solver.preset}, default sensors:"
+        f"  {scenario.name} cycle, {scenario.setup.params.brake} brake, preset"
+        f" {scenario.solver.preset}, default sensors:"
         f" {rtf:.1f}x real time (target >= {TARGET_RTF:.0f}x: {verdict})"
     )
     stops = sum(k.endswith(":brake") for k in kinds)
@@ -130,7 +161,10 @@ def main(argv: list[str] | None = None) -> int:
     )
     print("  cost per sample with the shoes off the drum (4 s, recording every sample):")
     for label, text in _OVERHEAD_CASES:
-        scenario = parse_scenario(text).with_solver(preset=args.preset)
+        scenario = parse_scenario(text)
+        if args.brake is not None:
+            scenario = on_brake(scenario, args.brake)
+        scenario = scenario.with_solver(preset=args.preset)
         n = round(4.0 / scenario.sample_period_s)
         best = float("inf")
         for _ in range(args.repeats):
