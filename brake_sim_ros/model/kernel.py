@@ -135,7 +135,7 @@ def evaluate_from(y, p, fe_left, fe_right, stuck, mode_left, mode_right, kl, kr,
         tip_right = fe_right
         if serviced:
             fe_left, tip_left, fe_right, tip_right, stop_loss, service_power, line_rate = (
-                _service_tips(p, y, kl, kr, fe_left, fe_right)
+                _service_tips(p, y, kl[8], kl[9], kr[8], kr[9], fe_left, fe_right)
             )
         sl = contact.shoe_forces(p, bl, y[L.Y_LEFT_SPEED], tip_left, kl, fnl, ffl, vl)
         sr = contact.shoe_forces(p, br, y[L.Y_RIGHT_SPEED], tip_right, kr, fnr, ffr, vr)
@@ -227,16 +227,17 @@ def evaluate_from(y, p, fe_left, fe_right, stuck, mode_left, mode_right, kl, kr,
 
 
 @njit(**JIT)
-def _service_tips(p, y, kl, kr, fe_left, fe_right):
-    """The service brake's tip forces (:mod:`.service`) of both shoes, given their contact
-    kinematics ``kl``/``kr`` and commanded forces (N, after their gains): (left piston
+def _service_tips(p, y, cl, snl, cr, snr, fe_left, fe_right):
+    """The service brake's tip forces (:mod:`.service`) of both shoes, given the cos and
+    sin of their turns (``cl``, ``snl``, ``cr``, ``snr``: :func:`.contact.kinematics`'
+    slots 8 and 9) and commanded forces (N, after their gains): (left piston
     force N, left net force at the tip N, right piston force N, right net force N, the
     stops' dampers' and the line's loss W, the actuation's power W, the line pressure's
     rate Pa/s). A call, not inlined: the study brake's path stays as it was."""
     bl = L.P_SHOE_BASE
     br = L.P_SHOE_BASE + L.SHOE_STRIDE
-    ul, rate_l, _ = service.tip_travel(p, bl, kl[8], kl[9], y[L.Y_LEFT_SPEED])
-    ur, rate_r, _ = service.tip_travel(p, br, kr[8], kr[9], y[L.Y_RIGHT_SPEED])
+    ul, rate_l, _ = service.tip_travel(p, bl, cl, snl, y[L.Y_LEFT_SPEED])
+    ur, rate_r, _ = service.tip_travel(p, br, cr, snr, y[L.Y_RIGHT_SPEED])
     cyl_l, cyl_r, line_rate, line_loss, power = service.hydraulics(
         p, y[L.Y_LINE_PRESSURE], fe_left, fe_right, rate_l, rate_r
     )
@@ -263,7 +264,7 @@ def _lined_shoes(p, y, wd, stuck, mode_left, mode_right, kl, kr, fe_left, fe_rig
         tr, cr = lining.hold(p, br, y[L.Y_RIGHT_ANGLE], wa)
         share = standstill.stuck_share(coupling + tl + tr, cl + cr)
     cyl_l, tip_l, cyl_r, tip_r, loss, power, line_rate = _service_tips(
-        p, y, kl, kr, fe_left, fe_right
+        p, y, kl[8], kl[9], kr[8], kr[9], fe_left, fe_right
     )
     sl = lining.shoe_contact(
         p, bl, y[L.Y_LEFT_ANGLE], y[L.Y_LEFT_SPEED], wd, tip_l, mode_left, stuck, share, wa
@@ -346,18 +347,67 @@ def _derivatives(
 
 
 @njit(inline="always", **JIT)
-def free_evaluate(y, p, dydt):
-    """:func:`evaluate`'s derivative for a state whose shoes exert nothing: the drum
-    slides, no actuation force, and neither shoe presses (its indentation is not positive
-    and its contact is not forced on). Every shoe force is then an exact zero, so the
-    shoes' accelerations, powers and drum torque are zeros (of either sign: they add to
-    the state as +0.0 does) and the rest is the rotors' (same bits as :func:`evaluate`,
-    without the contact geometry; :func:`rides_free` decides when it applies)."""
+def free_evaluate(y, p, fe_left, fe_right, dydt):
+    """:func:`evaluate`'s derivative for a state whose shoes' linings exert nothing: the
+    drum slides and neither shoe presses (its indentation is not positive and its contact
+    is not forced on); on the study brake no actuation force either. Every lining force is
+    then an exact zero, so the shoes' accelerations (the study brake's), the linings'
+    powers and drum torque are zeros (of either sign: they add to the state as +0.0 does)
+    and the rest is the rotors' (same bits as :func:`evaluate`, without the contact
+    geometry; :func:`rides_free` decides when it applies). The service brake's tips push
+    (``fe_left``/``fe_right``: the commanded forces, N after the gains):
+    :func:`_free_service`."""
+    if p[L.P_SERVICE] > 0.0:
+        _free_service(y, p, fe_left, fe_right, dydt)
+        return
     wd = y[L.Y_DRUM_SPEED]
     coupling, tyre_work, tyre_rate = standstill.rotor_coupling(p, y, wd)
     _derivatives(
         y, p, wd, 0, coupling, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, tyre_work, tyre_rate, dydt
     )
+
+
+@njit(**JIT)
+def _free_service(y, p, fe_left, fe_right, dydt):
+    """:func:`free_evaluate` of the service brake (its point contact): what
+    :func:`evaluate_from` computes where neither lining presses, by the same expressions.
+    The tips (springs, stops, pistons and the line: :func:`_service_tips`) turn the shoes
+    (:func:`.contact.free_acceleration`: the same bits but for the sign of a zero, where
+    the tips' moment is an exact zero), their losses are the contact loss (the linings'
+    are zeros), the source's power the actuation's, and the tyre couples the rotors. A
+    call, not inlined: the study brake's free ride stays as it was."""
+    bl = L.P_SHOE_BASE
+    br = L.P_SHOE_BASE + L.SHOE_STRIDE
+    wd = y[L.Y_DRUM_SPEED]
+    coupling, tyre_work, tyre_rate = standstill.rotor_coupling(p, y, wd)
+    # the turns as contact.kinematics computes them (its slots 8 and 9)
+    phi_l = p[bl + L.S_SIGN] * y[L.Y_LEFT_ANGLE]
+    phi_r = p[br + L.S_SIGN] * y[L.Y_RIGHT_ANGLE]
+    cl = math.cos(phi_l)
+    snl = math.sin(phi_l)
+    cr = math.cos(phi_r)
+    snr = math.sin(phi_r)
+    _, tip_l, _, tip_r, stop_loss, service_power, line_rate = _service_tips(
+        p, y, cl, snl, cr, snr, fe_left, fe_right
+    )
+    _derivatives(
+        y,
+        p,
+        wd,
+        0,
+        coupling,
+        contact.free_acceleration(p, bl, tip_l, cl, snl),
+        contact.free_acceleration(p, br, tip_r, cr, snr),
+        0.0,
+        0.0,
+        0.0 + stop_loss,
+        service_power,
+        0.0,
+        tyre_work,
+        tyre_rate,
+        dydt,
+    )
+    dydt[L.Y_LINE_PRESSURE] = line_rate
 
 
 # a free-ride bound that never holds (:func:`rides_free`): every stage evaluates in full
@@ -374,19 +424,29 @@ def lining_reach(p, base):
 
 
 @njit(inline="always", **JIT)
-def rides_free(y, y0, free_bound, stuck, ml, mr, fel, fer):
+def clear_bound(y, y0, free_bound, shoe):
+    """The bound of shoe ``shoe``'s (0 left, 1 right) indentation at ``y`` in a step from
+    ``y0`` (m, :func:`rides_free`'s ``eps0 + bound |theta - theta0|``): the shoe provably
+    clears the drum where it is negative."""
+    turn = abs(y[L.Y_LEFT_ANGLE + shoe] - y0[L.Y_LEFT_ANGLE + shoe])
+    return free_bound[2 * shoe] + free_bound[2 * shoe + 1] * turn
+
+
+@njit(inline="always", **JIT)
+def rides_free(y, y0, p, free_bound, stuck, ml, mr, fel, fer):
     """Whether an RK4 stage at ``y`` of a step from ``y0`` may take :func:`free_evaluate`:
-    the drum slides, no force on either shoe's tip, neither contact forced on, and each
+    the drum slides, no force on either shoe's tip (but on the service brake, whose free
+    ride evaluates its tips), neither contact forced on, and each
     shoe's indentation provably negative. ``free_bound`` (4,): the indentation at ``y0``
     (m) and the bound of its rate per radian of shoe angle (m/rad) for the left shoe, then
     the right; a positive indentation there disables the test. The lining point farthest
     from the drum centre moves away from it by at most its distance from the pivot per
     radian the shoe turns, so ``eps <= eps0 + bound |theta - theta0|`` on a round drum."""
-    if stuck or fel != 0.0 or fer != 0.0 or ml == L.CONTACT_ON or mr == L.CONTACT_ON:
+    if stuck or ml == L.CONTACT_ON or mr == L.CONTACT_ON:
         return False
-    dl = abs(y[L.Y_LEFT_ANGLE] - y0[L.Y_LEFT_ANGLE])
-    dr = abs(y[L.Y_RIGHT_ANGLE] - y0[L.Y_RIGHT_ANGLE])
-    return free_bound[0] + free_bound[1] * dl < 0.0 and free_bound[2] + free_bound[3] * dr < 0.0
+    if (fel != 0.0 or fer != 0.0) and p[L.P_SERVICE] <= 0.0:
+        return False
+    return clear_bound(y, y0, free_bound, 0) < 0.0 and clear_bound(y, y0, free_bound, 1) < 0.0
 
 
 @njit(**JIT)

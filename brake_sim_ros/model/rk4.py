@@ -53,14 +53,14 @@ def rk4_step(
     fer = kernel.force(p, L.P_SHOE_BASE + L.SHOE_STRIDE, th, tr, fr, gr)
     for j in range(n):
         tmp[j] = y[j] + 0.5 * h * k1[j]
-    if kernel.rides_free(tmp, y, free, stuck, ml, mr, fel, fer):
-        kernel.free_evaluate(tmp, p, k2)
+    if kernel.rides_free(tmp, y, p, free, stuck, ml, mr, fel, fer):
+        kernel.free_evaluate(tmp, p, fel, fer, k2)
     else:
         kernel.evaluate(tmp, p, fel, fer, stuck, ml, mr, k2, out, -1, t0)
     for j in range(n):
         tmp[j] = y[j] + 0.5 * h * k2[j]
-    if kernel.rides_free(tmp, y, free, stuck, ml, mr, fel, fer):
-        kernel.free_evaluate(tmp, p, k3)
+    if kernel.rides_free(tmp, y, p, free, stuck, ml, mr, fel, fer):
+        kernel.free_evaluate(tmp, p, fel, fer, k3)
     else:
         kernel.evaluate(tmp, p, fel, fer, stuck, ml, mr, k3, out, -1, t0)
     t1 = t0 + h
@@ -68,8 +68,8 @@ def rk4_step(
     fer = kernel.force(p, L.P_SHOE_BASE + L.SHOE_STRIDE, t1, tr, fr, gr)
     for j in range(n):
         tmp[j] = y[j] + h * k3[j]
-    if kernel.rides_free(tmp, y, free, stuck, ml, mr, fel, fer):
-        kernel.free_evaluate(tmp, p, k4)
+    if kernel.rides_free(tmp, y, p, free, stuck, ml, mr, fel, fer):
+        kernel.free_evaluate(tmp, p, fel, fer, k4)
     else:
         kernel.evaluate(tmp, p, fel, fer, stuck, ml, mr, k4, out, -1, t0)
     for j in range(n):
