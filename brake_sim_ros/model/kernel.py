@@ -347,19 +347,13 @@ def _derivatives(
 
 
 @njit(inline="always", **JIT)
-def free_evaluate(y, p, fe_left, fe_right, dydt):
-    """:func:`evaluate`'s derivative for a state whose shoes' linings exert nothing: the
-    drum slides and neither shoe presses (its indentation is not positive and its contact
-    is not forced on); on the study brake no actuation force either. Every lining force is
-    then an exact zero, so the shoes' accelerations (the study brake's), the linings'
-    powers and drum torque are zeros (of either sign: they add to the state as +0.0 does)
-    and the rest is the rotors' (same bits as :func:`evaluate`, without the contact
-    geometry; :func:`rides_free` decides when it applies). The service brake's tips push
-    (``fe_left``/``fe_right``: the commanded forces, N after the gains):
-    :func:`_free_service`."""
-    if p[L.P_SERVICE] > 0.0:
-        _free_service(y, p, fe_left, fe_right, dydt)
-        return
+def free_evaluate(y, p, dydt):
+    """:func:`evaluate`'s derivative for a state whose shoes exert nothing: the drum
+    slides, no actuation force, and neither shoe presses (its indentation is not positive
+    and its contact is not forced on). Every shoe force is then an exact zero, so the
+    shoes' accelerations, powers and drum torque are zeros (of either sign: they add to
+    the state as +0.0 does) and the rest is the rotors' (same bits as :func:`evaluate`,
+    without the contact geometry; :func:`rides_free` decides when it applies)."""
     wd = y[L.Y_DRUM_SPEED]
     coupling, tyre_work, tyre_rate = standstill.rotor_coupling(p, y, wd)
     _derivatives(
@@ -369,13 +363,13 @@ def free_evaluate(y, p, fe_left, fe_right, dydt):
 
 @njit(**JIT)
 def _free_service(y, p, fe_left, fe_right, dydt):
-    """:func:`free_evaluate` of the service brake (its point contact): what
+    """The free ride of the service brake (its point contact; :func:`stage_evaluate`): what
     :func:`evaluate_from` computes where neither lining presses, by the same expressions.
     The tips (springs, stops, pistons and the line: :func:`_service_tips`) turn the shoes
     (:func:`.contact.free_acceleration`: the same bits but for the sign of a zero, where
     the tips' moment is an exact zero), their losses are the contact loss (the linings'
     are zeros), the source's power the actuation's, and the tyre couples the rotors. A
-    call, not inlined: the study brake's free ride stays as it was."""
+    call, not inlined."""
     bl = L.P_SHOE_BASE
     br = L.P_SHOE_BASE + L.SHOE_STRIDE
     wd = y[L.Y_DRUM_SPEED]
@@ -410,8 +404,10 @@ def _free_service(y, p, fe_left, fe_right, dydt):
     dydt[L.Y_LINE_PRESSURE] = line_rate
 
 
-# a free-ride bound that never holds (:func:`rides_free`): every stage evaluates in full
-NOT_FREE = np.ones(4)
+# a free-ride bound that never holds (:func:`rides_free`, :func:`stage_evaluate`): every
+# stage evaluates in full. The study brake's bound in slots 0-3, the service brake's in 4-7
+# (each brake leaves the other's at 1: its own test never passes there)
+NOT_FREE = np.ones(8)
 
 
 @njit(inline="always", **JIT)
@@ -424,29 +420,46 @@ def lining_reach(p, base):
 
 
 @njit(inline="always", **JIT)
-def clear_bound(y, y0, free_bound, shoe):
-    """The bound of shoe ``shoe``'s (0 left, 1 right) indentation at ``y`` in a step from
-    ``y0`` (m, :func:`rides_free`'s ``eps0 + bound |theta - theta0|``): the shoe provably
-    clears the drum where it is negative."""
-    turn = abs(y[L.Y_LEFT_ANGLE + shoe] - y0[L.Y_LEFT_ANGLE + shoe])
-    return free_bound[2 * shoe] + free_bound[2 * shoe + 1] * turn
-
-
-@njit(inline="always", **JIT)
-def rides_free(y, y0, p, free_bound, stuck, ml, mr, fel, fer):
+def rides_free(y, y0, free_bound, stuck, ml, mr, fel, fer):
     """Whether an RK4 stage at ``y`` of a step from ``y0`` may take :func:`free_evaluate`:
-    the drum slides, no force on either shoe's tip (but on the service brake, whose free
-    ride evaluates its tips), neither contact forced on, and each
+    the drum slides, no force on either shoe's tip, neither contact forced on, and each
     shoe's indentation provably negative. ``free_bound`` (4,): the indentation at ``y0``
     (m) and the bound of its rate per radian of shoe angle (m/rad) for the left shoe, then
     the right; a positive indentation there disables the test. The lining point farthest
     from the drum centre moves away from it by at most its distance from the pivot per
     radian the shoe turns, so ``eps <= eps0 + bound |theta - theta0|`` on a round drum."""
-    if stuck or ml == L.CONTACT_ON or mr == L.CONTACT_ON:
+    if stuck or fel != 0.0 or fer != 0.0 or ml == L.CONTACT_ON or mr == L.CONTACT_ON:
         return False
-    if (fel != 0.0 or fer != 0.0) and p[L.P_SERVICE] <= 0.0:
-        return False
-    return clear_bound(y, y0, free_bound, 0) < 0.0 and clear_bound(y, y0, free_bound, 1) < 0.0
+    dl = abs(y[L.Y_LEFT_ANGLE] - y0[L.Y_LEFT_ANGLE])
+    dr = abs(y[L.Y_RIGHT_ANGLE] - y0[L.Y_RIGHT_ANGLE])
+    return free_bound[0] + free_bound[1] * dl < 0.0 and free_bound[2] + free_bound[3] * dr < 0.0
+
+
+@njit(**JIT)
+def stage_evaluate(
+    y, y0, p, free_bound, fe_left, fe_right, stuck, mode_left, mode_right, dydt, out, t
+):
+    """:func:`evaluate`'s derivative of an RK4 stage at ``y`` of a step from ``y0`` that
+    :func:`rides_free` (the study brake's) refused: the service brake's free ride
+    (:func:`_free_service`) where its bound (``free_bound`` slots 4-7, as
+    :func:`rides_free`'s 0-3: the indentation at ``y0`` and twice the lining's reach, per
+    shoe) proves that neither lining presses, the drum slides and no contact is forced on;
+    else the full evaluation (``out`` and ``t`` as :func:`evaluate`'s, no row). A call, so
+    that the study brake's stages compile as before. Returns whether it rode free."""
+    dl = abs(y[L.Y_LEFT_ANGLE] - y0[L.Y_LEFT_ANGLE])
+    dr = abs(y[L.Y_RIGHT_ANGLE] - y0[L.Y_RIGHT_ANGLE])
+    free = (
+        not stuck
+        and mode_left != L.CONTACT_ON
+        and mode_right != L.CONTACT_ON
+        and free_bound[4] + free_bound[5] * dl < 0.0
+        and free_bound[6] + free_bound[7] * dr < 0.0
+    )
+    if free:
+        _free_service(y, p, fe_left, fe_right, dydt)
+    else:
+        evaluate(y, p, fe_left, fe_right, stuck, mode_left, mode_right, dydt, out, -1, t)
+    return free
 
 
 @njit(**JIT)

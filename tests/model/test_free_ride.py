@@ -53,7 +53,7 @@ def _step(p, y, dt, free, mode, t_knots, f_knots):
     for j, c in enumerate((0.5, 0.5, 1.0)):
         stage = y + c * dt * k[j]
         force = kernel.force(p, L.P_SHOE_BASE, c * dt, t_knots, f_knots, 1.0)
-        free_stages += kernel.rides_free(stage, y, p, free, 0, mode, mode, force, force)
+        free_stages += kernel.rides_free(stage, y, free, 0, mode, mode, force, force)
     return y_out, free_stages
 
 

@@ -39,9 +39,17 @@ def _bound(p: np.ndarray, y: np.ndarray) -> np.ndarray:
         kin = contact.kinematics(
             p, base, y[L.Y_LEFT_ANGLE + i], y[L.Y_LEFT_SPEED + i], y[L.Y_DRUM_ANGLE], 0.0
         )
-        free[2 * i] = kin[0]
-        free[2 * i + 1] = 2.0 * kernel.lining_reach(p, base)
+        free[4 + 2 * i] = kin[0]  # the service brake's slots
+        free[4 + 2 * i + 1] = 2.0 * kernel.lining_reach(p, base)
     return free
+
+
+def _rides(y, y0, p, free, mode, fel, fer) -> bool:
+    """Whether ``kernel.stage_evaluate`` rides free at ``y`` (both shoes in ``mode``, the
+    drum sliding) in a step from ``y0``; never the study brake's ``kernel.rides_free``."""
+    assert not kernel.rides_free(y, y0, free, 0, mode, mode, fel, fer)
+    out, dydt = np.empty((1, L.N_COLUMNS)), np.empty(y.size)
+    return kernel.stage_evaluate(y, y0, p, free, fel, fer, 0, mode, mode, dydt, out, 0.0)
 
 
 def _step(p, y, t0, dt, free, mode, knots):
@@ -65,7 +73,7 @@ def _step(p, y, t0, dt, free, mode, knots):
         t = t0 + c * dt
         fel = kernel.force(p, BASES[0], t, tl, fl, 1.0)
         fer = kernel.force(p, BASES[1], t, tr, fr, 1.0)
-        free_stages += kernel.rides_free(stage, y, p, free, 0, mode, mode, fel, fer)
+        free_stages += _rides(stage, y, p, free, mode, fel, fer)
     return y_out, free_stages
 
 
@@ -142,10 +150,10 @@ def test_free_stages_step_applications_and_releases_with_the_same_bits():
 
 @pytest.mark.slow
 def test_the_free_evaluation_is_the_full_one_where_the_bound_holds():
-    """``kernel.free_evaluate`` against ``kernel.evaluate`` on the same state, every slot
-    of the derivative bit for bit (but the sign of a zero), over the application's run
-    (every 2 ms) wherever ``rides_free`` admits the state itself (no turn since the
-    bound's state)."""
+    """``kernel.stage_evaluate``'s free ride against ``kernel.evaluate`` on the same state,
+    every slot of the derivative bit for bit (but the sign of a zero), over the
+    application's run (every 2 ms) wherever it rides free at the state itself (no turn
+    since the bound's state)."""
     scenario = parse_scenario(APPLICATION)
     stepper = stepper_for(scenario)
     p = stepper.packed_parameters
@@ -159,11 +167,11 @@ def test_the_free_evaluation_is_the_full_one_where_the_bound_holds():
         fel = kernel.force(p, BASES[0], t, tl, fl, 1.0)
         fer = kernel.force(p, BASES[1], t, tr, fr, 1.0)
         for mode in (L.CONTACT_OFF, L.CONTACT_AUTO):
-            if not kernel.rides_free(y, y, p, _bound(p, y), 0, mode, mode, fel, fer):
-                continue
             full, free = np.empty(y.shape[0]), np.empty(y.shape[0])
+            bound = _bound(p, y)
+            if not kernel.stage_evaluate(y, y, p, bound, fel, fer, 0, mode, mode, free, out, t):
+                continue
             kernel.evaluate(y, p, fel, fer, 0, mode, mode, full, out, -1, t)
-            kernel.free_evaluate(y, p, fel, fer, free)
             # the same bits, but for the sign of a zero (the drum's torque from a lining that
             # exerts nothing: -0.0 or 0.0), which adds to the state as the other zero does
             assert np.array_equal(free, full), (t, mode)
@@ -180,6 +188,14 @@ def test_no_stage_rides_free_with_a_contact_forced_on_or_a_held_drum():
     stepper.advance(round(0.05 / stepper.sample_period_s))
     p, y = stepper.packed_parameters, stepper.state
     free = _bound(p, y)
-    assert kernel.rides_free(y, y, p, free, 0, L.CONTACT_AUTO, L.CONTACT_AUTO, 20.0, 20.0)
-    assert not kernel.rides_free(y, y, p, free, 0, L.CONTACT_ON, L.CONTACT_AUTO, 20.0, 20.0)
-    assert not kernel.rides_free(y, y, p, free, 1, L.CONTACT_AUTO, L.CONTACT_AUTO, 20.0, 20.0)
+    out, dydt = np.empty((1, L.N_COLUMNS)), np.empty(y.size)
+
+    def rides(stuck, mode_left):
+        modes = (mode_left, L.CONTACT_AUTO)
+        return kernel.stage_evaluate(y, y, p, free, 20.0, 20.0, stuck, *modes, dydt, out, 0.0)
+
+    assert rides(0, L.CONTACT_AUTO) and rides(0, L.CONTACT_OFF)
+    assert not rides(0, L.CONTACT_ON) and not rides(1, L.CONTACT_AUTO)
+    assert not kernel.stage_evaluate(
+        y, y, p, kernel.NOT_FREE, 20.0, 20.0, 0, L.CONTACT_AUTO, L.CONTACT_AUTO, dydt, out, 0.0
+    )
