@@ -12,8 +12,10 @@ chunks of 77 samples; the published cases, the downhill runs (thermal, wear), ev
 fixed-step scheme, one shoe removed, an oval drum and the urban cycle on a drum with a
 flat (physics only). The drive cycles (``urban``, the downhill runs) ran on the study
 brake until they moved to the service brake (issue 28): their lines keep their labels and
-meaning on the study brake (``tests/study_cycles.py``: the files with ``brake = "study"``),
-and the last lines are the built-in cycles as they ship, on the service brake.
+meaning on the study brake (``tests/study_cycles.py``: the files with ``brake = "study"``).
+Then the service brake: the built-in cycles as they ship (urban with its default sensors),
+20 s of urban with every fixed-step scheme, three applications and releases (shoes leaving
+and landing on their rest stops) on a line with air and a leak, and a stop on a wet road.
 ``--quick``: the first three runs only.
 
 Without the ROS message package: the stepper and the sensor bank are built as
@@ -40,6 +42,19 @@ OVAL = (
     "amplitude_um = 50.0\nphase_deg = 0.0\n"
 )
 CYCLES = ("urban", "downhill", "downhill_fade", "downhill_wear")  # the built-in drive cycles
+# three applications to 1000 N per shoe and their releases, 0.6 s apart: the shoes leave
+# their rest stops, brake, return and land on them (tests/model/test_service_brake.py)
+_KNOTS = (
+    "times_s = [0.0, 0.1, 0.15, 0.25, 0.27, 0.7, 0.75, 0.85, 0.87, 1.3, 1.35, 1.45, 1.47]\n"
+    "forces_n = [0.0, 0.0, 1000.0, 1000.0, 0.0, 0.0, 1000.0, 1000.0, 0.0, 0.0, 1000.0,"
+    " 1000.0, 0.0]\n"
+)
+SERVICE_APPLICATIONS = (
+    'name = "applications"\nbrake = "service"\nduration_s = 1.9\n[actuation]\n'
+    f'profile = "piecewise"\n[actuation.left]\n{_KNOTS}[actuation.right]\n{_KNOTS}'
+    "[defects.line]\nair_in_line_ml = 1.0\nline_leak_pct = 20.0\n"
+)
+SERVICE_WET = 'name = "wet"\nbrake = "service"\nroad_friction = 0.4\n'
 FLAT = (
     "\n[defects.drum]\nflat_depth_um = 40.0\nflat_width_deg = 20.0\n"
     "[[defects.drum.harmonics]]\norder = 3\namplitude_um = 20.0\nphase_deg = 10.0\n"
@@ -116,10 +131,24 @@ def main() -> None:
     print(run_hash("oval drum", parse_scenario(OVAL), 1000), flush=True)
     flat = parse_scenario(study_text("urban") + FLAT)
     print(run_hash("urban, drum with a flat", flat, 1000), flush=True)
-    service = load_scenario("urban")
-    print(run_hash("urban (service) + default sensors", service, 2560, sensors=service.sensors))
+    service_hashes()
+
+
+def service_hashes() -> None:
+    """The service brake's lines: the built-in cycles as they ship (urban with its default
+    sensors), urban with every scheme, applications and releases on a line with defects, a
+    stop on a wet road."""
+    urban = load_scenario("urban")
+    assert urban.setup.params.brake == "service"
+    print(run_hash("urban (service) + default sensors", urban, 2560, sensors=urban.sensors))
     for name in CYCLES[1:]:
         print(run_hash(f"{name} (service)", load_scenario(name), 1000), flush=True)
+    for scheme in ("rk4", "rk4-located", "semi-implicit-euler"):
+        print(run_hash("urban 20 s, service brake", urban, 1000, scheme=scheme, duration_s=20.0))
+    applications = parse_scenario(SERVICE_APPLICATIONS)
+    label = "service brake, 3 applications, air and leak"
+    print(run_hash(label, applications, 77, sensors=applications.sensors), flush=True)
+    print(run_hash("service brake, wet road stop", parse_scenario(SERVICE_WET), 1000))
 
 
 if __name__ == "__main__":

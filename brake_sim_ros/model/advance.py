@@ -151,8 +151,11 @@ def fixed_step_advance(
     # the lining over its arc switches on its nodes' (rk4.shoe_switch), not the kinematics'
     can_hold = can_hold and p[L.P_LINING_NODE_STIFFNESS] <= 0.0
     round_drum = p[L.P_DRUM_WAVE_COUNT] <= 0.0 and p[L.P_FLAT_DEPTH] <= 0.0
-    # a service brake's shoes are never free: the spring holds each on its stop
-    serviced = p[L.P_SERVICE] > 0.0
+    # the service brake's tips push (springs, stops, pistons): its free stages evaluate them
+    # (kernel.stage_evaluate); with its lining over the arc (not the point contact) they
+    # never ride free
+    lined = p[L.P_LINING_NODE_STIFFNESS] > 0.0
+    bound = 4 if p[L.P_SERVICE] > 0.0 else 0  # its slots in the bound (kernel.NOT_FREE)
     held = False
     kin_l = contact.kinematics(pw, bl, 0.0, 0.0, 0.0, 0.0)
     kin_r = kin_l
@@ -160,8 +163,8 @@ def fixed_step_advance(
     # (rides_free): on a round drum with a fixed geometry, each shoe's indentation at the
     # step's start and twice the largest distance of its lining from its pivot
     free = NOT_FREE.copy()
-    free[1] = 2.0 * kernel.lining_reach(pw, bl)
-    free[3] = 2.0 * kernel.lining_reach(pw, br)
+    free[bound + 1] = 2.0 * kernel.lining_reach(pw, bl)
+    free[bound + 3] = 2.0 * kernel.lining_reach(pw, br)
     for i in range(n_steps):
         step = step0 + i
         t = step * dt
@@ -257,9 +260,9 @@ def fixed_step_advance(
                 # modes frozen for the step; k1 (auto) equals k1 with these modes
                 ml = L.CONTACT_ON if h_start[0] > 0.0 else L.CONTACT_OFF
                 mr = L.CONTACT_ON if h_start[1] > 0.0 else L.CONTACT_OFF
-            if round_drum and not growing and not serviced:
-                free[0] = kin_l[0]
-                free[2] = kin_r[0]
+            if round_drum and not growing and not lined:
+                free[bound] = kin_l[0]
+                free[bound + 2] = kin_r[0]
             rk4.rk4_step(
                 y,
                 k1,

@@ -267,6 +267,38 @@ def sliding_friction(p, base, fn, v_slide):
 
 
 @njit(inline="always", **JIT)
+def tip_load(p, base, c, sn, actuation):
+    """The actuation ``actuation`` (N, along the cylinder axis, a fixed world direction)
+    on the tip of the shoe turned by phi (cos ``c``, sin ``sn``): (the tip's place from the
+    pivot x and y m, the force's x and y components N)."""
+    tdx = p[base + L.S_TIP_X] - p[base + L.S_PIVOT_X]
+    tdy = p[base + L.S_TIP_Y] - p[base + L.S_PIVOT_Y]
+    tx = c * tdx - sn * tdy
+    ty = sn * tdx + c * tdy
+    return (
+        tx,
+        ty,
+        actuation * p[base + L.S_ACTUATION_DIR_X],
+        actuation * p[base + L.S_ACTUATION_DIR_Y],
+    )
+
+
+@njit(inline="always", **JIT)
+def free_acceleration(p, base, actuation, c, sn):
+    """:func:`shoe_forces`' angular acceleration (rad/s^2, outward) of a shoe turned by phi
+    (cos ``c``, sin ``sn``) whose lining exerts nothing (normal and
+    friction force 0.0): the tip's ``actuation`` (N) alone, by the same expressions. The
+    contact's moment is then a zero, which :func:`shoe_forces` adds to the tip's: the same
+    bits, but for the sign of a zero where the tip's moment is an exact zero (a zero adds to
+    the state as the other does)."""
+    if p[base + L.S_ENABLED] <= 0.0:
+        return 0.0
+    tx, ty, fex, fey = tip_load(p, base, c, sn, actuation)
+    moment = 0.0 + tx * fey - ty * fex
+    return p[base + L.S_SIGN] * moment / p[base + L.S_INERTIA]
+
+
+@njit(inline="always", **JIT)
 def shoe_forces(p, base, omega, actuation, kin, fn, ff, v_slide):
     """Moment balance of one shoe given its contact kinematics ``kin`` (from
     :func:`kinematics`), normal force ``fn`` and friction force ``ff`` (N), and the
@@ -284,13 +316,7 @@ def shoe_forces(p, base, omega, actuation, kin, fn, ff, v_slide):
     w = s * omega
     fcx = -fn * qx - ff * ny
     fcy = -fn * qy + ff * nx
-    # actuation on the tip, fixed world direction
-    tdx = p[base + L.S_TIP_X] - px
-    tdy = p[base + L.S_TIP_Y] - py
-    tx = c * tdx - sn * tdy
-    ty = sn * tdx + c * tdy
-    fex = actuation * p[base + L.S_ACTUATION_DIR_X]
-    fey = actuation * p[base + L.S_ACTUATION_DIR_Y]
+    tx, ty, fex, fey = tip_load(p, base, c, sn, actuation)
     moment = (xx - px) * fcy - (xy - py) * fcx + tx * fey - ty * fex
     theta_ddot = s * moment / p[base + L.S_INERTIA] if enabled else 0.0
     p_contact = 0.0

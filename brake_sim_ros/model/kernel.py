@@ -135,7 +135,7 @@ def evaluate_from(y, p, fe_left, fe_right, stuck, mode_left, mode_right, kl, kr,
         tip_right = fe_right
         if serviced:
             fe_left, tip_left, fe_right, tip_right, stop_loss, service_power, line_rate = (
-                _service_tips(p, y, kl, kr, fe_left, fe_right)
+                _service_tips(p, y, kl[8], kl[9], kr[8], kr[9], fe_left, fe_right)
             )
         sl = contact.shoe_forces(p, bl, y[L.Y_LEFT_SPEED], tip_left, kl, fnl, ffl, vl)
         sr = contact.shoe_forces(p, br, y[L.Y_RIGHT_SPEED], tip_right, kr, fnr, ffr, vr)
@@ -227,16 +227,17 @@ def evaluate_from(y, p, fe_left, fe_right, stuck, mode_left, mode_right, kl, kr,
 
 
 @njit(**JIT)
-def _service_tips(p, y, kl, kr, fe_left, fe_right):
-    """The service brake's tip forces (:mod:`.service`) of both shoes, given their contact
-    kinematics ``kl``/``kr`` and commanded forces (N, after their gains): (left piston
+def _service_tips(p, y, cl, snl, cr, snr, fe_left, fe_right):
+    """The service brake's tip forces (:mod:`.service`) of both shoes, given the cos and
+    sin of their turns (``cl``, ``snl``, ``cr``, ``snr``: :func:`.contact.kinematics`'
+    slots 8 and 9) and commanded forces (N, after their gains): (left piston
     force N, left net force at the tip N, right piston force N, right net force N, the
     stops' dampers' and the line's loss W, the actuation's power W, the line pressure's
     rate Pa/s). A call, not inlined: the study brake's path stays as it was."""
     bl = L.P_SHOE_BASE
     br = L.P_SHOE_BASE + L.SHOE_STRIDE
-    ul, rate_l, _ = service.tip_travel(p, bl, kl[8], kl[9], y[L.Y_LEFT_SPEED])
-    ur, rate_r, _ = service.tip_travel(p, br, kr[8], kr[9], y[L.Y_RIGHT_SPEED])
+    ul, rate_l, _ = service.tip_travel(p, bl, cl, snl, y[L.Y_LEFT_SPEED])
+    ur, rate_r, _ = service.tip_travel(p, br, cr, snr, y[L.Y_RIGHT_SPEED])
     cyl_l, cyl_r, line_rate, line_loss, power = service.hydraulics(
         p, y[L.Y_LINE_PRESSURE], fe_left, fe_right, rate_l, rate_r
     )
@@ -263,7 +264,7 @@ def _lined_shoes(p, y, wd, stuck, mode_left, mode_right, kl, kr, fe_left, fe_rig
         tr, cr = lining.hold(p, br, y[L.Y_RIGHT_ANGLE], wa)
         share = standstill.stuck_share(coupling + tl + tr, cl + cr)
     cyl_l, tip_l, cyl_r, tip_r, loss, power, line_rate = _service_tips(
-        p, y, kl, kr, fe_left, fe_right
+        p, y, kl[8], kl[9], kr[8], kr[9], fe_left, fe_right
     )
     sl = lining.shoe_contact(
         p, bl, y[L.Y_LEFT_ANGLE], y[L.Y_LEFT_SPEED], wd, tip_l, mode_left, stuck, share, wa
@@ -360,8 +361,53 @@ def free_evaluate(y, p, dydt):
     )
 
 
-# a free-ride bound that never holds (:func:`rides_free`): every stage evaluates in full
-NOT_FREE = np.ones(4)
+@njit(**JIT)
+def _free_service(y, p, fe_left, fe_right, dydt):
+    """The free ride of the service brake (its point contact; :func:`stage_evaluate`): what
+    :func:`evaluate_from` computes where neither lining presses, by the same expressions.
+    The tips (springs, stops, pistons and the line: :func:`_service_tips`) turn the shoes
+    (:func:`.contact.free_acceleration`: the same bits but for the sign of a zero, where
+    the tips' moment is an exact zero), their losses are the contact loss (the linings'
+    are zeros), the source's power the actuation's, and the tyre couples the rotors. A
+    call, not inlined."""
+    bl = L.P_SHOE_BASE
+    br = L.P_SHOE_BASE + L.SHOE_STRIDE
+    wd = y[L.Y_DRUM_SPEED]
+    coupling, tyre_work, tyre_rate = standstill.rotor_coupling(p, y, wd)
+    # the turns as contact.kinematics computes them (its slots 8 and 9)
+    phi_l = p[bl + L.S_SIGN] * y[L.Y_LEFT_ANGLE]
+    phi_r = p[br + L.S_SIGN] * y[L.Y_RIGHT_ANGLE]
+    cl = math.cos(phi_l)
+    snl = math.sin(phi_l)
+    cr = math.cos(phi_r)
+    snr = math.sin(phi_r)
+    _, tip_l, _, tip_r, stop_loss, service_power, line_rate = _service_tips(
+        p, y, cl, snl, cr, snr, fe_left, fe_right
+    )
+    _derivatives(
+        y,
+        p,
+        wd,
+        0,
+        coupling,
+        contact.free_acceleration(p, bl, tip_l, cl, snl),
+        contact.free_acceleration(p, br, tip_r, cr, snr),
+        0.0,
+        0.0,
+        0.0 + stop_loss,
+        service_power,
+        0.0,
+        tyre_work,
+        tyre_rate,
+        dydt,
+    )
+    dydt[L.Y_LINE_PRESSURE] = line_rate
+
+
+# a free-ride bound that never holds (:func:`rides_free`, :func:`stage_evaluate`): every
+# stage evaluates in full. The study brake's bound in slots 0-3, the service brake's in 4-7
+# (each brake leaves the other's at 1: its own test never passes there)
+NOT_FREE = np.ones(8)
 
 
 @njit(inline="always", **JIT)
@@ -387,6 +433,33 @@ def rides_free(y, y0, free_bound, stuck, ml, mr, fel, fer):
     dl = abs(y[L.Y_LEFT_ANGLE] - y0[L.Y_LEFT_ANGLE])
     dr = abs(y[L.Y_RIGHT_ANGLE] - y0[L.Y_RIGHT_ANGLE])
     return free_bound[0] + free_bound[1] * dl < 0.0 and free_bound[2] + free_bound[3] * dr < 0.0
+
+
+@njit(**JIT)
+def stage_evaluate(
+    y, y0, p, free_bound, fe_left, fe_right, stuck, mode_left, mode_right, dydt, out, t
+):
+    """:func:`evaluate`'s derivative of an RK4 stage at ``y`` of a step from ``y0`` that
+    :func:`rides_free` (the study brake's) refused: the service brake's free ride
+    (:func:`_free_service`) where its bound (``free_bound`` slots 4-7, as
+    :func:`rides_free`'s 0-3: the indentation at ``y0`` and twice the lining's reach, per
+    shoe) proves that neither lining presses, the drum slides and no contact is forced on;
+    else the full evaluation (``out`` and ``t`` as :func:`evaluate`'s, no row). A call, so
+    that the study brake's stages compile as before. Returns whether it rode free."""
+    dl = abs(y[L.Y_LEFT_ANGLE] - y0[L.Y_LEFT_ANGLE])
+    dr = abs(y[L.Y_RIGHT_ANGLE] - y0[L.Y_RIGHT_ANGLE])
+    free = (
+        not stuck
+        and mode_left != L.CONTACT_ON
+        and mode_right != L.CONTACT_ON
+        and free_bound[4] + free_bound[5] * dl < 0.0
+        and free_bound[6] + free_bound[7] * dr < 0.0
+    )
+    if free:
+        _free_service(y, p, fe_left, fe_right, dydt)
+    else:
+        evaluate(y, p, fe_left, fe_right, stuck, mode_left, mode_right, dydt, out, -1, t)
+    return free
 
 
 @njit(**JIT)

@@ -44,9 +44,10 @@ def rk4_step(
 ):
     """One classical RK4 step of ``h`` s from ``y`` at ``t0`` (``k1 = f(t0, y)`` given) with
     the contact modes ``ml``/``mr`` into ``y_out`` (may be ``y`` itself). A stage where
-    the shoes provably exert nothing (``free``: :func:`.kernel.rides_free`'s bound, or
-    :data:`.kernel.NOT_FREE`) skips their contact geometry (:func:`.kernel.free_evaluate`,
-    same bits)."""
+    the shoes provably exert nothing (``free``: :func:`.kernel.rides_free`'s bound and
+    :func:`.kernel.stage_evaluate`'s, or :data:`.kernel.NOT_FREE`) skips their contact
+    geometry (:func:`.kernel.free_evaluate`, the service brake's in
+    :func:`.kernel.stage_evaluate`; same bits)."""
     n = y.shape[0]
     th = t0 + 0.5 * h
     fel = kernel.force(p, L.P_SHOE_BASE, th, tl, fl, gl)
@@ -56,13 +57,13 @@ def rk4_step(
     if kernel.rides_free(tmp, y, free, stuck, ml, mr, fel, fer):
         kernel.free_evaluate(tmp, p, k2)
     else:
-        kernel.evaluate(tmp, p, fel, fer, stuck, ml, mr, k2, out, -1, t0)
+        kernel.stage_evaluate(tmp, y, p, free, fel, fer, stuck, ml, mr, k2, out, t0)
     for j in range(n):
         tmp[j] = y[j] + 0.5 * h * k2[j]
     if kernel.rides_free(tmp, y, free, stuck, ml, mr, fel, fer):
         kernel.free_evaluate(tmp, p, k3)
     else:
-        kernel.evaluate(tmp, p, fel, fer, stuck, ml, mr, k3, out, -1, t0)
+        kernel.stage_evaluate(tmp, y, p, free, fel, fer, stuck, ml, mr, k3, out, t0)
     t1 = t0 + h
     fel = kernel.force(p, L.P_SHOE_BASE, t1, tl, fl, gl)
     fer = kernel.force(p, L.P_SHOE_BASE + L.SHOE_STRIDE, t1, tr, fr, gr)
@@ -71,7 +72,7 @@ def rk4_step(
     if kernel.rides_free(tmp, y, free, stuck, ml, mr, fel, fer):
         kernel.free_evaluate(tmp, p, k4)
     else:
-        kernel.evaluate(tmp, p, fel, fer, stuck, ml, mr, k4, out, -1, t0)
+        kernel.stage_evaluate(tmp, y, p, free, fel, fer, stuck, ml, mr, k4, out, t0)
     for j in range(n):
         y_out[j] = y[j] + h / 6.0 * (k1[j] + 2.0 * k2[j] + 2.0 * k3[j] + k4[j])
 

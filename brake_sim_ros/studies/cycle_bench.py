@@ -1,36 +1,42 @@
 """``brake-sim bench cycle``: a drive cycle's cost offline, and its energy books.
 
-The cycle scenario (default ``urban``) at its preset (``--preset``, default the
-scenario's: balanced) is stepped in chunks of ``--chunk-s`` simulated seconds, recording
-every sample, and its default sensor set (structure and channels, carrying their state
-from chunk to chunk as the node's measured stream does) processes every chunk; memory
+The cycle scenario (default ``urban``) on its brake or the one ``--brake`` names (study or
+service: the scenario with its top-level ``brake`` key set so) at its preset (``--preset``,
+default the scenario's: balanced) is stepped in chunks of ``--chunk-s`` simulated seconds,
+recording every sample, and its default sensor set (structure and channels, carrying their
+state from chunk to chunk as the node's measured stream does) processes every chunk; memory
 stays bounded by a chunk. Printed, best of ``--repeats`` (process CPU time, one core; the
-runs with and without sensors alternate, so a change of the machine's load hits both):
-the physics alone and physics plus sensors as multiples of real time, the latter split
-into the stepping, the sensors and the rest (the loop's own work; the benchmark's own
-records of segments are not counted), and each run's figure; then the issue's figure
-on one line (the cycle with the default sensors, at least 30x real time), the stops and
-phases the cycle went through, and
-the energy books over the whole cycle (drive work in against the losses, road load and the
-change of stored energy; :func:`brake_sim_ros.analysis.energy.energy_balance`); and what
-the vehicle costs per sample where the shoes ride free (4 s without braking, recording every
-sample): the published model, the same with a ``[vehicle]`` (road load), and with a
-``[cycle]`` (road load and the controller).
+runs with and without sensors alternate, so a change of the machine's load hits both): the
+physics alone and physics plus sensors as multiples of real time, the latter split into the
+stepping, the sensors and the rest (the loop's own work; the benchmark's own records of
+segments are not counted), and each run's figure; then the issue's figure on one line (the
+cycle with the default sensors, at least 30x real time), the stops and phases the cycle went
+through, and the energy books over the whole cycle (drive work in against the losses, road
+load and the change of stored energy; :func:`brake_sim_ros.analysis.energy.energy_balance`);
+and what the vehicle costs per sample where the shoes ride free (4 s without braking,
+recording every sample): the published model, the same with a ``[vehicle]`` (road load), and
+with a ``[cycle]`` (road load and the controller), on the ``--brake`` named.
 """
 
 from __future__ import annotations
 
 import argparse
+import re
 import time
 
 import numpy as np
 
 from brake_sim_ros.analysis.energy import energy_balance
+from brake_sim_ros.errors import ScenarioError
+from brake_sim_ros.model.parameters import BRAKES
 from brake_sim_ros.model.run_setup import SampleBlock
-from brake_sim_ros.scenarios import load_scenario, parse_scenario
+from brake_sim_ros.scenarios import Scenario, load_scenario, parse_scenario
+from brake_sim_ros.scenarios.loader import parse_toml
 from brake_sim_ros.stream.build import sensor_bank_for, stepper_for
 
 TARGET_RTF = 30.0
+# a scenario's top-level brake key on a line of its own (before its first table)
+_BRAKE_LINE = re.compile(r"""^brake\s*=\s*["'](?:study|service)["'][ \t]*(?:#.*)?$""", re.MULTILINE)
 # free-rolling runs for the vehicle's cost: no brake force, shoes off the drum
 _FREE = 'name = "free"\n[actuation]\npeak_force_n = 0.0\n'
 _OVERHEAD_CASES = (
@@ -75,21 +81,57 @@ def _run(scenario, chunk_samples: int, with_sensors: bool):
     return (cpu, stepping, sensing), SampleBlock.concatenate([first, end]), segments
 
 
+def on_brake(scenario: Scenario, brake: str) -> Scenario:
+    """``scenario`` on the brake ``brake`` (:data:`BRAKES`): its text with the top-level
+    ``brake`` key set so (its one ``brake = "..."`` line rewritten, or one added), parsed
+    again (itself if it is on that brake already).
+
+    Raises:
+        ScenarioError: the scenario's brake key is not one plain line before its first
+            table, or the text does not parse on this brake (one line).
+    """
+    if scenario.setup.params.brake == brake:
+        return scenario
+    text = scenario.text
+    if "brake" in parse_toml(text, scenario.source):
+        top = text.split("\n[", 1)[0]  # the top-level keys come before the first table
+        lines = _BRAKE_LINE.findall(top)
+        if len(lines) != 1:
+            raise ScenarioError(
+                f"{scenario.source}: brake = {scenario.setup.params.brake!r}: allowed --brake"
+                ' only for a scenario whose brake key is one line brake = "..." before its'
+                " first table, or without one"
+            )
+        text = _BRAKE_LINE.sub(f"brake = {brake!r}", text, count=1)
+    else:
+        text = f"brake = {brake!r}\n" + text
+    return parse_scenario(text, scenario.source)
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="brake-sim bench cycle", description=__doc__)
     parser.add_argument("--scenario", default="urban")
+    parser.add_argument(
+        "--brake", choices=BRAKES, default=None, help="the brake (default the scenario's)"
+    )
     parser.add_argument("--preset", default=None, help="solver preset (default the scenario's)")
     parser.add_argument("--chunk-s", type=float, default=0.1, help="simulated s per chunk")
     parser.add_argument("--repeats", type=int, default=3)
     args = parser.parse_args(argv)
-    scenario = load_scenario(args.scenario).with_solver(preset=args.preset)
+    scenario = load_scenario(args.scenario)
+    if args.brake is not None:
+        scenario = on_brake(scenario, args.brake)
+    scenario = scenario.with_solver(preset=args.preset)
     if scenario.setup.cycle is None:
         parser.error(f"scenario {scenario.name!r} has no [cycle]: allowed a cycle scenario")
     stepper = stepper_for(scenario)
     chunk = max(1, round(args.chunk_s / stepper.sample_period_s))
     stepper.advance(10)  # compile, or load the compiled kernel from the cache
     duration = scenario.duration_s
-    print(f"scenario {scenario.name}, preset {scenario.solver.preset}: {stepper.describe_step()}")
+    print(
+        f"scenario {scenario.name}, {scenario.setup.params.brake} brake, preset"
+        f" {scenario.solver.preset}: {stepper.describe_step()}"
+    )
     print(f"  {duration:g} s cycle in chunks of {chunk} samples, best of {args.repeats}")
     cases = (("physics", False), ("physics + default sensors", True))
     runs: dict[str, list[tuple[float, float, float]]] = {label: [] for label, _ in cases}
@@ -115,7 +157,8 @@ def main(argv: list[str] | None = None) -> int:
     rtf = duration / best[cases[1][0]][0]
     verdict = "met" if rtf >= TARGET_RTF else "NOT met"
     print(
-        f"  {scenario.name} cycle, preset {scenario.solver.preset}, default sensors:"
+        f"  {scenario.name} cycle, {scenario.setup.params.brake} brake, preset"
+        f" {scenario.solver.preset}, default sensors:"
         f" {rtf:.1f}x real time (target >= {TARGET_RTF:.0f}x: {verdict})"
     )
     stops = sum(k.endswith(":brake") for k in kinds)
@@ -130,7 +173,10 @@ def main(argv: list[str] | None = None) -> int:
     )
     print("  cost per sample with the shoes off the drum (4 s, recording every sample):")
     for label, text in _OVERHEAD_CASES:
-        scenario = parse_scenario(text).with_solver(preset=args.preset)
+        scenario = parse_scenario(text)
+        if args.brake is not None:
+            scenario = on_brake(scenario, args.brake)
+        scenario = scenario.with_solver(preset=args.preset)
         n = round(4.0 / scenario.sample_period_s)
         best = float("inf")
         for _ in range(args.repeats):

@@ -10,6 +10,7 @@ import math
 
 import numpy as np
 import pytest
+from numba import njit
 
 from brake_sim_ros.analysis.energy import energy_balance
 from brake_sim_ros.errors import ParameterError, ScenarioError
@@ -368,3 +369,43 @@ def test_a_run_may_draw_its_road_and_the_study_brake_refuses_one():
     assert "study brake has no tyre" in str(info.value) and "\n" not in str(info.value)
     with pytest.raises(ScenarioError, match="road_friction"):
         parse_scenario('name = "t"\nbrake = "service"\n[conditions]\nroad_friction = [0.0, 2.0]\n')
+
+
+@njit(error_model="numpy")
+def _stribeck_rows(slips, sliding, peak, speed, exponent):
+    """``tyre.stribeck`` and the curve written with the power (``|v / v_s| ** a``, as it
+    was before the exponential skipped it) at each slip speed, compiled as the kernel is."""
+    fast, powered = np.empty(slips.shape[0]), np.empty(slips.shape[0])
+    for i in range(slips.shape[0]):
+        v = slips[i]
+        fast[i] = tyre.stribeck(v, sliding, peak, speed, exponent)
+        shape = abs(v / speed) ** exponent
+        powered[i] = sliding + (peak - sliding) * math.exp(-shape)
+    return fast, powered
+
+
+@njit(error_model="numpy")
+def _unit_powers(xs):
+    out = np.empty(xs.shape[0])
+    for i in range(xs.shape[0]):
+        out[i] = xs[i] ** 1.0
+    return out
+
+
+def test_the_exponential_stribeck_curve_skips_the_power_with_the_same_bits():
+    """The default exponent 1 takes ``|v / v_s|`` itself: the compiled power returns its
+    base for exponent 1 (every power of two and its neighbours, where a rounding would
+    show first, and a million others), so the curve has the same bits as with the power,
+    here on 200,000 slip speeds from 1e-9 to 60 m/s; another exponent still takes it."""
+    powers = np.ldexp(1.0, np.arange(-1074, 1024))
+    rng = np.random.default_rng(7)
+    xs = np.concatenate(
+        [powers, np.nextafter(powers, 0.0), np.nextafter(powers, np.inf), rng.random(10**6)]
+    )
+    assert _unit_powers(xs).tobytes() == xs.tobytes()
+    slips = np.concatenate(
+        [[0.0, -0.0], rng.choice([-1.0, 1.0], 200_000) * np.geomspace(1e-9, 60.0, 200_000)]
+    )
+    for exponent in (1.0, 1.5):
+        fast, powered = _stribeck_rows(slips, 0.8 / 1.5, 0.8, 3.0, exponent)
+        assert fast.tobytes() == powered.tobytes(), exponent
