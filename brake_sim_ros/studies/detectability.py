@@ -73,8 +73,9 @@ def campaign_text(units: int, duration_s: float, seed: int = 16, brake: str = DE
     kinds = ", ".join(f'"{k}"' for k in study_kinds(brake))
     fractions = ", ".join(f"{f:g}" for f in FRACTIONS)
     forces = ", ".join(f"{f:g}" for f in FORCES)
-    return f"""# brake-sim bench detectability: every catalogue defect at {len(FRACTIONS)} fractions
-# of its service limit and a healthy brake, {len(FORCES)} forces, {units} units
+    return f"""# brake-sim bench detectability on the {brake} brake: every defect kind it
+# carries (but those the study leaves out) at {len(FRACTIONS)} fractions of its service
+# limit and a healthy brake, {len(FORCES)} forces, {units} units
 name = "detectability"
 description = "The detectability floor's study (brake_sim_ros/studies/detectability.py)"
 base = "symmetric"
