@@ -114,23 +114,23 @@ def benchmark_list() -> str:
 
 
 def campaign_table() -> str:
-    """The built-in campaigns as a Markdown table: runs in all and per split (their plans,
-    ``campaigns.campaign.plan_runs``), units, run length and sample rate."""
+    """The built-in campaigns as a Markdown table: their brake, runs in all and per split
+    (their plans, ``campaigns.campaign.plan_runs``), units, run length and sample rate."""
     from collections import Counter
 
     from brake_sim_ros.campaigns.campaign import plan_runs
     from brake_sim_ros.campaigns.loader import builtin_campaigns, load_campaign
 
     rows = [
-        "| campaign | runs | train | validation | test | units | run | sample rate |",
-        "|---|---|---|---|---|---|---|---|",
+        "| campaign | brake | runs | train | validation | test | units | run | sample rate |",
+        "|---|---|---|---|---|---|---|---|---|",
     ]
     for name in builtin_campaigns():
         c = load_campaign(name)
         runs = plan_runs(c)
         split = Counter(r.split for r in runs)
         rows.append(
-            f"| `{name}` | {len(runs)} | {split['train']} | {split['validation']} |"
+            f"| `{name}` | {c.brake} | {len(runs)} | {split['train']} | {split['validation']} |"
             f" {split['test']} | {len(c.unit_ids)} | {c.outputs.duration_s:g} s |"
             f" {c.outputs.sample_rate_hz:g} Hz |"
         )

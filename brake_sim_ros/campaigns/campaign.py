@@ -87,7 +87,13 @@ class RunSpec:
 
 @dataclass(frozen=True)
 class Campaign:
-    """A loaded campaign file."""
+    """A loaded campaign file.
+
+    Attributes (some):
+        base: the base scenario as the file names it; ``base_text`` its TOML.
+        brake: the brake the runs run on ("study" or "service"): the campaign's key
+            ``brake``, set on the base scenario (``base_data``), or the base's own.
+    """
 
     name: str
     description: str
@@ -95,6 +101,7 @@ class Campaign:
     text: str
     base: str
     base_text: str
+    brake: str
     seed: int
     unit_ids: tuple[str, ...]
     outputs: Outputs

@@ -2,12 +2,13 @@
 :mod:`.campaign` plans).
 
 A campaign names a base scenario (a built-in name, or a path relative to the campaign
-file), the axes it varies (:mod:`.axes`), how many units, what each run outputs and the
-split rule (:mod:`.splits`). Loading is strict like a scenario's: an unknown key, a wrong
-type or an out-of-range value is one line naming the file and the key. Every varied
-scenario is written as TOML text and read again by the scenario loader, so each field's
-rule is the scenario loader's and is written once; a varied scenario it refuses refuses
-the campaign, naming the run.
+file), the brake its runs run on (``brake``: "study" or "service", set on the base
+scenario; without it, the base's own), the axes it varies (:mod:`.axes`), how many units,
+what each run outputs and the split rule (:mod:`.splits`). Loading is strict like a
+scenario's: an unknown key, a wrong type or an out-of-range value is one line naming the
+file and the key. Every varied scenario is written as TOML text and read again by the
+scenario loader, so each field's rule is the scenario loader's and is written once; a
+varied scenario it refuses refuses the campaign, naming the run.
 
 See ``builtin/demo.toml`` for a commented example.
 """
@@ -45,8 +46,10 @@ from brake_sim_ros.campaigns.splits import (
     unit_counts,
     value_kind,
 )
+from brake_sim_ros.campaigns.toml_text import dumps
 from brake_sim_ros.errors import BrakeSimError
 from brake_sim_ros.model.catalogue import KIND_BY_NAME, brake_kinds
+from brake_sim_ros.model.parameters import BRAKES
 from brake_sim_ros.scenarios.checker import MISSING, Checker, show_value
 from brake_sim_ros.scenarios.files import MAX_SCENARIO_BYTES, is_path, read_scenario_text
 from brake_sim_ros.scenarios.loader import (
@@ -156,8 +159,8 @@ def parse_campaign(text: str, source: str, directory: Path | None = None) -> Cam
 
 def _parse(data: dict[str, Any], text: str, source: str, directory: Path | None) -> Campaign:
     ctx = Checker(source)
-    keys = {"name", "description", "base", "seed", "units", "unit_ids", "outputs", "axes"}
-    top = ctx.table(data, "", keys | {"draws", "split"})
+    keys = {"name", "description", "base", "brake", "seed", "units", "unit_ids", "outputs"}
+    top = ctx.table(data, "", keys | {"axes", "draws", "split"})
     if "name" not in top:
         raise ctx.fail("name", MISSING, "a campaign name; it is required")
     name = top["name"]
@@ -166,7 +169,9 @@ def _parse(data: dict[str, Any], text: str, source: str, directory: Path | None)
         raise ctx.fail("base", MISSING, "a base scenario (built-in name or .toml path)")
     base_text = _base_text(ctx, top["base"], directory)
     base_data = parse_toml(base_text, f"{source}: base {top['base']}")
-    base = parse_scenario(base_text, f"{source}: base scenario")  # refused here, not per run
+    _set_brake(ctx, top, base_data)
+    # refused here, not per run (a base that does not hold on the campaign's brake too)
+    base = parse_scenario(dumps(base_data), f"{source}: base scenario")
     circuit = base.setup.params.service is not None  # the line's kinds need its circuit
     seed = ctx.integer(top.get("seed", 0), "seed", 0, 2**63 - 1)
     unit_ids = _units(ctx, top)
@@ -186,6 +191,7 @@ def _parse(data: dict[str, Any], text: str, source: str, directory: Path | None)
         text=text,
         base=top["base"],
         base_text=base_text,
+        brake=base.setup.params.brake,
         seed=seed,
         unit_ids=unit_ids,
         outputs=outputs,
@@ -220,6 +226,24 @@ def _refuse_idle_rules(ctx: Checker, campaign: Campaign) -> None:
         problem = idle_rule([point_columns(p) for p in points], campaign.held_out)
         if problem is not None:
             raise CampaignError(f"{ctx.source}: key 'split.held_out[{problem[0]}]': {problem[1]}")
+
+
+def _set_brake(ctx: Checker, top: dict[str, Any], base_data: dict[str, Any]) -> None:
+    """Set the campaign's ``brake`` (when given; else the base scenario's own stands) on the
+    base scenario's data, which every run is varied from. An axis may not vary the brake
+    beside it (one of the two would be ignored)."""
+    if "brake" not in top:
+        return
+    brake = ctx.string(top["brake"], "brake", BRAKES)
+    axes = top.get("axes", [])
+    for i, axis in enumerate(axes if isinstance(axes, list) else []):
+        if isinstance(axis, dict) and axis.get("key") == "brake":
+            raise ctx.fail(
+                f"axes[{i}].key",
+                "brake",
+                "a key other than 'brake' when the campaign sets its brake (drop one of them)",
+            )
+    base_data["brake"] = brake
 
 
 def _units(ctx: Checker, top: dict[str, Any]) -> tuple[str, ...]:

@@ -51,7 +51,9 @@ def sweep_options(p: argparse.ArgumentParser) -> None:
         " (Parquet, hive-partitioned), campaign.lock. Running it again resumes: finished runs"
         " whose files check out are skipped. DIR must be new, empty, or this campaign's."
     )
-    p.add_argument("campaign", help="built-in campaign name (demo, reference) or .toml path")
+    p.add_argument(
+        "campaign", help="built-in campaign name (demo, reference, reference_study) or .toml path"
+    )
     p.add_argument("--out", required=True, metavar="DIR", help="output directory")
     p.add_argument(
         "--workers", type=int, metavar="N", help="local worker processes (default: every core)"

@@ -168,7 +168,7 @@ BENCHMARKS: dict[str, Study] = {
         Study(
             "detectability",
             "per defect, the smallest severity the baselines detect on unseen units at a"
-            " stated false-alarm rate",
+            " stated false-alarm rate (the service brake; --brake study for the study brake)",
             _detectability,
         ),
         Study(

@@ -1,17 +1,18 @@
 """The detectability floor: per defect kind, the smallest severity the baselines detect on
 brakes they were not trained on, at a stated false-alarm rate.
 
-``brake-sim bench detectability --out DIR [--units N] [--duration S] [--detectors A,B]
-[--false-alarm F] [--workers N]``
+``brake-sim bench detectability --out DIR [--brake B] [--units N] [--duration S]
+[--detectors A,B] [--false-alarm F] [--workers N]``
 
-1. A campaign (:func:`campaign_text`, swept into ``DIR``; a rerun resumes it): every kind
-   of the catalogue at each of its locations, at :data:`FRACTIONS` of its service limit
-   (``brake-sim defects``), one defect per run, and a healthy brake; :data:`FORCES`
-   actuation forces (the healthy reference needs more than one healthy run per unit);
-   ``--units`` units (default 6), whole units to train (2/3) and test (1/3);
-   ``--duration`` s runs (default 2: the order detector judges the quiet sliding after
-   the impacts, from about 1.2 s) at 5120 Hz keeping the measured channels and the
-   labels only.
+1. A campaign (:func:`campaign_text`, swept into ``DIR``; a rerun resumes it) on the
+   ``--brake`` (default ``service``; ``study`` for the study brake's table): every kind
+   of that brake's catalogue (the line's on the service brake only) at each of its
+   locations, at :data:`FRACTIONS` of its service limit (``brake-sim defects``), one
+   defect per run, and a healthy brake; :data:`FORCES` actuation forces (the healthy
+   reference needs more than one healthy run per unit); ``--units`` units (default 6),
+   whole units to train (2/3) and test (1/3); ``--duration`` s runs (default 2: the order
+   detector judges the quiet sliding after the impacts, from about 1.2 s) at 5120 Hz
+   keeping the measured channels and the labels only.
 2. Each detector (default ``orders``, ``impact`` and ``learned``) is fitted on the train
    units. Its alarm threshold is then set on healthy training data at the stated
    false-alarm rate: the ``1 - F`` quantile (default F = 0.01) of the health index over
@@ -41,24 +42,44 @@ from brake_sim_ros.datasets.sweep import sweep
 from brake_sim_ros.detection import evaluate, metrics
 from brake_sim_ros.detection.registry import make_detector
 from brake_sim_ros.errors import BrakeSimError
-from brake_sim_ros.model.catalogue import KIND_BY_NAME, KINDS
+from brake_sim_ros.model.catalogue import KIND_BY_NAME, KINDS, brake_kinds
+from brake_sim_ros.model.parameters import BRAKES
 
 FRACTIONS = (0.1, 0.2, 0.35, 0.5, 0.75, 1.0)  # of each kind's service limit
 FORCES = (1150.0, 1400.0)  # N per shoe, around the published 1300 N
 SAMPLE_RATE_HZ = 5120.0
 HOLD_S = 0.2
 DETECTED_SHARE = 0.5  # a fraction is detected when at least this share of its runs is
+DEFAULT_BRAKE = "service"  # the drive cycles' and campaigns' brake; "study" on request
+# kinds a brake's campaign leaves out, and why (printed under the table)
+LEFT_OUT = {
+    "service": {
+        "pivot_radius_change": "from half its service limit (+1.5 %, the study's cases on a"
+        " 3.5 mm clearance) its lining starts inside the drum of the service brake's 0.3 mm"
+        " clearance, which the scenario loader refuses",
+    },
+    "study": {},
+}
 
 
-def campaign_text(units: int, duration_s: float, seed: int = 16) -> str:
-    """The study's campaign (module docstring) as TOML."""
+def study_kinds(brake: str) -> list[str]:
+    """The kinds the study runs on ``brake``: every kind it can carry (the line's on the
+    service brake only) but those it leaves out (:data:`LEFT_OUT`)."""
+    return [k.name for k in brake_kinds(brake == "service") if k.name not in LEFT_OUT[brake]]
+
+
+def campaign_text(units: int, duration_s: float, seed: int = 16, brake: str = DEFAULT_BRAKE) -> str:
+    """The study's campaign (module docstring) as TOML, on ``brake``."""
+    kinds = ", ".join(f'"{k}"' for k in study_kinds(brake))
     fractions = ", ".join(f"{f:g}" for f in FRACTIONS)
     forces = ", ".join(f"{f:g}" for f in FORCES)
-    return f"""# brake-sim bench detectability: every catalogue defect at {len(FRACTIONS)} fractions
-# of its service limit and a healthy brake, {len(FORCES)} forces, {units} units
+    return f"""# brake-sim bench detectability on the {brake} brake: every defect kind it
+# carries (but those the study leaves out) at {len(FRACTIONS)} fractions of its service
+# limit and a healthy brake, {len(FORCES)} forces, {units} units
 name = "detectability"
 description = "The detectability floor's study (brake_sim_ros/studies/detectability.py)"
 base = "symmetric"
+brake = "{brake}"
 seed = {seed}
 units = {units}
 
@@ -74,7 +95,7 @@ columns = [
 ]
 
 [[axes]]
-defects = "all"
+defects = [{kinds}]
 severities = [{fractions}]
 healthy = true
 
@@ -107,7 +128,8 @@ def thresholds(detector, dataset, false_alarm: float) -> float:
 def run_study(dataset, names: list[str], false_alarm: float) -> dict:
     """Fit, threshold and score each detector (module docstring); the results as data."""
     info = {r["run_id"]: r for r in dataset.manifest.to_pylist()}
-    out: dict = {"false_alarm": false_alarm, "detectors": {}}
+    ran = {r["defect_kind"] for r in info.values()} - {"healthy"}
+    out: dict = {"false_alarm": false_alarm, "kinds": sorted(ran), "detectors": {}}
     for name in names:
         detector = make_detector(name)
         evaluate.fit(detector, dataset, "train")
@@ -152,8 +174,9 @@ def floor(shares: dict[float, float]) -> float | None:
     return best
 
 
-def table(result: dict) -> str:
-    """The markdown table: per kind and detector, the floor and the share at each fraction."""
+def table(result: dict, brake: str | None = None) -> str:
+    """The markdown table: per kind and detector, the floor and the share at each fraction;
+    the kinds ``brake``'s study leaves out (:data:`LEFT_OUT`) named under it."""
     names = list(result["detectors"])
     lines = [
         "| defect (service limit) | detector | floor (fraction, size) | "
@@ -161,10 +184,11 @@ def table(result: dict) -> str:
         + " |",
         "|---|---|---|" + "---|" * len(FRACTIONS),
     ]
-    # every kind, but the service brake's own (the line's, the seized adjuster) only where
-    # runs carried them (a campaign on the study brake carries none: not "not detected")
+    # the kinds the campaign ran (a kind it did not run is no row, not "not detected");
+    # a result without them: every kind but the service brake's own, unless counted
     carried = {key.split("@")[0] for n in names for key in result["detectors"][n]["counts"]}
-    for kind in (k for k in KINDS if not k.service_only or k.name in carried):
+    ran = set(result.get("kinds", ())) or {k.name for k in KINDS if not k.service_only}
+    for kind in (k for k in KINDS if k.name in ran | carried):
         for name in names:
             counts = result["detectors"][name]["counts"]
             shares, cells = {}, []
@@ -192,6 +216,8 @@ def table(result: dict) -> str:
             f" alarms in {d['healthy_hours'] * 3600:.1f} s of healthy test runs"
             f" ({rate:.3g} per hour)"
         )
+    for kind, why in LEFT_OUT.get(brake, {}).items():
+        lines.append(f"\n{kind}: not run on the {brake} brake: {why}")
     return "\n".join(lines)
 
 
@@ -200,6 +226,11 @@ def main(argv: list[str]) -> int:
         prog="brake-sim bench detectability", description=__doc__.splitlines()[0]
     )
     parser.add_argument("--out", required=True, help="the study's dataset directory")
+    parser.add_argument(
+        "--brake",
+        default=DEFAULT_BRAKE,
+        help=f"the brake: {' or '.join(BRAKES)} (default {DEFAULT_BRAKE})",
+    )
     parser.add_argument("--units", type=int, default=6, help="units (default 6: 4 train, 2 test)")
     parser.add_argument("--duration", type=float, default=2.0, help="run length, s (default 2)")
     parser.add_argument("--detectors", default="orders,impact,learned", help="comma-separated")
@@ -211,6 +242,8 @@ def main(argv: list[str]) -> int:
     )
     parser.add_argument("--workers", type=int, default=None, help="local workers")
     args = parser.parse_args(argv)
+    if args.brake not in BRAKES:
+        raise BrakeSimError(f"--brake {args.brake!r}: allowed one of {list(BRAKES)}")
     if not 3 <= args.units <= 100:
         raise BrakeSimError(f"--units {args.units}: allowed 3 to 100")
     if not 0.5 <= args.duration <= 10.0:
@@ -218,7 +251,9 @@ def main(argv: list[str]) -> int:
     if not 0.0 < args.false_alarm < 0.5:
         raise BrakeSimError(f"--false-alarm {args.false_alarm!r}: allowed between 0 and 0.5")
     out = Path(args.out)
-    campaign = parse_campaign(campaign_text(args.units, args.duration), "detectability")
+    campaign = parse_campaign(
+        campaign_text(args.units, args.duration, brake=args.brake), "detectability"
+    )
     start = time.monotonic()
     sweep(campaign, out, workers=args.workers)
     swept = time.monotonic() - start
@@ -229,12 +264,13 @@ def main(argv: list[str]) -> int:
     except (ValueError, RuntimeError) as exc:
         raise BrakeSimError(" ".join(str(exc).split())) from None
     print(
-        f"detectability: {len(dataset.runs('train'))} train and {len(dataset.runs('test'))} test"
-        f" runs of {args.duration:g} s at {SAMPLE_RATE_HZ:g} Hz, {args.units} units, forces"
+        f"detectability on the {args.brake} brake: {len(dataset.runs('train'))} train and"
+        f" {len(dataset.runs('test'))} test runs of {args.duration:g} s at"
+        f" {SAMPLE_RATE_HZ:g} Hz, {args.units} units, forces"
         f" {', '.join(f'{f:g}' for f in FORCES)} N; swept in {swept:.0f} s, scored in"
         f" {time.monotonic() - start - swept:.0f} s; threshold at {args.false_alarm:g} of"
         f" healthy training windows; a fraction is detected when >= {DETECTED_SHARE:g} of its"
         f" test runs raise an alarm held {HOLD_S:g} s after the onset\n"
     )
-    print(table(result))
+    print(table(result, args.brake))
     return 0
