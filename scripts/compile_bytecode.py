@@ -4,9 +4,11 @@ pip installs with ``--no-compile`` (scripts/setup.sh: it halves pip's time), and
 ``PYTHONDONTWRITEBYTECODE`` is set Python never writes a .pyc on import either: every
 ``brake-sim`` process then compiles numpy, scipy, numba, rclpy and the project from source
 as it imports them, about a second of CPU a process. This imports, with bytecode writing
-on, every module the project's sources name in an import statement (at module level or
-inside a function, found in their syntax trees) and the project's own modules, so that
-each writes its .pyc and those of what it imports.
+on, every module outside the package that the package's sources name in an import
+statement (at module level or inside a function, found in their syntax trees), so that
+each writes its .pyc and those of what it imports; and compiles the package's own sources
+without importing them (a module imported for its side effects, such as the sweep's
+worker warm-up, must not run here).
 
 A module that cannot be imported here (an optional part missing, the ROS interfaces not
 built yet) is counted in the last line and left to compile at its first use, as before.
@@ -15,9 +17,9 @@ built yet) is counted in the last line and left to compile at its first use, as 
 from __future__ import annotations
 
 import ast
+import compileall
 import importlib
 import importlib.util
-import pkgutil
 import sys
 import time
 from pathlib import Path
@@ -54,18 +56,13 @@ def _is_module(name: str) -> bool:
         return False
 
 
-def project_modules() -> list[str]:
-    """The package's modules, but its ``__main__`` ones (importing those runs them)."""
-    package = importlib.import_module(PACKAGE)
-    found = pkgutil.walk_packages(package.__path__, f"{PACKAGE}.")
-    return sorted(m.name for m in found if not m.name.endswith("__main__"))
-
-
 def main() -> int:
     sys.dont_write_bytecode = False  # whatever PYTHONDONTWRITEBYTECODE says
     sys.path.insert(0, str(ROOT))
     start = time.process_time()
-    names = sorted(imported_names(ROOT) - {"__main__"}) + project_modules()
+    names = sorted(
+        n for n in imported_names(ROOT) if n != "__main__" and n.split(".")[0] != PACKAGE
+    )
     failed = []
     for i, name in enumerate(names):
         if i % 100 == 0:  # the set-up's progress lines show the latest
@@ -74,10 +71,12 @@ def main() -> int:
             importlib.import_module(name)
         except Exception:  # any failure: left to compile at its first use
             failed.append(name)
+    own = compileall.compile_dir(str(ROOT / PACKAGE), quiet=1)
     left = f"; {len(failed)} could not be imported here: {', '.join(failed)}" if failed else ""
     print(
-        f"bytecode of {len(sys.modules)} modules written or up to date"
+        f"bytecode of {len(sys.modules)} modules and of the package written or up to date"
         f" ({time.process_time() - start:.1f} s of CPU){left}"
+        + ("" if own else "; the package's own could not all be compiled")
     )
     return 0
 

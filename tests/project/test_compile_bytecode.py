@@ -1,5 +1,5 @@
 """scripts/compile_bytecode.py finds what brake-sim imports, lazily imported modules too,
-and never imports a ``__main__`` module (that would run a command)."""
+and compiles the package's own modules without running them."""
 
 from __future__ import annotations
 
@@ -28,7 +28,17 @@ def test_the_imports_inside_functions_are_found_too():
     assert {"numpy", "numba", "rclpy"} <= names
 
 
-def test_no_main_module_is_imported():
-    modules = _script().project_modules()
-    assert "brake_sim_ros.cli.simulate" in modules
-    assert not [m for m in modules if m.endswith("__main__")]
+def test_the_package_is_compiled_not_imported(tmp_path, monkeypatch):
+    """The package's own sources are byte-compiled, not imported: a module imported for its
+    side effects (the sweep's worker warm-up runs a scenario) must not run at set-up."""
+    script = _script()
+    package = tmp_path / script.PACKAGE
+    package.mkdir()
+    (package / "__init__.py").write_text("")
+    (package / "side_effect.py").write_text("raise SystemExit('imported')\n")
+    monkeypatch.setattr(script, "ROOT", tmp_path)
+    monkeypatch.setattr(sys, "path", list(sys.path))  # main() puts ROOT first
+    monkeypatch.setattr(sys, "dont_write_bytecode", sys.dont_write_bytecode)  # and sets it
+    monkeypatch.setattr(script, "imported_names", lambda root: {"json"})
+    assert script.main() == 0
+    assert list((package / "__pycache__").glob("side_effect.*.pyc"))
