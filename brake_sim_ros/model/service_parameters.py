@@ -107,6 +107,14 @@ class TyreParameters:
 
 
 # (field, low, high) of TyreParameters besides the road friction
+# The closed bounds of the service brake's fields that are checked alone (field, low,
+# high, what the refusal says is allowed): its adjuster's step and its lining over the arc.
+SERVICE_LIMITS: tuple[tuple[str, float, float, str], ...] = (
+    ("adjuster_step_m", 1e-6, 1e-3, "1 um to 1 mm"),
+    ("lining_modulus_pa", 1e6, 1e11, "1e6 to 1e11 Pa"),
+    ("lining_thickness_m", 0.001, 0.02, "1 to 20 mm"),
+    ("lining_damping_time_s", 0.0, 1e-3, "0 to 1e-3 s"),
+)
 TYRE_LIMITS: tuple[tuple[str, float, float], ...] = (
     ("peak_ratio", 1.0, 3.0),
     ("stribeck_speed_m_s", 0.1, 50.0),
@@ -242,12 +250,7 @@ class ServiceBrakeParameters:
             self.stop_stiffness_n_per_m,
             "1e5 to 1e9 N/m",
         )
-        for name, low, high, allowed in (
-            ("adjuster_step_m", 1e-6, 1e-3, "1 um to 1 mm"),
-            ("lining_modulus_pa", 1e6, 1e11, "1e6 to 1e11 Pa"),
-            ("lining_thickness_m", 0.001, 0.02, "1 to 20 mm"),
-            ("lining_damping_time_s", 0.0, 1e-3, "0 to 1e-3 s"),
-        ):
+        for name, low, high, allowed in SERVICE_LIMITS:
             value = getattr(self, name)
             _require(low <= value <= high, name, value, allowed)
         _require(

@@ -51,6 +51,7 @@ from brake_sim_ros.model.parameters import PARAMETER_GROUPS, BrakeParameters, un
 from brake_sim_ros.model.run_setup import BrakeSetup
 from brake_sim_ros.model.service_parameters import (
     ROAD_FRICTION_RANGE,
+    SERVICE_LIMITS,
     TYRE_LIMITS,
     ServiceBrakeParameters,
     TyreParameters,
@@ -110,6 +111,7 @@ _RANGES: dict[str, tuple[float, float]] = {
     "service.line_compliance_m3_per_pa": (1e-16, 1e-10),  # [core]
     "service.line_resistance_pa_s_per_m3": (1e7, 1e14),  # [core]
     "service.tyre.road_friction": ROAD_FRICTION_RANGE,  # [core]
+    **{f"service.{name}": (lo, hi) for name, lo, hi, _allowed in SERVICE_LIMITS},  # [core]
     **{f"service.tyre.{name}": (lo, hi) for name, lo, hi in TYRE_LIMITS},  # [core]
 }
 # The service brake's groups under their node names, present only on the service brake
