@@ -40,6 +40,8 @@ def imported_names(root: Path) -> set[str]:
                 names.update(alias.name for alias in node.names)
             elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
                 names.add(node.module)
+                if node.module.split(".")[0] == PACKAGE:  # find_spec would import its parent
+                    continue
                 names.update(
                     f"{node.module}.{alias.name}"
                     for alias in node.names
