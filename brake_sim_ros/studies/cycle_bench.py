@@ -21,13 +21,12 @@ with a ``[cycle]`` (road load and the controller), on the ``--brake`` named.
 from __future__ import annotations
 
 import argparse
-import re
 import time
 
 import numpy as np
 
 from brake_sim_ros.analysis.energy import energy_balance
-from brake_sim_ros.errors import ScenarioError
+from brake_sim_ros.campaigns.toml_text import dumps
 from brake_sim_ros.model.parameters import BRAKES
 from brake_sim_ros.model.run_setup import SampleBlock
 from brake_sim_ros.scenarios import Scenario, load_scenario, parse_scenario
@@ -35,8 +34,6 @@ from brake_sim_ros.scenarios.loader import parse_toml
 from brake_sim_ros.stream.build import sensor_bank_for, stepper_for
 
 TARGET_RTF = 30.0
-# a scenario's top-level brake key on a line of its own (before its first table)
-_BRAKE_LINE = re.compile(r"""^brake\s*=\s*["'](?:study|service)["'][ \t]*(?:#.*)?$""", re.MULTILINE)
 # free-rolling runs for the vehicle's cost: no brake force, shoes off the drum
 _FREE = 'name = "free"\n[actuation]\npeak_force_n = 0.0\n'
 _OVERHEAD_CASES = (
@@ -82,30 +79,19 @@ def _run(scenario, chunk_samples: int, with_sensors: bool):
 
 
 def on_brake(scenario: Scenario, brake: str) -> Scenario:
-    """``scenario`` on the brake ``brake`` (:data:`BRAKES`): its text with the top-level
-    ``brake`` key set so (its one ``brake = "..."`` line rewritten, or one added), parsed
-    again (itself if it is on that brake already).
+    """``scenario`` on the brake ``brake`` (:data:`BRAKES`): its data with the top-level
+    ``brake`` key set so, as a campaign sets its base's (written again as TOML text,
+    :func:`brake_sim_ros.campaigns.toml_text.dumps`) and parsed again; itself if it is on
+    that brake already.
 
     Raises:
-        ScenarioError: the scenario's brake key is not one plain line before its first
-            table, or the text does not parse on this brake (one line).
+        ScenarioError: the scenario does not hold on this brake (one line).
     """
     if scenario.setup.params.brake == brake:
         return scenario
-    text = scenario.text
-    if "brake" in parse_toml(text, scenario.source):
-        top = text.split("\n[", 1)[0]  # the top-level keys come before the first table
-        lines = _BRAKE_LINE.findall(top)
-        if len(lines) != 1:
-            raise ScenarioError(
-                f"{scenario.source}: brake = {scenario.setup.params.brake!r}: allowed --brake"
-                ' only for a scenario whose brake key is one line brake = "..." before its'
-                " first table, or without one"
-            )
-        text = _BRAKE_LINE.sub(f"brake = {brake!r}", text, count=1)
-    else:
-        text = f"brake = {brake!r}\n" + text
-    return parse_scenario(text, scenario.source)
+    data = parse_toml(scenario.text, scenario.source)
+    data["brake"] = brake
+    return parse_scenario(dumps(data), scenario.source)
 
 
 def main(argv: list[str] | None = None) -> int:
