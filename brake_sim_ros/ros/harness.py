@@ -89,11 +89,19 @@ class NodeProcess:
 
     @classmethod
     def start(
-        cls, args: list[str], *, domain_id: int, log_path: Path, python: str = sys.executable
+        cls,
+        args: list[str],
+        *,
+        domain_id: int,
+        log_path: Path,
+        python: str = sys.executable,
+        launch: Callable[..., subprocess.Popen] = subprocess.Popen,
     ) -> NodeProcess:
+        """The node started by ``launch`` (:class:`subprocess.Popen`'s signature and what it
+        returns: wait, poll, send_signal, kill)."""
         log_path.parent.mkdir(parents=True, exist_ok=True)
         with log_path.open("w") as log:
-            proc = subprocess.Popen(
+            proc = launch(
                 [python, "-m", "brake_sim_ros.app.node", *args],
                 stdout=log,
                 stderr=subprocess.STDOUT,

@@ -17,10 +17,11 @@ from brake_sim_ros.scenarios import load_scenario
 from brake_sim_ros.scenarios.loader import parse_scenario
 from brake_sim_ros.stream.run import run_scenario
 from brake_sim_ros.studies.validation_checks import checks
+from tests import cli_process
 
 
 def _cli(*args, cwd=None):
-    return subprocess.run(
+    return cli_process.run(
         [sys.executable, "-m", "brake_sim_ros.cli", *args],
         capture_output=True,
         text=True,

@@ -17,7 +17,6 @@ import io
 import json
 import os
 import re
-import subprocess
 import sys
 from pathlib import Path
 
@@ -29,6 +28,7 @@ from hypothesis import strategies as st
 from brake_sim_ros import cli
 from brake_sim_ros.cli.simulate import MAX_SIMULATE_DURATION_S
 from brake_sim_ros.stream import run as run_module
+from tests import cli_process
 
 SMALL = 'name = "small"\nduration_s = 0.01\n'
 _PROGRESS = re.compile(r"^simulating .*%$")
@@ -432,7 +432,7 @@ def test_real_processes_print_one_line_and_no_traceback(tmp_path, argv, fragment
     names = _scene(tmp_path)
     (tmp_path / "deep.toml").write_text("a = " + "[" * 100_000)
     before = _tree(tmp_path)
-    r = subprocess.run(
+    r = cli_process.run(
         [sys.executable, "-m", "brake_sim_ros.cli", *(a.format(**names) for a in argv)],
         capture_output=True,
         text=True,

@@ -28,6 +28,7 @@ from brake_sim_ros import cli
 from brake_sim_ros.campaigns import load_campaign
 from brake_sim_ros.datasets.sweep import sweep
 from brake_sim_ros.datasets.sweep_output import LOCK_NAME, MANIFEST_NAME
+from tests import cli_process
 
 ROOT = Path(__file__).resolve().parents[2]
 CAMPAIGN = """
@@ -210,7 +211,7 @@ DAMAGE: dict[str, Callable[[Path], None]] = {
 
 def _run(args: list[str], timeout: float = 120) -> subprocess.CompletedProcess[str]:
     """A real process: a hang is a failure, not a stuck test."""
-    return subprocess.run(
+    return cli_process.run(
         [sys.executable, "-m", "brake_sim_ros.cli", *args],
         capture_output=True,
         text=True,

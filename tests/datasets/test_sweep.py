@@ -31,6 +31,7 @@ from brake_sim_ros.datasets.reader import info_text
 from brake_sim_ros.datasets.sweep import sweep
 from brake_sim_ros.datasets.sweep_output import DONE_DIR, LOCK_NAME, MANIFEST_NAME
 from brake_sim_ros.scenarios import parse_scenario
+from tests import cli_process
 
 ROOT = Path(__file__).resolve().parents[2]
 # 3 units x (healthy + 2 sides x 2 severities) x 2 forces = 30 short runs
@@ -54,7 +55,7 @@ values = [1200.0, 1300.0]
 
 def _cli(*args: str, timeout: float = 300) -> subprocess.CompletedProcess[str]:
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
-    return subprocess.run(
+    return cli_process.run(
         [sys.executable, "-m", "brake_sim_ros.cli", *args],
         capture_output=True,
         text=True,

@@ -20,6 +20,7 @@ from brake_sim_ros import cli
 from brake_sim_ros.datasets import open as open_dataset
 from brake_sim_ros.datasets.reader import check
 from brake_sim_ros.datasets.sweep_output import DONE_DIR, MANIFEST_NAME, sha256_file
+from tests import cli_process
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -218,7 +219,7 @@ def test_a_full_disk_while_writing_the_lock_is_one_line(tmp_path):
         signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
         resource.setrlimit(resource.RLIMIT_FSIZE, (100, 100))
 
-    result = subprocess.run(
+    result = cli_process.run(
         [sys.executable, "-m", "brake_sim_ros.cli", "sweep", str(campaign), "--out", str(out),
          "--quiet", "--workers", "1"],
         env={**os.environ, "PYTHONPATH": str(ROOT)},
@@ -237,7 +238,7 @@ def test_unknown_output_columns_are_refused_before_the_directory_is_made(tmp_pat
     path = _campaign(tmp_path / "c.toml", "c", 3, 1200.0, 0.1)
     path.write_text(path.read_text().replace("[outputs]\n", '[outputs]\ncolumns = ["no_such"]\n'))
     out = tmp_path / "out"
-    result = subprocess.run(
+    result = cli_process.run(
         [sys.executable, "-m", "brake_sim_ros.cli", "sweep", str(path), "--out", str(out),
          "--quiet", "--workers", "1"],
         env={**os.environ, "PYTHONPATH": str(ROOT)},

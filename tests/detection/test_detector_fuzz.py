@@ -21,6 +21,7 @@ from brake_sim_ros.campaigns import load_campaign
 from brake_sim_ros.datasets.sweep import sweep
 from brake_sim_ros.detection.detector import Assessment, Detector
 from brake_sim_ros.ros.harness import domain_id_for, ros_environment
+from tests import cli_process
 
 ROOT = Path(__file__).resolve().parents[2]
 HERE = "tests.detection.test_detector_fuzz"
@@ -197,7 +198,7 @@ def _monitor(*args: str, path: Path | None = None) -> subprocess.CompletedProces
     env = ros_environment(domain_id_for(31))
     paths = [str(ROOT)] + ([str(path)] if path else [])
     env["PYTHONPATH"] = os.pathsep.join([*paths, env.get("PYTHONPATH", "")])
-    return subprocess.run(
+    return cli_process.run(
         [sys.executable, "-m", "brake_sim_ros.cli", "monitor", *args],
         capture_output=True,
         text=True,

@@ -20,6 +20,7 @@ from brake_sim_ros.datasets.sweep import sweep
 from brake_sim_ros.fleet import scatter
 from brake_sim_ros.scenarios import load_scenario
 from brake_sim_ros.studies import units as fleet_study
+from tests import cli_process
 from tests.study_cycles import on_study_brake
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -39,7 +40,7 @@ def _brake_keys(values) -> set[str]:
 
 def _cli(*args: str) -> subprocess.CompletedProcess[str]:
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
-    return subprocess.run(
+    return cli_process.run(
         [sys.executable, "-m", "brake_sim_ros.cli", *args],
         capture_output=True, text=True, cwd=ROOT, env=env, timeout=600,
     )  # fmt: skip

@@ -22,6 +22,7 @@ from brake_sim_ros.model.parameters import BrakeParameters
 from brake_sim_ros.scenarios import builtin_names, load_scenario, parse_scenario
 from brake_sim_ros.sensing.sensors import default_sensor_set
 from brake_sim_ros.studies import units as fleet_study
+from tests import cli_process
 
 ROOT = Path(__file__).resolve().parents[2]
 SENSORS = default_sensor_set()
@@ -194,7 +195,7 @@ def test_a_bad_unit_id_is_refused_in_one_line(unit_id):
 
 @pytest.mark.slow
 def test_the_unit_command_prints_the_unit_against_nominal():
-    r = subprocess.run(
+    r = cli_process.run(
         [sys.executable, "-m", "brake_sim_ros.cli", "unit", "VIN-0042", "--fleet-seed", "11"],
         capture_output=True, text=True, cwd=ROOT, timeout=600,
     )  # fmt: skip
@@ -204,7 +205,7 @@ def test_the_unit_command_prints_the_unit_against_nominal():
     line = next(x for x in r.stdout.splitlines() if "friction.coefficient" in x)
     assert f"{mu:.6g}" in line and f"{100 * (mu / 0.285 - 1):+.3f} %" in line
     assert "+-15 %" in line
-    bad = subprocess.run(
+    bad = cli_process.run(
         [sys.executable, "-m", "brake_sim_ros.cli", "unit", "a b"],
         capture_output=True, text=True, cwd=ROOT, timeout=600,
     )  # fmt: skip
@@ -248,7 +249,7 @@ def test_simulate_writes_the_unit_into_the_parquet_metadata(tmp_path):
     source = tmp_path / "unit.toml"
     source.write_text('name = "fleet"\nunit_id = "VIN-0042"\nseed = 11\nfleet_seed = 3\n')
     out = tmp_path / "run.parquet"
-    r = subprocess.run(
+    r = cli_process.run(
         [sys.executable, "-m", "brake_sim_ros.cli", "simulate", str(source), "--duration",
          "0.05", "--out", str(out), "--quiet"],
         capture_output=True, text=True, cwd=ROOT, timeout=600,

@@ -48,6 +48,7 @@ from brake_sim_ros.stream import conversion  # noqa: E402
 from brake_sim_ros.stream import parameters as ros_params  # noqa: E402
 from brake_sim_ros.stream.build import stepper_for  # noqa: E402
 from brake_sim_ros.stream.offline import offline_messages  # noqa: E402
+from tests import cli_process  # noqa: E402
 
 SCENARIO = "case7_left_actuation"
 DURATION_S = 2.5
@@ -283,7 +284,7 @@ def test_cli_simulate_mcap_and_recover(tmp_path):
     path = tmp_path / "cli.mcap"
     env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[2])}
     cli = [sys.executable, "-m", "brake_sim_ros.cli"]
-    run = subprocess.run(
+    run = cli_process.run(
         [*cli, "simulate", "symmetric", "--duration", "0.5", "--quiet", "--mcap", str(path)],
         capture_output=True, text=True, timeout=120, env=env,
     )  # fmt: skip
@@ -291,13 +292,13 @@ def test_cli_simulate_mcap_and_recover(tmp_path):
     assert f"recording: {path}" in run.stdout
     broken = tmp_path / "broken.mcap"
     broken.write_bytes(path.read_bytes()[:-100])
-    run = subprocess.run(
+    run = cli_process.run(
         [*cli, "recover", str(broken), str(tmp_path / "fixed.mcap")],
         capture_output=True, text=True, timeout=60, env=env,
     )  # fmt: skip
     assert run.returncode == 0, run.stderr
     assert "/brake_sim/pivot_forces: 50" in run.stdout
-    run = subprocess.run(
+    run = cli_process.run(
         [*cli, "recover", str(Path(__file__)), str(tmp_path / "x.mcap")],
         capture_output=True, text=True, timeout=60, env=env,
     )  # fmt: skip

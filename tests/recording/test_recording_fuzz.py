@@ -28,7 +28,6 @@ import io
 import os
 import random
 import struct
-import subprocess
 import sys
 import zlib
 from collections import Counter
@@ -51,6 +50,7 @@ from brake_sim_ros.recording.record import record_offline
 from brake_sim_ros.recording.writer import RecordingOptions
 from brake_sim_ros.ros.harness import domain_id_for, ros_environment
 from brake_sim_ros.scenarios import load_scenario
+from tests import cli_process
 
 pytestmark = [
     pytest.mark.ros,  # the recorder and the replay module need the ROS wheels (no DDS used)
@@ -515,7 +515,6 @@ def test_subprocesses_refuse_with_one_line(bags, tmp_path):
     by_name = {c.name: c for c in CASES}
     env = {**ros_environment(domain_id_for(7)), "PYTHONPATH": str(ROOT)}
     cli = [sys.executable, "-m", "brake_sim_ros.cli"]
-    procs = []
     for i, name in enumerate(SUBPROCESS_CASES):
         broken = tmp_path / f"case{i}.mcap"
         broken.write_bytes(damage(bags["zstd"], by_name[name], tmp_path))
@@ -525,15 +524,16 @@ def test_subprocesses_refuse_with_one_line(bags, tmp_path):
             "recover": [*cli, "recover", str(broken), str(broken), "--overwrite"],
         }
         for what, argv in commands.items():
-            proc = subprocess.Popen(
-                argv, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+            proc = cli_process.run(argv, env=env, capture_output=True, text=True, timeout=120)
+            assert proc.returncode in (1, 2), (
+                name,
+                what,
+                proc.returncode,
+                proc.stdout,
+                proc.stderr,
             )
-            procs.append((name, what, proc))
-    for name, what, proc in procs:
-        out, err = proc.communicate(timeout=120)
-        assert proc.returncode in (1, 2), (name, what, proc.returncode, out, err)
-        line = _one_line_error(err)
-        assert line.startswith("brake-sim"), line
+            line = _one_line_error(proc.stderr)
+            assert line.startswith("brake-sim"), line
     assert not list(tmp_path.glob("*.rrd")) and not list(tmp_path.glob(".*partial*"))
 
 

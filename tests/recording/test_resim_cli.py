@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import hashlib
 import os
-import subprocess
 import sys
 from pathlib import Path
 
@@ -27,6 +26,7 @@ from brake_sim_ros.recording.writer import McapRecorder
 from brake_sim_ros.scenarios import load_scenario, parse_scenario
 from brake_sim_ros.stream import conversion
 from brake_sim_ros.stream.offline import offline_messages
+from tests import cli_process
 from tests.stream.test_drive_command import RIG
 
 SECONDS = 0.25
@@ -34,7 +34,7 @@ SECONDS = 0.25
 
 def resim(*args):
     """``brake-sim resim ARGS`` in a process of its own (str() of each argument)."""
-    return subprocess.run(
+    return cli_process.run(
         [sys.executable, "-m", "brake_sim_ros.cli", "resim", *map(str, args)],
         capture_output=True,
         text=True,
@@ -285,7 +285,7 @@ def test_a_run_made_with_solver_options_resimulates_with_them(tmp_path, options,
     scenario's text: the recording says so, and re-simulation runs with them (it refused
     the other sample rate, and re-ran another preset with the text's)."""
     first, again = tmp_path / "first.mcap", tmp_path / "again.mcap"
-    made = subprocess.run(
+    made = cli_process.run(
         [sys.executable, "-m", "brake_sim_ros.cli", "simulate", "symmetric", "--duration",
          "0.05", "--quiet", "--mcap", str(first), *options],
         capture_output=True, text=True, timeout=600,

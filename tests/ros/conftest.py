@@ -26,6 +26,7 @@ from rclpy.qos import QoSProfile
 
 from brake_sim_ros.ros import qos
 from brake_sim_ros.ros.harness import NodeProcess, SimClient
+from tests import cli_process
 
 HERE = Path(__file__).parent
 # lark (pulled in by rclpy's type-description code) imports sre_parse
@@ -50,7 +51,9 @@ class Nodes:
     def _start(self, args: list[str], domain: int, log_path: Path | None, python: str | None):
         log = log_path or self._tmp.mktemp("node") / "node.log"
         extra = {"python": python} if python else {}
-        return NodeProcess.start(args, domain_id=domain, log_path=log, **extra)
+        return NodeProcess.start(
+            args, domain_id=domain, log_path=log, launch=cli_process.popen, **extra
+        )
 
     @contextlib.contextmanager
     def process(

@@ -2,13 +2,13 @@
 
 from __future__ import annotations
 
-import subprocess
 import sys
 from pathlib import Path
 
 from rosbags.highlevel import AnyReader
 
 from brake_sim_ros.ros.harness import domain_id_for, ros_environment
+from tests import cli_process
 from tests.rerun_helpers import verify
 
 DURATION_S = 0.5
@@ -18,7 +18,7 @@ def test_live_streams_records_and_says_where(tmp_path: Path):
     env = ros_environment(domain_id_for(11))
     env.pop("DISPLAY", None)
     env.pop("WAYLAND_DISPLAY", None)
-    proc = subprocess.run(
+    proc = cli_process.run(
         [
             sys.executable,
             "-m",

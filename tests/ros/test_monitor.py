@@ -51,6 +51,7 @@ from brake_sim_ros.scenarios import load_scenario
 from brake_sim_ros.stream import conversion
 from brake_sim_ros.stream.offline import StreamSettings
 from brake_sim_ros.stream.run import run_scenario
+from tests import cli_process
 from tests.sample_blocks import training_windows
 
 SCENARIO = """\
@@ -251,7 +252,7 @@ def test_offline_and_replayed_through_the_monitor_agree(recording, threshold, tm
 
     log = tmp_path / "monitor.log"
     with _monitoring(11, threshold, log) as listener:
-        replay = subprocess.run(
+        replay = cli_process.run(
             [*CLI, "replay", str(path), "--rate", "2", "--wait-for-subscribers", "1", *TOPICS],
             env=ros_environment(listener.domain_id),
             capture_output=True,
@@ -433,7 +434,7 @@ def test_monitor_then_node_in_the_documented_order_assess_every_window_from_samp
     window = OffsetRms().window_samples(5120.0)
     expected = [(w * window, (w + 1) * window - 1) for w in range(5120 // window)]
     with _monitoring(16, threshold, log) as ears:
-        node = subprocess.run(
+        node = cli_process.run(
             [*CLI, "node", "--scenario", str(scenario), "--exit-at-end", *MEASURED_FIRST],
             env=ros_environment(ears.domain_id),
             capture_output=True,
@@ -452,7 +453,7 @@ def test_monitor_then_node_in_the_documented_order_assess_every_window_from_samp
 
 
 def test_measured_subscribers_without_measured_is_refused_in_one_line(tmp_path):
-    node = subprocess.run(
+    node = cli_process.run(
         [*CLI, "node", "--scenario", "symmetric", "--ros-args", "-p", "measured_subscribers:=1"],
         env=ros_environment(domain_id_for(17)),
         capture_output=True,

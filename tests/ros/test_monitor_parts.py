@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import math
 import os
-import subprocess
 import sys
 from pathlib import Path
 from types import SimpleNamespace
@@ -22,6 +21,7 @@ from brake_sim_ros.detection.detector import (
 )
 from brake_sim_ros.ros.harness import domain_id_for, ros_environment
 from brake_sim_ros.ros.monitor import MonitorStats, PeriodView, health_level
+from tests import cli_process
 
 MONITOR = [sys.executable, "-m", "brake_sim_ros.cli", "monitor"]
 
@@ -147,7 +147,7 @@ def test_a_bad_ros_parameter_is_refused_in_one_line(parameter, says):
     env = ros_environment(domain_id_for(21))
     env["PYTHONPATH"] = os.pathsep.join([str(Path(__file__).parent), env.get("PYTHONPATH", "")])
     env["BRAKE_SIM_TEST_RMS_THRESHOLD"] = "1.0"
-    proc = subprocess.run(
+    proc = cli_process.run(
         [*MONITOR, "--detector", "test_monitor:OffsetRms", "--ros-args", "-p", parameter],
         env=env,
         capture_output=True,

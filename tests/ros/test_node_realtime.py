@@ -34,6 +34,7 @@ from brake_sim_ros.ros.harness import (
 from brake_sim_ros.scenarios import load_scenario
 from brake_sim_ros.stream import conversion
 from brake_sim_ros.stream.build import stepper_for
+from tests import cli_process
 
 DOMAIN = domain_id_for(1)
 RUN_S = 3.0
@@ -244,7 +245,7 @@ def test_exit_at_end_prints_a_summary_and_exits_0(nodes):
 @pytest.mark.slow
 def test_brake_sim_node_command_runs_a_scenario_to_the_end():
     """The README's main command, through the ``brake-sim`` CLI, shortened."""
-    proc = subprocess.run(
+    proc = cli_process.run(
         [
             sys.executable,
             "-m",

@@ -28,6 +28,7 @@ from brake_sim_ros import stream
 from brake_sim_ros.ros import qos
 from brake_sim_ros.ros.harness import domain_id_for, ros_environment
 from brake_sim_ros.ros.messages import message_class
+from tests import cli_process
 
 pytestmark = pytest.mark.realtime  # arrival times against the recording's log times
 
@@ -42,7 +43,7 @@ LOSSLESS = QoSProfile(depth=10_000, reliability=ReliabilityPolicy.RELIABLE)
 
 
 def _record(path: Path, duration_s: float) -> None:
-    subprocess.run(
+    cli_process.run(
         [
             sys.executable,
             "-m",
@@ -55,6 +56,7 @@ def _record(path: Path, duration_s: float) -> None:
             str(path),
             "--quiet",
         ],
+        capture_output=True,
         check=True,
     )
 
@@ -226,7 +228,7 @@ def test_rate_and_start_offset(recording: Path):
 def test_refuses_a_broken_recording_with_the_fix(tmp_path: Path, recording: Path):
     broken = tmp_path / "cut.mcap"
     broken.write_bytes(recording.read_bytes()[: recording.stat().st_size // 2])
-    proc = subprocess.run(
+    proc = cli_process.run(
         [sys.executable, "-m", "brake_sim_ros.cli", "replay", str(broken)],
         capture_output=True,
         text=True,
