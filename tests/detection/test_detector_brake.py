@@ -170,3 +170,21 @@ def test_a_run_file_records_its_brake_and_an_older_one_gives_it_by_its_scenario(
             recorded_brake(changed, "run 7")
         assert str(caught.value).startswith("run 7: ") and words in str(caught.value)
         assert "\n" not in str(caught.value)
+
+
+def test_evaluation_refuses_the_other_brake_and_a_brake_not_recorded_is_not_checked(study, service):
+    """From Python: ``evaluate.score`` raises the same one line; a detector whose brake is
+    not recorded (built by hand, never fitted on a dataset, as a saved file's null brake)
+    judges either brake's runs."""
+    fitted = make_detector("rms")
+    evaluate.fit(fitted, open_dataset(study), "train")
+    assert fitted.fitted_brake == "study"
+    with pytest.raises(ValueError, match="comes from the service brake") as caught:
+        evaluate.score(fitted, open_dataset(service), "test")
+    assert "\n" not in str(caught.value)
+    by_hand = make_detector("rms")
+    by_hand.threshold = fitted.threshold
+    assert by_hand.fitted_brake is None
+    for root in (study, service):
+        dataset = open_dataset(root)
+        assert evaluate.score(by_hand, dataset, "test")["runs"] == len(dataset.runs("test"))
