@@ -400,43 +400,6 @@ def test_a_detector_fitted_at_5120_hz_is_refused_at_25600_hz_in_one_line(
     assert not ears.health and "Traceback" not in output
 
 
-@pytest.mark.parametrize(
-    ("declared", "words"),
-    [
-        (["--brake", "study"], "the stream on /brake_sim/measured comes from the study brake"),
-        ([], "the brake of the stream on /brake_sim/measured is not declared"),
-    ],
-)
-def test_a_detector_fitted_on_the_service_brake_refuses_a_study_stream_in_one_line(
-    threshold, tmp_path, declared, words
-):
-    """A saved rms fitted on the service brake's samples, monitoring a stream declared to
-    come from the study brake, or whose brake is not declared: the monitor refuses in one
-    line naming both, and exits 2 as for samples at another rate (before: it judged the
-    study brake's samples against the service brake's threshold)."""
-    detector = VibrationThreshold("rms", window_s=0.07)
-    detector.threshold = threshold
-    detector.fitted_brake = "service"
-    model = tmp_path / "rms.json"
-    model.write_text(
-        saved.dumps(detector, fitted_on={"dataset": "test", "split": "train", "windows": 0})
-    )
-    result = subprocess.run(
-        [*CLI, "monitor", "--detector", "rms", "--model", str(model), *declared],
-        env=ros_environment(domain_id_for(18)),
-        capture_output=True,
-        text=True,
-        timeout=120,
-    )
-    output = result.stdout + result.stderr
-    assert result.returncode == 2, output
-    assert "(fitted at a rate not recorded on the service brake)" in output
-    refused = [line for line in output.splitlines() if "brake-sim monitor: refused:" in line]
-    assert len(refused) == 1, output
-    assert "fitted on the service brake's samples" in refused[0] and words in refused[0]
-    assert "Traceback" not in output
-
-
 def test_the_monitor_counts_the_samples_sent_before_it_heard_the_run(
     recording, threshold, tmp_path
 ):
