@@ -43,7 +43,8 @@ def run(
         0 after an interrupt, 2 when the node refused to start (a parameter of
         ``--ros-args`` out of range or of the wrong type, a topic name ROS refuses: bad
         arguments, like every other refusal of ``brake-sim monitor``) or refused the
-        samples (at another rate than the detector was fitted at).
+        samples (at another rate than the detector was fitted at, or from another brake
+        than it was fitted on, or whose brake is not declared: ``MonitorNode.refusal``).
     """
     stop = start_ros(ros_argv)  # the loop ends between callbacks, never on a dead context
     node = None

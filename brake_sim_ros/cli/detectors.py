@@ -46,6 +46,7 @@ def cmd_fit(args: argparse.Namespace) -> int:
     and save it (``detection.saved``), for ``score --model`` and ``monitor --model``."""
     from brake_sim_ros.datasets.reader import open_dataset
     from brake_sim_ros.detection import evaluate, saved
+    from brake_sim_ros.detection.fitted import facts_text
     from brake_sim_ros.detection.registry import make_detector
     from brake_sim_ros.recording.output import atomic_output, probe_output
 
@@ -67,7 +68,10 @@ def cmd_fit(args: argparse.Namespace) -> int:
     text = saved.dumps(detector, fitted_on=fitted_on)
     with atomic_output(args.out, inputs=inputs, overwrite=args.overwrite, option="--out") as tmp:
         tmp.write_text(text, encoding="utf-8")
-    print(f"detector {detector.name} fitted on {args.fit_split} ({windows} windows): {args.out}")
+    print(
+        f"detector {detector.name} fitted on {args.fit_split} ({windows} windows,"
+        f" {facts_text(detector)}): {args.out}"
+    )
     return 0
 
 
@@ -159,17 +163,18 @@ def _score_one(
     """One detector loaded (``--model``) or fitted, and scored on ``--split``: its score
     and how it was fitted, in words; its windows appended to ``window_rows``."""
     from brake_sim_ros.detection import evaluate
+    from brake_sim_ros.detection.fitted import facts_text
     from brake_sim_ros.detection.registry import make_detector
 
     try:
         if args.model:
             detector = load_model(args.model, name)
-            fitted = f"loaded from {args.model}"
+            fitted = f"loaded from {args.model} (fitted {facts_text(detector)})"
         else:
             detector = make_detector(name or "rms")
             fit_split = args.fit_split or "train"
             windows = evaluate.fit(detector, dataset, fit_split)
-            fitted = f"fitted on {fit_split} ({windows} windows)"
+            fitted = f"fitted on {fit_split} ({windows} windows, {facts_text(detector)})"
         score = evaluate.score(
             detector, dataset, args.split, hold_s=args.hold_s, windows=window_rows
         )

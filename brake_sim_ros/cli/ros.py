@@ -86,6 +86,7 @@ def run_replay(argv: list[str]) -> int:
 def monitor_parser() -> argparse.ArgumentParser:
     """``brake-sim monitor``'s own parser (its ROS options are removed before it parses)."""
     from brake_sim_ros.detection.registry import help_text
+    from brake_sim_ros.model.parameters import BRAKES
 
     p = Parser(
         prog="brake-sim monitor",
@@ -111,6 +112,12 @@ def monitor_parser() -> argparse.ArgumentParser:
         help="fit the detector on a sweep's dataset first (brake-sim sweep ... --out DIR)",
     )
     p.add_argument("--fit-split", default="train", help="split to fit on (default train)")
+    p.add_argument(
+        "--brake",
+        choices=BRAKES,
+        help="the brake the measured samples come from (a scenario's brake); a detector"
+        " fitted on one brake's samples refuses the other's, and a stream without --brake",
+    )
     p.add_argument("--debug", action="store_true", help=DEBUG_HELP)
     p.add_argument(
         "--model",
@@ -165,6 +172,8 @@ def _monitor(argv: list[str]) -> int:
         overrides.append(("measured_topic", topic))
     if args.unit_id is not None:
         overrides.append(("unit_id", args.unit_id))
+    if args.brake is not None:
+        overrides.append(("brake", args.brake))
     detector = _monitor_detector(parser, args)
     from brake_sim_ros.app.monitor import run
 
@@ -174,6 +183,7 @@ def _monitor(argv: list[str]) -> int:
 def _monitor_detector(parser: argparse.ArgumentParser, args: argparse.Namespace) -> Detector:
     """The monitor's detector: loaded (``--model``), or made and fitted (``--fit``)."""
     from brake_sim_ros.cli.detectors import load_model
+    from brake_sim_ros.detection.fitted import facts_text
     from brake_sim_ros.detection.registry import REGISTRY, make_detector
 
     if args.model is not None:
@@ -183,7 +193,10 @@ def _monitor_detector(parser: argparse.ArgumentParser, args: argparse.Namespace)
             detector = load_model(args.model, args.detector)
         except ValueError as exc:  # ModelFileError too
             parser.error(str(exc))
-        print(f"brake-sim monitor: {detector.name} loaded from {args.model}")
+        print(
+            f"brake-sim monitor: {detector.name} loaded from {args.model} (fitted"
+            f" {facts_text(detector)})"
+        )
         return detector
     try:
         detector = make_detector(args.detector)
@@ -204,7 +217,10 @@ def _monitor_detector(parser: argparse.ArgumentParser, args: argparse.Namespace)
             windows = evaluate.fit(detector, open_dataset(args.fit), args.fit_split)
         except (BrakeSimError, ValueError, RuntimeError) as exc:
             parser.error(f"--fit {args.fit}: {exc}")
-        print(f"brake-sim monitor: {detector.name} fitted on {windows} windows of {args.fit_split}")
+        print(
+            f"brake-sim monitor: {detector.name} fitted on {windows} windows of"
+            f" {args.fit_split} ({facts_text(detector)})"
+        )
     return detector
 
 

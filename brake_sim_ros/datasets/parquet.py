@@ -38,17 +38,18 @@ One row per sample of the scenario's rate. Columns, units in the names:
 
 Each measured column's field metadata gives ``unit``, ``rate_hz`` and ``decimation``; an
 edge-time column's gives ``unit`` and ``tone_ring_teeth``.
-The file's key-value metadata ``brake_sim`` holds JSON: the run parameters the caller
-gives (scenario, method, seed, rates, ...), ``fault_bits``, ``defects`` (the ground truth:
-one object per defect of the run with kind, location, final severity, unit, onset_s,
-growth and growth_rate, as the DefectState message), ``unit_id`` (the scenario's brake unit,
-"nominal" for the drawing's brake) and ``unit_parameters`` (the unit's ground truth: a
-list of ``{key, unit, nominal, value}``, every scattered parameter as the scenario gives it
-and as the unit has it, :mod:`brake_sim_ros.fleet.scatter`) and ``conditions`` (the run's
-operating conditions drawn from the scenario's ranges: per name ``{value, unit, range}``,
-:mod:`brake_sim_ros.fleet.conditions`; ``{}`` without them) and ``life`` (the failure the
-``rul`` column counts down to: ``time_s``, ``kind``, ``location``, ``service_limit``,
-``unit``, ``source`` "run", "law" or "censored"; :class:`.life.Failure`).
+The file's key-value metadata ``brake_sim`` holds JSON: the run parameters the caller gives
+(scenario, method, seed, rates, ...; ``brake``: ``"study"`` or ``"service"``, the brake the
+samples come from, which :mod:`.run_brake` reads for a detector), ``fault_bits``,
+``defects`` (the ground truth: one object per defect of the run with kind, location, final
+severity, unit, onset_s, growth and growth_rate, as the DefectState message), ``unit_id``
+(the scenario's brake unit, "nominal" for the drawing's brake) and ``unit_parameters`` (the
+unit's ground truth: a list of ``{key, unit, nominal, value}``, every scattered parameter as
+the scenario gives it and as the unit has it, :mod:`brake_sim_ros.fleet.scatter`) and
+``conditions`` (the run's operating conditions drawn from the scenario's ranges: per name
+``{value, unit, range}``, :mod:`brake_sim_ros.fleet.conditions`; ``{}`` without them) and
+``life`` (the failure the ``rul`` column counts down to: ``time_s``, ``kind``, ``location``,
+``service_limit``, ``unit``, ``source`` "run", "law" or "censored"; :class:`.life.Failure`).
 """
 
 from __future__ import annotations
@@ -212,6 +213,7 @@ def run_table(
     meta = {
         "scenario": scenario.name,
         "source": scenario.source,
+        "brake": scenario.setup.params.brake,
         "method": result.method,
         "stop_time_s": result.stop_time_s,
         "version": __version__,

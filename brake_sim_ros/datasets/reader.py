@@ -25,7 +25,7 @@ import pyarrow.dataset as pads
 from brake_sim_ros.campaigns.splits import SPLITS, HeldOut, leaks
 from brake_sim_ros.datasets import checked
 from brake_sim_ros.datasets.checked import DatasetError
-from brake_sim_ros.datasets.sweep_output import LOCK_NAME, MANIFEST_NAME, SAMPLES_DIR
+from brake_sim_ros.datasets.sweep_output import LOCK_NAME, MANIFEST_NAME, SAMPLES_DIR, run_file
 from brake_sim_ros.model.catalogue import label_columns
 from brake_sim_ros.recording.mcap_format import describe_path
 
@@ -100,6 +100,10 @@ class SweepDataset:
         if row is None or row["status"] != "ok":
             raise DatasetError(f"{describe_path(self.root)}: no finished run {run_id!r}")
         return checked.read_run(self.root, row)
+
+    def run_where(self, run_id: str) -> str:
+        """How messages name a run: its id and its file."""
+        return f"run {run_id} ({describe_path(self.root / run_file(run_id))})"
 
     def _rows(self) -> dict[str, dict[str, Any]]:
         if self._by_id is None:

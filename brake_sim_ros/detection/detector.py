@@ -208,6 +208,10 @@ class Detector(abc.ABC):
     # another rate is refused, unless the detector declares that it resamples.
     fitted_rate_hz: float | None = None
     fitted_channels: Mapping[str, str] = MappingProxyType({})
+    # The brake whose samples it was fitted on ("study" or "service"; None: not recorded):
+    # the other brake's springs, stops, hydraulics, tyre and clearance change every signal,
+    # so its samples are refused whatever the detector.
+    fitted_brake: str | None = None
     resamples: bool = False
 
     def __init__(self) -> None:
@@ -250,6 +254,25 @@ class Detector(abc.ABC):
             f"detector {self.name} was fitted at {fitted:g} Hz and the samples are at"
             f" {sample_rate_hz:g} Hz: allowed {fitted:g} Hz (fit it on runs at"
             f" {sample_rate_hz:g} Hz, or stream at {fitted:g} Hz)"
+        )
+
+    def brake_refusal(self, brake: str, where: str) -> str | None:
+        """Why samples from ``brake`` ("study" or "service"; "": not declared) cannot be
+        judged, in one line naming both brakes and ``where`` (the run, the file or the
+        stream); None when they can (the fitted brake, or none recorded)."""
+        fitted = self.fitted_brake
+        if fitted is None or brake == fitted:
+            return None
+        if not brake:
+            return (
+                f"detector {self.name} was fitted on the {fitted} brake's samples and the brake"
+                f" of {where} is not declared: allowed samples from the {fitted} brake (declare"
+                " theirs: brake-sim monitor --brake study|service, or the ROS parameter brake)"
+            )
+        return (
+            f"detector {self.name} was fitted on the {fitted} brake's samples and {where}"
+            f" comes from the {brake} brake: allowed the {fitted} brake's (fit it on the"
+            f" {brake} brake's runs)"
         )
 
     def window_samples(self, sample_rate_hz: float) -> int:

@@ -60,6 +60,7 @@ import numpy as np
 
 from brake_sim_ros.datasets.life import RUL_COLUMN
 from brake_sim_ros.datasets.reader import DatasetError, SweepDataset
+from brake_sim_ros.datasets.run_brake import recorded_brake
 from brake_sim_ros.detection import metrics
 from brake_sim_ros.detection.detector import Assessment, Detector, SampleChunk, TrainingWindow
 from brake_sim_ros.detection.user_code import user_code
@@ -86,6 +87,8 @@ class RunSamples:
     labels: np.ndarray  # (n, len(label_names)) severities, 0 where absent
     rul_s: np.ndarray | None = None  # (n,) the ``rul [s]`` label (NaN: censored); None: none
     units: dict[str, str] = field(default_factory=dict)  # channel name -> its unit
+    brake: str = ""  # "study" or "service" (datasets.run_brake); "": not known
+    where: str = ""  # the run and its file, for messages
 
     def active(self, row: int) -> tuple[tuple[str, str], ...]:
         """``(kind, location)`` of the defects active at sample ``row``."""
@@ -117,7 +120,14 @@ def _channel_unit(column: str) -> str:
 
 
 def read_run(dataset: SweepDataset, run_id: str) -> RunSamples:
+    """One finished run of ``dataset``, its brake read from its file's metadata.
+
+    Raises:
+        DatasetError: the run's file damaged, or its brake not recorded (one line).
+    """
     table = dataset.run_table(run_id)
+    where = dataset.run_where(run_id)
+    brake = recorded_brake(table, where)
     names = table.column_names
     time_s = table["time_s"].to_numpy()
     if time_s.size < 2:
@@ -150,6 +160,8 @@ def read_run(dataset: SweepDataset, run_id: str) -> RunSamples:
         labels=labels,
         rul_s=rul,
         units=units,
+        brake=brake,
+        where=where,
     )
 
 
@@ -205,17 +217,23 @@ class SplitRateError(DatasetError):
     """A split's runs are at several sample rates: no detector is fitted on them."""
 
 
+class SplitBrakeError(DatasetError):
+    """A split's runs come from both brakes: no detector is fitted on them."""
+
+
 class SplitWindows:
     """The training windows of a split, read from the dataset run by run each time it is
     iterated: a detector's fit holds one run's channels at a time, not the split's (a
     detector that iterates twice reads the runs twice and sees the same windows). Counts
-    the windows of a whole pass and collects the runs' sample rate and channel units."""
+    the windows of a whole pass and collects the runs' sample rate, brake and channel
+    units."""
 
     def __init__(self, detector: Detector, dataset: SweepDataset, split: str) -> None:
         self.detector, self.dataset, self.split = detector, dataset, split
         self.windows = 0  # of the last whole pass
         self.longest = 0  # samples of the longest run read
         self.rates: set[float] = set()
+        self.brakes: set[str] = set()
         self.units: dict[str, str] = {}
 
     def __iter__(self) -> Iterator[TrainingWindow]:
@@ -229,6 +247,13 @@ class SplitWindows:
                 raise SplitRateError(
                     f"split {self.split}: runs at {shown} Hz; allowed one sample rate to fit"
                     " a detector on"
+                )
+            self.brakes.add(run.brake)
+            if len(self.brakes) > 1:
+                raise SplitBrakeError(
+                    f"split {self.split}: runs from the {' and the '.join(sorted(self.brakes))}"
+                    f" brake ({run.where} is from the {run.brake} brake); allowed one brake's"
+                    " runs to fit a detector on"
                 )
             n = window_samples(self.detector, run.sample_rate_hz)
             self.longest = max(self.longest, run.time_s.size)
@@ -249,19 +274,22 @@ class SplitWindows:
 def fit(detector: Detector, dataset: SweepDataset, split: str = "train") -> int:
     """Fit ``detector`` on the windows of ``split`` (its window length), streamed run by
     run (:class:`SplitWindows`); the number of windows it saw. Records on the detector the
-    sample rate and the units of the channels it read (:attr:`Detector.fitted_rate_hz`,
+    sample rate, the brake and the units of the channels it read
+    (:attr:`Detector.fitted_rate_hz`, :attr:`Detector.fitted_brake`,
     :attr:`Detector.fitted_channels`).
 
     Raises:
         SplitRateError: the split's runs are at several sample rates (one line).
+        SplitBrakeError: the split's runs come from both brakes (one line).
     """
     windows = SplitWindows(detector, dataset, split)
     if next(iter(windows), None) is None:  # reads runs up to the first window only
         _no_window(detector, dataset, split, windows.longest)
-    with user_code(detector, "fit", passthrough=(SplitRateError,)):
+    with user_code(detector, "fit", passthrough=(SplitRateError, SplitBrakeError)):
         detector.fit(windows)
     if windows.rates:
         detector.fitted_rate_hz = windows.rates.pop()
+        detector.fitted_brake = windows.brakes.pop()
         units = windows.units
         detector.fitted_channels = {c: units[c] for c in detector.channels if c in units}
     return windows.windows
@@ -306,11 +334,15 @@ def assess_run(detector: Detector, run: RunSamples, chunk_s: float) -> list[Asse
     """The detector's assessments over ``run`` fed in chunks of ``chunk_s``.
 
     Raises:
-        ValueError: the run's rate or a channel's unit is not what the detector was fitted
-            on (one line; :class:`~.detector.RateMismatchError` for the rate).
+        ValueError: the run's rate, brake or a channel's unit is not what the detector was
+            fitted on (one line; :class:`~.detector.RateMismatchError` for the rate).
         DetectorCodeError: the detector's code raised.
     """
-    refusal = detector.rate_refusal(run.sample_rate_hz) or unit_refusal(detector, run)
+    refusal = (
+        detector.rate_refusal(run.sample_rate_hz)
+        or detector.brake_refusal(run.brake, run.where or f"run {run.run_id}")
+        or unit_refusal(detector, run)
+    )
     if refusal is not None:
         raise ValueError(refusal)
     with user_code(detector, "feed"):

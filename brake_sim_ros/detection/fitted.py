@@ -1,6 +1,6 @@
 """Parts of a saved detector file (:mod:`.saved`) beside the built-ins' own codecs: the
-``fitted_at`` record (the rate and the channels with their units a detector was fitted
-on), and the state of a user's detector (:meth:`Detector.saved_state` /
+``fitted_at`` record (the rate, the brake and the channels with their units a detector
+was fitted on), and the state of a user's detector (:meth:`Detector.saved_state` /
 :meth:`Detector.load_state`).
 
 A user's detector is saved as data like the built-ins: ``parameters`` is ``{}`` and
@@ -20,7 +20,13 @@ from typing import Any
 import numpy as np
 
 from brake_sim_ros.detection.detector import Detector
+from brake_sim_ros.model.parameters import BRAKES
 
+# The saved file's version (:mod:`.saved`). 3: ``fitted_at`` records the brake. A version 2
+# file is refused rather than read as the study brake's: the service brake came after
+# version 2, so either brake may have fitted it.
+SCHEMA_VERSION = 3
+_OLD_VERSIONS = {1: "version 1 did not record the rate", 2: "version 2 did not record the brake"}
 DTYPES = {"float64": "<f8", "int64": "<i8"}
 ARRAY_KEYS = ("dtype", "shape", "base64")
 MAX_STATE_DEPTH = 16  # nesting of a user's state: objects and lists within each other
@@ -38,15 +44,30 @@ def array_json(a: np.ndarray, dtype: str) -> dict[str, Any]:
 
 def fitted_at_json(detector: Detector) -> dict[str, Any]:
     """The ``fitted_at`` object of ``detector``."""
-    return {"sample_rate_hz": detector.fitted_rate_hz, "channels": dict(detector.fitted_channels)}
+    return {
+        "sample_rate_hz": detector.fitted_rate_hz,
+        "brake": detector.fitted_brake,
+        "channels": dict(detector.fitted_channels),
+    }
 
 
-def read_fitted_at(value: object, c: Any) -> tuple[float | None, dict[str, str]]:
-    """``fitted_at``: the rate (None: not recorded) and each channel's unit; ``c`` is the
-    file's checker (its refusals name the key)."""
-    at = c.obj(value, "fitted_at", ("sample_rate_hz", "channels"))
+def read_schema_version(value: object, c: Any) -> None:
+    """Refuse a ``schema_version`` other than :data:`SCHEMA_VERSION`, saying what an old
+    one lacks; ``c`` is the file's checker."""
+    if value == SCHEMA_VERSION and type(value) is int:
+        return
+    old = _OLD_VERSIONS.get(value) if type(value) is int else None
+    allowed = f"allowed {SCHEMA_VERSION}" + (f" ({old}: fit it again)" if old else "")
+    raise c.fail("schema_version", f"not one this version reads; {allowed}")
+
+
+def read_fitted_at(value: object, c: Any) -> tuple[float | None, str | None, dict[str, str]]:
+    """``fitted_at``: the rate (None: not recorded), the brake (None: not recorded) and
+    each channel's unit; ``c`` is the file's checker (its refusals name the key)."""
+    at = c.obj(value, "fitted_at", ("sample_rate_hz", "brake", "channels"))
     rate = at["sample_rate_hz"]
     rate = None if rate is None else c.positive(rate, "fitted_at.sample_rate_hz", 1e7)
+    brake = None if at["brake"] is None else c.string(at["brake"], "fitted_at.brake", BRAKES)
     channels = at["channels"]
     if not (isinstance(channels, dict) and len(channels) <= 64):
         raise c.fail("fitted_at.channels", "allowed an object of at most 64 channel: unit")
@@ -54,7 +75,7 @@ def read_fitted_at(value: object, c: Any) -> tuple[float | None, dict[str, str]]
         c.channel(name, "fitted_at.channels")
         if not (isinstance(unit, str) and len(unit) <= 32 and unit.isprintable()):
             raise c.fail("fitted_at.channels", "allowed units of at most 32 printable characters")
-    return rate, dict(channels)
+    return rate, brake, dict(channels)
 
 
 def has_saved_form(detector: Detector) -> bool:
@@ -128,3 +149,14 @@ def load_state(detector: Detector, parameters: object, state: object, c: Any) ->
     except ValueError as exc:
         raise c.fail("state", " ".join(str(exc).split())[:300]) from None
     return detector
+
+
+def facts_text(detector: Detector) -> str:
+    """What ``detector`` was fitted on, for what the CLI prints: its rate and its brake,
+    e.g. ``at 5120 Hz on the study brake`` (``not recorded`` where the file says nothing)."""
+    rate = detector.fitted_rate_hz
+    brake = detector.fitted_brake
+    return (
+        f"at {'a rate not recorded' if rate is None else f'{rate:g} Hz'} on"
+        f" {'a brake not recorded' if brake is None else f'the {brake} brake'}"
+    )

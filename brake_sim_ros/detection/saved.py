@@ -11,15 +11,18 @@ trees' arrays (:mod:`.forest` says why, and checks every index). :func:`dumps` g
 file's text; the CLI writes it (whole, never through a link or over an input:
 :mod:`brake_sim_ros.recording.output`, an adapter this layer does not import).
 
-The file (:data:`SCHEMA_VERSION` 2), one JSON object::
+The file (:data:`SCHEMA_VERSION` 3), one JSON object::
 
     format          "brake-sim detector"
-    schema_version  2 (version 1 did not record the rate: refused, fit it again)
+    schema_version  3 (version 1 did not record the rate, version 2 the brake: both are
+                    refused, fit it again)
     detector        the detector's name: rms, kurtosis, crest, orders, impact, learned
     software        brake_sim_ros version that wrote it (informative)
     fitted_on       {"dataset": path, "split": name, "windows": count} (informative)
-    fitted_at       {"sample_rate_hz": Hz or null (not recorded), "channels": {name: unit}}
-                    what it was fitted on; samples at another rate are refused
+    fitted_at       {"sample_rate_hz": Hz or null (not recorded), "brake": "study" or
+                    "service" or null (not recorded), "channels": {name: unit}}
+                    what it was fitted on; samples at another rate or from the other
+                    brake are refused
     parameters      the constructor's arguments (below)
     state           what fitting learned (below)
 
@@ -71,11 +74,13 @@ from brake_sim_ros.detection.detector import Detector
 from brake_sim_ros.detection.features import ORDERS, feature_names
 from brake_sim_ros.detection.fitted import (
     DTYPES,
+    SCHEMA_VERSION,
     array_json,
     fitted_at_json,
     has_saved_form,
     load_state,
     read_fitted_at,
+    read_schema_version,
     state_json,
 )
 from brake_sim_ros.detection.forest import ForestArrays
@@ -87,7 +92,6 @@ from brake_sim_ros.model.catalogue import KINDS
 from brake_sim_ros.regular_file import FileRefusedError, read_regular_file
 
 FORMAT = "brake-sim detector"
-SCHEMA_VERSION = 2
 # The largest file the loader reads: 256 MiB. The reference campaign's learned detector
 # (100 trees on 14 040 windows, 18 severity forests) takes 61 MB: a campaign four times
 # its size fits; a larger file is refused before it is read.
@@ -574,10 +578,7 @@ def load(
     doc = c.obj(doc, "the file", TOP_KEYS)
     if doc["format"] != FORMAT:
         raise c.fail("format", f"not a saved detector; allowed {FORMAT!r}")
-    if doc["schema_version"] != SCHEMA_VERSION or isinstance(doc["schema_version"], bool):
-        old = " (version 1 did not record the rate: fit it again)"
-        allowed = f"allowed {SCHEMA_VERSION}" + (old if doc["schema_version"] == 1 else "")
-        raise c.fail("schema_version", f"not one this version reads; {allowed}")
+    read_schema_version(doc["schema_version"], c)
     kind = c.string(doc["detector"], "detector", SAVED if user is None else (user.name,))
     if name is not None and user is None and kind != name:
         raise c.fail("detector", f"the file holds a fitted {kind}; allowed the named one, {name}")
@@ -586,10 +587,10 @@ def load(
     c.string(fitted["dataset"], "fitted_on.dataset")
     c.string(fitted["split"], "fitted_on.split")
     c.integer(fitted["windows"], "fitted_on.windows", 0, 2**62)
-    rate, channels = read_fitted_at(doc["fitted_at"], c)
+    rate, brake, channels = read_fitted_at(doc["fitted_at"], c)
     if user is None:
         loaded = _LOADERS[kind](kind, doc["parameters"], doc["state"], c)
     else:
         loaded = load_state(user, doc["parameters"], doc["state"], c)
-    loaded.fitted_rate_hz, loaded.fitted_channels = rate, channels
+    loaded.fitted_rate_hz, loaded.fitted_brake, loaded.fitted_channels = rate, brake, channels
     return loaded

@@ -26,6 +26,12 @@ a gap (lost samples: the detector restarts at the next aligned window), a detect
 raises, or a diagnosis outside the defect catalogue each give one warning line and a
 counter in /diagnostics; the node keeps running. A message starting again at sample 0, or
 at another sample rate, is a new run (the simulator was reset): the detector restarts.
+
+Samples the detector cannot judge at all stop the node (:attr:`MonitorNode.refusal`, one
+line; ``brake-sim monitor`` exits 2): samples at another rate than it was fitted at, or,
+for a detector that recorded the brake it was fitted on, a stream from the other brake.
+No message says which brake it is, so the parameter ``brake`` declares it; a detector that
+recorded its brake refuses a stream whose brake is not declared.
 """
 
 from __future__ import annotations
@@ -47,6 +53,7 @@ from std_msgs.msg import Header
 
 from brake_sim_ros.errors import BrakeSimError
 from brake_sim_ros.model.catalogue import KIND_BY_NAME
+from brake_sim_ros.model.parameters import BRAKES
 from brake_sim_ros.ros import qos
 from brake_sim_ros.ros.descriptors import descriptor
 from brake_sim_ros.stream.conversion import stamp_ns, time_msg
@@ -120,6 +127,14 @@ def parameter_specs() -> list[ParamSpec]:
             "Brake unit id written into every output; empty: the one DefectState gives. " + fixed,
         ),
         ParamSpec(
+            "brake",
+            "",
+            "The brake the measured samples come from: study or service (a scenario's"
+            " brake); empty: not declared. A detector fitted on one brake's samples refuses"
+            " the other's, and a stream whose brake is not declared. " + fixed,
+            constraints=f"one of {', '.join(BRAKES)}, or empty",
+        ),
+        ParamSpec(
             "warn_level",
             0.8,
             "Health index (dimensionless, 1 = alarm) from which /diagnostics says WARN. " + fixed,
@@ -147,6 +162,8 @@ class StreamingDetector(Protocol):
     def reset(self) -> None: ...
 
     def rate_refusal(self, sample_rate_hz: float) -> str | None: ...
+
+    def brake_refusal(self, brake: str, where: str) -> str | None: ...
 
 
 @dataclass
@@ -247,6 +264,11 @@ class MonitorNode(Node):
         self.measured_topic = str(p["measured_topic"]) or f"{simulator}/measured"
         self.defects_topic = str(p["defects_topic"]) or f"{simulator}/defects"
         self.unit_id_fixed = _id_text(str(p["unit_id"]))
+        self.brake = str(p["brake"])
+        if self.brake not in ("", *BRAKES):
+            raise BrakeSimError(
+                f"brake {self.brake[:40]!r}: allowed {', '.join(BRAKES)} or empty (not declared)"
+            )
         self.warn_level = float(p["warn_level"])
         period_s = float(p["diagnostics_period_s"])
         if not 0.0 <= self.warn_level <= 1.0:
@@ -255,8 +277,13 @@ class MonitorNode(Node):
             raise BrakeSimError(f"diagnostics_period_s {period_s!r}: allowed 0.05 to 60 s")
         self.run_id = ""
         self.unit_id = self.unit_id_fixed
-        # why the node stops: samples at another rate than the detector was fitted at
-        self.refusal: str | None = None
+        # why the node stops: samples at another rate than the detector was fitted at, or
+        # from another brake than it was fitted on (known at start: the brake is declared)
+        self.refusal: str | None = detector.brake_refusal(
+            self.brake, f"the stream on {self.measured_topic}"
+        )
+        if self.refusal is not None:
+            self.get_logger().error(self.refusal)
         self._next_index: int | None = None
         self._rate: float | None = None
         self._last_stamp_ns = 0

@@ -71,6 +71,7 @@ def test_a_detector_fitted_at_5120_hz_is_refused_at_25600_hz_by_score(slow, fast
     doc = json.loads(model.read_text())
     assert doc["fitted_at"] == {
         "sample_rate_hz": 5120.0,
+        "brake": "study",  # the campaign's base, symmetric, runs the study brake
         "channels": {"backing_plate_accel_y": "m/s^2"},
     }
     capsys.readouterr()

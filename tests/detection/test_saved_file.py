@@ -136,10 +136,24 @@ def _drop(key):
     return lambda doc: doc.pop(key)
 
 
+def _drop_brake(doc):
+    doc["fitted_at"].pop("brake")
+
+
+def _version_2(doc):
+    """A file as version 2 wrote it: no brake in fitted_at."""
+    _drop_brake(doc)
+    doc["schema_version"] = 2
+
+
 MUTATIONS = {
     "format": (_set(("format",), MARKER), "format"),
-    "version": (_set(("schema_version",), 3), "schema_version"),
+    "version": (_set(("schema_version",), 4), "schema_version"),
+    "version as a list": (_set(("schema_version",), [2]), "schema_version"),
     "version 1": (_set(("schema_version",), 1), "did not record the rate: fit it again"),
+    "version 2": (_version_2, "version 2 did not record the brake: fit it again"),
+    "brake": (_set(("fitted_at", "brake"), "tram"), "fitted_at.brake"),
+    "brake not recorded as a key": (_drop_brake, "fitted_at: no key 'brake'"),
     "rate": (_set(("fitted_at", "sample_rate_hz"), -5120.0), "fitted_at.sample_rate_hz"),
     "unit": (_set(("fitted_at", "channels"), {"backing_plate_accel_y": 5}), "fitted_at"),
     "version as true": (_set(("schema_version",), True), "schema_version"),

@@ -352,6 +352,7 @@ def test_the_monitor_runs_a_saved_detector_as_offline(recording, threshold, tmp_
     _path, measured, _run = recording
     detector = VibrationThreshold("rms", window_s=0.07)
     detector.threshold = threshold
+    detector.fitted_brake = "study"  # the recording's scenario runs the study brake
     model = tmp_path / "rms.json"
     model.write_text(
         saved.dumps(detector, fitted_on={"dataset": "test", "split": "train", "windows": 0})
@@ -359,14 +360,15 @@ def test_the_monitor_runs_a_saved_detector_as_offline(recording, threshold, tmp_
     expected = _expected(_offline(measured[:6], threshold))
     assert any(e[3] for e in expected) and not all(e[3] for e in expected)
     log = tmp_path / "monitor.log"
-    with _monitoring(13, threshold, log, ["--detector", "rms", "--model", str(model)]) as ears:
+    options = ["--detector", "rms", "--model", str(model), "--brake", "study"]
+    with _monitoring(13, threshold, log, options) as ears:
         for msg in measured[:6]:
             ears.measured.publish(msg)
             ears.spin_until(lambda: False, 0.05)
         ears.spin_until(lambda: len(ears.health) >= len(expected), 10.0)
     output = log.read_text()
     assert ears.exit_code == 0, output
-    assert f"rms loaded from {model}" in output
+    assert f"rms loaded from {model} (fitted at a rate not recorded on the study brake)" in output
     assert _verdicts(ears.health) == expected
     assert {h.detector for h in ears.health} == {"rms"} and not ears.diagnoses
 
