@@ -9,7 +9,6 @@ test_monitor.py's ``test_the_monitor_runs_a_saved_detector_as_offline`` declares
 
 from __future__ import annotations
 
-import subprocess
 import sys
 
 import pytest
@@ -17,6 +16,7 @@ import pytest
 from brake_sim_ros.detection import saved
 from brake_sim_ros.detection.baselines import VibrationThreshold
 from brake_sim_ros.ros.harness import domain_id_for, ros_environment
+from tests import cli_process
 
 CLI = [sys.executable, "-m", "brake_sim_ros.cli"]
 
@@ -42,7 +42,7 @@ def test_a_detector_fitted_on_the_service_brake_refuses_a_study_stream_in_one_li
     model.write_text(
         saved.dumps(detector, fitted_on={"dataset": "test", "split": "train", "windows": 0})
     )
-    result = subprocess.run(
+    result = cli_process.run(
         [*CLI, "monitor", "--detector", "rms", "--model", str(model), *declared],
         env=ros_environment(domain_id_for(18)),
         capture_output=True,
