@@ -94,6 +94,29 @@ def test_the_demo_can_fit_and_score_every_baseline():
     assert campaign.outputs.sample_rate_hz == 5120.0
 
 
+def test_the_reference_campaign_runs_every_service_kind_but_the_pivot_radius():
+    """The reference campaign (docs/benchmarks.md's service-brake scores): every kind the
+    service brake carries, the seized adjuster and the line's too, but the pivot radius, at
+    its two severities on each of its locations, and one healthy run, at each drawn force;
+    forces from 1450 N up on the test units only."""
+    campaign = load_campaign("reference")
+    runs = campaign.runs()
+    kinds = [k for k in brake_kinds(True) if k.name != PIVOT]
+    assert {r.columns["defect_kind"] for r in runs} == {k.name for k in kinds} | {"healthy"}
+    conditions = 2 * sum(len(k.locations) for k in kinds) + 1
+    forces = {r.columns["peak_force_n"] for r in runs}
+    assert len(forces) == 4  # the Latin hypercube's four draws
+    held = sum(force >= 1450.0 for force in forces)
+    assert 0 < held < len(forces)  # the held-out rule holds something out and keeps the rest
+    counts = unit_counts(10, {"train": 0.6, "validation": 0.2, "test": 0.2})
+    pairs = counts["test"] * len(forces) + (10 - counts["test"]) * (len(forces) - held)
+    assert len(runs) == conditions * pairs
+    for split, units in counts.items():
+        assert len([r for r in runs if r.split == split]) == units * conditions * (
+            len(forces) - (held if split != "test" else 0)
+        )
+
+
 def test_healthy_counts_make_that_many_healthy_runs_each_its_own():
     text = TINY.replace("severities = [0.5, 1.0]", "severities = [0.5, 1.0]\nhealthy = 3")
     runs = parse_campaign(text, "t.toml").runs()
