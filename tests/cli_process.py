@@ -15,12 +15,15 @@ what it needs is tested in ``tests/cli/test_cli.py`` with fresh interpreters.
 :class:`subprocess.Popen` (output to files only), for ``python -m`` of one of
 :data:`MODULES`; each falls back to :mod:`subprocess` where the server cannot stand in:
 another command line, standard input or a pipe, or an environment that differs from the
-server's in a variable read at start-up (numba's, Python's, the kernel cache's).
+server's in a variable read at start-up (numba's, Python's, the kernel cache's). With
+``BRAKE_SIM_TESTS_FRESH=1`` in the environment every command gets a fresh interpreter.
 """
 
 from __future__ import annotations
 
 import atexit
+import gc
+import importlib
 import io
 import json
 import locale
@@ -40,9 +43,12 @@ from typing import Any
 MODULES = ("brake_sim_ros.cli", "brake_sim_ros.app.node")
 REPO = Path(__file__).resolve().parents[1]
 # read when the interpreter starts or a module is imported: only a fresh interpreter
-# honours a change of them (but those of HONOURED, see _Server.usable_env and _child)
-IMPORT_TIME_ENV = ("PYTHON", "NUMBA_", "BRAKE_SIM_", "XDG_CACHE_HOME", "OPENBLAS", "OMP_")
+# honours a change of them (but those of HONOURED, see _child)
+IMPORT_TIME_ENV = (
+    "PYTHON", "NUMBA_", "BRAKE_SIM_CACHE_DIR", "XDG_CACHE_HOME", "OPENBLAS", "OMP_", "MKL_", "LD_"
+)  # fmt: skip
 HONOURED = {"PYTHONPATH", "PYTHONUNBUFFERED"}
+FRESH_ENV = "BRAKE_SIM_TESTS_FRESH"  # set (to anything): every command a fresh interpreter
 RUN_ARGS = {"capture_output", "text", "timeout", "cwd", "env", "check"}
 POPEN_ARGS = {"stdout", "stderr", "env", "cwd"}
 
@@ -73,7 +79,7 @@ class _Server:
                 bufsize=1,
                 start_new_session=True,
             )
-        self.path = {os.path.realpath(p) for p in self.request({})["path"] if p}
+        self.request({})  # its line once warm
 
     def request(self, request: dict[str, Any]) -> dict[str, Any]:
         if request:
@@ -88,13 +94,9 @@ class _Server:
 
     def usable_env(self, env: dict[str, str]) -> bool:
         """Whether a fresh interpreter with ``env`` would start as the server did: the same
-        variables read at start-up but those the child honours (``PYTHONUNBUFFERED``, and a
-        ``PYTHONPATH`` whose every entry is on the server's path)."""
+        variables read at start-up but those the child honours."""
         keys = set(env) | set(self.env)
-        changed = {k for k in keys if env.get(k) != self.env.get(k)}
-        given = env.get("PYTHONPATH", "").split(os.pathsep)
-        if {os.path.realpath(p) for p in given if p} <= self.path:
-            changed -= HONOURED
+        changed = {k for k in keys if env.get(k) != self.env.get(k)} - HONOURED
         return not any(k.startswith(IMPORT_TIME_ENV) for k in changed)
 
     def scratch_file(self, suffix: str) -> Path:
@@ -120,7 +122,7 @@ _server: _Server | None = None
 def _server_for(cmd: list[Any], kwargs: dict[str, Any], allowed: set[str]) -> _Server | None:
     """The server, if it can run ``cmd`` with ``kwargs`` as a fresh interpreter would."""
     global _server
-    if _module(cmd) is None or set(kwargs) - allowed:
+    if _module(cmd) is None or set(kwargs) - allowed or os.environ.get(FRESH_ENV):
         return None
     if _server is None:
         _server = _Server()
@@ -251,6 +253,12 @@ def _child(request: dict[str, Any]) -> None:
         os.chdir(request["cwd"])
         os.environ.clear()
         os.environ.update(request["env"])
+        # as python -m: the working directory first, then PYTHONPATH's entries
+        sys.path[0] = os.getcwd()
+        known = {os.path.realpath(p) for p in sys.path if p}
+        given = [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p]
+        sys.path[1:1] = [p for p in given if os.path.realpath(p) not in known]
+        importlib.invalidate_caches()  # directories written since the server listed them
         if os.environ.get("PYTHONUNBUFFERED"):  # as python -u: no buffer under the text
             for name, fd in (("stdout", 1), ("stderr", 2)):
                 old = getattr(sys, name)
@@ -324,9 +332,10 @@ def _answer(request: dict[str, Any]) -> dict[str, Any]:
 def serve() -> None:
     """Read one request a line on stdin, answer each with one line."""
     _warm()
+    gc.freeze()  # what the warm-up made: never collected in a child, so never copied by it
     if threading.active_count() != 1:  # a fork copies no thread but the caller
         raise RuntimeError(f"{threading.active_count()} threads: cannot fork safely")
-    print(json.dumps({"path": sys.path}), flush=True)
+    print(json.dumps({"ready": True}), flush=True)
     for line in sys.stdin:
         print(json.dumps(_answer(json.loads(line))), flush=True)
 
