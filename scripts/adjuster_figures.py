@@ -15,8 +15,6 @@ healthy and seized. Usage (a minute or two once the kernels are compiled)::
 
 from __future__ import annotations
 
-import dataclasses
-
 import numpy as np
 
 from brake_sim_ros.analysis.energy import line_pressure_pa
@@ -87,11 +85,12 @@ def _within_run() -> None:
 def _downhill_wear() -> None:
     limit = KIND_BY_NAME["lining_wear"].service_limit
     base = load_scenario("downhill_wear")
-    seized = dataclasses.replace(base.setup.defects.left, adjuster_seized_mm=R.SEIZED_MM)
+    stated = base.setup.defects  # both linings' wear, growing with their work
+    seized = ShoeDefect(lining_wear_mm=stated.left.lining_wear_mm, adjuster_seized_mm=R.SEIZED_MM)
     variants = {
         "ratchet": base,
         f"seized {R.SEIZED_MM:g} mm": base.with_defects(
-            dataclasses.replace(base.setup.defects, left=seized)
+            Defects(left=seized, right=stated.right, growth=stated.growth)
         ),
     }
     for name, scenario in variants.items():
