@@ -3,8 +3,12 @@
 ``tests/model/test_adjuster.py`` checks: the clearance at rest with a worn lining (healthy
 and seized adjuster), and for one application (2000 N a shoe in 1 ms, held) the first
 contact's delay, the hand model's, the flow-limited ``A du R / p_s`` and the hardest
-normal force within 2 ms of the touch, at each seized severity. Usage (seconds once the
-kernels are compiled)::
+normal force within 2 ms of the touch, at each seized severity. Within a run
+(``tests/model/test_adjuster_ratchet.py``): the clearance at rest after each of eight
+applications while the lining wears with its friction work, with the ratchet and with the
+adjuster seized; and ``downhill_wear`` (the left lining's wear, the take-up and the
+clearance it would rest at, at the end, and when the lining reaches its 3.4 mm limit),
+healthy and seized. Usage (a minute or two once the kernels are compiled)::
 
     PYTHONPATH=. .venv/bin/python scripts/adjuster_figures.py
 """
@@ -14,10 +18,14 @@ from __future__ import annotations
 import numpy as np
 
 from brake_sim_ros.analysis.energy import line_pressure_pa
+from brake_sim_ros.model.catalogue import KIND_BY_NAME
 from brake_sim_ros.model.defects import Defects, ShoeDefect
+from brake_sim_ros.model.service_parameters import SERVICE_RUNNING_CLEARANCE_M
+from brake_sim_ros.scenarios import load_scenario
 from brake_sim_ros.scenarios.loader import parse_scenario
 from brake_sim_ros.stream.build import stepper_for
 from tests.model import test_adjuster as T
+from tests.model import test_adjuster_ratchet as R
 
 
 def _clearances() -> None:
@@ -65,6 +73,45 @@ def _delays() -> None:
         )
 
 
+def _within_run() -> None:
+    runs = {"ratchet": R._run(R.WORK), "seized": R._run(R._seized_text())}
+    for name, (scenario, _stepper, block) in runs.items():
+        rows = [R._row_before(block, t) for t in R._rests(R.WORK_STARTS, scenario.duration_s)]
+        wear = ", ".join(f"{block['left_lining_wear_m'][r] * 1e3:.3f}" for r in rows)
+        gap = ", ".join(f"{-block['left_indentation_m'][r] * 1e3:.3f}" for r in rows)
+        print(f"eight applications, {name}: wear at rest {wear} mm; clearance at rest {gap} mm")
+
+
+def _downhill_wear() -> None:
+    limit = KIND_BY_NAME["lining_wear"].service_limit
+    base = load_scenario("downhill_wear")
+    stated = base.setup.defects  # both linings' wear, growing with their work
+    seized = ShoeDefect(lining_wear_mm=stated.left.lining_wear_mm, adjuster_seized_mm=R.SEIZED_MM)
+    variants = {
+        "ratchet": base,
+        f"seized {R.SEIZED_MM:g} mm": base.with_defects(
+            Defects(left=seized, right=stated.right, growth=stated.growth)
+        ),
+    }
+    for name, scenario in variants.items():
+        stepper = stepper_for(scenario)
+        block = stepper.run(scenario.duration_s, record_every=256)
+        wear = block["left_lining_wear_m"]
+        worn = wear >= limit * 1e-3
+        reached = f"{block.time_s[np.argmax(worn)]:.2f}" if worn[-1] else "never"
+        taken, pending = stepper.adjuster_takeup_m[0], stepper.adjuster_pending_m[0]
+        rest = SERVICE_RUNNING_CLEARANCE_M + wear[-1] - taken - pending
+        if name != "ratchet":
+            rest += R.SEIZED_MM * 1e-3
+        print(
+            f"downhill_wear, {name}: left wear at the end {wear[-1] * 1e3:.3f} mm, taken up"
+            f" {taken * 1e3:.2f} mm, pending {pending * 1e3:.2f} mm, clearance it rests at"
+            f" {rest * 1e3:.3f} mm; the {limit:g} mm limit reached at {reached} s"
+        )
+
+
 if __name__ == "__main__":
     _clearances()
     _delays()
+    _within_run()
+    _downhill_wear()

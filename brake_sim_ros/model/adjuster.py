@@ -1,5 +1,6 @@
 """The service brake's self-adjuster: how much of a lining's wear it has taken up when a
-run starts, and the seized adjuster's refusal on the study brake.
+run starts, its ratchet's step within the run, and the seized adjuster's refusal on the
+study brake.
 
 The mechanism (:attr:`.service_parameters.ServiceBrakeParameters.adjuster_step_m`): a
 ratchet strut between the shoes at the wheel cylinder. Its slot gives the shoe the free
@@ -15,18 +16,19 @@ of the clearance ``s`` a tooth takes up at the lining. The takeup ``n s`` is put
 the lining's radius at rest (the gap it closes), not on the shoe's rest angle: the
 clearance the piston closes is the same; the lining arc stays concentric with the drum at
 rest, where the real strut turns the shoe about its pin (1 mm at the lining, 1.92 mm at
-the tip 284 mm from the pin, tilts it by 0.39 deg). The adjuster holds its place during a
-run: the wear a run adds (the friction-work law: about 1.5 um in a stop from 100 km/h at
-the default rate) stays far below a step (0.05 mm), which takes some thirty such stops, so
-it opens the clearance as it did before; the ratchet stepping within a run is not
-modelled.
+the tip 284 mm from the pin, tilts it by 0.39 deg). Within a run the ratchet steps on as
+the wear grows (:mod:`.ratchet`): an application that carries the shoe a step past the
+free play picks up a tooth, taken up on the lining's radius in the same way once the shoe
+is back at rest; this module packs its step and free play where a lining's wear grows.
 
 A seized adjuster (``adjuster_seized``, a shoe's defect, service brake only) has failed to
 take up ``y`` mm of that wear: it takes up ``max(w - y, 0)`` in whole steps, and where
 ``y`` exceeds the stated wear the surplus is wear the lining has beyond it (the kind
 alone: ``y`` mm of wear the adjuster did not follow). Either way the clearance at rest
 grows by ``y`` over the adjusted one: the pistons travel further and the circuit takes
-more fluid before the lining touches (the low pedal mechanics find it by).
+more fluid before the lining touches (the low pedal mechanics find it by). A seized
+adjuster does not step within the run either: a wear that grows opens the clearance by
+all of it.
 
 Pure logic: no files.
 """
@@ -72,17 +74,22 @@ def pack_adjuster(
     """Put the adjuster's takeup of shoe ``side`` (``shoe``: its
     :class:`.defects.ShoeDefect`; ``wear_growth``: its lining wear's law) back on its
     lining's radius in ``p`` (layout ``S_LINING_RADIUS`` and the unworn ``LN_RADIUS`` a
-    growing wear is taken from), on the service brake; the study brake has none."""
+    growing wear is taken from), on the service brake; the study brake has none. Where the
+    wear grows during the run and the adjuster is not seized, its ratchet steps within the
+    run too (:mod:`.ratchet`): its step and free play go to layout ``P_ADJUSTER_*``."""
     spec = params.service
     if spec is None:
         return
     wear = starting_wear_mm(shoe.lining_wear_mm, wear_growth) * 1e-3
     seized = shoe.adjuster_seized_mm * 1e-3
+    i = L.SIDES.index(side)
+    if wear_growth != Growth() and seized == 0.0:  # the ratchet steps within the run
+        p[L.P_ADJUSTER_STEP + i] = spec.adjuster_step_m
+        p[L.P_ADJUSTER_FREE_PLAY] = params.shoe.running_clearance_m
     if wear == 0.0 and seized == 0.0:
         return  # the new lining: nothing to take up (the healthy brake's arithmetic)
     takeup = takeup_m(wear, seized, spec.adjuster_step_m)
     beyond = seized - wear if seized > wear else 0.0
-    i = L.SIDES.index(side)
     p[L.P_SHOE_BASE + i * L.SHOE_STRIDE + L.S_LINING_RADIUS] += takeup - beyond
     p[L.P_LINING_BASE + i * L.LINING_STRIDE + L.LN_RADIUS] += takeup - beyond
 

@@ -15,6 +15,7 @@ from brake_sim_ros.model import (
     cycle,
     growth,
     kernel,
+    ratchet,
     rk4,
     standstill,
     thermal,
@@ -87,7 +88,9 @@ def fixed_step_advance(
 
     Defects that change during the run (``p``'s growth entries, :mod:`.growth`) are set
     at the start of every step, at its time, in a working copy of ``p`` (the actuation
-    gains with them); without entries ``p`` is used as it is.
+    gains with them); without entries ``p`` is used as it is. Where a lining's wear grows
+    on the service brake, its self-adjuster steps then too (:mod:`.ratchet`, its teeth
+    in fstate).
 
     A drive cycle (``p``'s P_CYCLE_COUNT > 0, :mod:`.cycle`) replaces the actuation knots
     by its brake force ramp and sets the drive torque and the vehicle's load: its
@@ -125,8 +128,13 @@ def fixed_step_advance(
         fl = ramp_f
         tr = ramp_t
         fr = ramp_f
+    # the service brake's self-adjuster steps within the run (model/ratchet.py): only where
+    # a lining's wear grows, so the working copy is there
+    adjusting = growing and ratchet.ratcheting(p)
     if growing:
         gl, gr, _ = growth.apply(p, pw, step0 * dt, y)
+    if adjusting:
+        ratchet.take_up(p, pw, fstate, y)
     if gain_override != 0:
         gl = 1.0
         gr = 1.0
@@ -170,6 +178,8 @@ def fixed_step_advance(
         t = step * dt
         if growing and i > 0:
             gl, gr, moved = growth.apply(p, pw, t, y)
+            if adjusting and ratchet.take_up(p, pw, fstate, y):
+                moved = True
             if gain_override != 0:
                 gl = 1.0
                 gr = 1.0

@@ -295,9 +295,10 @@ KINDS: list[DefectKind] = [
         description=(
             "lining thickness the shoe has lost, in mm: the lining surface moves in, the gap"
             " to the drum grows by as much (the shoe turns further before it touches), but"
-            " on the service brake, whose self-adjuster has taken the wear present at the"
-            " start up in whole steps (adjuster_seized: what it failed to); growth"
-            " friction_work wears it with the shoe's own friction work"
+            " on the service brake, whose self-adjuster takes the wear up in whole steps,"
+            " the wear present at the start and, as it grows, at each application"
+            " (adjuster_seized: what it failed to); growth friction_work wears it with the"
+            " shoe's own friction work"
         ),
         scenario_key="lining_wear_mm",
         # replaced at 1.6 mm left of 5 mm (1/16 in above the table: a typical workshop limit)

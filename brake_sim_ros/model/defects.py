@@ -55,8 +55,9 @@ class ShoeDefect(_FieldSet):
     times ``1 - pct/100``: :mod:`brake_sim_ros.model.service`); a worn lining's surface
     moves in by the wear, so the running clearance grows on the study brake (no adjuster);
     on the service brake its self-adjuster has taken the wear present at the start up in
-    whole steps, but for what a seized adjuster failed to take up
-    (``adjuster_seized_mm``: :mod:`brake_sim_ros.model.adjuster`).
+    whole steps, and takes a wear that grows up at each application
+    (:mod:`brake_sim_ros.model.ratchet`), but for what a seized adjuster failed to take up
+    (``adjuster_seized_mm``, nothing within the run: :mod:`brake_sim_ros.model.adjuster`).
     """
 
     @classmethod

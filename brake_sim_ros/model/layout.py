@@ -244,8 +244,14 @@ P_TYRE_STRIBECK_EXPONENT = P_TYRE_STIFFNESS + 6
 # share of the lining's area), and its damping, N s/m
 P_LINING_NODE_STIFFNESS = P_TYRE_STIFFNESS + 7
 P_LINING_NODE_DAMPING = P_TYRE_STIFFNESS + 8
+# the service brake's self-adjuster stepping within the run (model/ratchet.py): each shoe's
+# ratchet step at the lining, m (left; the right shoe's at + 1; 0: no ratchet within the
+# run: the study brake, a seized adjuster, a wear that does not grow), and the strut's free
+# play at the lining, m (the new lining's running clearance)
+P_ADJUSTER_STEP = P_TYRE_STIFFNESS + 9
+P_ADJUSTER_FREE_PLAY = P_TYRE_STIFFNESS + 11
 
-N_PARAMS = P_TYRE_STIFFNESS + 9
+N_PARAMS = P_TYRE_STIFFNESS + 12
 
 # --- state vector ---------------------------------------------------------------------
 Y_FLYWHEEL_ANGLE = 0
@@ -408,7 +414,12 @@ F_DRAG_FORCE = 9
 # when the cycle starts) and the kinetic energy its changes brought, J (model/cycle.py)
 F_LOAD_FACTOR = 10
 F_LOAD_CHANGE_WORK = 11
-N_FSTATE = 12
+# the self-adjuster within the run (model/ratchet.py), whole teeth per shoe (left; right at
+# + 1): taken up (in the lining's radius) and picked up by an application, not yet taken
+# up (the shoe has not returned to the lengthened strut yet)
+F_ADJUSTER_TAKEN = 12
+F_ADJUSTER_PENDING = 14
+N_FSTATE = 16
 
 # contact modes of the right-hand side (the adaptive reference forces them per segment)
 CONTACT_AUTO = -1

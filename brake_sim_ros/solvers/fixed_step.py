@@ -333,6 +333,24 @@ class FixedStepStepper:
         return int(self._fstate[L.F_SWITCHES])
 
     @property
+    def adjuster_takeup_m(self) -> tuple[float, float]:
+        """Lining wear each shoe's self-adjuster (left, right) has taken up within the run
+        so far, m: whole steps, in the lining's radius (model/ratchet.py; 0 where it does
+        not step within the run). Besides the wear it took up at the start (model/adjuster.py)."""
+        return self._adjuster_m(L.F_ADJUSTER_TAKEN)
+
+    @property
+    def adjuster_pending_m(self) -> tuple[float, float]:
+        """Teeth each shoe's self-adjuster (left, right) has picked up in an application
+        and not yet taken up (the shoe has not returned to the lengthened strut), m."""
+        return self._adjuster_m(L.F_ADJUSTER_PENDING)
+
+    def _adjuster_m(self, slot: int) -> tuple[float, float]:
+        steps = self._p[L.P_ADJUSTER_STEP : L.P_ADJUSTER_STEP + 2]
+        left, right = (float(self._fstate[slot + i] * steps[i]) for i in range(2))
+        return left, right
+
+    @property
     def packed_parameters(self) -> np.ndarray:
         return self._p.copy()
 

@@ -87,14 +87,18 @@ def test_a_seized_adjuster_leaves_the_whole_wear_in_the_clearance(wear_mm):
         (Growth(law="friction_work", wear_rate_mm_per_mj=1.0), 0.0),  # a state from 0
     ],
 )
-def test_a_wear_that_grows_in_the_run_is_taken_up_only_as_it_was_at_the_start(growth, taken_mm):
-    """The adjuster holds its place during a run (the ratchet stepping within a run is
-    not modelled): it has taken up the wear the run starts with, in whole steps, and the
-    wear the run adds opens the clearance, to the final wear less that takeup."""
+def test_a_wear_that_grows_in_the_run_starts_taken_up_as_it_was_at_the_start(growth, taken_mm):
+    """When the run starts the adjuster has taken up the wear the run starts with, in
+    whole steps; the growth alone (without the ratchet's steps within the run, which the
+    stepper takes at applications: tests/model/test_adjuster_ratchet.py) opens the
+    clearance to the final wear less that takeup. Its ratchet is packed to step within the
+    run (its step and free play)."""
     defects = Defects(
         left=ShoeDefect(lining_wear_mm=1.0), growth=(("lining_wear", "left", growth),)
     )
     p = pack(SERVICE, defects)
+    assert p[L.P_ADJUSTER_STEP] == STEP_M and p[L.P_ADJUSTER_STEP + 1] == 0.0
+    assert p[L.P_ADJUSTER_FREE_PLAY] == SERVICE.shoe.running_clearance_m
     unworn = SERVICE.shoe.drum_radius_m - SERVICE_RUNNING_CLEARANCE_M
     assert p[L.P_LINING_BASE + L.LN_RADIUS] == pytest.approx(unworn + taken_mm * 1e-3, abs=1e-12)
     if growth.follows_time:  # the radius the growth writes at the end: final wear applied
