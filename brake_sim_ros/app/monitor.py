@@ -44,7 +44,8 @@ def run(
         ``--ros-args`` out of range or of the wrong type, a topic name ROS refuses: bad
         arguments, like every other refusal of ``brake-sim monitor``) or refused the
         samples (at another rate than the detector was fitted at, or from another brake
-        than it was fitted on, or whose brake is not declared: ``MonitorNode.refusal``).
+        than it was fitted on, or whose brake neither the simulator says nor ``--brake``
+        declares, or a ``--brake`` the simulator contradicts: ``MonitorNode.refusal``).
     """
     stop = start_ros(ros_argv)  # the loop ends between callbacks, never on a dead context
     node = None

@@ -115,8 +115,10 @@ def monitor_parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--brake",
         choices=BRAKES,
-        help="the brake the measured samples come from (a scenario's brake); a detector"
-        " fitted on one brake's samples refuses the other's, and a stream without --brake",
+        help="the brake the measured samples come from (a scenario's brake); default: asked"
+        " of the simulator (its parameter brake), which must agree when given. Needed for"
+        " a stream the simulator does not publish (a replay, a driver): a detector fitted"
+        " on one brake's samples refuses the other's, and a brake neither given nor said",
     )
     p.add_argument("--debug", action="store_true", help=DEBUG_HELP)
     p.add_argument(

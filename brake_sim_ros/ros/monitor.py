@@ -30,8 +30,11 @@ at another sample rate, is a new run (the simulator was reset): the detector res
 Samples the detector cannot judge at all stop the node (:attr:`MonitorNode.refusal`, one
 line; ``brake-sim monitor`` exits 2): samples at another rate than it was fitted at, or,
 for a detector that recorded the brake it was fitted on, a stream from the other brake.
-No message says which brake it is, so the parameter ``brake`` declares it; a detector that
-recorded its brake refuses a stream whose brake is not declared.
+No message says which brake it is: the monitor asks the simulator (its read-only parameter
+``brake``, :mod:`.monitor_brake`) before it judges the first window, and again at each new
+run (a ``~/reset`` may load a scenario of the other brake), holding the samples meanwhile.
+The parameter ``brake`` declares it instead, for a stream no node can say (a replay, a
+driver); a declared brake the simulator contradicts is refused, naming both.
 """
 
 from __future__ import annotations
@@ -45,8 +48,13 @@ from typing import Any, Protocol
 from brake_sim_msgs.msg import DefectState, Diagnosis, HealthAssessment, MeasuredChunk
 from builtin_interfaces.msg import Time
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from rcl_interfaces.srv import GetParameters
 from rclpy.clock import Clock, ClockType
-from rclpy.exceptions import InvalidTopicNameException, ParameterException
+from rclpy.exceptions import (
+    InvalidServiceNameException,
+    InvalidTopicNameException,
+    ParameterException,
+)
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from std_msgs.msg import Header
@@ -56,6 +64,7 @@ from brake_sim_ros.model.catalogue import KIND_BY_NAME
 from brake_sim_ros.model.parameters import BRAKES
 from brake_sim_ros.ros import qos
 from brake_sim_ros.ros.descriptors import descriptor
+from brake_sim_ros.ros.monitor_brake import BrakeQuery, StreamBrake
 from brake_sim_ros.stream.conversion import stamp_ns, time_msg
 from brake_sim_ros.stream.parameters import ParamSpec
 from brake_sim_ros.stream.topics import (
@@ -76,6 +85,9 @@ STAMP_ROUNDING_NS = 1_000
 FAULT_SUMMARY_S = 10.0  # after a fault's first line, its count at most once per this (wall)
 MAX_WINDOW_SAMPLES = 1 << 22  # detection.detector's: the node imports nothing of it
 MAX_WINDOW_S = 60.0
+# messages held while the stream's brake is asked (a bounded wait: 200 s of 10 Hz chunks);
+# those past it are dropped, and counted as a gap when the next is judged
+MAX_HELD = 2000
 
 # The monitor wants every sample: a reliable subscription with room for 10 s of the
 # simulator's 10 Hz chunks, so a briefly busy monitor loses nothing (a loss would show as
@@ -130,8 +142,10 @@ def parameter_specs() -> list[ParamSpec]:
             "brake",
             "",
             "The brake the measured samples come from: study or service (a scenario's"
-            " brake); empty: not declared. A detector fitted on one brake's samples refuses"
-            " the other's, and a stream whose brake is not declared. " + fixed,
+            " brake); empty: asked of the simulator (its parameter brake), which must say"
+            " the same when it is given. A detector fitted on one brake's samples refuses"
+            " the other's, and a stream whose brake neither is declared nor the simulator"
+            " says (a replay, a driver). " + fixed,
             constraints=f"one of {', '.join(BRAKES)}, or empty",
         ),
         ParamSpec(
@@ -227,7 +241,7 @@ def _stamp_ns(stamp: Time) -> int:
     return int(stamp.sec) * _NS_PER_S + int(stamp.nanosec)
 
 
-class MonitorNode(Node):
+class MonitorNode(StreamBrake, Node):
     """Feeds ``~/measured`` to ``detector`` and publishes its verdicts (module docstring).
 
     Args:
@@ -278,12 +292,19 @@ class MonitorNode(Node):
         self.run_id = ""
         self.unit_id = self.unit_id_fixed
         # why the node stops: samples at another rate than the detector was fitted at, or
-        # from another brake than it was fitted on (known at start: the brake is declared)
-        self.refusal: str | None = detector.brake_refusal(
-            self.brake, f"the stream on {self.measured_topic}"
-        )
+        # from another brake than it was fitted on (a declared one is known at start)
+        self.refusal: str | None = None
+        if self.brake:
+            where = f"the stream on {self.measured_topic}"
+            self.refusal = detector.brake_refusal(self.brake, where)
         if self.refusal is not None:
             self.get_logger().error(self.refusal)
+        # the brake the stream comes from, as the simulator said it ("": not said)
+        self.stream_brake = ""
+        # asked when declared (the simulator must agree) or when the detector records one
+        self._asks_brake = bool(self.brake) or detector.brake_refusal("", "") is not None
+        self._brake_query: BrakeQuery | None = None
+        self._held: list[MeasuredChunk] = []
         self._next_index: int | None = None
         self._rate: float | None = None
         self._last_stamp_ns = 0
@@ -312,11 +333,16 @@ class MonitorNode(Node):
             self._diagnoses = self.create_publisher(
                 Diagnosis, DIAGNOSES.relative, qos.for_topic(DIAGNOSES)
             )
-        except InvalidTopicNameException:
-            shown = f"{self.measured_topic[:80]!r}, {self.defects_topic[:80]!r}"
+            self._parameters = self.create_client(GetParameters, f"{simulator}/get_parameters")
+        except (InvalidTopicNameException, InvalidServiceNameException):
+            shown = f"{self.measured_topic[:80]!r}, {self.defects_topic[:80]!r}, {simulator[:80]!r}"
             raise BrakeSimError(
-                f"topics {shown}: not topic names ROS accepts (allowed e.g. /brake_sim/measured)"
+                f"topics {shown}: not names ROS accepts (allowed e.g. /brake_sim/measured)"
             ) from None
+        self.simulator = simulator
+        if self._asks_brake and self.refusal is None:
+            self._ask_brake()
+        self.create_timer(0.1, self._poll_brake, clock=Clock(clock_type=ClockType.STEADY_TIME))
         self._diagnostics = self.create_publisher(
             DiagnosticArray, DIAGNOSTICS.name, qos.for_topic(DIAGNOSTICS)
         )
@@ -364,6 +390,22 @@ class MonitorNode(Node):
             self.unit_id = _id_text(msg.unit_id)
 
     def _on_measured(self, msg: MeasuredChunk) -> None:
+        if self.refusal is not None:
+            return
+        new_run = self._next_index is not None and (
+            (msg.first_sample_index == 0 and self._next_index > 0)
+            or msg.sample_rate_hz != self._rate
+        )
+        if new_run and self._asks_brake and self._brake_query is None and not self._held:
+            self._ask_brake()  # a ~/reset may have loaded a scenario of the other brake
+        if self._brake_query is not None:
+            self._brake_query.heard()
+            if len(self._held) < MAX_HELD:
+                self._held.append(msg)
+            return
+        self._judge(msg)
+
+    def _judge(self, msg: MeasuredChunk) -> None:
         try:
             chunk = self._to_chunk(msg)
             first, rate = chunk.first_sample_index, chunk.sample_rate_hz
@@ -529,6 +571,8 @@ class MonitorNode(Node):
             "last_alarm": "" if last is None else str(last.alarm).lower(),
             "last_rul_s": "" if last is None else f"{last.rul_s:.6g}",
             "warn_level": f"{self.warn_level:g}",
+            "brake": self.stream_brake or self.brake,
+            "held_for_brake": str(len(self._held)),
             **{k: str(v) for k, v in vars(self.stats).items()},
         }
         status = DiagnosticStatus(

@@ -174,6 +174,7 @@ class BrakeSimNode(NodeParameters, NodeServices, NodeTiming, Node):
         self._unit_id = self._param("unit_id")  # "" = each scenario's own
         scenario = self._as_unit(load_scenario(self._param("scenario")))
         run_id = run_parameters.check_run_id(self._param("run_id"))
+        self._declare_brake(scenario)
         self._model_names = self._declare_model(scenario)
         self._refuse_unknown_overrides()
         values = {name: self._param(name) for name in self._model_names}

@@ -12,6 +12,7 @@ then to the node's pacing and timers, and handed to the sinks that record change
 
 from __future__ import annotations
 
+import dataclasses
 import difflib
 from collections.abc import Iterable
 
@@ -25,11 +26,23 @@ from brake_sim_ros.scenarios import Scenario
 from brake_sim_ros.solvers.realtime import check_chunk_work
 from brake_sim_ros.stream import conversion, run_parameters
 from brake_sim_ros.stream import parameters as ros_params
+from brake_sim_ros.stream.parameters import ParamSpec
 
 # parameters rclpy declares or reads for any node: never "unknown"
 _ROS_PARAMETER_PREFIXES = ("qos_overrides.",)
 _SHOWN_CHARS = 64  # at most this much of a caller's text is echoed back
 _RATES = frozenset({"chunk_rate_hz", "state_rate_hz", "real_time_factor"})
+# The brake the running scenario simulates, for a client that must know it (brake-sim
+# monitor refuses a detector fitted on the other brake's samples). Not the descriptor's
+# read_only: the node itself sets it at a ~/reset to a scenario of the other brake.
+BRAKE = ParamSpec(
+    "brake",
+    "study",
+    "The brake the running scenario simulates (its top-level key brake): study or"
+    " service; follows a ~/reset to a scenario of the other brake. Read-only: set from the"
+    " scenario, a change (at start-up too) is refused.",
+    constraints="study or service (the scenario's)",
+)
 
 
 class NodeParameters:
@@ -78,6 +91,19 @@ class NodeParameters:
                 raise ParameterError(f"--ros-args override refused: {exc}") from None
             names.append(spec.name)
         return names
+
+    def _declare_brake(self, scenario: Scenario) -> None:
+        """Declare ``brake`` at ``scenario``'s; a ``--ros-args`` override of it that says
+        another brake is refused (ParameterError): the scenario chooses the brake."""
+        brake = scenario.setup.params.brake
+        self._declare([dataclasses.replace(BRAKE, default=brake)])
+        given = self._param(BRAKE.name)
+        if given != brake:
+            shown = str(given)[:_SHOWN_CHARS]
+            raise ParameterError(
+                f"--ros-args override refused: brake={shown!r}: read-only, scenario"
+                f" '{scenario.name}' runs the {brake} brake (its top-level key brake sets it)"
+            )
 
     def _declare_model(self, scenario: Scenario) -> list[str]:
         setup = scenario.setup
@@ -173,6 +199,12 @@ class NodeParameters:
         if self._internal_update:
             return SetParametersResult(successful=True)
         changes = {p.name: p.value for p in parameters}
+        if BRAKE.name in changes:
+            return SetParametersResult(
+                successful=False,
+                reason="brake is read-only: the running scenario's brake (switch scenarios"
+                " with the ~/reset service)",
+            )
         for name in changes.keys() & run_parameters.fixed_at_start():
             hint = (
                 " (switch scenarios with the ~/reset service)"

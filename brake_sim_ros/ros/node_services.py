@@ -164,7 +164,7 @@ class NodeServices:
         self._budget.costs = costs
         session.switch(prepared)
         self._follow_brake(scenario)
-        values = {**session.model, "scenario": name_or_path}
+        values = {**session.model, "scenario": name_or_path, "brake": scenario.setup.params.brake}
         for name in ("max_actuation_force_n", "duration_s", *self._drive_names):
             values[name] = session.settings[name]
         self._set_internal(values)
