@@ -18,6 +18,12 @@ CLI = [sys.executable, "-m", "brake_sim_ros.cli"]
 LONG = ["simulate", "urban", "--duration", "60", "--sample-rate", "5120", "--quiet"]
 
 
+@pytest.fixture(autouse=True)
+def _forking(monkeypatch):
+    """These tests are of the forked runs: not sent to fresh interpreters by the switch."""
+    monkeypatch.delenv(cli_process.FRESH_ENV, raising=False)
+
+
 @pytest.mark.parametrize(
     "argv",
     [
