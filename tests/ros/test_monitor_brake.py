@@ -162,6 +162,16 @@ def test_without_brake_the_monitor_learns_the_study_brake_from_the_node_and_judg
     assert monitor.returncode == 0 and not _refusals(output), output
 
 
+def _refused_study_detector_on_service(output: str) -> None:
+    """One refusal line: a study-fitted detector on the stream /brake_sim says is the
+    service brake's."""
+    refused = _refusals(output)
+    assert len(refused) == 1, output
+    assert "fitted on the study brake's samples" in refused[0]
+    assert "as /brake_sim says, comes from the service brake" in refused[0]
+    assert "Traceback" not in output
+
+
 def test_the_node_says_its_brake_read_only_and_follows_a_reset(tmp_path, nodes):
     """The simulator's parameter ``brake`` is its scenario's; a change is refused, an
     override at start that says another brake is refused in one line, and a ~/reset to a
@@ -196,12 +206,7 @@ def test_the_node_says_its_brake_read_only_and_follows_a_reset(tmp_path, nodes):
             assert _wait_exit(monitor, 30.0) == 2, log.read_text()
     finally:
         ears.close()
-    output = log.read_text()
-    refused = _refusals(output)
-    assert len(refused) == 1, output
-    assert "fitted on the study brake's samples" in refused[0]
-    assert "as /brake_sim says, comes from the service brake" in refused[0]
-    assert "Traceback" not in output
+    _refused_study_detector_on_service(log.read_text())
 
 
 def test_without_brake_a_service_stream_is_refused_for_a_study_detector(tmp_path, nodes):
@@ -217,12 +222,7 @@ def test_without_brake_a_service_stream_is_refused_for_a_study_detector(tmp_path
         nodes.process(service, domain),
     ):
         assert _wait_exit(monitor, 60.0) == 2, log.read_text()
-    output = log.read_text()
-    refused = _refusals(output)
-    assert len(refused) == 1, output
-    assert "fitted on the study brake's samples" in refused[0]
-    assert "as /brake_sim says, comes from the service brake" in refused[0]
-    assert "Traceback" not in output
+    _refused_study_detector_on_service(log.read_text())
 
 
 def test_a_brake_declared_that_the_node_contradicts_is_refused_naming_both(tmp_path, nodes):
