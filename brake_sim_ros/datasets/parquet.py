@@ -64,6 +64,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from brake_sim_ros.datasets import life
+from brake_sim_ros.datasets.run_brake import BRAKE_KEY, METADATA_KEY
 from brake_sim_ros.fleet.scatter import UnitValue
 from brake_sim_ros.model.cycle import Cycle
 from brake_sim_ros.model.defects import Defects
@@ -75,8 +76,6 @@ from brake_sim_ros.stream.ground_truth import recorded_wear
 if TYPE_CHECKING:
     from brake_sim_ros.scenarios.types import Scenario
     from brake_sim_ros.stream.run import RunResult
-
-METADATA_KEY = b"brake_sim"
 
 
 def measured_column(name: str, unit: str) -> str:
@@ -213,7 +212,7 @@ def run_table(
     meta = {
         "scenario": scenario.name,
         "source": scenario.source,
-        "brake": scenario.setup.params.brake,
+        BRAKE_KEY: scenario.setup.params.brake,
         "method": result.method,
         "stop_time_s": result.stop_time_s,
         "version": __version__,

@@ -23,8 +23,10 @@ import pyarrow as pa
 from brake_sim_ros.datasets.checked import DatasetError
 from brake_sim_ros.model.parameters import BRAKES, DEFAULT_BRAKE
 
-BRAKE_KEY = "brake"  # the key of the ``brake_sim`` metadata (:mod:`.parquet`)
-_METADATA_KEY = b"brake_sim"  # parquet.METADATA_KEY (that module imports the physics)
+# a run table's key-value metadata key (its JSON, :mod:`.parquet`), here rather than in the
+# writer, which imports the physics, and within it the key of the brake
+METADATA_KEY = b"brake_sim"
+BRAKE_KEY = "brake"
 
 
 def _from_scenario_text(text: object) -> object:
@@ -47,7 +49,7 @@ def recorded_brake(table: pa.Table, where: str) -> str:
         DatasetError: no readable record of the brake, or a brake not in ``BRAKES`` (one
             line).
     """
-    raw = (table.schema.metadata or {}).get(_METADATA_KEY)
+    raw = (table.schema.metadata or {}).get(METADATA_KEY)
     try:
         meta = json.loads(raw) if raw is not None else None
     except (ValueError, UnicodeDecodeError):
