@@ -110,6 +110,7 @@ def test_health_level_of_a_period():
         (["--detector", "rms", "--simulator", "brake sim"], "--simulator 'brake sim'"),
         (["--detector", "rms", "--measured-topic", "/a//b"], "--measured-topic '/a//b'"),
         (["--detector", "rms", "--bogus"], "unrecognized arguments: --bogus"),
+        (["--detector", "rms", "--brake", "foo"], "--brake: invalid choice: 'foo'"),
     ],
 )
 def test_bad_options_are_one_line_and_exit_2(args, says, capsys):
@@ -140,6 +141,7 @@ def test_fit_on_a_file_that_is_not_a_dataset_is_one_line(tmp_path, capsys):
     [
         ("warn_level:=2.0", "warn_level out of range"),
         ("unit_id:=5", "expecting type 'STRING'"),
+        ("brake:=foo", "brake 'foo': allowed study, service or empty"),
     ],
 )
 def test_a_bad_ros_parameter_is_refused_in_one_line(parameter, says):
