@@ -53,7 +53,6 @@ from brake_sim_ros import __version__
 from brake_sim_ros.errors import BrakeSimError
 from brake_sim_ros.recording import metadata, schemas
 from brake_sim_ros.stream import Topic
-from brake_sim_ros.stream.topics import offered_qos
 
 PROFILE = "ros2"
 SCHEMA_ENCODING = "ros2msg"
@@ -270,7 +269,7 @@ class McapRecorder:
             message_encoding=MESSAGE_ENCODING,
             schema_id=schema_id,
             metadata={
-                "offered_qos_profiles": metadata.qos_yaml([offered_qos(topic)]),
+                "offered_qos_profiles": metadata.qos_yaml([topic.qos]),
                 "topic_type_hash": schemas.type_hash(topic.type_name),
             },
         )
@@ -362,7 +361,7 @@ class McapRecorder:
             {
                 "name": c.topic.name,
                 "type": c.topic.type_name,
-                "qos_yaml": metadata.qos_yaml([offered_qos(c.topic)]),
+                "qos_yaml": metadata.qos_yaml([c.topic.qos]),
                 "type_hash": schemas.type_hash(c.topic.type_name),
                 "message_count": c.count,
             }

@@ -36,7 +36,7 @@ from rcl_interfaces.srv import GetParameters, SetParameters, SetParametersAtomic
 from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.parameter import Parameter
-from rclpy.qos import QoSProfile
+from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 
@@ -46,6 +46,10 @@ from brake_sim_ros.stream import conversion
 from brake_sim_ros.stream.topics import STREAM_QOS
 
 NODE = "/brake_sim"
+# a subscriber's profile for lossless checks: reliable, and a history that keeps whatever
+# a busy client has not taken yet (a keep-last reader of depth 1000 lost states when a
+# loaded client fell 1000 behind); pair it with the node's deep_history_args
+LOSSLESS = QoSProfile(history=HistoryPolicy.KEEP_ALL, reliability=ReliabilityPolicy.RELIABLE)
 
 
 def domain_id_for(offset: int) -> int:
@@ -69,6 +73,20 @@ def domain_id_for(offset: int) -> int:
         index = int(worker[2:])
         first = 1 + index * width
     return first + (os.getpid() + 37 * offset) % width
+
+
+def deep_history_args(measured: bool = False, depth: int = 1000) -> list[str]:
+    """Node arguments that deepen the stream publishers' keep-last histories to ``depth``
+    (``qos_overrides``), so that a node run as fast as possible keeps every message for a
+    reliable subscriber that is briefly slow (at the default depth of 10 a loaded client
+    loses some). ``measured``: ~/measured too (only a node that publishes it declares it)."""
+    topics = [stream.PIVOT_FORCES, stream.STATE, stream.JOINT_STATES]
+    if measured:
+        topics.append(stream.MEASURED)
+    args = ["--ros-args"]
+    for topic in topics:
+        args += ["-p", f"qos_overrides.{topic.name}.publisher.depth:={depth}"]
+    return args
 
 
 def ros_environment(domain_id: int) -> dict[str, str]:

@@ -133,6 +133,7 @@ class BrakeSimNode(NodeParameters, NodeServices, NodeTiming, Node):
         self.add_pre_set_parameters_callback(self._pre_set_parameters)
         self.add_on_set_parameters_callback(self._on_set_parameters)
         self._create_interfaces()
+        self._refuse_unknown_overrides(publishers=True)
         now = self._wall()
         self._pacer.restart(now, 0)
         self._last_run_tick: float | None = now
@@ -211,9 +212,10 @@ class BrakeSimNode(NodeParameters, NodeServices, NodeTiming, Node):
 
     def _create_interfaces(self) -> None:
         """Publishers, subscriptions, services and timers."""
-        self._out = NodeOutputs(
-            self, self.stats, measured=self.session.settings["publish_measured"]
-        )
+        with self._internally():  # the publishers declare their qos_overrides.* parameters
+            self._out = NodeOutputs(
+                self, self.stats, measured=self.session.settings["publish_measured"]
+            )
         sub = self.create_subscription(
             ActuationCommand,
             stream.ACTUATION.relative,
@@ -359,6 +361,7 @@ class BrakeSimNode(NodeParameters, NodeServices, NodeTiming, Node):
     def _fail(self, message: str) -> None:
         self._flush_measured()  # the samples published before the failure
         self._failure = message
+        self._retime_tick()
         self.get_logger().error(f"simulation stopped: {message}")
 
     def _finish(self) -> None:
@@ -366,6 +369,7 @@ class BrakeSimNode(NodeParameters, NodeServices, NodeTiming, Node):
         if not self._finished:
             self._account_free_run(self._wall())
             self._finished = True
+            self._retime_tick()
             self.get_logger().info(
                 f"reached duration_s = {self.session.settings['duration_s']:g} s"
             )

@@ -12,9 +12,10 @@ then to the node's pacing and timers, and handed to the sinks that record change
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import difflib
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator
 
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.exceptions import ParameterException
@@ -28,8 +29,8 @@ from brake_sim_ros.stream import conversion, run_parameters
 from brake_sim_ros.stream import parameters as ros_params
 from brake_sim_ros.stream.parameters import ParamSpec
 
-# parameters rclpy declares or reads for any node: never "unknown"
-_ROS_PARAMETER_PREFIXES = ("qos_overrides.",)
+# declared by the publishers (their QoS overrides), after the node's own parameters
+_QOS_OVERRIDES = "qos_overrides."
 _SHOWN_CHARS = 64  # at most this much of a caller's text is echoed back
 _RATES = frozenset({"chunk_rate_hz", "state_rate_hz", "real_time_factor"})
 # The brake the running scenario simulates, for a client that must know it (brake-sim
@@ -67,16 +68,17 @@ class NodeParameters:
             " (ros2 param list shows those it has)"
         )
 
-    def _refuse_unknown_overrides(self) -> None:
+    def _refuse_unknown_overrides(self, *, publishers: bool = False) -> None:
         """A ``--ros-args -p`` name this node does not declare is a typo: refuse to start.
 
         rclpy keeps the overrides it was given (``/**`` ones too) in ``_parameter_overrides``
-        and ignores undeclared ones silently; there is no public accessor.
+        and ignores undeclared ones silently; there is no public accessor. The publishers'
+        ``qos_overrides.*`` names are checked once they exist (``publishers``).
         """
         unknown = sorted(
             name
             for name in getattr(self, "_parameter_overrides", {})
-            if not self.has_parameter(name) and not name.startswith(_ROS_PARAMETER_PREFIXES)
+            if not self.has_parameter(name) and (publishers or not name.startswith(_QOS_OVERRIDES))
         )
         if unknown:
             raise ParameterError(f"--ros-args override refused: {self._unknown_reason(unknown)}")
@@ -117,8 +119,7 @@ class NodeParameters:
         setup = scenario.setup
         specs = ros_params.model_parameter_specs(setup.params, setup.defects)
         names = [spec.name for spec in specs]
-        self._internal_update = True
-        try:
+        with self._internally():
             for name in set(self._model_names) - set(names):
                 self.undeclare_parameter(name)
                 self._double_names.discard(name)
@@ -127,17 +128,21 @@ class NodeParameters:
                     self.declare_parameter(spec.name, spec.default, descriptor(spec))
                     if isinstance(spec.default, float):
                         self._double_names.add(spec.name)
+        self._model_names = names
+
+    @contextlib.contextmanager
+    def _internally(self) -> Iterator[None]:
+        """Parameters declared or set inside: not validated again, not counted."""
+        self._internal_update = True
+        try:
+            yield
         finally:
             self._internal_update = False
-        self._model_names = names
 
     def _set_internal(self, values: dict) -> None:
         """Set parameters from inside the node (not validated again, not counted)."""
-        self._internal_update = True
-        try:
+        with self._internally():
             self.set_parameters([Parameter(k, value=v) for k, v in values.items()])
-        finally:
-            self._internal_update = False
 
     def set_parameters_atomically(self, parameter_list):
         """Count every refused external change (descriptor checks included)."""
@@ -253,8 +258,9 @@ class NodeParameters:
         if self._finished and before_end and changes.keys() & {"duration_s", "continuous"}:
             self._finished = False
             self._pacer.restart(now, step)
-        if changes.keys() & {"real_time_factor", "paused", "chunk_rate_hz"}:
-            self._tick_timer.timer_period_ns = int(self._tick_period_s() * 1e9)
+        if changes.keys() & {"real_time_factor", "paused", "chunk_rate_hz", "duration_s",
+                             "continuous"}:  # fmt: skip
+            self._retime_tick()
 
     def _record_change(self, changes: dict) -> None:
         """Hand an accepted parameter change to the sinks that record changes (a

@@ -111,6 +111,7 @@ class NodeServices:
         self._failure = ""
         self._finished = False
         self._pacer.restart(now, 0)
+        self._retime_tick()
         for message in self.session.start():
             self._emit(*message)
         response.success = True
@@ -175,4 +176,4 @@ class NodeServices:
             paused=self._pacer.paused,
             max_lag_s=MAX_LAG_S,
         )
-        self._tick_timer.timer_period_ns = int(self._tick_period_s() * 1e9)
+        self._retime_tick()

@@ -24,6 +24,10 @@ from brake_sim_ros.stream import conversion
 from brake_sim_ros.stream.commands import describe_drive
 
 AFAP_TICK_BUDGET_S = 0.02  # wall time per tick as fast as possible (stays responsive)
+# paused, finished or failed: nothing to step, so tick slowly (a 1 ms tick as fast as
+# possible would keep a finished node at 60 % of a core); a change that resumes the run
+# restarts the tick at once (:meth:`NodeTiming._retime_tick`)
+IDLE_TICK_S = 0.1
 
 
 class NodeTiming:
@@ -143,10 +147,20 @@ class NodeTiming:
 
     def _tick_period_s(self) -> float:
         chunk = self.session.chunk_samples
-        if self._pacer.mode is PacingMode.REAL_TIME:
+        mode = self._pacer.mode
+        if self._failure or self._finished or mode is PacingMode.PAUSED:
+            return IDLE_TICK_S
+        if mode is PacingMode.REAL_TIME:
             half_chunk = 0.5 * self._pacer.chunk_wall_period_s(chunk)
             return min(0.01, max(0.001, half_chunk))
-        return 0.001 if self._pacer.mode is PacingMode.AS_FAST_AS_POSSIBLE else 0.01
+        return 0.001
+
+    def _retime_tick(self) -> None:
+        """Tick at the period the run's state needs now, the next tick one period from now."""
+        if getattr(self, "_tick_timer", None) is None:
+            return  # not ticking yet: the timer starts at this period
+        self._tick_timer.timer_period_ns = int(self._tick_period_s() * 1e9)
+        self._tick_timer.reset()
 
     def _max_chunks_per_tick(self) -> int:
         if self._pacer.mode is not PacingMode.REAL_TIME:

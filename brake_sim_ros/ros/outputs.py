@@ -13,13 +13,36 @@ from __future__ import annotations
 import dataclasses
 from typing import Any
 
+from rclpy.exceptions import ParameterException
 from rclpy.node import Node
+from rclpy.qos_overriding_options import InvalidQosOverridesError
 
 from brake_sim_ros import stream
+from brake_sim_ros.errors import ParameterError
 from brake_sim_ros.ros import qos
 from brake_sim_ros.ros.diagnostics import RunStats
 from brake_sim_ros.ros.messages import message_class
 from brake_sim_ros.stream import MessageSink, Topic
+
+
+def _publisher(node: Node, topic: Topic) -> Any:
+    """``topic``'s publisher, with the QoS overrides the operator gave (one line if bad)."""
+    try:
+        return node.create_publisher(
+            message_class(topic.type_name),
+            topic.relative,
+            qos.for_topic(topic),
+            qos_overriding_options=qos.PUBLISHER_OVERRIDES,
+        )
+    except (InvalidQosOverridesError, ParameterException, RuntimeError, ValueError) as exc:
+        # rclpy's message may echo a hostile value at any length: name the parameters only
+        name = f"qos_overrides.{node.resolve_topic_name(topic.relative)}.publisher"
+        reason = exc.__class__.__name__
+        raise ParameterError(
+            f"--ros-args override refused: {name}.depth and .reliability ({reason}): allowed"
+            f" depth an integer from 1 to {qos.MAX_DEPTH}, reliability one of reliable,"
+            " best_effort, system_default, best_available"
+        ) from None
 
 
 class NodeOutputs:
@@ -38,10 +61,11 @@ class NodeOutputs:
         self._outputs: dict[Topic, tuple[Any, Topic]] = {}
         for topic in stream.TOPICS:
             if topic.published and (topic is not stream.MEASURED or measured):
-                pub = node.create_publisher(
-                    message_class(topic.type_name), topic.relative, qos.for_topic(topic)
+                pub = _publisher(node, topic)
+                offered = dataclasses.replace(
+                    topic, name=pub.topic_name, qos=qos.spec_of(pub.qos_profile)
                 )
-                self._outputs[topic] = (pub, dataclasses.replace(topic, name=pub.topic_name))
+                self._outputs[topic] = (pub, offered)
         self.sinks: list[MessageSink] = []
 
     def subscriber_count(self, topic: Topic) -> int:

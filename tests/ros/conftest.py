@@ -22,10 +22,10 @@ except ImportError as error:  # pragma: no cover - a machine without ROS
         allow_module_level=True,
     )
 
-from rclpy.qos import QoSProfile
+from rclpy.qos import QoSProfile, ReliabilityPolicy
 
 from brake_sim_ros.ros import qos
-from brake_sim_ros.ros.harness import NodeProcess, SimClient
+from brake_sim_ros.ros.harness import NodeProcess, SimClient, deep_history_args
 from tests import cli_process
 
 HERE = Path(__file__).parent
@@ -87,7 +87,10 @@ class Nodes:
         **process: object,
     ) -> Iterator[tuple[NodeProcess, SimClient]]:
         """:meth:`process`, and a :class:`SimClient` (``stream_qos``) that has discovered
-        the node within ``wait_s`` seconds; closed before the node stops."""
+        the node within ``wait_s`` seconds; closed before the node stops. A reliable
+        ``stream_qos`` (a lossless check) gets the node's deep histories too."""
+        if stream_qos.reliability is ReliabilityPolicy.RELIABLE:
+            args = [*args, *deep_history_args(measured="publish_measured:=true" in args)]
         with self.process(args, domain, **process) as node:
             client = SimClient(domain, stream_qos=stream_qos)
             try:

@@ -17,12 +17,11 @@ import math
 import numpy as np
 import pytest
 from brake_sim_msgs.msg import DriveCommand
-from rclpy.qos import QoSProfile, ReliabilityPolicy
 
 from brake_sim_ros import stream
 from brake_sim_ros.model.cycle import DRIVE_MODES, SPEED_TOLERANCE, LiveDrive
 from brake_sim_ros.model.layout import COL
-from brake_sim_ros.ros.harness import SimClient, domain_id_for
+from brake_sim_ros.ros.harness import LOSSLESS, SimClient, domain_id_for
 from brake_sim_ros.scenarios import load_scenario
 from brake_sim_ros.stream import conversion
 from brake_sim_ros.stream.build import stepper_for
@@ -34,7 +33,6 @@ pytestmark = pytest.mark.realtime
 
 DOMAIN = domain_id_for(41)
 BRAKE_N = 1500.0
-LOSSLESS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
 
 
 @pytest.fixture(scope="module")
@@ -89,8 +87,13 @@ def test_a_client_drives_a_stop_live_as_the_offline_stepper_does(rig):
     _counted(client, "commands_accepted", commands + 2)
     _step(client, 2)
     n = 12 * RATE
+    stride = RATE // 256  # state_rate_hz 256
     client.wait_for(lambda: client.sample_count >= n, 10.0, "every sample")
-    client.spin_for(0.3)  # the last states
+    client.wait_for(
+        lambda: client.rx.states and client.rx.states[-1].sample_index >= n - stride,
+        10.0,
+        "the last state",
+    )
 
     # offline: the same commands at the same samples
     scenario = load_scenario(str(path))
@@ -110,10 +113,10 @@ def test_a_client_drives_a_stop_live_as_the_offline_stepper_does(rig):
             np.testing.assert_array_equal(
                 got[f"{side}_{axis}_n"], offline[:, COL[f"{side}_pivot_{axis}_n"]]
             )
-    # the states the client took (a keep-last publisher may overwrite some under load)
+    # every state (the node's histories are deep for this reliable client)
     states = [s for s in client.rx.states if s.sample_index < n]
     index = np.array([s.sample_index for s in states])
-    assert len(index) > 12 * 256 // 2
+    np.testing.assert_array_equal(index, np.arange(0, n, stride))
     for name in ("flywheel_speed_rad_s", "drum_speed_rad_s"):
         np.testing.assert_array_equal([getattr(s, name) for s in states], offline[index, COL[name]])
 

@@ -32,7 +32,7 @@ from brake_sim_msgs.msg import Diagnosis, HealthAssessment, MeasuredChunk
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor
-from rclpy.qos import QoSProfile, ReliabilityPolicy
+from rclpy.qos import QoSProfile
 from rclpy.serialization import deserialize_message
 
 from brake_sim_ros import stream
@@ -45,7 +45,7 @@ from brake_sim_ros.detection.impact import ImpactDetector
 from brake_sim_ros.model.catalogue import KIND_BY_NAME
 from brake_sim_ros.recording.reader import open_recording
 from brake_sim_ros.recording.record import record_offline
-from brake_sim_ros.ros.harness import domain_id_for, ros_environment
+from brake_sim_ros.ros.harness import LOSSLESS, domain_id_for, ros_environment
 from brake_sim_ros.ros.monitor import DIAGNOSES, HEALTH
 from brake_sim_ros.scenarios import load_scenario
 from brake_sim_ros.stream import conversion
@@ -66,7 +66,6 @@ THRESHOLD_ENV = "BRAKE_SIM_TEST_RMS_THRESHOLD"
 DETECTOR = "test_monitor:OffsetRms"  # this module, importable by the monitor process
 CLI = [sys.executable, "-m", "brake_sim_ros.cli"]
 TOPICS = ["--topics", stream.MEASURED.name, stream.DEFECTS.name]  # what the monitor reads
-LOSSLESS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
 DIAGNOSED = ("initial_angle", "left")
 # the node's options in the documented order: its sensors on, the run held for the monitor
 MEASURED_FIRST = ["--ros-args", "-p", "publish_measured:=true", "-p", "measured_subscribers:=1"]

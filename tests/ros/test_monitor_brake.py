@@ -24,12 +24,12 @@ import rclpy
 from brake_sim_msgs.msg import HealthAssessment, MeasuredChunk
 from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor
-from rclpy.qos import QoSProfile, ReliabilityPolicy
+from rclpy.qos import QoSProfile
 
 from brake_sim_ros import stream
 from brake_sim_ros.detection import saved
 from brake_sim_ros.detection.baselines import VibrationThreshold
-from brake_sim_ros.ros.harness import domain_id_for, ros_environment
+from brake_sim_ros.ros.harness import LOSSLESS, domain_id_for, ros_environment
 from brake_sim_ros.ros.monitor import HEALTH
 from tests import cli_process
 
@@ -45,7 +45,6 @@ peak_force_n = 1300.0
 """
 # the node's sensors on, the run held until the monitor subscribes (the documented order)
 MEASURED_FIRST = ["--ros-args", "-p", "publish_measured:=true", "-p", "measured_subscribers:=1"]
-LOSSLESS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
 WINDOW_S = 0.07
 
 

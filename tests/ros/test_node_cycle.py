@@ -6,17 +6,15 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from rclpy.qos import QoSProfile, ReliabilityPolicy
 
 from brake_sim_ros.model.layout import COL
-from brake_sim_ros.ros.harness import domain_id_for
+from brake_sim_ros.ros.harness import LOSSLESS, domain_id_for
 from brake_sim_ros.scenarios import load_scenario, parse_scenario
 from brake_sim_ros.stream.build import stepper_for
 from tests.model.test_cycle_load import LAPS
 
 DOMAIN = domain_id_for(23)
 RUN_S = 1.0
-LOSSLESS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
 
 
 def test_the_node_streams_a_drive_cycle_and_refuses_commands_to_its_brake(node_and_client):

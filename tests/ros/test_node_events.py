@@ -15,17 +15,15 @@ import dataclasses
 
 import numpy as np
 import pytest
-from rclpy.qos import QoSProfile, ReliabilityPolicy
 
 from brake_sim_ros import stream
 from brake_sim_ros.analysis import contact_events as ce
-from brake_sim_ros.ros.harness import SimClient, domain_id_for
+from brake_sim_ros.ros.harness import LOSSLESS, SimClient, domain_id_for
 from brake_sim_ros.scenarios import load_scenario
 from brake_sim_ros.stream.offline import StreamSettings, offline_messages
 
 DOMAIN = domain_id_for(8)
 N_STEPS = 7680  # 0.3 s of 25.6 kHz samples: every bounce of the symmetric run, contact starts
-LOSSLESS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
 RUN_ID = "events-test.run_1"  # the node's run_id parameter: kept across resets
 FIELDS = (
     "sample_index",

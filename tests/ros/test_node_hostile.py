@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import math
 import os
-import subprocess
 import sys
 import time
 import uuid
@@ -27,6 +26,7 @@ from brake_sim_ros.ros.harness import (
 )
 from brake_sim_ros.scenarios import loader
 from brake_sim_ros.scenarios.files import MAX_SCENARIO_BYTES
+from tests import cli_process
 
 # each refusal answered within 1-2 s of wall time, then a chunk in 1 s
 pytestmark = pytest.mark.realtime
@@ -227,6 +227,9 @@ def test_hostile_step_requests_are_refused(sim, request_fields):
     sim.wait_for(lambda: sim.chunk_count > chunks, 1.0, "pivot-force chunk after the refusal")
 
 
+QOS = "qos_overrides./brake_sim/pivot_forces.publisher"  # a publisher's QoS overrides
+
+
 @pytest.mark.parametrize(
     ("args", "message"),
     [
@@ -236,10 +239,16 @@ def test_hostile_step_requests_are_refused(sim, request_fields):
         (["-p", "chunk_rate_hz:=1000.0", "-p", "state_rate_hz:=10000.0"], "cannot keep real"),
         (["-p", "run_id:=a/b"], "run_id='a/b': allowed empty"),
         (["-p", f"run_id:={'x' * 65}"], "1 to 64 characters"),
+        (["-p", f"{QOS}.depth:=0"], "depth an integer from 1 to 100000"),
+        (["-p", f"{QOS}.depth:=100001"], "depth an integer from 1 to 100000"),
+        (["-p", f"{QOS}.depth:=deep"], "depth an integer from 1 to 100000"),
+        (["-p", f"{QOS}.reliability:={'x' * 500}"], "reliability one of reliable, best_effort"),
+        (["-p", "qos_overrides./brake_sim/pivot_force.publisher.depth:=9"], f"did you mean {QOS}"),
+        (["-p", "qos_overrides./brake_sim/measured.publisher.depth:=9"], "not declared"),
     ],
 )
 def test_refuses_to_start_with_hostile_parameters(args, message):
-    proc = subprocess.run(
+    proc = cli_process.run(
         [sys.executable, "-m", "brake_sim_ros.app.node", "--ros-args", *args],
         env=ros_environment(domain_id_for(18)),
         capture_output=True,
@@ -249,6 +258,7 @@ def test_refuses_to_start_with_hostile_parameters(args, message):
     assert proc.returncode == 1, proc.stdout + proc.stderr
     lines = [line for line in proc.stderr.splitlines() if line.startswith("brake_sim:")]
     assert len(lines) == 1 and message in lines[0], proc.stderr
+    assert "x" * 80 not in lines[0]  # a hostile value is not echoed at any length
 
 
 def test_heard_chunks_are_not_counted_as_unheard(sim):

@@ -16,11 +16,10 @@ import uuid
 
 import numpy as np
 import pytest
-from rclpy.qos import QoSProfile, ReliabilityPolicy
 
 from brake_sim_ros.model.defects import Defects, ShoeDefect
 from brake_sim_ros.model.layout import COL
-from brake_sim_ros.ros.harness import SimClient, domain_id_for
+from brake_sim_ros.ros.harness import LOSSLESS, SimClient, domain_id_for
 from brake_sim_ros.scenarios import load_scenario
 from brake_sim_ros.stream import conversion
 from brake_sim_ros.stream.build import stepper_for
@@ -34,7 +33,6 @@ DT = 1 / 25_600  # the sample period
 MAX_FORCE = 5000.0  # the largest command accepted: 3 substeps per sample (limit 16.7 us)
 STATE_RATE_HZ = 1024.0
 STATE_STRIDE = 25  # 25.6 kHz / 1024 Hz
-LOSSLESS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
 
 
 @pytest.fixture(scope="module")

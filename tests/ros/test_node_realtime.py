@@ -21,13 +21,13 @@ import numpy as np
 import pytest
 from rclpy.qos import (
     DurabilityPolicy,
-    QoSProfile,
     ReliabilityPolicy,
 )
 
 from brake_sim_ros import stream
 from brake_sim_ros.ros import qos
 from brake_sim_ros.ros.harness import (
+    LOSSLESS,
     domain_id_for,
     ros_environment,
 )
@@ -41,7 +41,6 @@ RUN_S = 3.0
 PERIOD = 1 / 25_600  # the scenario's sample rate
 N_SAMPLES = round(RUN_S / PERIOD)
 CHUNK = 256  # 100 chunks per simulated second
-LOSSLESS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
 BAD_COMMANDS = [(math.nan, 0.0), (0.0, math.inf), (-math.inf, 0.0), (-1.0, 0.0), (0.0, 1e9)]
 BAD_PARAMETERS = {
     "friction.coefficient": 1.5,  # outside the descriptor's range

@@ -127,11 +127,15 @@ def test_live_equals_offline_for_every_scheme(tmp_path, nodes, method):
 def test_the_recording_holds_the_qos_the_node_offers(tmp_path, nodes):
     """Each recorded channel's offered_qos_profiles equals what the running node's
     publisher offers, as DDS discovery reports it to another participant (every topic:
-    ~/measured switched on)."""
+    ~/measured switched on), the operator's QoS overrides included."""
     path = tmp_path / "rec.mcap"
     domain = domain_id_for(47)
+    overrides = {"/brake_sim/pivot_forces": ("depth", 500), "/brake_sim/state": ("reliability",
+                 "best_effort")}  # fmt: skip
     args = ["--scenario", SCENARIO, "--duration", "3", "--exit-at-end", "--record", str(path),
             "--ros-args", "-p", "publish_measured:=true"]  # fmt: skip
+    for name, (policy, value) in overrides.items():
+        args += ["-p", f"qos_overrides.{name}.publisher.{policy}:={value}"]
     offered: dict[str, tuple[str, str, int]] = {}
     with nodes.process(args, domain) as node:
         context = rclpy.context.Context()
@@ -167,9 +171,11 @@ def test_the_recording_holds_the_qos_the_node_offers(tmp_path, nodes):
             # DDS discovery carries no history depth (it reports 0); the node creates its
             # publishers from the same table, so the recorded depth is checked against it
             topic = stream.topics.TOPIC_BY_NAME[channel.topic]
-            assert recorded_depth == topic.qos.depth, channel.topic
+            policy, value = overrides.get(channel.topic, ("depth", topic.qos.depth))
+            assert recorded_depth == (value if policy == "depth" else topic.qos.depth)
     for name, (reliability, durability, _depth) in offered.items():
         assert recorded[name] == (reliability, durability), name
+    assert offered["/brake_sim/state"][0] == "best_effort"  # the override reached DDS
 
 
 @pytest.mark.realtime  # signalled after 2.5 s of wall time: more than 1 s of signal

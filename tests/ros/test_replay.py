@@ -21,12 +21,11 @@ import rclpy
 from mcap.reader import make_reader
 from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor
-from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.serialization import deserialize_message
 
 from brake_sim_ros import stream
 from brake_sim_ros.ros import qos
-from brake_sim_ros.ros.harness import domain_id_for, ros_environment
+from brake_sim_ros.ros.harness import LOSSLESS, domain_id_for, ros_environment
 from brake_sim_ros.ros.messages import message_class
 from tests import cli_process
 
@@ -39,7 +38,6 @@ DURATION_S = 1.5
 # of ms, so single messages get a generous bound and the typical one a tight bound.
 TYPICAL_LATE_S = 0.010  # median |arrival - due|
 WORST_LATE_S = 0.150  # any message
-LOSSLESS = QoSProfile(depth=10_000, reliability=ReliabilityPolicy.RELIABLE)
 
 
 def _record(path: Path, duration_s: float) -> None:

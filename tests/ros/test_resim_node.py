@@ -18,17 +18,15 @@ import pytest
 from brake_sim_msgs.msg import DriveCommand
 from mcap.reader import make_reader
 from mcap_ros2.decoder import DecoderFactory
-from rclpy.qos import QoSProfile, ReliabilityPolicy
 
 from brake_sim_ros import stream
 from brake_sim_ros.model.cycle import LiveDrive
-from brake_sim_ros.ros.harness import SimClient, domain_id_for
+from brake_sim_ros.ros.harness import LOSSLESS, SimClient, domain_id_for
 from brake_sim_ros.scenarios import parse_scenario
 from brake_sim_ros.stream.build import stepper_for
 from tests.recording.test_resim_cli import pivot_arrays, resim, run_record
 from tests.stream.test_drive_command import RATE, RIG
 
-LOSSLESS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
 LIMIT_N_M = 200.0  # the node's max_drive_torque_n_m (the rig's own: the default 120)
 TAU_S = 0.5  # the node's speed_time_constant_s (default 1)
 
