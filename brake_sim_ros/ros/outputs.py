@@ -23,6 +23,7 @@ from brake_sim_ros.ros import qos
 from brake_sim_ros.ros.diagnostics import RunStats
 from brake_sim_ros.ros.messages import message_class
 from brake_sim_ros.stream import MessageSink, Topic
+from brake_sim_ros.stream.topics import RELIABILITY_POLICIES
 
 
 def _publisher(node: Node, topic: Topic) -> Any:
@@ -40,8 +41,8 @@ def _publisher(node: Node, topic: Topic) -> Any:
         reason = exc.__class__.__name__
         raise ParameterError(
             f"--ros-args override refused: {name}.depth and .reliability ({reason}): allowed"
-            f" depth an integer from 1 to {qos.MAX_DEPTH}, reliability one of reliable,"
-            " best_effort, system_default, best_available"
+            f" depth an integer from 1 to {qos.MAX_DEPTH}, reliability one of"
+            f" {', '.join(RELIABILITY_POLICIES)}"
         ) from None
 
 

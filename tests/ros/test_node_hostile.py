@@ -242,7 +242,7 @@ QOS = "qos_overrides./brake_sim/pivot_forces.publisher"  # a publisher's QoS ove
         (["-p", f"{QOS}.depth:=0"], "depth an integer from 1 to 100000"),
         (["-p", f"{QOS}.depth:=100001"], "depth an integer from 1 to 100000"),
         (["-p", f"{QOS}.depth:=deep"], "depth an integer from 1 to 100000"),
-        (["-p", f"{QOS}.reliability:={'x' * 500}"], "reliability one of reliable, best_effort"),
+        (["-p", f"{QOS}.reliability:={'x' * 500}"], "one of system_default, reliable, best_effort"),
         (["-p", "qos_overrides./brake_sim/pivot_force.publisher.depth:=9"], f"did you mean {QOS}"),
         (["-p", "qos_overrides./brake_sim/measured.publisher.depth:=9"], "not declared"),
     ],
