@@ -63,7 +63,7 @@ def _score(directory: Path) -> tuple[float, str]:
     """Fit the baseline on train, score it on test: (wall s, one line of figures)."""
     from brake_sim_ros.datasets.reader import open_dataset
     from brake_sim_ros.detection import evaluate
-    from brake_sim_ros.detection.baselines import make_detector
+    from brake_sim_ros.detection.registry import make_detector
 
     start = time.perf_counter()
     dataset = open_dataset(directory)

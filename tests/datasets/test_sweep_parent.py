@@ -121,6 +121,27 @@ def test_the_fleet_slice_keeps_the_runs_settings():
         fleet_bench.sliced(campaign, 2, 1)
 
 
+def test_the_fleet_benchmark_sweeps_and_scores_a_campaign_end_to_end(tmp_path):
+    # the fleet's own outputs (measured channels, 25.6 kHz) on 5 units x (one defect at
+    # its limit and healthy), short runs: the whole path the full campaign takes
+    fleet = load_campaign(fleet_bench.CAMPAIGN_FILE)
+    small = parse_campaign(
+        'name = "fleet_small"\nbase = "symmetric"\nseed = 3\nunits = 5\n[outputs]\n'
+        "duration_s = 0.6\nsample_rate_hz = 25600.0\n"
+        '[[axes]]\ndefects = ["friction_change"]\nseverities = [1.0]\nhealthy = true\n',
+        "test",
+    )
+    small = dataclasses.replace(small, outputs=dataclasses.replace(fleet.outputs, duration_s=0.6))
+    report = fleet_bench.run(small, fleet_bench.run_count(small), tmp_path / "out", 2)
+    lines = report.splitlines()
+    sweep_line = next(line for line in lines if line.startswith("  sweep: "))
+    runs = fleet_bench.run_count(small)
+    assert sweep_line.startswith(f"  sweep: {runs} runs (0 failed)")
+    score_line = next(line for line in lines if line.startswith("  score: "))
+    assert "impact fitted on train (" in score_line and "scored on test: " in score_line
+    assert not any("EXTRAPOLATED to all" in line for line in lines)
+
+
 def test_the_sweep_benchmarks_short_campaign_is_short_runs_of_every_defect():
     campaign = sweep_bench.bench_campaign("short")
     runs = campaign.runs()
