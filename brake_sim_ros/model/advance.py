@@ -48,6 +48,20 @@ def _update_regime(kstate, k_regime, k_flag, k_change, touching, step, settle_st
 
 
 @njit(**JIT)
+def _kinematics_pair(p, y, drum_speed):
+    """Both shoes' :func:`.contact.kinematics` for the state ``y`` with the drum turning at
+    ``drum_speed`` (rad/s). A call, not inlined, where a step needs them afresh (its
+    start after a switch or a lock, or on a path that holds nothing): each inlined copy
+    compiles on its own."""
+    wa = y[L.Y_DRUM_ANGLE]
+    bl = L.P_SHOE_BASE
+    br = L.P_SHOE_BASE + L.SHOE_STRIDE
+    kin_l = contact.kinematics(p, bl, y[L.Y_LEFT_ANGLE], y[L.Y_LEFT_SPEED], wa, drum_speed)
+    kin_r = contact.kinematics(p, br, y[L.Y_RIGHT_ANGLE], y[L.Y_RIGHT_SPEED], wa, drum_speed)
+    return kin_l, kin_r
+
+
+@njit(**JIT)
 def fixed_step_advance(
     y,
     step0,
@@ -165,8 +179,7 @@ def fixed_step_advance(
     lined = p[L.P_LINING_NODE_STIFFNESS] > 0.0
     bound = 4 if p[L.P_SERVICE] > 0.0 else 0  # its slots in the bound (kernel.NOT_FREE)
     held = False
-    kin_l = contact.kinematics(pw, bl, 0.0, 0.0, 0.0, 0.0)
-    kin_r = kin_l
+    kin_l, kin_r = _kinematics_pair(pw, y, 0.0)  # their types: the first step computes them
     # RK4 stages skip the contact geometry where the shoes provably exert nothing
     # (rides_free): on a round drum with a fixed geometry, each shoe's indentation at the
     # step's start and twice the largest distance of its lining from its pivot
@@ -201,10 +214,7 @@ def fixed_step_advance(
         fer = kernel.force(pw, L.P_SHOE_BASE + L.SHOE_STRIDE, t, tr, fr, gr)
         record = i % record_every == 0
         if not (held and (round_drum or not stuck)):
-            wa = y[L.Y_DRUM_ANGLE]
-            wd = 0.0 if stuck else y[L.Y_DRUM_SPEED]
-            kin_l = contact.kinematics(pw, bl, y[L.Y_LEFT_ANGLE], y[L.Y_LEFT_SPEED], wa, wd)
-            kin_r = contact.kinematics(pw, br, y[L.Y_RIGHT_ANGLE], y[L.Y_RIGHT_SPEED], wa, wd)
+            kin_l, kin_r = _kinematics_pair(pw, y, 0.0 if stuck else y[L.Y_DRUM_SPEED])
         held = False
         row = rows if record else -1
         kernel.evaluate_from(y, pw, fel, fer, stuck, auto, auto, kin_l, kin_r, k1, out, row, t)
@@ -299,6 +309,7 @@ def fixed_step_advance(
             accept = True
             if located:
                 if can_hold:
+                    # inlined here, the path of every held step; a call elsewhere
                     wa = y_new[L.Y_DRUM_ANGLE]
                     wn = y_new[L.Y_DRUM_SPEED]
                     kin_l = contact.kinematics(

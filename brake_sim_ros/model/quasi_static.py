@@ -118,6 +118,10 @@ SHARE_TOL = 1e-13
 MAX_SHARE_ITERATIONS = 60
 
 
+# The stick state is passed as an np.int64 (``kstate``'s type), never as a literal 0 or 1:
+# numba compiles a callee once more for each literal value of an argument.
+
+
 @njit(**JIT)
 def _solve_shoe(p, i, fe, wd, stuck, share, touch, shoes, cache):
     """Balance shoe ``i`` for actuation ``fe`` (N), drum speed ``wd`` (rad/s) and stick state
@@ -164,7 +168,7 @@ def _balance(p, y, fel, fer, stuck, touch, shoes, cache):
                         cache[i, C_OUT + contact.E_FF] * v_new
                     )
                     continue
-            st = _solve_shoe(p, i, fe, wd, 0, 0.0, touch, shoes, cache)
+            st = _solve_shoe(p, i, fe, wd, np.int64(0), 0.0, touch, shoes, cache)
             if st != STATUS_OK:
                 return st
         return STATUS_OK
@@ -196,7 +200,7 @@ def _share_map(p, coupling, share, fel, fer, touch, shoes, cache):
     """Balance both shoes with the static share ``share``; returns (the share their normal
     forces imply, status)."""
     for i in range(2):
-        st = _solve_shoe(p, i, fel if i == 0 else fer, 0.0, 1, share, touch, shoes, cache)
+        st = _solve_shoe(p, i, fel if i == 0 else fer, 0.0, np.int64(1), share, touch, shoes, cache)
         if st != STATUS_OK:
             return share, st
     capacity = standstill.static_capacity(
@@ -344,7 +348,7 @@ def advance(y, step0, h, n_steps, p, tl, fl, tr, fr, touch, shoes, cache, kstate
                     # and the breakaway check only)
                     fe_l = gl * kernel._pwl(ts, tl, fl)
                     fe_r = gr * kernel._pwl(ts, tr, fr)
-                    st = _balance(p, tmp, fe_l, fe_r, 0, touch, shoes, cache)
+                    st = _balance(p, tmp, fe_l, fe_r, np.int64(0), touch, shoes, cache)
                     if st != STATUS_OK:
                         kstate[1] = st
                         return k + 1
@@ -396,7 +400,7 @@ def advance(y, step0, h, n_steps, p, tl, fl, tr, fr, touch, shoes, cache, kstate
                     y,
                     gl * kernel._pwl(t_new, tl, fl),
                     gr * kernel._pwl(t_new, tr, fr),
-                    1,
+                    np.int64(1),
                     touch,
                     shoes,
                     cache,

@@ -15,10 +15,12 @@ from brake_sim_ros.model.compiled import JIT
 from brake_sim_ros.model.kernel import NOT_FREE
 
 
-@njit(inline="always", **JIT)
+@njit(**JIT)
 def shoe_switch(p, shoe, y):
     """:func:`contact.switching_function` of shoe 0 (left) or 1 (right) for the state ``y``
-    (the service brake's lining over its arc: :func:`.lining.switching`, a call)."""
+    (the service brake's lining over its arc: :func:`.lining.switching`, a call). A call
+    itself, not inlined: the steps test it at a dozen places, and each inlined copy
+    compiles on its own."""
     if p[L.P_LINING_NODE_STIFFNESS] > 0.0:
         return lining.switching(
             p,
