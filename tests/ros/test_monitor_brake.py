@@ -45,6 +45,9 @@ peak_force_n = 1300.0
 """
 # the node's sensors on, the run held until the monitor subscribes (the documented order)
 MEASURED_FIRST = ["--ros-args", "-p", "publish_measured:=true", "-p", "measured_subscribers:=1"]
+# a node whose stream is refused whole: paced as fast as it goes, so that a loaded machine
+# cannot make it refuse to start (it cannot keep real time) before the monitor refuses
+AS_FAST = ["-p", "real_time_factor:=0.0"]
 WINDOW_S = 0.07
 
 
@@ -214,7 +217,7 @@ def test_without_brake_a_service_stream_is_refused_for_a_study_detector(tmp_path
     not declared, which names only the study brake)."""
     domain = domain_id_for(82)
     log = tmp_path / "monitor.log"
-    service = ["--scenario", str(_scenario(tmp_path, "service")), *MEASURED_FIRST]
+    service = ["--scenario", str(_scenario(tmp_path, "service")), *MEASURED_FIRST, *AS_FAST]
     # the node stays up after its run (no --exit-at-end): the monitor may ask it late
     with (
         _monitor(domain, _model(tmp_path, "study"), log) as monitor,
@@ -230,7 +233,7 @@ def test_a_brake_declared_that_the_node_contradicts_is_refused_naming_both(tmp_p
     exit 2 (before: the service brake's samples judged as the study brake's)."""
     domain = domain_id_for(83)
     log = tmp_path / "monitor.log"
-    service = ["--scenario", str(_scenario(tmp_path, "service")), *MEASURED_FIRST]
+    service = ["--scenario", str(_scenario(tmp_path, "service")), *MEASURED_FIRST, *AS_FAST]
     # the node stays up after its run (no --exit-at-end): the monitor may ask it late
     with (
         _monitor(domain, _model(tmp_path, "study"), log, "--brake", "study") as monitor,
