@@ -1,5 +1,5 @@
-"""scripts/compile_bytecode.py finds what brake-sim imports, lazily imported modules too,
-and compiles the package's own modules without running them."""
+"""scripts/compile_bytecode.py finds what brake-sim and its tests import, lazily imported
+modules too, and compiles the package's own modules without running them."""
 
 from __future__ import annotations
 
@@ -26,6 +26,17 @@ def test_the_imports_inside_functions_are_found_too():
     # Rerun sinks): the modules a process would otherwise compile at its first use
     assert {"scipy.signal", "scipy.integrate", "rerun"} <= names
     assert {"numpy", "numba", "rclpy"} <= names
+
+
+def test_what_only_the_tests_import_is_found_and_the_local_packages_are_not():
+    """The suite's imports (its workers and subprocesses import them in every run) and
+    none of the two local packages, which are byte-compiled or rewritten, not imported."""
+    script = _script()
+    names = script.imported_names(ROOT)
+    assert {"hypothesis", "pytest", "rosbags.typesys"} <= names
+    assert any(n.startswith("tests.") for n in names)  # found, then left out by main()
+    runner = {n.split(".")[0] for n in script.RUNNER}
+    assert {"_pytest", "xdist", "hypothesis"} <= runner
 
 
 def test_the_package_is_compiled_not_imported(tmp_path, monkeypatch):
