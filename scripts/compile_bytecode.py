@@ -1,15 +1,16 @@
-"""Write the bytecode (.pyc) of every module brake-sim and its tests import, once, at set-up.
+"""Write the bytecode (.pyc) of what brake-sim and its tests run, once, at set-up.
 
 pip installs with ``--no-compile`` (scripts/setup.sh: it halves pip's time), and where
 ``PYTHONDONTWRITEBYTECODE`` is set Python never writes a .pyc on import either: every
-``brake-sim`` process then compiles numpy, scipy, numba, rclpy and the project from source
-as it imports them, about a second of CPU a process. This imports, with bytecode writing
-on, every module outside the package that the package's sources or the tests name in an
-import statement (at module level or inside a function, found in their syntax trees), so
-that each writes its .pyc and those of what it imports; byte-compiles the test runner's
-packages whole (:data:`RUNNER`: pytest loads its plugins by name, not by an import
-statement); and compiles the package's own sources without importing them (a module
-imported for its side effects, such as the sweep's worker warm-up, must not run here).
+process then compiles from source what it imports, numba's typing and lowering modules
+(imported as it loads or compiles a kernel), scipy, numpy, rclpy and the project, one to
+three seconds of CPU a process; the test suite starts hundreds. This byte-compiles the
+venv's installed packages whole (what a process imports lazily is in them too); imports,
+with bytecode writing on, every module that the package's or the tests' sources name in
+an import statement (at module level or inside a function, found in their syntax trees),
+so that those outside the venv (a system ROS 2's rclpy) write theirs where they may; and
+compiles the package's own sources without importing them (a module imported for its side
+effects, such as the sweep's worker warm-up, must not run here).
 
 A module that cannot be imported here (an optional part missing, the ROS interfaces not
 built yet) is counted in the last line and left to compile at its first use, as before.
@@ -22,6 +23,7 @@ import compileall
 import importlib
 import importlib.util
 import sys
+import sysconfig
 import time
 from pathlib import Path
 
@@ -29,10 +31,6 @@ ROOT = Path(__file__).resolve().parents[1]
 PACKAGE = "brake_sim_ros"
 TESTS = "tests"  # the suite's own package: the set-up installs the test extra
 LOCAL = {PACKAGE, TESTS}
-# The test runner's packages (the test extra's), byte-compiled whole: each of the suite's
-# workers and subprocesses would otherwise compile them from source
-RUNNER = ("pytest", "_pytest", "pluggy", "iniconfig", "xdist", "execnet", "hypothesis",
-          "_hypothesis_pytestplugin")  # fmt: skip
 
 
 def imported_names(root: Path) -> set[str]:
@@ -66,27 +64,52 @@ def _is_module(name: str) -> bool:
         return False
 
 
-def _compile_installed(name: str) -> None:
-    """Byte-compile the installed module or package ``name`` whole (nothing if missing)."""
-    try:
-        spec = importlib.util.find_spec(name)
-    except (ImportError, ValueError):
-        return
-    if spec is None:
-        return
-    if spec.submodule_search_locations:
-        for folder in spec.submodule_search_locations:
-            compileall.compile_dir(folder, quiet=1)
-    elif spec.origin and spec.origin.endswith(".py"):
-        compileall.compile_file(spec.origin, quiet=1)
+def installed_folders() -> list[Path]:
+    """This interpreter's environment's site-packages folders (the venv's)."""
+    paths = dict.fromkeys(sysconfig.get_path(key) for key in ("purelib", "platlib"))
+    return [Path(p) for p in paths if p]
+
+
+def outside(names: list[str], folders: list[Path]) -> list[str]:
+    """Those of ``names`` whose top-level package is not installed in ``folders`` (a system
+    ROS 2's rclpy, the standard library): what compiling ``folders`` leaves out."""
+    kept = []
+    for name in names:
+        try:
+            spec = importlib.util.find_spec(name.split(".")[0])  # top level: imports nothing
+        except (ImportError, ValueError):
+            spec = None
+        places = [] if spec is None else list(spec.submodule_search_locations or [spec.origin])
+        inside = [Path(p).is_relative_to(f) for p in places if p for f in folders]
+        if not any(inside):  # a namespace package has no origin, only its folders
+            kept.append(name)
+    return kept
+
+
+def compile_installed(say=print) -> bool:
+    """Byte-compile the packages installed in this interpreter's environment (the venv's
+    site-packages), each top-level entry in turn, saying how far every 100 entries; those
+    up to date are only looked at. False if a file would not compile."""
+    entries = sorted(e for folder in installed_folders() for e in folder.glob("*"))
+    ok = True
+    for i, entry in enumerate(entries):
+        if i % 100 == 0:  # the set-up's progress lines show the latest
+            say(f"{i} of {len(entries)} installed packages byte-compiled")
+        if entry.is_dir() and not entry.name.endswith((".dist-info", ".egg-info")):
+            ok &= bool(compileall.compile_dir(str(entry), quiet=2))
+        elif entry.suffix == ".py":
+            ok &= bool(compileall.compile_file(str(entry), quiet=2))
+    return ok
 
 
 def main() -> int:
     sys.dont_write_bytecode = False  # whatever PYTHONDONTWRITEBYTECODE says
     sys.path.insert(0, str(ROOT))
     start = time.process_time()
-    names = sorted(
-        n for n in imported_names(ROOT) if n != "__main__" and n.split(".")[0] not in LOCAL
+    installed = compile_installed(lambda line: print(line, flush=True))
+    names = outside(
+        sorted(n for n in imported_names(ROOT) if n != "__main__" and n.split(".")[0] not in LOCAL),
+        installed_folders(),
     )
     failed = []
     for i, name in enumerate(names):
@@ -96,13 +119,13 @@ def main() -> int:
             importlib.import_module(name)
         except Exception:  # any failure: left to compile at its first use
             failed.append(name)
-    for name in RUNNER:
-        _compile_installed(name)
     own = compileall.compile_dir(str(ROOT / PACKAGE), quiet=1)
     left = f"; {len(failed)} could not be imported here: {', '.join(failed)}" if failed else ""
     print(
-        f"bytecode of {len(sys.modules)} modules and of the package written or up to date"
-        f" ({time.process_time() - start:.1f} s of CPU){left}"
+        f"bytecode of the installed packages, of {len(sys.modules)} modules imported and of"
+        f" the package written or up to date ({time.process_time() - start:.1f} s of CPU)"
+        + left
+        + ("" if installed else "; some installed files would not compile (left as they are)")
         + ("" if own else "; the package's own could not all be compiled")
     )
     return 0

@@ -35,8 +35,24 @@ def test_what_only_the_tests_import_is_found_and_the_local_packages_are_not():
     names = script.imported_names(ROOT)
     assert {"hypothesis", "pytest", "rosbags.typesys"} <= names
     assert any(n.startswith("tests.") for n in names)  # found, then left out by main()
-    runner = {n.split(".")[0] for n in script.RUNNER}
-    assert {"_pytest", "xdist", "hypothesis"} <= runner
+
+
+def test_the_installed_packages_are_compiled_whole_with_their_lazy_imports(tmp_path, monkeypatch):
+    """Every installed package is byte-compiled, modules nothing imports at set-up too
+    (numba imports its typing modules as it compiles), and how far it is is said."""
+    script = _script()
+    site = tmp_path / "site-packages"
+    (site / "lazy").mkdir(parents=True)
+    (site / "lazy" / "__init__.py").write_text("")
+    (site / "lazy" / "deep.py").write_text("raise SystemExit('imported')\n")
+    (site / "single.py").write_text("X = 1\n")
+    (site / "lazy-1.0.dist-info").mkdir()
+    monkeypatch.setattr(script.sysconfig, "get_path", lambda key: str(site))
+    said: list[str] = []
+    assert script.compile_installed(said.append)
+    assert list((site / "lazy" / "__pycache__").glob("deep.*.pyc"))
+    assert list((site / "__pycache__").glob("single.*.pyc"))
+    assert said == ["0 of 3 installed packages byte-compiled"]
 
 
 def test_the_package_is_compiled_not_imported(tmp_path, monkeypatch):
@@ -51,5 +67,16 @@ def test_the_package_is_compiled_not_imported(tmp_path, monkeypatch):
     monkeypatch.setattr(sys, "path", list(sys.path))  # main() puts ROOT first
     monkeypatch.setattr(sys, "dont_write_bytecode", sys.dont_write_bytecode)  # and sets it
     monkeypatch.setattr(script, "imported_names", lambda root: {"json"})
+    monkeypatch.setattr(script, "compile_installed", lambda say: True)
     assert script.main() == 0
     assert list((package / "__pycache__").glob("side_effect.*.pyc"))
+
+
+def test_only_what_lies_outside_the_installed_packages_is_imported():
+    """What the venv's packages hold is compiled whole and not imported again; what lies
+    elsewhere (the standard library here, a system ROS 2's rclpy) is imported."""
+    script = _script()
+    kept = script.outside(
+        ["json.decoder", "numpy.linalg", "no_such_module"], script.installed_folders()
+    )
+    assert kept == ["json.decoder", "no_such_module"]
