@@ -395,6 +395,7 @@ step "cmake configure" "$CMAKE" -S "$MSG_SRC" -B "$BUILD_DIR" -G Ninja \
   "-DCMAKE_BUILD_TYPE=Release" \
   "-DPython3_EXECUTABLE=$VPY" \
   "-DCMAKE_PROJECT_INCLUDE=$WHEEL_FIX" \
+  -DBRAKE_SIM_MSGS_PYTHON_ONLY=ON \
   -DBUILD_TESTING=OFF
 # A CMake Error that did not fail the configure/generate step still counts.
 if grep -q "CMake Error" "$LOG"; then
