@@ -128,6 +128,10 @@ KERNEL_ST=""    # its status, once it has ended
 STEP_PID=""     # the running step's (with_progress)
 KERNEL_LOG="$REPO_ROOT/build/kernels.log"
 SETSID=(setsid); command -v setsid >/dev/null 2>&1 || SETSID=()
+# The steps beside the kernels' compile (pip's rest, the msg_defs build, the bytecode) run
+# at a lower priority: the fixed-step kernel compiles on one core and is the set-up's
+# critical path, so on 2 cores it keeps its core and the others share the second.
+NICE=(nice -n 10); command -v nice >/dev/null 2>&1 || NICE=()
 
 # (from the source tree: pip may not have installed the package yet)
 start_kernels() {
@@ -180,7 +184,7 @@ write_bytecode() {
   local log="$REPO_ROOT/build/bytecode.log"
   mkdir -p "$REPO_ROOT/build"
   : >"$log"
-  if with_progress "writing the bytecode of what brake-sim imports" "$log" \
+  if with_progress "writing the bytecode of what brake-sim and its tests import" "$log" \
       "$VPY" "$REPO_ROOT/scripts/compile_bytecode.py"; then
     log "$(tail -n 1 "$log" | cut -c1-300)"
   else
@@ -195,7 +199,7 @@ with_progress() {
   local what="$1" log="$2" st t0 waited
   shift 2
   t0=$SECONDS
-  "${SETSID[@]}" "$@" >>"$log" 2>&1 &
+  "${SETSID[@]}" "${NICE[@]}" "$@" >>"$log" 2>&1 &
   STEP_PID=$!
   while true; do
     waited=0
