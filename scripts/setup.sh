@@ -176,10 +176,10 @@ kernels_ended() {
   die "compiling the physics kernels failed (exit $KERNEL_ST): $(grep -v '^\s*$' "$KERNEL_LOG" | tail -n 1 | cut -c1-160) (full log: $KERNEL_LOG)"
 }
 
-# The .pyc of every module brake-sim and its tests import (scripts/compile_bytecode.py): pip installs
-# with --no-compile, and where PYTHONDONTWRITEBYTECODE is set nothing writes them later, so
-# that every brake-sim process would compile its imports from source (about 1 s of CPU).
-# Beside the kernels' compile; a few seconds when they are up to date.
+# The .pyc of what brake-sim and its tests run (scripts/compile_bytecode.py: the venv's
+# packages whole): pip installs with --no-compile, and where PYTHONDONTWRITEBYTECODE is set
+# nothing writes them later, so that every process would compile its imports from source
+# (1-3 s of CPU). Beside the kernels' compile; about 6 s of CPU when they are up to date.
 write_bytecode() {
   local log="$REPO_ROOT/build/bytecode.log"
   mkdir -p "$REPO_ROOT/build"
