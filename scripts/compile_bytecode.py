@@ -33,10 +33,12 @@ TESTS = "tests"  # the suite's own package: the set-up installs the test extra
 LOCAL = {PACKAGE, TESTS}
 
 
-def imported_names(root: Path) -> set[str]:
+def imported_names(root: Path, compiled: list[Path] | None = None) -> set[str]:
     """Every absolute module name an import statement in the package's or the tests'
     sources names: ``import a.b`` names ``a.b``; ``from a import b`` names ``a`` and,
-    where ``b`` is a submodule (``from scipy import signal``), ``a.b``."""
+    where ``b`` is a submodule (``from scipy import signal``), ``a.b``; but not for an
+    ``a`` installed in ``compiled`` (folders compiled whole: looking ``a.b`` up would
+    import ``a`` for nothing)."""
     names: set[str] = set()
     sources = [p for folder in (PACKAGE, TESTS) for p in (root / folder).rglob("*.py")]
     for path in sources:
@@ -46,8 +48,9 @@ def imported_names(root: Path) -> set[str]:
                 names.update(alias.name for alias in node.names)
             elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
                 names.add(node.module)
-                if node.module.split(".")[0] in LOCAL:  # find_spec would import its parent
-                    continue
+                top = node.module.split(".")[0]
+                if top in LOCAL or (compiled and _installed_in(top, compiled)):
+                    continue  # find_spec would import its parent
                 names.update(
                     f"{node.module}.{alias.name}"
                     for alias in node.names
@@ -70,20 +73,21 @@ def installed_folders() -> list[Path]:
     return [Path(p) for p in paths if p]
 
 
+def _installed_in(top: str, folders: list[Path]) -> bool:
+    """Whether the top-level module or package ``top`` is installed in one of ``folders``."""
+    try:
+        spec = importlib.util.find_spec(top)  # top level: imports nothing
+    except (ImportError, ValueError):
+        return False
+    # a namespace package has no origin, only its folders
+    places = [] if spec is None else list(spec.submodule_search_locations or [spec.origin])
+    return any(Path(p).is_relative_to(f) for p in places if p for f in folders)
+
+
 def outside(names: list[str], folders: list[Path]) -> list[str]:
     """Those of ``names`` whose top-level package is not installed in ``folders`` (a system
     ROS 2's rclpy, the standard library): what compiling ``folders`` leaves out."""
-    kept = []
-    for name in names:
-        try:
-            spec = importlib.util.find_spec(name.split(".")[0])  # top level: imports nothing
-        except (ImportError, ValueError):
-            spec = None
-        places = [] if spec is None else list(spec.submodule_search_locations or [spec.origin])
-        inside = [Path(p).is_relative_to(f) for p in places if p for f in folders]
-        if not any(inside):  # a namespace package has no origin, only its folders
-            kept.append(name)
-    return kept
+    return [name for name in names if not _installed_in(name.split(".")[0], folders)]
 
 
 def compile_installed(say=print) -> bool:
@@ -107,9 +111,14 @@ def main() -> int:
     sys.path.insert(0, str(ROOT))
     start = time.process_time()
     installed = compile_installed(lambda line: print(line, flush=True))
+    folders = installed_folders()
     names = outside(
-        sorted(n for n in imported_names(ROOT) if n != "__main__" and n.split(".")[0] not in LOCAL),
-        installed_folders(),
+        sorted(
+            n
+            for n in imported_names(ROOT, folders)
+            if n != "__main__" and n.split(".")[0] not in LOCAL
+        ),
+        folders,
     )
     failed = []
     for i, name in enumerate(names):

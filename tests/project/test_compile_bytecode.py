@@ -66,7 +66,7 @@ def test_the_package_is_compiled_not_imported(tmp_path, monkeypatch):
     monkeypatch.setattr(script, "ROOT", tmp_path)
     monkeypatch.setattr(sys, "path", list(sys.path))  # main() puts ROOT first
     monkeypatch.setattr(sys, "dont_write_bytecode", sys.dont_write_bytecode)  # and sets it
-    monkeypatch.setattr(script, "imported_names", lambda root: {"json"})
+    monkeypatch.setattr(script, "imported_names", lambda root, compiled=None: {"json"})
     monkeypatch.setattr(script, "compile_installed", lambda say: True)
     assert script.main() == 0
     assert list((package / "__pycache__").glob("side_effect.*.pyc"))
@@ -80,3 +80,6 @@ def test_only_what_lies_outside_the_installed_packages_is_imported():
         ["json.decoder", "numpy.linalg", "no_such_module"], script.installed_folders()
     )
     assert kept == ["json.decoder", "no_such_module"]
+    # nor are the submodules of an installed package looked up (that would import it)
+    names = script.imported_names(ROOT, script.installed_folders())
+    assert "scipy" in names and "scipy.signal" not in names
