@@ -80,13 +80,15 @@ def rk4_step(
 
 
 @njit(**JIT)
-def _rk4_step_call(
+def rk4_step_call(
     y, k1, t0, h, p, gl, tl, fl, gr, tr, fr, stuck, ml, mr, k2, k3, k4, tmp, out, y_out, free
 ):
     """:func:`rk4_step` as a call: the steps that locate a contact switch take it, the
     plain step inlines it. Each inlined copy is compiled on its own, and the two locating
     functions' three copies took a quarter of the kernels' compile time (212 s of CPU
-    against 158 s with this call) for a path a step takes at a switch only."""
+    against 158 s with this call) for a path a step takes at a switch only. The tests call
+    it from Python with a read-only ``free`` (as the kernel's): the set-up's compile then
+    serves them from the cache."""
     rk4_step(
         y, k1, t0, h, p, gl, tl, fl, gr, tr, fr, stuck, ml, mr, k2, k3, k4, tmp, out, y_out, free
     )
@@ -123,7 +125,7 @@ def _locate_switch(
             s = b - fb * (b - a) / (fb - fa)
             if not (a < s < b):
                 s = 0.5 * (a + b)
-        _rk4_step_call(
+        rk4_step_call(
             ya,
             ka,
             t0,
@@ -195,7 +197,7 @@ def located_step(y, k1, t, dt, p, gl, tl, fl, gr, tr, fr, stuck, h_start, work, 
         rem = dt - tau
         ml = L.CONTACT_ON if on_l else L.CONTACT_OFF
         mr = L.CONTACT_ON if on_r else L.CONTACT_OFF
-        _rk4_step_call(
+        rk4_step_call(
             ya,
             ka,
             t + tau,
@@ -278,7 +280,7 @@ def located_step(y, k1, t, dt, p, gl, tl, fl, gr, tr, fr, stuck, h_start, work, 
         # shoes switching together (a symmetric brake's) flip together
         flip_l = bad_l and s_l <= s + 2.0 * tol
         flip_r = bad_r and s_r <= s + 2.0 * tol
-        _rk4_step_call(
+        rk4_step_call(
             ya,
             ka,
             t + tau,
