@@ -351,8 +351,15 @@ def _shoe_event(p: np.ndarray, base: int, index: int, offset_m: float):
 
 def _compile_part() -> None:
     """The reference solver's right-hand side and sample evaluation, compiled on a tiny event
-    (:mod:`brake_sim_ros.solvers.warmup`)."""
-    run_reference(BrakeSetup(), 0.01, rtol=1e-6)
+    (:mod:`brake_sim_ros.solvers.warmup`), and the standstill rules its stick, rest and
+    breakaway events call, which a tiny event does not reach (on a copy of its state)."""
+    setup = BrakeSetup()
+    run_reference(setup, 0.01, rtol=1e-6)
+    p = pack(setup.params, setup.defects, setup.options)
+    y = initial_state(setup.params, setup.defects)
+    standstill.hold_torques(p, y)
+    standstill.at_rest(p, y)
+    standstill.stick(p, y)
 
 
 # compiled at first use, not at set-up (its ensure_compiled call above)
