@@ -137,8 +137,9 @@ def pytest_sessionstart(session: pytest.Session) -> None:
     compile at first use (solvers/warmup.py; a no-op when this source version's are cached)
     in the background, so that they compile beside the first tests, in parallel, instead of
     inside the first test that needs one while the other workers wait for it. A test that
-    needs a part meanwhile waits on the kernel cache's lock, as at any first use."""
-    if os.environ.get("PYTEST_XDIST_WORKER"):
+    needs a part meanwhile waits on the kernel cache's lock, as at any first use. Not for
+    ``--collect-only`` (the set-up's bytecode step collects; no test needs a kernel)."""
+    if os.environ.get("PYTEST_XDIST_WORKER") or session.config.option.collectonly:
         return
     from brake_sim_ros.solvers.warmup import PARTS, is_compiled
 
