@@ -40,7 +40,8 @@ def test_what_only_the_tests_import_is_found_and_the_local_packages_are_not():
 
 def test_the_installed_packages_are_compiled_whole_with_their_lazy_imports(tmp_path, monkeypatch):
     """Every installed package is byte-compiled, modules nothing imports at set-up too
-    (numba imports its typing modules as it compiles), and how far it is is said."""
+    (numba imports its typing modules as it compiles), but for the packages' own tests and
+    the installers; and how far it is is said."""
     script = _script()
     site = tmp_path / "site-packages"
     (site / "lazy").mkdir(parents=True)
@@ -48,12 +49,19 @@ def test_the_installed_packages_are_compiled_whole_with_their_lazy_imports(tmp_p
     (site / "lazy" / "deep.py").write_text("raise SystemExit('imported')\n")
     (site / "single.py").write_text("X = 1\n")
     (site / "lazy-1.0.dist-info").mkdir()
+    # a package's own test suite and the installer: nothing brake-sim runs imports them
+    (site / "lazy" / "tests").mkdir()
+    (site / "lazy" / "tests" / "test_deep.py").write_text("X = 2\n")
+    (site / "pip").mkdir()
+    (site / "pip" / "__init__.py").write_text("")
     monkeypatch.setattr(script.sysconfig, "get_path", lambda key: str(site))
     said: list[str] = []
     assert script.compile_installed(said.append)
     assert list((site / "lazy" / "__pycache__").glob("deep.*.pyc"))
     assert list((site / "__pycache__").glob("single.*.pyc"))
-    assert said == ["0 of 3 installed packages byte-compiled"]
+    assert not list(site.glob("lazy/tests/__pycache__/*.pyc"))
+    assert not list(site.glob("pip/__pycache__/*.pyc"))
+    assert said == ["0 of 4 installed packages byte-compiled"]
 
 
 def test_the_package_is_compiled_not_imported(tmp_path, monkeypatch):
