@@ -338,10 +338,13 @@ def fixed_step_advance(
             if accept:
                 for j in range(n):
                     y[j] = y_new[j]
-        if stuck:
-            if standstill.slips(pw, y):
+        if stuck:  # the held drum's torques, once a step (its rules' own copies are calls)
+            coupling, capacity = standstill.hold_torques(pw, y)
+            if standstill.slips_held(pw, coupling, capacity):
                 kstate[L.K_STUCK] = 0
                 kstate[L.K_BREAKAWAYS] += 1
+            elif fstate[L.F_STOP_TIME] < 0.0 and standstill.rests_held(pw, y, capacity):
+                fstate[L.F_STOP_TIME] = t + dt
         elif standstill.sticks(pw, y, surface_before):
             t_stick = standstill.interpolated_stick_time(
                 t,
@@ -360,8 +363,6 @@ def fixed_step_advance(
             kstate[L.K_STUCK] = 1
             if fstate[L.F_STOP_TIME] < 0.0 and standstill.at_rest(pw, y):
                 fstate[L.F_STOP_TIME] = t_stick
-        if kstate[L.K_STUCK] and fstate[L.F_STOP_TIME] < 0.0 and standstill.at_rest(pw, y):
-            fstate[L.F_STOP_TIME] = t + dt
         for j in range(8):
             if not math.isfinite(y[j]):
                 kstate[L.K_STATUS] = 1

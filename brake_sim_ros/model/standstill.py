@@ -138,6 +138,16 @@ def hold_torques(p, y):
 
 
 @njit(**JIT)
+def hold_torques_call(p, y):
+    """:func:`hold_torques` as a call, for the tests made near or at a standstill only
+    (:func:`sticks`, :func:`at_rest`); a held drum's step inlines it once
+    (:func:`slips_held`, :func:`rests_held`). Each inlined copy (900 IR statements with
+    the shoes' kinematics) compiles on its own: the fixed-step kernel's five copies were
+    a fifth of its compile time."""
+    return hold_torques(p, y)
+
+
+@njit(**JIT)
 def _lined_hold_torques(p, y):
     """:func:`hold_torques` of the service brake's lining over its arc (:func:`.lining.hold`).
     A call: the point contact's path stays as it was."""
@@ -154,7 +164,7 @@ def sticks(p, y, surface_before):
     surface = abs(y[L.Y_DRUM_SPEED]) * p[L.P_DRUM_RADIUS]
     if surface > p[L.P_FRICTION_SMOOTHING_SPEED] or surface > surface_before:
         return False
-    coupling, capacity = hold_torques(p, y)
+    coupling, capacity = hold_torques_call(p, y)
     return capacity > 0.0 and abs(coupling) <= capacity
 
 
@@ -163,6 +173,13 @@ def slips(p, y):
     """Whether a sticking drum breaks away in state ``y``: the coupling torque exceeds what
     the shoes hold (with a rigid coupling: the shoes no longer hold at all)."""
     coupling, capacity = hold_torques(p, y)
+    return slips_held(p, coupling, capacity)
+
+
+@njit(inline="always", **JIT)
+def slips_held(p, coupling, capacity):
+    """:func:`slips` of the state whose :func:`hold_torques` are ``coupling`` and
+    ``capacity`` (N m)."""
     if p[L.P_RIGID_COUPLING] > 0.0:
         return capacity <= 0.0
     return abs(coupling) > capacity
@@ -172,7 +189,14 @@ def slips(p, y):
 def at_rest(p, y):
     """Whether the vehicle has come to rest in the state ``y`` of a held drum: the rotor's
     remaining energy fits in the coupling below the static capacity (see the module notes)."""
-    _coupling, capacity = hold_torques(p, y)
+    _coupling, capacity = hold_torques_call(p, y)
+    return rests_held(p, y, capacity)
+
+
+@njit(inline="always", **JIT)
+def rests_held(p, y, capacity):
+    """:func:`at_rest` of the state ``y`` whose static capacity (:func:`hold_torques`) is
+    ``capacity`` (N m)."""
     if p[L.P_RIGID_COUPLING] > 0.0:
         return capacity > 0.0
     if p[L.P_SERVICE] > 0.0:
