@@ -153,10 +153,11 @@ def rewrite_tests(root: Path) -> str:
     if not stale:
         return "; the tests' rewritten bytecode up to date"
     env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
-    command = [sys.executable, "-m", "pytest", "--collect-only", "-q", "-p", "no:xdist"]
+    command = [sys.executable, "-m", "pytest", "--collect-only", "-q"]
+    command += ["-p", "no:xdist", "-p", "no:cacheprovider", TESTS]
     try:
         done = subprocess.run(
-            [*command, "-p", "no:cacheprovider", TESTS],
+            command,
             cwd=root,
             env=env,
             stdin=subprocess.DEVNULL,

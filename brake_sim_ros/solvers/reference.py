@@ -247,7 +247,7 @@ class _ReferenceRun:
         if self.stuck:
 
             def breakaway_event(_t: float, yy: np.ndarray) -> float:
-                coupling, capacity = standstill.hold_torques(p, yy)
+                coupling, capacity = standstill.hold_torques_call(p, yy)
                 if p[L.P_RIGID_COUPLING] > 0.0:
                     return -capacity
                 return abs(coupling) - capacity
@@ -302,7 +302,7 @@ class _ReferenceRun:
             ev = events[ev_index]
             if ev.__name__ == "stick_event":
                 # the crossing of v_s is where the fixed-step rule sticks, if it holds
-                coupling, capacity = standstill.hold_torques(p, y)
+                coupling, capacity = standstill.hold_torques_call(p, y)
                 rigid = p[L.P_RIGID_COUPLING] > 0.0
                 if capacity > 0.0 and (rigid or abs(coupling) <= capacity):
                     self.stuck = 1
@@ -357,7 +357,7 @@ def _compile_part() -> None:
     run_reference(setup, 0.01, rtol=1e-6)
     p = pack(setup.params, setup.defects, setup.options)
     y = initial_state(setup.params, setup.defects)
-    standstill.hold_torques(p, y)
+    standstill.hold_torques_call(p, y)
     standstill.at_rest(p, y)
     standstill.stick(p, y)
 
