@@ -27,7 +27,7 @@ from brake_sim_ros.app.stop import start_ros
 from brake_sim_ros.errors import BrakeSimError
 from brake_sim_ros.recording.playback import Recording
 from brake_sim_ros.recording.reader import RecordingReadError
-from brake_sim_ros.ros.replay import ReplayNode
+from brake_sim_ros.ros.replay import ReplayNode, serve
 
 
 def _parse_cli(argv: list[str]) -> argparse.Namespace:
@@ -89,27 +89,37 @@ def main(args: list[str] | None = None) -> int:
     def stopped() -> bool:
         return stop.requested or not rclpy.ok()
 
+    brake, why = recording.brake()
     node = None
     try:
         try:
-            node = ReplayNode(recording, rate=cli.rate, start_offset_s=cli.start_offset)
+            node = ReplayNode(
+                recording, rate=cli.rate, start_offset_s=cli.start_offset, brake=brake
+            )
         except BrakeSimError as exc:
             print(f"brake-sim replay: {exc}", file=sys.stderr)
             return 1
         topics = ", ".join(f"{t.name} ({t.count})" for t in recording.topics.values())
+        says = (
+            f"the {brake} brake (its parameter brake)"
+            if brake
+            else f"no brake ({why}): a monitor of it needs --brake"
+        )
         print(
             f"brake-sim replay: {cli.recording}, {recording.duration_s:.3f} s at {cli.rate:g}x"
-            f" from {cli.start_offset:g} s: {topics}",
+            f" from {cli.start_offset:g} s: {topics}; {node.get_fully_qualified_name()} says"
+            f" {says}",
             flush=True,
         )
-        if cli.wait_for_subscribers and not node.wait_for_subscribers(
-            cli.wait_for_subscribers, 10.0
-        ):
-            print("brake-sim replay: not every topic has its subscribers; playing anyway")
-        while not stopped():
-            node.play_once(stopped)
-            if not cli.loop:
-                break
+        with serve(node):
+            if cli.wait_for_subscribers and not node.wait_for_subscribers(
+                cli.wait_for_subscribers, 10.0
+            ):
+                print("brake-sim replay: not every topic has its subscribers; playing anyway")
+            while not stopped():
+                node.play_once(stopped)
+                if not cli.loop:
+                    break
         print(f"brake-sim replay: published {node.published} messages", flush=True)
         return 0
     except RecordingReadError as exc:  # the file changed after it was checked

@@ -116,9 +116,10 @@ def monitor_parser() -> argparse.ArgumentParser:
         "--brake",
         choices=BRAKES,
         help="the brake the measured samples come from (a scenario's brake); default: asked"
-        " of the simulator (its parameter brake), which must agree when given. Needed for"
-        " a stream the simulator does not publish (a replay, a driver): a detector fitted"
-        " on one brake's samples refuses the other's, and a brake neither given nor said",
+        " of the node that publishes them (the simulator's or a replay's parameter brake),"
+        " which must agree when given. Needed for a stream whose publisher does not say it"
+        " (a driver): a detector fitted on one brake's samples refuses the other's, and a"
+        " brake neither given nor said",
     )
     p.add_argument("--debug", action="store_true", help=DEBUG_HELP)
     p.add_argument(

@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from brake_sim_ros.errors import BrakeSimError
+from brake_sim_ros.recording import metadata
 from brake_sim_ros.recording.reader import RecordingReadError, open_recording
 from brake_sim_ros.stream.topics import QosSpec, offered_qos
 
@@ -79,6 +80,21 @@ class Recording:
     @property
     def duration_s(self) -> float:
         return (self.end_ns - self.start_ns) / _NS_PER_S
+
+    def brake(self) -> tuple[str, str]:
+        """``(brake, "")``: the brake the recorded run simulated ("study" or "service"),
+        from its ``brake_sim_model`` record (the run's model at the start of the
+        recording); or ``("", why)``: why the recording does not say it (one clause)."""
+        record = self._recording.metadata_record(metadata.MODEL)
+        if record is None:
+            return "", f"it has no {metadata.MODEL} metadata (not a brake-sim run's recording)"
+        try:
+            return metadata.model_from_record(record)[0].brake, ""
+        except (BrakeSimError, ValueError, TypeError, KeyError, SyntaxError, RecursionError):
+            return "", (
+                f"its {metadata.MODEL} metadata is not a model this version reads (another"
+                " version's recording?)"
+            )
 
     def messages(self, start_ns: int | None = None) -> Iterator[tuple[str, bytes, int]]:
         """``(topic, CDR payload, log time ns)`` from ``start_ns`` on, in log-time order.

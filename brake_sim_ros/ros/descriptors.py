@@ -19,13 +19,14 @@ _TYPES = {
 }
 
 
-def descriptor(spec: ParamSpec) -> ParameterDescriptor:
+def descriptor(spec: ParamSpec, *, read_only: bool = False) -> ParameterDescriptor:
     """``rcl_interfaces/ParameterDescriptor`` for ``spec`` (type from its default's type)."""
     desc = ParameterDescriptor(
         name=spec.name,
         type=_TYPES[type(spec.default)],
         description=spec.description,
         additional_constraints=spec.constraints,
+        read_only=read_only,
     )
     if spec.range is not None and isinstance(spec.default, float):
         desc.floating_point_range = [

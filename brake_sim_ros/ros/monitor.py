@@ -30,11 +30,11 @@ at another sample rate, is a new run (the simulator was reset): the detector res
 Samples the detector cannot judge at all stop the node (:attr:`MonitorNode.refusal`, one
 line; ``brake-sim monitor`` exits 2): samples at another rate than it was fitted at, or,
 for a detector that recorded the brake it was fitted on, a stream from the other brake.
-No message says which brake it is: the monitor asks the simulator (its read-only parameter
-``brake``, :mod:`.monitor_brake`) before it judges the first window, and again at each new
-run (a ``~/reset`` may load a scenario of the other brake), holding the samples meanwhile.
-The parameter ``brake`` declares it instead, for a stream no node can say (a replay, a
-driver); a declared brake the simulator contradicts is refused, naming both.
+No message says which brake it is: the monitor asks the stream's publisher (the simulator's
+or a replay's read-only parameter ``brake``, :mod:`.monitor_brake`) before it judges the
+first window and at each new run (a ``~/reset`` may switch brakes), holding the samples
+meanwhile. The parameter ``brake`` declares it for a stream whose publisher cannot say it
+(a driver); a declared brake the node contradicts is refused, naming both.
 """
 
 from __future__ import annotations
@@ -142,10 +142,10 @@ def parameter_specs() -> list[ParamSpec]:
             "brake",
             "",
             "The brake the measured samples come from: study or service (a scenario's"
-            " brake); empty: asked of the simulator (its parameter brake), which must say"
-            " the same when it is given. A detector fitted on one brake's samples refuses"
-            " the other's, and a stream whose brake neither is declared nor the simulator"
-            " says (a replay, a driver). " + fixed,
+            " brake); empty: asked of the node that publishes them (the simulator's or a"
+            " replay's parameter brake), which must say the same when it is given. A"
+            " detector fitted on one brake's samples refuses the other's, and a stream whose"
+            " brake is neither declared nor said by its publisher (a driver). " + fixed,
             constraints=f"one of {', '.join(BRAKES)}, or empty",
         ),
         ParamSpec(

@@ -1,16 +1,19 @@
-"""How the monitor learns which brake its stream comes from: it asks the simulator node.
+"""How the monitor learns which brake its stream comes from: it asks the node that
+publishes it.
 
 No message says which brake a MeasuredChunk comes from, and message definitions stay as
 they are; the simulator node says it in its read-only ROS parameter ``brake`` (the running
-scenario's, following a ``~/reset`` to a scenario of the other brake). :class:`BrakeQuery`
-asks it once, with bounded waits, from the monitor's own executor (it never blocks a
-callback): wait for a publisher of the measured topic (unbounded, as the monitor waits for
-the stream itself), then, once one is seen, at most ``wait_s`` for the simulator's
-``get_parameters`` service and its answer.
+scenario's, following a ``~/reset`` to a scenario of the other brake), and so does
+``brake-sim replay``'s node (``brake_sim_replay``: the recording's brake).
+:class:`BrakeQuery` asks once, with bounded waits, from the monitor's own executor (it
+never blocks a callback): wait for a publisher of the measured topic (unbounded, as the
+monitor waits for the stream itself), then, once one is seen, at most ``wait_s`` for the
+answer of the node to ask: the simulator if it publishes the stream, else the one node
+that does.
 
-A stream that the simulator does not publish (``brake-sim replay`` publishes a recording
-from its own node, ``brake_sim_replay``; a real brake's driver) has no node to ask: the
-answer then says why, and the monitor needs the brake declared (``--brake``).
+A stream whose publisher does not say its brake (a real brake's driver, a recording that
+does not say it), or that several nodes but not the simulator publish, has no answer: it
+then says why, and the monitor needs the brake declared (``--brake``).
 """
 
 from __future__ import annotations
@@ -24,9 +27,9 @@ from rcl_interfaces.msg import ParameterType
 from rcl_interfaces.srv import GetParameters
 
 from brake_sim_ros.model.parameters import BRAKES
+from brake_sim_ros.ros.node_parameters import BRAKE
 
-BRAKE_PARAMETER = "brake"  # the simulator node's (ros.node_parameters.BRAKE)
-BRAKE_WAIT_S = 20.0  # from the stream's first publisher seen to the simulator's answer
+BRAKE_WAIT_S = 20.0  # from the stream's first publisher seen to the answer
 # what rmw reports for an endpoint whose node it has not discovered yet
 _UNKNOWN_NODE = "_NODE_NAME_UNKNOWN_"
 
@@ -48,10 +51,11 @@ def _node_name(info: Any) -> str:
 
 
 class BrakeQuery:
-    """One question to ``simulator``: its parameter ``brake``.
+    """One question, its parameter ``brake``, to the node that publishes ``topic``: the
+    simulator if it does, else the one node that does.
 
     Args:
-        node: the monitor's rclpy node (graph queries).
+        node: the monitor's rclpy node (graph queries, the clients of other nodes).
         client: its GetParameters client of ``<simulator>/get_parameters``.
         simulator: the simulator's fully qualified node name.
         topic: the measured topic whose publishers are looked at.
@@ -69,10 +73,12 @@ class BrakeQuery:
         wait_s: float = BRAKE_WAIT_S,
         clock: Callable[[], float] = time.monotonic,
     ) -> None:
-        self._node, self._client = node, client
+        self._node, self._simulator_client = node, client
         self._simulator, self._topic = simulator, topic
         self._wait_s, self._clock = wait_s, clock
         self._started: float | None = None
+        self._asked = ""  # the node asked, once chosen
+        self._client: Any = None
         self._future: Any = None
 
     def heard(self) -> None:
@@ -87,20 +93,37 @@ class BrakeQuery:
             self.heard()
         if self._future is not None and self._future.done():
             return self._answer(self._future.result())
-        if self._future is None and self._simulator in names and self._client.service_is_ready():
-            self._future = self._client.call_async(GetParameters.Request(names=[BRAKE_PARAMETER]))
-        known = {n for n in names if not n.endswith("/" + _UNKNOWN_NODE)}
-        if known and known == names and self._simulator not in names:
-            return BrakeAnswer(
-                "",
-                why=f"published by {', '.join(sorted(names))[:200]}, not by the simulator"
-                f" {self._simulator}: no node says its brake (a replay, a driver)",
-            )
+        if not self._asked:
+            several = self._choose(names)
+            if several is not None:
+                return several
+        if self._future is None and self._asked and self._client.service_is_ready():
+            self._future = self._client.call_async(GetParameters.Request(names=[BRAKE.name]))
         if self._started is not None and self._clock() - self._started > self._wait_s:
+            asked = self._asked or f"no single node (publishers: {', '.join(sorted(names))})"
+            return self._close(
+                BrakeAnswer(
+                    "",
+                    why=f"{asked[:200]} did not say its brake (its parameter {BRAKE.name})"
+                    f" within {self._wait_s:g} s of the stream",
+                )
+            )
+        return None
+
+    def _choose(self, names: set[str]) -> BrakeAnswer | None:
+        """Pick the node to ask among the stream's publishers ``names``, once every one is
+        known by name; an answer (none to ask) when several publish it, none the simulator."""
+        known = {n for n in names if not n.endswith("/" + _UNKNOWN_NODE)}
+        if self._simulator in names:
+            self._asked, self._client = self._simulator, self._simulator_client
+        elif known and known == names and len(known) == 1:
+            (self._asked,) = known
+            self._client = self._node.create_client(GetParameters, f"{self._asked}/get_parameters")
+        elif known and known == names:
             return BrakeAnswer(
                 "",
-                why=f"the simulator {self._simulator} did not say its brake (its parameter"
-                f" {BRAKE_PARAMETER}) within {self._wait_s:g} s of its stream",
+                why=f"published by {', '.join(sorted(names))[:200]}: several nodes, none the"
+                f" simulator {self._simulator}, so none is asked its brake",
             )
         return None
 
@@ -108,19 +131,29 @@ class BrakeQuery:
         values = list(getattr(response, "values", None) or [])
         value = values[0] if len(values) == 1 else None
         if value is None or value.type != ParameterType.PARAMETER_STRING:
-            return BrakeAnswer(
-                "",
-                why=f"the simulator {self._simulator} has no string parameter"
-                f" {BRAKE_PARAMETER} (a node older than this monitor)",
+            return self._close(
+                BrakeAnswer(
+                    "",
+                    why=f"{self._asked}, which publishes it, has no string parameter"
+                    f" {BRAKE.name} (a driver, or a node older than this monitor)",
+                )
             )
         brake = value.string_value
         if brake not in BRAKES:
-            return BrakeAnswer(
-                "",
-                why=f"the simulator {self._simulator} says brake {brake[:40]!r}, not one of"
-                f" {', '.join(BRAKES)}",
+            return self._close(
+                BrakeAnswer(
+                    "",
+                    why=f"{self._asked} says brake {brake[:40]!r}, not one of {', '.join(BRAKES)}",
+                )
             )
-        return BrakeAnswer(brake, source=self._simulator)
+        return self._close(BrakeAnswer(brake, source=self._asked))
+
+    def _close(self, answer: BrakeAnswer) -> BrakeAnswer:
+        """The client this query made for a node not the simulator is destroyed."""
+        if self._client is not None and self._client is not self._simulator_client:
+            self._node.destroy_client(self._client)
+        self._client = None
+        return answer
 
 
 class StreamBrake:
@@ -130,8 +163,9 @@ class StreamBrake:
     def _ask_brake(self) -> None:
         self._brake_query = BrakeQuery(self, self._parameters, self.simulator, self.measured_topic)
         self.get_logger().info(
-            f"asking {self.simulator} (its parameter brake) which brake the stream on"
-            f" {self.measured_topic} comes from; its samples are held until it says"
+            f"asking the node that publishes {self.measured_topic} ({self.simulator} if it"
+            " does; its parameter brake) which brake the stream comes from; its samples are"
+            " held until it says"
         )
 
     def _poll_brake(self) -> None:
@@ -148,9 +182,9 @@ class StreamBrake:
         if answer.brake and self.brake and answer.brake != self.brake:
             refusal: str | None = (
                 f"the brake declared for {where} is the {self.brake} brake (--brake, the ROS"
-                f" parameter brake), but {answer.source} simulates the {answer.brake} brake"
+                f" parameter brake), but {answer.source} says the {answer.brake} brake"
                 f" (its parameter brake): allowed --brake {answer.brake}, or none (the"
-                " monitor asks the simulator)"
+                " monitor asks the node that publishes the stream)"
             )
         elif answer.brake:
             refusal = self.detector.brake_refusal(
@@ -168,7 +202,7 @@ class StreamBrake:
             self.get_logger().error(refusal)
             return
         if answer.brake and answer.brake != self.stream_brake:
-            self.get_logger().info(f"{answer.source} simulates the {answer.brake} brake")
+            self.get_logger().info(f"{answer.source} says the {answer.brake} brake")
         self.stream_brake = answer.brake
         held, self._held = self._held, []
         for msg in held:

@@ -9,6 +9,11 @@ replay looks like the live run.
 
 Options (rate, start offset, loop, topics): :mod:`brake_sim_ros.app.replay`.
 
+The node says the brake the recorded run simulated in its read-only ROS parameter
+``brake`` (the recording's ``brake_sim_model``; not declared when the recording does not
+say it), as the simulator node does, so that ``brake-sim monitor`` asks it as it would
+ask the simulator. :func:`serve` answers parameter requests beside the play.
+
 Topics whose QoS keeps the last message for late joiners (transient local, e.g. the
 defect ground truth) get the newest message recorded before the start offset published
 at the start, so a replay from an offset still carries the ground truth in force.
@@ -24,6 +29,9 @@ import). A damaged or foreign file is refused with one line and nothing is publi
 
 from __future__ import annotations
 
+import contextlib
+import dataclasses
+import threading
 import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
@@ -31,11 +39,14 @@ from typing import Protocol
 
 import rclpy
 from rclpy.exceptions import InvalidTopicNameException
+from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 
 from brake_sim_ros.errors import BrakeSimError
 from brake_sim_ros.ros import qos
+from brake_sim_ros.ros.descriptors import descriptor
 from brake_sim_ros.ros.messages import message_class
+from brake_sim_ros.ros.node_parameters import BRAKE
 from brake_sim_ros.stream.topics import QosSpec
 
 NODE_NAME = "brake_sim_replay"
@@ -80,8 +91,19 @@ class Schedule:
 class ReplayNode(Node):
     """Publishes a recording with its original timing (or ``rate`` times faster)."""
 
-    def __init__(self, recording: ReplaySource, *, rate: float, start_offset_s: float) -> None:
+    def __init__(
+        self, recording: ReplaySource, *, rate: float, start_offset_s: float, brake: str = ""
+    ) -> None:
         super().__init__(NODE_NAME)
+        if brake:  # the recording's; nothing sets it later
+            spec = dataclasses.replace(
+                BRAKE,
+                default=brake,
+                description="The brake the recorded run simulated (the recording's"
+                " brake_sim_model): study or service. Read-only.",
+                constraints="study or service (the recording's)",
+            )
+            self.declare_parameter(spec.name, brake, descriptor(spec, read_only=True))
         self.recording = recording
         self.rate = rate
         self.start_ns = recording.start_ns + round(start_offset_s * _NS_PER_S)
@@ -137,3 +159,18 @@ class ReplayNode(Node):
     def _publish(self, topic: str, data: bytes) -> None:
         self._publishers_by_topic[topic].publish(data)
         self.published += 1
+
+
+@contextlib.contextmanager
+def serve(node: Node) -> Iterator[None]:
+    """Spin ``node`` on a thread of its own for the block (its parameter services answer
+    while the caller's thread plays); the executor is shut down at the end."""
+    executor = SingleThreadedExecutor(context=node.context)
+    executor.add_node(node)
+    thread = threading.Thread(target=executor.spin, name="replay-services", daemon=True)
+    thread.start()
+    try:
+        yield
+    finally:
+        executor.shutdown(timeout_sec=1.0)
+        thread.join(timeout=1.0)

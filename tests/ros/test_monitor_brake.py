@@ -160,7 +160,7 @@ def test_without_brake_the_monitor_learns_the_study_brake_from_the_node_and_judg
         ears.close()
     output = log.read_text()
     assert [(h.first_sample_index, h.last_sample_index) for h in ears.health] == expected
-    assert "/brake_sim simulates the study brake" in output
+    assert "/brake_sim says the study brake" in output
     assert monitor.returncode == 0 and not _refusals(output), output
 
 
@@ -247,15 +247,15 @@ def test_a_brake_declared_that_the_node_contradicts_is_refused_naming_both(tmp_p
     refused = _refusals(output)
     assert len(refused) == 1, output
     assert re.search(r"declared .* is the study brake \(--brake", refused[0]), refused[0]
-    assert "/brake_sim simulates the service brake" in refused[0]
+    assert "/brake_sim says the service brake" in refused[0]
     assert "Traceback" not in output
 
 
-def test_a_stream_no_node_says_needs_brake(tmp_path):
-    """A stream published by another node than the simulator (here this test's; a replay's
-    brake_sim_replay, a driver): without --brake the monitor refuses in one line saying
-    who publishes it and to give --brake; a declared --brake study for a detector fitted
-    on the service brake is refused at start, naming both."""
+def test_a_stream_whose_publisher_says_no_brake_needs_brake(tmp_path):
+    """A stream published by a node that has no parameter ``brake`` (here this test's, as
+    a real brake's driver would): without --brake the monitor asks that node and refuses
+    in one line saying who publishes it and to give --brake; a declared --brake study for
+    a detector fitted on the service brake is refused at start, naming both."""
     domain = domain_id_for(84)
     model = _model(tmp_path, "service")
     log = tmp_path / "declared.log"
@@ -267,20 +267,67 @@ def test_a_stream_no_node_says_needs_brake(tmp_path):
     context = Context()
     rclpy.init(context=context, domain_id=domain)
     node = rclpy.create_node("brake_test_driver", context=context)
+    executor = SingleThreadedExecutor(context=context)
+    executor.add_node(node)  # it answers the monitor's question (no parameter brake)
     publisher = node.create_publisher(MeasuredChunk, stream.MEASURED.name, QoSProfile(depth=10))
     try:
         with _monitor(domain, model, log) as monitor:
             end = time.monotonic() + 60.0
             while monitor.poll() is None and time.monotonic() < end:
                 publisher.publish(MeasuredChunk(sample_rate_hz=5120.0))
-                time.sleep(0.2)
+                executor.spin_once(timeout_sec=0.2)
             assert _wait_exit(monitor, 5.0) == 2, log.read_text()
     finally:
+        executor.shutdown(timeout_sec=1.0)
         node.destroy_node()
         rclpy.try_shutdown(context=context)
     output = log.read_text()
     refused = _refusals(output)
     assert len(refused) == 1, output
-    assert "published by /brake_test_driver, not by the simulator /brake_sim" in refused[0]
+    assert "/brake_test_driver, which publishes it, has no string parameter brake" in refused[0]
     assert "fitted on the service brake's samples" in refused[0] and "--brake" in refused[0]
     assert "Traceback" not in output
+
+
+def test_a_replay_says_its_recordings_brake(tmp_path):
+    """``brake-sim replay`` of a service-brake recording: its node says the recording's
+    brake (its read-only parameter ``brake``), so a monitor without --brake, its detector
+    fitted on the study brake, refuses the replayed stream in one line naming the replay's
+    node and both brakes (before: the replay said no brake, and the monitor needed
+    --brake to know it)."""
+    domain = domain_id_for(85)
+    recorded, measured = tmp_path / "service.mcap", tmp_path / "service_measured.mcap"
+    scenario = _scenario(tmp_path, "service", duration_s=0.3)
+    for command in (
+        ["simulate", str(scenario), "--mcap", str(recorded)],
+        ["resim", str(recorded), "--out", str(measured), "--measured"],
+    ):
+        done = cli_process.run([*CLI, *command], capture_output=True, text=True, timeout=120)
+        assert done.returncode == 0, done.stdout + done.stderr
+    log, replay_log = tmp_path / "monitor.log", tmp_path / "replay.log"
+    with (
+        _monitor(domain, _model(tmp_path, "study"), log) as monitor,
+        replay_log.open("w") as out,
+    ):
+        command = [*CLI, "replay", str(measured), "--loop", "--wait-for-subscribers", "1"]
+        command += ["--topics", stream.MEASURED.name, stream.DEFECTS.name]  # the monitor's
+        replay = cli_process.popen(
+            command,
+            env=ros_environment(domain),
+            stdout=out,
+            stderr=subprocess.STDOUT,
+        )
+        try:
+            assert _wait_exit(monitor, 60.0) == 2, log.read_text() + replay_log.read_text()
+        finally:
+            replay.send_signal(signal.SIGINT)
+            replay.wait(timeout=10)
+    output = log.read_text()
+    refused = _refusals(output)
+    assert len(refused) == 1, output
+    assert "fitted on the study brake's samples" in refused[0]
+    assert "as /brake_sim_replay says, comes from the service brake" in refused[0]
+    assert "/brake_sim_replay says the service brake (its parameter brake)" in (
+        replay_log.read_text()
+    )
+    assert "Traceback" not in output + replay_log.read_text()

@@ -1,8 +1,8 @@
 """:class:`BrakeQuery`'s reading of the graph and of the answer, the cases a real node
 cannot show here (a node older than the ``brake`` parameter, a nonsense value, a node
-that never answers, a publisher whose node is not discovered yet). Pure logic: the graph,
-the client and the clock are stand-ins; the real exchange is tests/ros/test_monitor_brake.py.
-"""
+that never answers, a publisher whose node is not discovered yet, several publishers).
+Pure logic: the graph, the client and the clock are stand-ins; the real exchange is
+tests/ros/test_monitor_brake.py."""
 
 from __future__ import annotations
 
@@ -25,11 +25,23 @@ class Endpoint:
 
 @dataclass
 class Graph:
+    """The monitor's node: the graph and the clients it makes for other nodes."""
+
     publishers: list[Endpoint] = field(default_factory=list)
+    clients: dict[str, Client] = field(default_factory=dict)
+    destroyed: list[Client] = field(default_factory=list)
 
     def get_publishers_info_by_topic(self, topic: str) -> list[Endpoint]:
         assert topic == TOPIC
         return self.publishers
+
+    def create_client(self, kind: type, service: str) -> Client:
+        assert kind is GetParameters and service not in self.clients
+        self.clients[service] = Client()
+        return self.clients[service]
+
+    def destroy_client(self, client: Client) -> None:
+        self.destroyed.append(client)
 
 
 class Future:
@@ -113,14 +125,36 @@ def test_an_answer_that_does_not_come_is_waited_for_20_s_from_the_stream():
     assert "did not say its brake (its parameter brake) within 20 s" in answer.why
 
 
-def test_a_publisher_not_yet_named_is_waited_for_and_another_node_says_no_brake():
+def test_a_publisher_not_yet_named_is_waited_for_then_the_node_that_publishes_is_asked():
     graph, client, clock = Graph([Endpoint("_NODE_NAME_UNKNOWN_")]), Client(), Clock()
     query = _query(graph, client, clock)
-    assert query.poll() is None  # perhaps the simulator, not yet discovered by name
-    graph.publishers[0] = Endpoint("brake_sim_replay", "/")
+    assert query.poll() is None and not graph.clients  # perhaps the simulator, not yet named
+    graph.publishers[0] = Endpoint("brake_sim_replay", "/")  # brake-sim replay's node
+    assert query.poll() is None
+    replay = graph.clients["/brake_sim_replay/get_parameters"]
+    assert replay.calls == [["brake"]] and not client.calls
+    replay.future.response = _answer(
+        ParameterValue(type=ParameterType.PARAMETER_STRING, string_value="study")
+    )
+    assert query.poll() == BrakeAnswer("study", source="/brake_sim_replay")
+    assert graph.destroyed == [replay]  # the client made for it goes with the answer
+    graph = Graph([Endpoint("driver", "/car")])
+    query = _query(graph, Client(), Clock())
+    assert query.poll() is None
+    graph.clients["/car/driver/get_parameters"].future.response = _answer(
+        ParameterValue(type=ParameterType.PARAMETER_NOT_SET)
+    )
     answer = query.poll()
-    assert answer is not None and answer.brake == "" and not client.calls
-    assert "published by /brake_sim_replay, not by the simulator /brake_sim" in answer.why
-    graph = Graph([Endpoint("brake_sim", "/other")])
+    assert answer is not None and answer.brake == ""
+    assert "/car/driver, which publishes it, has no string parameter brake" in answer.why
+
+
+def test_the_simulator_is_asked_among_publishers_and_several_others_are_not_asked():
+    graph = Graph([Endpoint("brake_sim_replay"), Endpoint("brake_sim")])
+    client = Client()
+    assert _query(graph, client, Clock()).poll() is None
+    assert client.calls == [["brake"]] and not graph.clients
+    graph = Graph([Endpoint("brake_sim_replay"), Endpoint("brake_sim", "/other")])
     answer = _query(graph, Client(), Clock()).poll()
-    assert answer is not None and "published by /other/brake_sim" in answer.why
+    assert answer is not None and answer.brake == "" and not graph.clients
+    assert "published by /brake_sim_replay, /other/brake_sim: several nodes" in answer.why
