@@ -1,9 +1,10 @@
 """Energy bookkeeping of a recorded run: what the model stores, spends and is supplied.
 
 The state carries four energy quadratures integrated with the motion (layout.Y_*):
-friction work, coupling-damper loss, contact (Kelvin-Voigt) loss and actuator work; the
-stepper adds the kinetic energy removed when the brake locks (``lock_loss_j``). Between
-any two samples of one run
+friction work, coupling-damper loss, contact loss (Kelvin-Voigt, and the strain a wearing
+lining's worn layer takes away: ``contact.wear_loss``) and actuator work; the stepper
+adds the kinetic energy removed when the brake locks (``lock_loss_j``). Between any two
+samples of one run
 
     stored(first) + actuator work = stored(last) + friction + damper + contact + lock losses
 

@@ -52,7 +52,7 @@ E_CONTACT_Y = 8
 E_APPLIED_X = 9  # contact + friction + actuation force on the shoe, N
 E_APPLIED_Y = 10
 E_FRICTION_POWER = 11  # W, dissipated by friction
-E_CONTACT_POWER = 12  # W, dissipated by the Kelvin-Voigt damper
+E_CONTACT_POWER = 12  # W, dissipated by the Kelvin-Voigt damper (and by the wear: wear_loss)
 E_ACTUATION_POWER = 13  # W, supplied by the actuator
 N_EVAL = 14
 
@@ -325,7 +325,8 @@ def shoe_forces(p, base, omega, actuation, kin, fn, ff, v_slide):
         # k max(eps, 0)^2 / 2 that the balance counts (also while the force is off: with
         # fn = 0 that elastic energy is lost, not returned). Not gated on eps > 0: a located
         # onset sits at eps == 0.0 exactly, where the force already pushes with c eps_dot.
-        p_contact = (fn - p[L.P_CONTACT_STIFFNESS] * max(eps, 0.0)) * eps_dot
+        elastic = p[L.P_CONTACT_STIFFNESS] * max(eps, 0.0)
+        p_contact = (fn - elastic) * eps_dot + wear_loss(p, base, elastic, ff * v_slide)
     p_act = fex * (-w * ty) + fey * (w * tx)
     return (
         theta_ddot,
@@ -343,6 +344,20 @@ def shoe_forces(p, base, omega, actuation, kin, fn, ff, v_slide):
         p_contact,
         p_act,
     )
+
+
+@njit(inline="always", **JIT)
+def wear_loss(p, base, elastic_force, friction_power):
+    """Power (W) that a lining's wear takes out of its contact's elastic energy: the worn
+    layer leaves with the strain it held, ``F_el dw/dt`` for the elastic force ``F_el`` (N,
+    ``k max(eps, 0)``; a lining over its arc: its nodes' sum) and the wear rate ``dw/dt``,
+    the shoe's wear per joule (layout.LN_WEAR_RATE) times its ``friction_power`` (W), as
+    the wear state integrates it (kernel._wear_rates). 0 but for a lining that wears
+    with its friction work. The indentation falls by the wear (the lining's radius is the
+    unworn one less it), exactly where the deepest point lies between the lining's ends."""
+    shoe = (base - L.P_SHOE_BASE) // L.SHOE_STRIDE
+    rate = p[L.P_LINING_BASE + shoe * L.LINING_STRIDE + L.LN_WEAR_RATE]
+    return elastic_force * rate * friction_power if rate > 0.0 else 0.0
 
 
 @njit(inline="always", **JIT)

@@ -148,6 +148,7 @@ def shoe_contact(p, base, theta, omega, drum_speed, actuation, mode, stuck, shar
     fn_sum = 0.0
     p_friction = 0.0
     p_loss = 0.0
+    elastic = 0.0  # the nodes' elastic force, N (the wear's loss: contact.wear_loss)
     m_centre = 0.0
     v_sum = 0.0
     eps = -math.inf
@@ -174,7 +175,9 @@ def shoe_contact(p, base, theta, omega, drum_speed, actuation, mode, stuck, shar
                 f = 0.0
         if enabled:
             # the node's damper loss: power in less the rate of its elastic energy
-            p_loss += (f - k * max(d, 0.0)) * d_dot
+            spring = k * max(d, 0.0)
+            p_loss += (f - spring) * d_dot
+            elastic += spring
         if f <= 0.0:
             continue
         ff = share * mu * f if stuck else mu * f * math.tanh(v / v_s)
@@ -214,7 +217,7 @@ def shoe_contact(p, base, theta, omega, drum_speed, actuation, mode, stuck, shar
         fx + fex,
         fy + fey,
         p_friction,
-        p_loss if enabled else 0.0,
+        p_loss + contact.wear_loss(p, base, elastic, p_friction) if enabled else 0.0,
         p_act,
     )
 
