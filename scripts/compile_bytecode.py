@@ -10,9 +10,11 @@ with bytecode writing on, every module that the package's or the tests' sources 
 an import statement (at module level or inside a function, found in their syntax trees),
 so that those outside the venv (a system ROS 2's rclpy) write theirs where they may; and
 compiles the package's own sources without importing them (a module imported for its side
-effects, such as the sweep's worker warm-up, must not run here); and has pytest collect the
-suite once (:func:`rewrite_tests`), which writes the test modules' assertion-rewritten
-bytecode.
+effects, such as the sweep's worker warm-up, must not run here). The test modules'
+assertion-rewritten bytecode is pytest's to write, at the suite's first run
+(tests/conftest.py lets it whatever ``PYTHONDONTWRITEBYTECODE`` says): collecting the
+suite here took 12 s of CPU on the set-up's critical path, and the suite's workers write
+it in parallel.
 
 A module that cannot be imported here (an optional part missing, the ROS interfaces not
 built yet) is counted in the last line and left to compile at its first use, as before.
@@ -24,10 +26,7 @@ import ast
 import compileall
 import importlib
 import importlib.util
-import os
 import re
-import resource
-import subprocess
 import sys
 import sysconfig
 import time
@@ -122,67 +121,10 @@ def compile_installed(say=print) -> bool:
     return ok
 
 
-def stale_test_modules(root: Path) -> list[Path]:
-    """The test modules and conftests under ``root/tests`` whose assertion-rewritten
-    bytecode (pytest's own .pyc beside them, tagged with its version) is missing or older
-    than their source."""
-    import pytest
-
-    tag = f"{sys.implementation.cache_tag}-pytest-{pytest.__version__}.pyc"
-    stale = []
-    for path in sorted((root / TESTS).rglob("*.py")):
-        if not (path.name.startswith("test_") or path.name == "conftest.py"):
-            continue
-        pyc = path.parent / "__pycache__" / f"{path.stem}.{tag}"
-        if not pyc.is_file() or pyc.stat().st_mtime < path.stat().st_mtime:
-            stale.append(path)
-    return stale
-
-
-def rewrite_tests(root: Path) -> str:
-    """Have pytest collect the suite once with bytecode writing on, if a test module's
-    rewritten bytecode is stale: pytest then writes each test module's and conftest's
-    assertion-rewritten bytecode beside it, and every later run reads it. Where
-    ``PYTHONDONTWRITEBYTECODE`` is set, each test worker would otherwise rewrite every
-    module again (about 4.5 s of CPU a worker, half its collection). Collection runs no test
-    and, with ``--collect-only``, the suite's conftest compiles no kernel. Returns a clause
-    for the last line."""
-    if importlib.util.find_spec("pytest") is None:
-        return "; pytest not installed: no test module rewritten"
-    stale = stale_test_modules(root)
-    if not stale:
-        return "; the tests' rewritten bytecode up to date"
-    env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
-    command = [sys.executable, "-m", "pytest", "--collect-only", "-q"]
-    command += ["-p", "no:xdist", "-p", "no:cacheprovider", TESTS]
-    try:
-        done = subprocess.run(
-            command,
-            cwd=root,
-            env=env,
-            stdin=subprocess.DEVNULL,
-            capture_output=True,
-            timeout=300,
-        )
-    except (OSError, subprocess.TimeoutExpired) as exc:
-        return f"; the tests were not collected ({type(exc).__name__}): rewritten at their run"
-    left = len(stale_test_modules(root))
-    written = f"; the rewritten bytecode of {len(stale) - left} test modules written"
-    if done.returncode != 0 or left:
-        return f"{written}, {left} left to their run (pytest's collection: exit {done.returncode})"
-    return written
-
-
-def _cpu_s() -> float:
-    """CPU seconds of this process and of its ended children (the tests' collection)."""
-    children = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return time.process_time() + children.ru_utime + children.ru_stime
-
-
 def main() -> int:
     sys.dont_write_bytecode = False  # whatever PYTHONDONTWRITEBYTECODE says
     sys.path.insert(0, str(ROOT))
-    start = _cpu_s()
+    start = time.process_time()
     installed = compile_installed(lambda line: print(line, flush=True))
     folders = installed_folders()
     names = outside(
@@ -202,12 +144,10 @@ def main() -> int:
         except Exception:  # any failure: left to compile at its first use
             failed.append(name)
     own = compileall.compile_dir(str(ROOT / PACKAGE), quiet=1)
-    tests = rewrite_tests(ROOT)
     left = f"; {len(failed)} could not be imported here: {', '.join(failed)}" if failed else ""
     print(
         f"bytecode of the installed packages, of {len(sys.modules)} modules imported and of"
-        f" the package written or up to date ({_cpu_s() - start:.1f} s of CPU)"
-        + tests
+        f" the package written or up to date ({time.process_time() - start:.1f} s of CPU)"
         + left
         + ("" if installed else "; some installed files would not compile (left as they are)")
         + ("" if own else "; the package's own could not all be compiled")

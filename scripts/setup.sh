@@ -179,8 +179,8 @@ kernels_ended() {
 # The .pyc of what brake-sim and its tests run (scripts/compile_bytecode.py: the venv's
 # packages whole): pip installs with --no-compile, and where PYTHONDONTWRITEBYTECODE is set
 # nothing writes them later, so that every process would compile its imports from source
-# (1-3 s of CPU), and every test worker would rewrite the test modules' asserts (4.5 s).
-# Beside the kernels' compile; about 3 s of CPU when they are up to date.
+# (1-3 s of CPU; the test modules' rewritten asserts the suite's first run writes, its
+# conftest). Beside the kernels' compile; about 3 s of CPU when they are up to date.
 write_bytecode() {
   local log="$REPO_ROOT/build/bytecode.log"
   mkdir -p "$REPO_ROOT/build"

@@ -21,6 +21,13 @@ from brake_sim_ros.stream.run import RunResult, run_scenario
 
 IMPACTING_S = 0.3  # the impacting regime of the symmetric run ends at 0.27 s
 
+# pytest writes each test module's assertion-rewritten bytecode beside it, and every later
+# run reads it; where PYTHONDONTWRITEBYTECODE is set it would write none, and every worker
+# of every run would rewrite all the test modules again (4.5 s of CPU a worker). So the
+# suite writes them, as the set-up writes the package's and the venv's
+# (scripts/compile_bytecode.py): its first run does, its workers in parallel.
+sys.dont_write_bytecode = False
+
 
 @functools.cache
 def cached_run(name: str, method: str | None = "rk4") -> RunResult:

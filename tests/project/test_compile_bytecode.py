@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import importlib.util
 import os
+import subprocess
 import sys
 from pathlib import Path
 
@@ -94,36 +95,26 @@ def test_only_what_lies_outside_the_installed_packages_is_imported():
     assert "scipy" in names and "scipy.signal" not in names
 
 
-def test_the_test_modules_rewritten_bytecode_is_written_once_and_kept_fresh(tmp_path):
-    """pytest collects the suite once with bytecode writing on (whatever
-    PYTHONDONTWRITEBYTECODE says), writing each test module's assertion-rewritten .pyc;
-    an up-to-date suite is not collected again, and an edited module is stale again."""
-    script = _script()
-    tests = tmp_path / script.TESTS
+def test_the_suite_writes_its_modules_rewritten_bytecode_whatever_the_environment_says(
+    tmp_path,
+):
+    """With PYTHONDONTWRITEBYTECODE set pytest writes no assertion-rewritten .pyc; beside
+    the suite's conftest it does, so that later runs (and the workers of this one that
+    import a module after another) read it instead of rewriting it."""
+    import pytest
+
+    tag = f"{sys.implementation.cache_tag}-pytest-{pytest.__version__}.pyc"
+    tests = tmp_path / "suite"  # not "tests": that is the suite's package, imported below
     tests.mkdir()
     module = tests / "test_one.py"
     module.write_text("def test_sum():\n    assert 1 + 1 == 2\n")
-    (tests / "helper.py").write_text("X = 1\n")  # not a test module: not pytest's to rewrite
-    assert script.stale_test_modules(tmp_path) == [module]
-    said = script.rewrite_tests(tmp_path)
-    assert said == "; the rewritten bytecode of 1 test modules written"
-    assert [p.name.split(".")[0] for p in (tests / "__pycache__").glob("*-pytest-*.pyc")] == [
-        "test_one"
-    ]
-    assert script.stale_test_modules(tmp_path) == []
-    assert script.rewrite_tests(tmp_path) == "; the tests' rewritten bytecode up to date"
-    later = module.stat().st_mtime + 10
-    os.utime(module, (later, later))
-    assert script.stale_test_modules(tmp_path) == [module]
-
-
-def test_a_suite_that_does_not_collect_is_one_clause_of_the_last_line(tmp_path):
-    script = _script()
-    tests = tmp_path / script.TESTS
-    tests.mkdir()
-    (tests / "test_broken.py").write_text("def test_broken(:\n")  # not even rewritten
-    said = script.rewrite_tests(tmp_path)
-    assert said == (
-        "; the rewritten bytecode of 0 test modules written, 1 left to their run"
-        " (pytest's collection: exit 2)"
-    )
+    pyc = tests / "__pycache__" / f"test_one.{tag}"
+    command = [sys.executable, "-m", "pytest", "--collect-only", "-q", "-p", "no:xdist"]
+    command += ["-p", "no:cacheprovider", "--rootdir", str(tmp_path), str(module)]
+    env = {**os.environ, "PYTHONDONTWRITEBYTECODE": "1", "PYTHONPATH": str(ROOT)}
+    for conftest in (False, True):
+        if conftest:  # the suite's conftest, imported: what its import does, not its hooks
+            (tests / "conftest.py").write_text("import tests.conftest  # noqa: F401\n")
+        done = subprocess.run(command, cwd=tmp_path, env=env, capture_output=True, text=True)
+        assert done.returncode == 0, done.stdout + done.stderr
+        assert pyc.is_file() == conftest
