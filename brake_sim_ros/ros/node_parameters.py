@@ -32,7 +32,8 @@ from brake_sim_ros.stream.parameters import ParamSpec
 # declared by the publishers (their QoS overrides), after the node's own parameters
 _QOS_OVERRIDES = "qos_overrides."
 _SHOWN_CHARS = 64  # at most this much of a caller's text is echoed back
-_RATES = frozenset({"chunk_rate_hz", "state_rate_hz", "real_time_factor"})
+# what the real-time check looks at (resuming a paused run included)
+_RATES = frozenset({"chunk_rate_hz", "state_rate_hz", "real_time_factor", "paused"})
 # The brake the running scenario simulates, for a client that must know it (brake-sim
 # monitor refuses a detector fitted on the other brake's samples). Not the descriptor's
 # read_only: the node itself sets it at a ~/reset to a scenario of the other brake.
@@ -183,7 +184,9 @@ class NodeParameters:
         return out
 
     def _rates_refusal(self, changes: dict) -> str | None:
-        """Why new chunk/state rates or real-time factor cannot be held, or None."""
+        """Why new chunk/state rates or real-time factor cannot be held, or None; a paused
+        run (stepped on request) needs no real time: its settings are checked when it is
+        resumed (``paused`` set false)."""
         session = self.session
         chunk = session.samples_per("chunk_rate_hz", changes.get("chunk_rate_hz"))
         stride = session.samples_per("state_rate_hz", changes.get("state_rate_hz"))
@@ -192,7 +195,7 @@ class NodeParameters:
         work = check_chunk_work(stepper.substeps, chunk, stepper.physics_step_s)
         if work:
             return work
-        if factor == 0.0:
+        if factor == 0.0 or changes.get("paused", self._pacer.paused):
             return None
         verdict = self._pipeline_verdict(
             chunk_samples=chunk, state_stride=stride, real_time_factor=factor

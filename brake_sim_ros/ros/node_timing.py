@@ -68,9 +68,13 @@ class NodeTiming:
 
     def _check_keeps_up(self) -> None:
         """Refuse to start when this machine cannot step and publish the chunks in real
-        time (:func:`brake_sim_ros.solvers.realtime.check_pipeline`)."""
+        time (:func:`brake_sim_ros.solvers.realtime.check_pipeline`). A node started
+        paused (stepped on request) is checked when its run is resumed instead."""
         if self._pacer.real_time_factor == 0.0:
             return  # as fast as possible: nothing to keep up with
+        if self._pacer.paused:
+            self.get_logger().info("started paused: the real-time check runs at resume")
+            return
         verdict = self._pipeline_verdict()
         if not verdict.ok:
             raise BrakeSimError(
