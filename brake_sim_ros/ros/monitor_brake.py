@@ -100,7 +100,8 @@ class BrakeQuery:
         if self._future is None and self._asked and self._client.service_is_ready():
             self._future = self._client.call_async(GetParameters.Request(names=[BRAKE.name]))
         if self._started is not None and self._clock() - self._started > self._wait_s:
-            asked = self._asked or f"no single node (publishers: {', '.join(sorted(names))})"
+            publishers = f"publishers: {', '.join(sorted(names))}" if names else "none seen"
+            asked = self._asked or f"no single node ({publishers})"
             return self._close(
                 BrakeAnswer(
                     "",
