@@ -55,7 +55,8 @@ def test_reset_to_a_scenario_without_sensors_is_refused_and_the_node_runs_on(
     allowed, node_and_client
 ):
     args = ["--duration", "3600", "--ros-args", "-p", f"scenario_dirs:={allowed}",
-            "-p", "publish_measured:=true"]  # fmt: skip
+            "-p", "publish_measured:=true",
+            "-p", "real_time_factor:=0.2"]  # a busy CPU: pace not tested  # fmt: skip
     with node_and_client(args, domain_id_for(72), wait_s=30.0) as (_, sim):
         response = sim.reset(scenario="lean.toml", timeout_s=10.0)
         assert not response.success

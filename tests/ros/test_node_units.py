@@ -19,7 +19,8 @@ def test_the_node_runs_the_unit_records_it_and_redraws_it_with_a_new_seed(
     tmp_path, node_and_client
 ):
     bag = tmp_path / "unit.mcap"
-    args = ["--duration", "3600", "--record", str(bag), "--ros-args", "-p", f"unit_id:={UNIT}"]
+    args = ["--duration", "3600", "--record", str(bag), "--ros-args", "-p", f"unit_id:={UNIT}",
+            "-p", "real_time_factor:=0.2"]  # a busy CPU: pace not tested  # fmt: skip
     first = load_scenario("symmetric").with_unit(UNIT)
     with node_and_client(args, domain_id_for(74), wait_s=30.0) as (_, sim):
         truth = sim.rx.defects[-1]
