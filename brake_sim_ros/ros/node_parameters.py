@@ -195,7 +195,7 @@ class NodeParameters:
         work = check_chunk_work(stepper.substeps, chunk, stepper.physics_step_s)
         if work:
             return work
-        if factor == 0.0 or changes.get("paused", self._pacer.paused):
+        if not self._paced(factor, changes.get("paused")):
             return None
         verdict = self._pipeline_verdict(
             chunk_samples=chunk, state_stride=stride, real_time_factor=factor

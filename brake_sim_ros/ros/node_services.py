@@ -152,7 +152,7 @@ class NodeServices:
             sensors=None,
             publishing=self._budget.costs,
         )
-        if self._pacer.real_time_factor > 0.0 and not self._pacer.paused:
+        if self._paced():
             verdict = self._pipeline_verdict(
                 costs=costs,
                 sample_period_s=dt,

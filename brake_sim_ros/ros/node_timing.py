@@ -66,14 +66,21 @@ class NodeTiming:
             label=given.get("label") or f"scenario '{session.scenario.name}'",
         )
 
+    def _paced(self, real_time_factor: float | None = None, paused: bool | None = None) -> bool:
+        """Whether a run at ``real_time_factor`` (default: the pacer's), ``paused`` or not
+        (default: the pacer's), keeps to the wall clock, so that the real-time budget
+        applies: not as fast as possible (factor 0) and not paused (stepped on request;
+        checked when it is resumed)."""
+        factor = self._pacer.real_time_factor if real_time_factor is None else real_time_factor
+        return factor > 0.0 and not (self._pacer.paused if paused is None else paused)
+
     def _check_keeps_up(self) -> None:
         """Refuse to start when this machine cannot step and publish the chunks in real
         time (:func:`brake_sim_ros.solvers.realtime.check_pipeline`). A node started
         paused (stepped on request) is checked when its run is resumed instead."""
-        if self._pacer.real_time_factor == 0.0:
-            return  # as fast as possible: nothing to keep up with
-        if self._pacer.paused:
-            self.get_logger().info("started paused: the real-time check runs at resume")
+        if not self._paced():
+            if self._pacer.paused and self._pacer.real_time_factor > 0.0:
+                self.get_logger().info("started paused: the real-time check runs at resume")
             return
         verdict = self._pipeline_verdict()
         if not verdict.ok:
