@@ -1,8 +1,10 @@
 """Energy bookkeeping of a recorded run: what the model stores, spends and is supplied.
 
 The state carries four energy quadratures integrated with the motion (layout.Y_*):
-friction work, coupling-damper loss, contact loss (Kelvin-Voigt, and the strain a wearing
-lining's worn layer takes away: ``contact.wear_loss``) and actuator work; the stepper
+friction work, coupling-damper loss, contact loss (Kelvin-Voigt, the strain a wearing
+lining's worn layer takes away, ``contact.wear_loss``, and what a defect growing with a
+law of time moves at each step of the geometry, model/growth_energy.py) and actuator
+work; the stepper
 adds the kinetic energy removed when the brake locks (``lock_loss_j``). Between any two
 samples of one run
 
@@ -15,6 +17,8 @@ the whole event; it can fail, since the quadratures and the motion are independe
 A run whose drive cycle changes the vehicle's load (model/cycle.py) stores the flywheel's
 kinetic energy with the inertia in force at each sample (``flywheel_inertia_kg_m2``) and
 is supplied the kinetic energy its load changes brought (``load_change_work_j``).
+With ``packed`` (the run's packed parameters), each end's stored energy is read with the
+parameters in force at its time (:func:`parameters_at`: growing defects as they were).
 The service brake (model/service.py) also stores energy in its return springs and rest
 stops (from the shoe angles and the packed parameters, which place them for the run's
 defects) and in its hydraulic circuit's compliance, ``C p^2 / 2`` (the line pressure
@@ -32,9 +36,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from brake_sim_ros.model import growth, lining, service
 from brake_sim_ros.model import layout as L
-from brake_sim_ros.model import lining, service
 from brake_sim_ros.model.assembly import SIDES
+from brake_sim_ros.model.growth_law import LAW_FRICTION_WORK
 from brake_sim_ros.model.parameters import BrakeParameters
 from brake_sim_ros.model.run_setup import SampleBlock
 
@@ -88,14 +93,44 @@ class EnergyBalance:
         return abs(self.residual_j) / self.stored_start_j
 
 
+def parameters_at(packed: np.ndarray, block: SampleBlock, row: int) -> np.ndarray:
+    """The packed parameters in force at row ``row`` of ``block``: ``packed`` (a run's,
+    whose defects are at their final severity) with its growing defects at the row's
+    time (:func:`.growth.apply`; a lining that wears with its friction work at the row's
+    recorded wear). A self-adjuster's take-up within the run is not in them: it moves a
+    lining only while it is clear of the drum (model/ratchet.py), which stores nothing."""
+    if packed[L.P_GROWTH_COUNT] <= 0.0:
+        return packed
+    pw = growth.working_copy(packed)
+    y = np.zeros(L.N_STATE_SERVICE)
+    entries = range(int(packed[L.P_GROWTH_COUNT]))
+    laws = {int(packed[L.P_GROWTH_BASE + j * L.GROWTH_STRIDE + L.G_LAW]) for j in entries}
+    if LAW_FRICTION_WORK in laws:  # the wear state it reads
+        for i, side in enumerate(SIDES):
+            y[L.Y_LEFT_WEAR + i] = block[f"{side}_lining_wear_m"][row]
+    growth.apply(packed, pw, float(block["time_s"][row]), y, growth.ALL_ENTRIES)
+    return pw
+
+
 def stored_energy_j(
-    block: SampleBlock, params: BrakeParameters, row: int, *, point_contact: bool = True
+    block: SampleBlock,
+    params: BrakeParameters,
+    row: int,
+    *,
+    point_contact: bool = True,
+    packed: np.ndarray | None = None,
 ) -> float:
     """Kinetic plus elastic energy at row ``row`` of ``block`` (columns read by name), J;
     without the point contacts' ``k_c eps^2 / 2`` if not ``point_contact`` (a lining over
-    its arc stores :func:`lining_energy_j` instead)."""
+    its arc stores :func:`lining_energy_j` instead). The shoes' inertias about their
+    pivots are ``packed``'s (the parameters in force at the row, :func:`parameters_at`:
+    a pivot out of place changes them), else the nominal shoe's."""
     d = params.driveline
-    i_s = params.shoe.inertia_about_pivot_kg_m2
+    if packed is None:
+        i_l = i_r = params.shoe.inertia_about_pivot_kg_m2
+    else:
+        i_l = packed[L.P_SHOE_BASE + L.S_INERTIA]
+        i_r = packed[L.P_SHOE_BASE + L.SHOE_STRIDE + L.S_INERTIA]
 
     def at(name: str) -> float:  # a numpy float64, as the arithmetic below expects
         return block[name][row]
@@ -104,7 +139,8 @@ def stored_energy_j(
     kinetic = (
         0.5 * i_f * at("flywheel_speed_rad_s") ** 2
         + 0.5 * d.drum_inertia_kg_m2 * at("drum_speed_rad_s") ** 2
-        + 0.5 * i_s * (at("left_speed_rad_s") ** 2 + at("right_speed_rad_s") ** 2)
+        + 0.5 * i_l * at("left_speed_rad_s") ** 2
+        + 0.5 * i_r * at("right_speed_rad_s") ** 2
     )
     twist = at("flywheel_angle_rad") - at("drum_angle_rad")
     # the service brake's tyre replaces the coupling spring (its work is booked whole)
@@ -170,16 +206,17 @@ def energy_balance(
             " parameters: where its springs and stops sit for its defects)"
         )
     lined = packed is not None and packed[L.P_LINING_NODE_STIFFNESS] > 0.0
-    start = stored_energy_j(block, params, 0, point_contact=not lined)
-    end = stored_energy_j(block, params, -1, point_contact=not lined)
-    if params.service is not None:
-        rows = [0, len(block) - 1]
-        first, last = spring_energy_j(block, packed, rows)
-        line_first, line_last = line_energy_j(block, packed, rows)
-        start, end = start + first + line_first, end + last + line_last
-    if lined:
-        lining_first, lining_last = lining_energy_j(block, packed, [0, len(block) - 1])
-        start, end = start + lining_first, end + lining_last
+
+    def stored(row: int) -> float:
+        at = None if packed is None else parameters_at(packed, block, row)
+        energy = stored_energy_j(block, params, row, point_contact=not lined, packed=at)
+        if params.service is not None:
+            energy += spring_energy_j(block, at, [row])[0] + line_energy_j(block, at, [row])[0]
+        if lined:
+            energy += lining_energy_j(block, at, [row])[0]
+        return energy
+
+    start, end = stored(0), stored(len(block) - 1)
     work = block["actuation_work_j"]
     supplied = float(work[-1] - work[0])
     spent = float(sum(block[name][-1] - block[name][0] for name in _LOSSES))

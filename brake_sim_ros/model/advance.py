@@ -14,6 +14,7 @@ from brake_sim_ros.model import (
     contact,
     cycle,
     growth,
+    growth_energy,
     kernel,
     ratchet,
     rk4,
@@ -45,20 +46,6 @@ def _update_regime(kstate, k_regime, k_flag, k_change, touching, step, settle_st
         elif regime == L.REGIME_IMPACTING and since >= settle_steps:
             regime = L.REGIME_FREE
     kstate[k_regime] = regime
-
-
-@njit(**JIT)
-def _kinematics_pair(p, y, drum_speed):
-    """Both shoes' :func:`.contact.kinematics` for the state ``y`` with the drum turning at
-    ``drum_speed`` (rad/s). A call, not inlined, where a step needs them afresh (its
-    start after a switch or a lock, or on a path that holds nothing): each inlined copy
-    compiles on its own."""
-    wa = y[L.Y_DRUM_ANGLE]
-    bl = L.P_SHOE_BASE
-    br = L.P_SHOE_BASE + L.SHOE_STRIDE
-    kin_l = contact.kinematics(p, bl, y[L.Y_LEFT_ANGLE], y[L.Y_LEFT_SPEED], wa, drum_speed)
-    kin_r = contact.kinematics(p, br, y[L.Y_RIGHT_ANGLE], y[L.Y_RIGHT_SPEED], wa, drum_speed)
-    return kin_l, kin_r
 
 
 @njit(**JIT)
@@ -104,7 +91,8 @@ def fixed_step_advance(
     at the start of every step, at its time, in a working copy of ``p`` (the actuation
     gains with them); without entries ``p`` is used as it is. Where a lining's wear grows
     on the service brake, its self-adjuster steps then too (:mod:`.ratchet`, its teeth
-    in fstate).
+    in fstate). The energy a law of time's step of the geometry moves is booked in the
+    contact loss (:mod:`.growth_energy`).
 
     A drive cycle (``p``'s P_CYCLE_COUNT > 0, :mod:`.cycle`) replaces the actuation knots
     by its brake force ramp and sets the drive torque and the vehicle's load: its
@@ -145,10 +133,14 @@ def fixed_step_advance(
     # the service brake's self-adjuster steps within the run (model/ratchet.py): only where
     # a lining's wear grows, so the working copy is there
     adjusting = growing and ratchet.ratcheting(p)
+    # a law of time's steps of the geometry are booked (model/growth_energy.py): from the
+    # step before the block's first, as that step had its parameters
+    booking = growing and growth_energy.booked(p)
     if growing:
-        gl, gr, _ = growth.apply(p, pw, step0 * dt, y)
-    if adjusting:
-        ratchet.take_up(p, pw, fstate, y)
+        resumed = booking and step0 > 0
+        if resumed:
+            growth_energy.previous_step(p, pw, (step0 - 1) * dt, y, fstate, adjusting)
+        gl, gr, _ = growth_energy.grow(p, pw, step0 * dt, y, fstate, adjusting, resumed)
     if gain_override != 0:
         gl = 1.0
         gr = 1.0
@@ -179,7 +171,7 @@ def fixed_step_advance(
     lined = p[L.P_LINING_NODE_STIFFNESS] > 0.0
     bound = 4 if p[L.P_SERVICE] > 0.0 else 0  # its slots in the bound (kernel.NOT_FREE)
     held = False
-    kin_l, kin_r = _kinematics_pair(pw, y, 0.0)  # their types: the first step computes them
+    kin_l, kin_r = contact.kinematics_pair(pw, y, 0.0)  # their types: the first step computes them
     # RK4 stages skip the contact geometry where the shoes provably exert nothing
     # (rides_free): on a round drum with a fixed geometry, each shoe's indentation at the
     # step's start and twice the largest distance of its lining from its pivot
@@ -190,9 +182,7 @@ def fixed_step_advance(
         step = step0 + i
         t = step * dt
         if growing and i > 0:
-            gl, gr, moved = growth.apply(p, pw, t, y)
-            if adjusting and ratchet.take_up(p, pw, fstate, y):
-                moved = True
+            gl, gr, moved = growth_energy.grow(p, pw, t, y, fstate, adjusting, booking)
             if gain_override != 0:
                 gl = 1.0
                 gr = 1.0
@@ -214,7 +204,7 @@ def fixed_step_advance(
         fer = kernel.force(pw, L.P_SHOE_BASE + L.SHOE_STRIDE, t, tr, fr, gr)
         record = i % record_every == 0
         if not (held and (round_drum or not stuck)):
-            kin_l, kin_r = _kinematics_pair(pw, y, 0.0 if stuck else y[L.Y_DRUM_SPEED])
+            kin_l, kin_r = contact.kinematics_pair(pw, y, 0.0 if stuck else y[L.Y_DRUM_SPEED])
         held = False
         row = rows if record else -1
         kernel.evaluate_from(y, pw, fel, fer, stuck, auto, auto, kin_l, kin_r, k1, out, row, t)

@@ -190,6 +190,20 @@ def kinematics(p, base, theta, omega, drum_angle, drum_speed):
 
 
 @njit(**JIT)
+def kinematics_pair(p, y, drum_speed):
+    """Both shoes' :func:`kinematics` for the state ``y`` (layout ``Y_*``) with the drum
+    turning at ``drum_speed`` (rad/s). A call, not inlined, where a kernel needs them
+    afresh (a step's start after a switch or a lock, or on a path that holds nothing; the
+    energy a growing defect's step moves): each inlined copy compiles on its own."""
+    wa = y[L.Y_DRUM_ANGLE]
+    bl = L.P_SHOE_BASE
+    br = L.P_SHOE_BASE + L.SHOE_STRIDE
+    kin_l = kinematics(p, bl, y[L.Y_LEFT_ANGLE], y[L.Y_LEFT_SPEED], wa, drum_speed)
+    kin_r = kinematics(p, br, y[L.Y_RIGHT_ANGLE], y[L.Y_RIGHT_SPEED], wa, drum_speed)
+    return kin_l, kin_r
+
+
+@njit(**JIT)
 def _out_of_round(p, px, py, xx, xy, dist, nx, ny, turn, vx, vy, w, c, sn, drum_angle, drum_speed):
     """:func:`kinematics` on an out-of-round drum (harmonics, a flat), from the lining point
     ``X`` = (``xx``, ``xy``) at ``dist`` from the centre, its radial unit vector

@@ -118,13 +118,21 @@ def lining_wear(p, pw, g, shoe, t, y, severity):
     return worn if worn < final else final
 
 
+# which growth entries :func:`apply` writes: all, only the linings' wears driven by
+# friction work (whose geometry follows the motion's wear state), or all but those (the
+# laws of time, whose steps of the geometry growth_energy books)
+ALL_ENTRIES, WORK_ENTRIES, TIMED_ENTRIES = 0, 1, 2
+
+
 @njit(**JIT)
-def apply(p, pw, t, y):
+def apply(p, pw, t, y, entries):
     """Write the parameters at simulated time ``t`` (s) of every growing defect of ``p``
     into ``pw`` (:func:`working_copy` of ``p``); return the shoes' actuation gains (left,
     right) and whether any geometry changed since the last call (the contact's switching
     functions must then be re-evaluated). ``y``: the state at ``t`` (a lining that wears
-    with friction work reads its wear there, :func:`lining_wear`).
+    with friction work reads its wear there, :func:`lining_wear`). ``entries``: which
+    entries (``ALL_ENTRIES``, ``WORK_ENTRIES``, ``TIMED_ENTRIES``); the gains are
+    those of the entries written (``p``'s unless a share or gain grows among them).
 
     A pivot re-places its shoe (:func:`shoe_placement`); an actuation share sets this
     shoe's share to ``0.5 + s`` and the other's to ``0.5 - s``, an actuation gain change
@@ -145,6 +153,10 @@ def apply(p, pw, t, y):
     moved = False
     for j in range(int(p[L.P_GROWTH_COUNT])):
         g = L.P_GROWTH_BASE + j * L.GROWTH_STRIDE
+        if entries != ALL_ENTRIES and (entries == WORK_ENTRIES) != (
+            int(p[g + L.G_LAW]) == LAW_FRICTION_WORK
+        ):
+            continue
         final = p[g + L.G_FINAL]
         s = severity_at(
             t, int(p[g + L.G_LAW]), p[g + L.G_ONSET], p[g + L.G_RATE], p[g + L.G_START], final

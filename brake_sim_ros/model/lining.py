@@ -292,25 +292,33 @@ def hold(p, base, theta, drum_angle):
     return torque, capacity
 
 
+@njit(inline="always", **JIT)
+def shoe_energy(p, base, theta, drum_angle):
+    """Elastic energy of the lining foundation of the shoe at ``base`` at the shoe angle
+    ``theta`` and the drum angle ``drum_angle`` (rad), ``sum k_i max(delta_i, 0)^2 / 2``,
+    J; 0 for a shoe removed from the model."""
+    if p[base + L.S_ENABLED] <= 0.0:
+        return 0.0
+    k = p[L.P_LINING_NODE_STIFFNESS]
+    phi = p[base + L.S_SIGN] * theta
+    c = math.cos(phi)
+    sn = math.sin(phi)
+    cb, sb, cd_, sd_ = first_node(p, base)
+    energy = 0.0
+    for _ in range(NODES):
+        st = node_state(p, base, c, sn, 0.0, cb, sb, drum_angle, 0.0)
+        cb, sb = cb * cd_ - sb * sd_, sb * cd_ + cb * sd_
+        if st[0] > 0.0:
+            energy += 0.5 * k * st[0] * st[0]
+    return energy
+
+
 @njit(**JIT)
 def stored_energy_rows(p, left_angle, right_angle, drum_angle):
-    """Elastic energy of both linings' foundations, ``sum k_i max(delta_i, 0)^2 / 2`` (J),
-    at each row of shoe and drum angles (rad, arrays of one length)."""
+    """Elastic energy of both linings' foundations (J, :func:`shoe_energy`) at each row of
+    shoe and drum angles (rad, arrays of one length)."""
     out = np.zeros(left_angle.shape[0])
-    k = p[L.P_LINING_NODE_STIFFNESS]
     for row in range(left_angle.shape[0]):
-        for shoe in range(2):
-            base = L.P_SHOE_BASE + shoe * L.SHOE_STRIDE
-            if p[base + L.S_ENABLED] <= 0.0:
-                continue
-            theta = left_angle[row] if shoe == 0 else right_angle[row]
-            phi = p[base + L.S_SIGN] * theta
-            c = math.cos(phi)
-            sn = math.sin(phi)
-            cb, sb, cd_, sd_ = first_node(p, base)
-            for _ in range(NODES):
-                st = node_state(p, base, c, sn, 0.0, cb, sb, drum_angle[row], 0.0)
-                cb, sb = cb * cd_ - sb * sd_, sb * cd_ + cb * sd_
-                if st[0] > 0.0:
-                    out[row] += 0.5 * k * st[0] * st[0]
+        out[row] = shoe_energy(p, L.P_SHOE_BASE, left_angle[row], drum_angle[row])
+        out[row] += shoe_energy(p, L.P_SHOE_BASE + L.SHOE_STRIDE, right_angle[row], drum_angle[row])
     return out

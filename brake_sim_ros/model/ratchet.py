@@ -78,6 +78,20 @@ def _runout(p):
 
 
 @njit(**JIT)
+def hold(p, pw, fstate):
+    """Write each shoe's lining radius with the teeth its adjuster has taken up so far into
+    ``pw`` (``p``'s unworn radius less ``pw``'s wear, layout ``LN_*``, plus the teeth
+    taken), where it took any: :func:`.growth.apply` writes the worn radius alone."""
+    for shoe in range(2):
+        taken = fstate[L.F_ADJUSTER_TAKEN + shoe]
+        if taken > 0.0:
+            base = L.P_SHOE_BASE + shoe * L.SHOE_STRIDE
+            lb = L.P_LINING_BASE + shoe * L.LINING_STRIDE
+            step = p[L.P_ADJUSTER_STEP + shoe]
+            pw[base + L.S_LINING_RADIUS] = p[lb + L.LN_RADIUS] - pw[lb + L.LN_WEAR] + taken * step
+
+
+@njit(**JIT)
 def take_up(p, pw, fstate, y):
     """Step each shoe's adjuster at the state ``y`` (the start of a physics step): pick up
     the teeth the shoe's travel passed, take the pending ones up on the lining's radius in
@@ -89,6 +103,7 @@ def take_up(p, pw, fstate, y):
     Returns whether a take-up moved a lining now (the contact's switching functions must
     be re-evaluated).
     """
+    hold(p, pw, fstate)  # the radius the growth wrote, less the wear taken up so far
     moved = False
     free_play = p[L.P_ADJUSTER_FREE_PLAY]
     for shoe in range(2):
@@ -98,8 +113,6 @@ def take_up(p, pw, fstate, y):
         base = L.P_SHOE_BASE + shoe * L.SHOE_STRIDE
         lb = L.P_LINING_BASE + shoe * L.LINING_STRIDE
         taken = fstate[L.F_ADJUSTER_TAKEN + shoe]
-        if taken > 0.0:  # the radius the growth wrote, less the wear taken up so far
-            pw[base + L.S_LINING_RADIUS] = p[lb + L.LN_RADIUS] - pw[lb + L.LN_WEAR] + taken * step
         phi = pw[base + L.S_SIGN] * y[L.Y_LEFT_ANGLE + shoe]
         c, sn = math.cos(phi), math.sin(phi)
         travel, reach = lining_travel(pw, base, c, sn)

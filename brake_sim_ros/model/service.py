@@ -216,16 +216,22 @@ def stored_energy(p, shoe, travel):
     return energy
 
 
+@njit(inline="always", **JIT)
+def shoe_energy(p, shoe, theta):
+    """Elastic energy of shoe ``shoe``'s (0 left, 1 right) return spring and rest stop at
+    the shoe angle ``theta`` (rad), J (:func:`stored_energy` at its tip's travel)."""
+    base = L.P_SHOE_BASE + shoe * L.SHOE_STRIDE
+    phi = p[base + L.S_SIGN] * theta
+    travel = tip_travel(p, base, np.cos(phi), np.sin(phi), 0.0)[0]
+    return stored_energy(p, shoe, travel)
+
+
 @njit(**JIT)
 def stored_energy_rows(p, left_angle, right_angle):
-    """Elastic energy of both shoes' springs and stops (J) at each pair of shoe angles
-    (rad, arrays of one length)."""
+    """Elastic energy of both shoes' springs and stops (J, :func:`shoe_energy`) at each
+    pair of shoe angles (rad, arrays of one length)."""
     out = np.zeros(left_angle.shape[0])
     for i in range(left_angle.shape[0]):
-        for shoe in range(2):
-            base = L.P_SHOE_BASE + shoe * L.SHOE_STRIDE
-            theta = left_angle[i] if shoe == 0 else right_angle[i]
-            phi = p[base + L.S_SIGN] * theta
-            travel = tip_travel(p, base, np.cos(phi), np.sin(phi), 0.0)[0]
-            out[i] += stored_energy(p, shoe, travel)
+        out[i] += shoe_energy(p, 0, left_angle[i])
+        out[i] += shoe_energy(p, 1, right_angle[i])
     return out

@@ -102,6 +102,8 @@ def _loaded_angle(p: np.ndarray, base: int, force_n: float, drum_speed: float) -
             )[0]
         return kernel.shoe_eval(p, base, theta, 0.0, drum_speed, force_n, L.CONTACT_ON)[0]
 
+    if moment(onset) <= 0.0:  # a lining over its arc (its nodes, not the point) may hold it there
+        return onset
     upper = onset + 1e-6
     while moment(upper) > 0.0 and upper < onset + 0.05:
         upper = onset + 2.0 * (upper - onset)

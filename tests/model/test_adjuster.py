@@ -103,7 +103,7 @@ def test_a_wear_that_grows_in_the_run_starts_taken_up_as_it_was_at_the_start(gro
     assert p[L.P_LINING_BASE + L.LN_RADIUS] == pytest.approx(unworn + taken_mm * 1e-3, abs=1e-12)
     if growth.follows_time:  # the radius the growth writes at the end: final wear applied
         pw = growth_update.working_copy(p)
-        growth_update.apply(p, pw, 10.0, np.zeros(L.N_STATE_WEAR))
+        growth_update.apply(p, pw, 10.0, np.zeros(L.N_STATE_WEAR), growth_update.ALL_ENTRIES)
         radius = pw[L.P_SHOE_BASE + L.S_LINING_RADIUS]
         assert radius == pytest.approx(unworn + taken_mm * 1e-3 - 1e-3, abs=1e-12)
 

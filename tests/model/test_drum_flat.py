@@ -107,11 +107,11 @@ def test_a_growing_flat_sets_its_depth_at_each_step():
     p = pack(BrakeParameters(), d)
     assert p[L.P_FLAT_DEPTH] == pytest.approx(40e-6)
     pw = growth.working_copy(p)
-    growth.apply(p, pw, 0.5, np.zeros(L.N_STATE))
+    growth.apply(p, pw, 0.5, np.zeros(L.N_STATE), growth.ALL_ENTRIES)
     assert pw[L.P_FLAT_DEPTH] == 0.0
-    growth.apply(p, pw, 1.5, np.zeros(L.N_STATE))
+    growth.apply(p, pw, 1.5, np.zeros(L.N_STATE), growth.ALL_ENTRIES)
     assert pw[L.P_FLAT_DEPTH] == pytest.approx(10e-6, rel=1e-12)
-    growth.apply(p, pw, 9.0, np.zeros(L.N_STATE))
+    growth.apply(p, pw, 9.0, np.zeros(L.N_STATE), growth.ALL_ENTRIES)
     assert pw[L.P_FLAT_DEPTH] == pytest.approx(40e-6, rel=1e-12)
 
 

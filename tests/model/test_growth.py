@@ -204,10 +204,12 @@ def test_the_compiled_placement_is_the_assembly_rule_of_the_static_pack():
     p = pack(sc.setup.params, d)
     healthy = pack(sc.setup.params, Defects())
     pw = growth.working_copy(p)
-    growth.apply(p, pw, 0.0, np.zeros(L.N_STATE))  # severity 0: the healthy shoe
+    growth.apply(
+        p, pw, 0.0, np.zeros(L.N_STATE), growth.ALL_ENTRIES
+    )  # severity 0: the healthy shoe
     b = L.P_SHOE_BASE
     assert np.allclose(pw[b : b + L.SHOE_STRIDE], healthy[b : b + L.SHOE_STRIDE], rtol=1e-14)
-    growth.apply(p, pw, 10.0, np.zeros(L.N_STATE))  # 3 % reached
+    growth.apply(p, pw, 10.0, np.zeros(L.N_STATE), growth.ALL_ENTRIES)  # 3 % reached
     assert np.allclose(pw[b : b + L.SHOE_STRIDE], p[b : b + L.SHOE_STRIDE], rtol=1e-14)
     assert not np.allclose(p[b : b + L.SHOE_STRIDE], healthy[b : b + L.SHOE_STRIDE])
 
@@ -283,9 +285,11 @@ def test_a_growing_drum_scales_every_harmonic_with_the_peak_runout():
     p = pack(sc.setup.params, d)
     pw = growth.working_copy(p)
     amplitude = L.P_DRUM_WAVE_BASE + L.W_AMPLITUDE
-    growth.apply(p, pw, 0.5, np.zeros(L.N_STATE))
+    growth.apply(p, pw, 0.5, np.zeros(L.N_STATE), growth.ALL_ENTRIES)
     assert pw[amplitude] == 0.0
-    growth.apply(p, pw, 1.4, np.zeros(L.N_STATE))  # 10 um of 50 um: a fifth of each harmonic
+    growth.apply(
+        p, pw, 1.4, np.zeros(L.N_STATE), growth.ALL_ENTRIES
+    )  # 10 um of 50 um: a fifth of each harmonic
     assert pw[amplitude] == pytest.approx(8e-6, rel=1e-12)
     assert pw[amplitude + L.DRUM_WAVE_STRIDE] == pytest.approx(2e-6, rel=1e-12)
     truth = {a.kind: a for a in d.active(1.4)}[DRUM]

@@ -1,0 +1,113 @@
+"""The energy a growing defect's step of the geometry moves, booked, compiled (numba).
+
+A defect that grows with a law of time (a pivot moving, a drum going out of round or
+gaining a flat, a lining wearing at a set rate) is written into the step's parameters at
+each physics step's start (:func:`.growth.apply`), with the state held: the contact's
+indentation, the springs' stretch at the shoe's angle and the shoe's inertia about its
+moved pivot change with no motion, and so does the energy they store. What that step
+releases goes with the defect that took it (the worn layer's strain, the strain of a
+contact whose surface moved away); what it stores came from it. The kernel books the
+difference, the energy :func:`stored` at the state before the step less after it, in
+``contact_loss_j``, as :func:`.contact.wear_loss` books the strain a lining that wears
+with its friction work loses continuously (that wear's geometry is written first and is
+not booked here again). The energy books (:mod:`brake_sim_ros.analysis.energy`) read the
+stored energy at a sample with the parameters in force then (:func:`.growth.apply` at its
+time), so they close whatever grows.
+
+A shoe's self-adjuster (:mod:`.ratchet`) moves its lining only while the lining is clear
+of the drum: that moves no energy, and its radius is written (:func:`.ratchet.hold`)
+before the energy is taken on either side of the step.
+"""
+
+from __future__ import annotations
+
+from numba import njit
+
+from brake_sim_ros.model import contact, growth, lining, ratchet, service
+from brake_sim_ros.model import layout as L
+from brake_sim_ros.model.compiled import JIT
+from brake_sim_ros.model.growth_law import LAW_FRICTION_WORK
+
+
+@njit(**JIT)
+def booked(p):
+    """Whether ``p`` has a growth entry whose steps :func:`grow` books: a kind that moves
+    the geometry or a shoe's inertia (pivot, drum out of round, drum flat, lining wear)
+    growing with a law of time."""
+    for j in range(int(p[L.P_GROWTH_COUNT])):
+        g = L.P_GROWTH_BASE + j * L.GROWTH_STRIDE
+        kind = int(p[g + L.G_KIND])
+        geometric = kind == L.GK_PIVOT or kind == L.GK_DRUM or kind == L.GK_FLAT
+        if int(p[g + L.G_LAW]) != LAW_FRICTION_WORK and (geometric or kind == L.GK_WEAR):
+            return True
+    return False
+
+
+@njit(**JIT)
+def stored(p, y):
+    """Energy the state ``y`` stores in what the parameters ``p`` place, J: the shoes'
+    kinetic energy about their pivots (``p``'s inertias), their contacts' elastic energy
+    (``k max(eps, 0)^2 / 2``; a lining over its arc: its nodes', :func:`.lining.shoe_energy`)
+    and, on the service brake, their return springs' and rest stops'
+    (:func:`.service.shoe_energy`). The rotors and the line store what no geometry moves."""
+    lined = p[L.P_LINING_NODE_STIFFNESS] > 0.0
+    k = p[L.P_CONTACT_STIFFNESS]
+    wa = y[L.Y_DRUM_ANGLE]
+    eps_l = eps_r = 0.0
+    if not lined:
+        kin_l, kin_r = contact.kinematics_pair(p, y, 0.0)
+        eps_l, eps_r = kin_l[0], kin_r[0]
+    energy = 0.0
+    for shoe in range(2):
+        base = L.P_SHOE_BASE + shoe * L.SHOE_STRIDE
+        theta = y[L.Y_LEFT_ANGLE + shoe]
+        omega = y[L.Y_LEFT_SPEED + shoe]
+        energy += 0.5 * p[base + L.S_INERTIA] * omega * omega
+        eps = eps_l if shoe == 0 else eps_r
+        if lined:
+            energy += lining.shoe_energy(p, base, theta, wa)
+        elif p[base + L.S_ENABLED] > 0.0 and eps > 0.0:
+            energy += 0.5 * k * eps * eps
+        if p[L.P_SERVICE] > 0.0:
+            energy += service.shoe_energy(p, shoe, theta)
+    return energy
+
+
+@njit(**JIT)
+def grow(p, pw, t, y, fstate, adjusting, book):
+    """The growing defects' parameters at the step that starts at ``t`` (s) in ``pw``
+    (:func:`.growth.apply`), the self-adjuster's take-up after them if ``adjusting``
+    (:func:`.ratchet.take_up`); with ``book``, the energy the laws of time's step moved
+    (:func:`stored` before less after) added to ``y``'s contact loss. ``pw`` must hold
+    the previous step's parameters when booking.
+
+    Returns the shoes' actuation gains (left, right) and whether any geometry moved.
+    """
+    if not book:
+        gl, gr, moved = growth.apply(p, pw, t, y, growth.ALL_ENTRIES)
+        if adjusting and ratchet.take_up(p, pw, fstate, y):
+            moved = True
+        return gl, gr, moved
+    # the wear that follows the wear state is booked continuously (contact.wear_loss)
+    _, _, worn = growth.apply(p, pw, t, y, growth.WORK_ENTRIES)
+    if adjusting:
+        ratchet.hold(p, pw, fstate)
+    before = stored(pw, y)
+    gl, gr, moved = growth.apply(p, pw, t, y, growth.TIMED_ENTRIES)
+    if adjusting:
+        ratchet.hold(p, pw, fstate)
+    if moved:
+        y[L.Y_CONTACT_LOSS] += before - stored(pw, y)
+    if adjusting and ratchet.take_up(p, pw, fstate, y):
+        moved = True
+    return gl, gr, moved or worn
+
+
+@njit(**JIT)
+def previous_step(p, pw, t, y, fstate, adjusting):
+    """Write into ``pw`` (a fresh :func:`.growth.working_copy`) the parameters of the step
+    that started at ``t`` (s), the one before a block's first, as that step had them:
+    :func:`grow` then books the block's first step from them."""
+    growth.apply(p, pw, t, y, growth.ALL_ENTRIES)
+    if adjusting:
+        ratchet.hold(p, pw, fstate)
