@@ -176,6 +176,7 @@ def fixed_step_advance(
     # (rides_free): on a round drum with a fixed geometry, each shoe's indentation at the
     # step's start and twice the largest distance of its lining from its pivot
     free = NOT_FREE.copy()
+    never = NOT_FREE.copy()  # the located sub-steps' (writable: one signature of rk4_step_call)
     free[bound + 1] = 2.0 * kernel.lining_reach(pw, bl)
     free[bound + 3] = 2.0 * kernel.lining_reach(pw, br)
     for i in range(n_steps):
@@ -273,7 +274,7 @@ def fixed_step_advance(
             if round_drum and not growing and not lined:
                 free[bound] = kin_l[0]
                 free[bound + 2] = kin_r[0]
-            rk4.rk4_step(
+            rk4.rk4_step_call(
                 y,
                 k1,
                 t,
@@ -316,7 +317,23 @@ def fixed_step_advance(
                 if (hl > 0.0) != (h_start[0] > 0.0) or (hr > 0.0) != (h_start[1] > 0.0):
                     # a contact switches inside this step: redo it split at the switches
                     fstate[L.F_SWITCHES] += rk4.located_step(
-                        y, k1, t, dt, pw, gl, tl, fl, gr, tr, fr, stuck, h_start, work, out, h_end
+                        y,
+                        k1,
+                        t,
+                        dt,
+                        pw,
+                        gl,
+                        tl,
+                        fl,
+                        gr,
+                        tr,
+                        fr,
+                        stuck,
+                        h_start,
+                        work,
+                        out,
+                        h_end,
+                        never,
                     )
                     accept = False
                 else:

@@ -11,9 +11,6 @@ from brake_sim_ros.model import contact, kernel, lining
 from brake_sim_ros.model import layout as L
 from brake_sim_ros.model.compiled import JIT
 
-# by name, not as kernel.NOT_FREE: numba cannot resolve a module's array attribute in a call
-from brake_sim_ros.model.kernel import NOT_FREE
-
 
 @njit(**JIT)
 def shoe_switch(p, shoe, y):
@@ -83,12 +80,12 @@ def rk4_step(
 def rk4_step_call(
     y, k1, t0, h, p, gl, tl, fl, gr, tr, fr, stuck, ml, mr, k2, k3, k4, tmp, out, y_out, free
 ):
-    """:func:`rk4_step` as a call: the steps that locate a contact switch take it, the
-    plain step inlines it. Each inlined copy is compiled on its own, and the two locating
-    functions' three copies took a quarter of the kernels' compile time (212 s of CPU
-    against 158 s with this call) for a path a step takes at a switch only. The tests call
-    it from Python with a read-only ``free`` (as the kernel's): the set-up's compile then
-    serves them from the cache."""
+    """:func:`rk4_step` as a call, the one compiled copy of it: every scheme's step and the
+    steps that locate a contact switch take it (each inlined copy compiled on its own; the
+    plain step's inlined copy and this call's took 33 s and 30 s of the fixed-step
+    kernel's 98 s of compile). ``free`` is a writable array wherever it is called (the
+    kernel's bound, or a copy of :data:`.kernel.NOT_FREE`): one signature, which the tests'
+    calls from Python share."""
     rk4_step(
         y, k1, t0, h, p, gl, tl, fl, gr, tr, fr, stuck, ml, mr, k2, k3, k4, tmp, out, y_out, free
     )
@@ -96,7 +93,27 @@ def rk4_step_call(
 
 @njit(**JIT)
 def _locate_switch(
-    shoe, on, ya, ka, t0, rem, f_end, p, gl, tl, fl, gr, tr, fr, stuck, ml, mr, work, out, tol
+    shoe,
+    on,
+    ya,
+    ka,
+    t0,
+    rem,
+    f_end,
+    p,
+    gl,
+    tl,
+    fl,
+    gr,
+    tr,
+    fr,
+    stuck,
+    ml,
+    mr,
+    work,
+    out,
+    tol,
+    never,
 ):
     """Instant (s after ``t0``) where ``shoe`` leaves its contact mode ``on``.
 
@@ -146,7 +163,7 @@ def _locate_switch(
             tmp,
             out,
             yb,
-            NOT_FREE,
+            never,
         )
         fs = sign * shoe_switch(p, shoe, yb)[1]
         if fs > 0.0:
@@ -165,7 +182,7 @@ def _locate_switch(
 
 
 @njit(**JIT)
-def located_step(y, k1, t, dt, p, gl, tl, fl, gr, tr, fr, stuck, h_start, work, out, h_end):
+def located_step(y, k1, t, dt, p, gl, tl, fl, gr, tr, fr, stuck, h_start, work, out, h_end, never):
     """RK4 step of ``dt`` from ``y`` (in place) with contact switches located in the step.
 
     The step runs with each shoe's contact mode frozen (the force law is then smooth); a
@@ -175,7 +192,9 @@ def located_step(y, k1, t, dt, p, gl, tl, fl, gr, tr, fr, stuck, h_start, work, 
     stage, so RK4 keeps its fourth order. At most ``MAX_SWITCHES_PER_STEP`` switches are
     located per step (a Zeno bounce sequence); beyond that the step finishes with the last
     modes. ``h_start`` (2,) holds the switching functions at ``y``; ``h_end`` (4,) receives
-    (eps left, h left, eps right, h right) at the end of the step.
+    (eps left, h left, eps right, h right) at the end of the step. ``never``: a free-ride
+    bound that never holds (a writable copy of :data:`.kernel.NOT_FREE`): its sub-steps
+    start where the caller's bound does not hold.
     """
     n = y.shape[0]
     k2 = work[0]
@@ -218,7 +237,7 @@ def located_step(y, k1, t, dt, p, gl, tl, fl, gr, tr, fr, stuck, h_start, work, 
             tmp,
             out,
             yb,
-            NOT_FREE,
+            never,
         )
         el, hl = shoe_switch(p, 0, yb)
         er, hr = shoe_switch(p, 1, yb)
@@ -251,6 +270,7 @@ def located_step(y, k1, t, dt, p, gl, tl, fl, gr, tr, fr, stuck, h_start, work, 
                 work,
                 out,
                 tol,
+                never,
             )
         if bad_r:
             f_end = hr if on_r else -hr
@@ -275,6 +295,7 @@ def located_step(y, k1, t, dt, p, gl, tl, fl, gr, tr, fr, stuck, h_start, work, 
                 work,
                 out,
                 tol,
+                never,
             )
         s = min(s_l, s_r)
         # shoes switching together (a symmetric brake's) flip together
@@ -301,7 +322,7 @@ def located_step(y, k1, t, dt, p, gl, tl, fl, gr, tr, fr, stuck, h_start, work, 
             tmp,
             out,
             ya,
-            NOT_FREE,
+            never,
         )
         tau += s
         if flip_l:

@@ -47,9 +47,7 @@ def _step(p, y, dt, free, mode, t_knots, f_knots):
     tmp, y_out = np.empty(n), np.empty(n)
     out = np.empty((1, L.N_COLUMNS))
     kernel.evaluate(y, p, 0.0, 0.0, 0, mode, mode, k[0], out, -1, 0.0)
-    free = free.copy()
-    free.flags.writeable = False  # as the kernel's bound (a constant there): the call that
-    # the set-up compiled, loaded from the kernel cache
+    free = free.copy()  # writable, as the kernel's bound: the call the set-up compiled
     rk4.rk4_step_call(
         y, k[0], 0.0, dt, p, 1.0, t_knots, f_knots, 1.0, t_knots, f_knots, 0, mode, mode,
         k[1], k[2], k[3], tmp, out, y_out, free,

@@ -63,9 +63,7 @@ def _step(p, y, t0, dt, free, mode, knots):
     tl, fl, tr, fr = knots
     fe = (kernel.force(p, BASES[0], t0, tl, fl, 1.0), kernel.force(p, BASES[1], t0, tr, fr, 1.0))
     kernel.evaluate(y, p, fe[0], fe[1], 0, mode, mode, k[0], out, -1, t0)
-    free = free.copy()
-    free.flags.writeable = False  # as the kernel's bound (a constant there): the call that
-    # the set-up compiled, loaded from the kernel cache
+    free = free.copy()  # writable, as the kernel's bound: the call the set-up compiled
     rk4.rk4_step_call(
         y, k[0], t0, dt, p, 1.0, tl, fl, 1.0, tr, fr, 0, mode, mode,
         k[1], k[2], k[3], tmp, out, y_out, free,
