@@ -135,12 +135,12 @@ def fixed_step_advance(
     adjusting = growing and ratchet.ratcheting(p)
     # a law of time's steps of the geometry are booked (model/growth_energy.py): from the
     # step before the block's first, as that step had its parameters
-    booking = growing and growth_energy.booked(p)
+    book_shoes, worked = growth_energy.booked(p)  # the shoes whose energy they move
     if growing:
-        resumed = booking and step0 > 0
+        resumed = book_shoes if step0 > 0 else 0
         if resumed:
             growth_energy.previous_step(p, pw, (step0 - 1) * dt, y, fstate, adjusting)
-        gl, gr, _ = growth_energy.grow(p, pw, step0 * dt, y, fstate, adjusting, resumed)
+        gl, gr, _ = growth_energy.grow(p, pw, step0 * dt, y, fstate, adjusting, resumed, worked)
     if gain_override != 0:
         gl = 1.0
         gr = 1.0
@@ -183,7 +183,7 @@ def fixed_step_advance(
         step = step0 + i
         t = step * dt
         if growing and i > 0:
-            gl, gr, moved = growth_energy.grow(p, pw, t, y, fstate, adjusting, booking)
+            gl, gr, moved = growth_energy.grow(p, pw, t, y, fstate, adjusting, book_shoes, worked)
             if gain_override != 0:
                 gl = 1.0
                 gr = 1.0

@@ -16,7 +16,10 @@ time), so they close whatever grows.
 
 A shoe's self-adjuster (:mod:`.ratchet`) moves its lining only while the lining is clear
 of the drum: that moves no energy, and its radius is written (:func:`.ratchet.hold`)
-before the energy is taken on either side of the step.
+before the energy is taken on either side of the step. The energy is taken only where a
+severity changes at the step (:func:`_moves`) and only of the shoes the defect moves (a
+pivot or a wear its own, a drum both): a defect growing through a whole stop steps about
+a fifth slower, before its onset and at its final severity by a check of its severity.
 """
 
 from __future__ import annotations
@@ -26,30 +29,62 @@ from numba import njit
 from brake_sim_ros.model import contact, growth, lining, ratchet, service
 from brake_sim_ros.model import layout as L
 from brake_sim_ros.model.compiled import JIT
-from brake_sim_ros.model.growth_law import LAW_FRICTION_WORK
+from brake_sim_ros.model.growth_law import LAW_FRICTION_WORK, severity_at
+
+# the shoes a booked entry's step moves the energy of (:func:`booked`): its own, or both
+_LEFT, _RIGHT, _BOTH = 1, 2, 3
 
 
 @njit(**JIT)
 def booked(p):
-    """Whether ``p`` has a growth entry whose steps :func:`grow` books: a kind that moves
-    the geometry or a shoe's inertia (pivot, drum out of round, drum flat, lining wear)
-    growing with a law of time."""
+    """The entries whose steps :func:`grow` books: a kind that moves the geometry or a
+    shoe's inertia (pivot, drum out of round, drum flat, lining wear) growing with a law
+    of time. Returns the shoes whose energy they move (a mask: 1 left, 2 right, 3 both;
+    0: none) and whether a lining wears with its friction work (written apart)."""
+    shoes = 0
+    worked = False
     for j in range(int(p[L.P_GROWTH_COUNT])):
         g = L.P_GROWTH_BASE + j * L.GROWTH_STRIDE
+        if int(p[g + L.G_LAW]) == LAW_FRICTION_WORK:
+            worked = True
+            continue
+        kind = int(p[g + L.G_KIND])
+        if kind == L.GK_DRUM or kind == L.GK_FLAT:
+            shoes |= _BOTH
+        elif kind == L.GK_PIVOT or kind == L.GK_WEAR:
+            shoes |= _LEFT if int(p[g + L.G_SHOE]) == 0 else _RIGHT
+    return shoes, worked
+
+
+@njit(**JIT)
+def _moves(p, pw, t, y):
+    """Whether a booked entry's severity at ``t`` (s) differs from the one ``pw`` holds:
+    :func:`.growth.apply` would move the geometry now (its severity, as it computes it)."""
+    for j in range(int(p[L.P_GROWTH_COUNT])):
+        g = L.P_GROWTH_BASE + j * L.GROWTH_STRIDE
+        law = int(p[g + L.G_LAW])
         kind = int(p[g + L.G_KIND])
         geometric = kind == L.GK_PIVOT or kind == L.GK_DRUM or kind == L.GK_FLAT
-        if int(p[g + L.G_LAW]) != LAW_FRICTION_WORK and (geometric or kind == L.GK_WEAR):
+        if law == LAW_FRICTION_WORK or not (geometric or kind == L.GK_WEAR):
+            continue
+        s = severity_at(
+            t, law, p[g + L.G_ONSET], p[g + L.G_RATE], p[g + L.G_START], p[g + L.G_FINAL]
+        )
+        if kind == L.GK_WEAR:  # a law of time: the severity in m, nothing written
+            s = growth.lining_wear(p, pw, g, int(p[g + L.G_SHOE]), t, y, s)
+        if s != pw[g + L.G_NOW]:
             return True
     return False
 
 
 @njit(**JIT)
-def stored(p, y):
-    """Energy the state ``y`` stores in what the parameters ``p`` place, J: the shoes'
-    kinetic energy about their pivots (``p``'s inertias), their contacts' elastic energy
-    (``k max(eps, 0)^2 / 2``; a lining over its arc: its nodes', :func:`.lining.shoe_energy`)
-    and, on the service brake, their return springs' and rest stops'
-    (:func:`.service.shoe_energy`). The rotors and the line store what no geometry moves."""
+def stored(p, y, shoes):
+    """Energy the state ``y`` stores in what the parameters ``p`` place for the shoes of
+    the mask ``shoes`` (1 left, 2 right, 3 both), J: their kinetic energy about their
+    pivots (``p``'s inertias), their contacts' elastic energy (``k max(eps, 0)^2 / 2``; a
+    lining over its arc: its nodes', :func:`.lining.shoe_energy`) and, on the service
+    brake, their return springs' and rest stops' (:func:`.service.shoe_energy`). The
+    rotors and the line store what no geometry moves."""
     lined = p[L.P_LINING_NODE_STIFFNESS] > 0.0
     k = p[L.P_CONTACT_STIFFNESS]
     wa = y[L.Y_DRUM_ANGLE]
@@ -59,6 +94,8 @@ def stored(p, y):
         eps_l, eps_r = kin_l[0], kin_r[0]
     energy = 0.0
     for shoe in range(2):
+        if not shoes & (1 << shoe):
+            continue
         base = L.P_SHOE_BASE + shoe * L.SHOE_STRIDE
         theta = y[L.Y_LEFT_ANGLE + shoe]
         omega = y[L.Y_LEFT_SPEED + shoe]
@@ -74,30 +111,35 @@ def stored(p, y):
 
 
 @njit(**JIT)
-def grow(p, pw, t, y, fstate, adjusting, book):
+def grow(p, pw, t, y, fstate, adjusting, shoes, worked):
     """The growing defects' parameters at the step that starts at ``t`` (s) in ``pw``
     (:func:`.growth.apply`), the self-adjuster's take-up after them if ``adjusting``
-    (:func:`.ratchet.take_up`); with ``book``, the energy the laws of time's step moved
-    (:func:`stored` before less after) added to ``y``'s contact loss. ``pw`` must hold
-    the previous step's parameters when booking.
+    (:func:`.ratchet.take_up`). With ``shoes`` (:func:`booked`'s mask; 0: nothing
+    booked), the energy the laws of time's step moved (:func:`stored` before less after,
+    where :func:`_moves` says it moves) is added to ``y``'s contact loss, and ``worked``
+    says whether a lining wears with its friction work; ``pw`` must then hold the
+    previous step's parameters.
 
     Returns the shoes' actuation gains (left, right) and whether any geometry moved.
     """
-    if not book:
+    if shoes == 0:
         gl, gr, moved = growth.apply(p, pw, t, y, growth.ALL_ENTRIES)
         if adjusting and ratchet.take_up(p, pw, fstate, y):
             moved = True
         return gl, gr, moved
-    # the wear that follows the wear state is booked continuously (contact.wear_loss)
-    _, _, worn = growth.apply(p, pw, t, y, growth.WORK_ENTRIES)
-    if adjusting:
-        ratchet.hold(p, pw, fstate)
-    before = stored(pw, y)
-    gl, gr, moved = growth.apply(p, pw, t, y, growth.TIMED_ENTRIES)
-    if adjusting:
-        ratchet.hold(p, pw, fstate)
-    if moved:
-        y[L.Y_CONTACT_LOSS] += before - stored(pw, y)
+    worn = False
+    if worked:  # the wear that follows the wear state is booked continuously (wear_loss)
+        worn = growth.apply(p, pw, t, y, growth.WORK_ENTRIES)[2]
+        if adjusting:
+            ratchet.hold(p, pw, fstate)
+    if _moves(p, pw, t, y):
+        before = stored(pw, y, shoes)
+        gl, gr, moved = growth.apply(p, pw, t, y, growth.TIMED_ENTRIES)
+        if adjusting:
+            ratchet.hold(p, pw, fstate)
+        y[L.Y_CONTACT_LOSS] += before - stored(pw, y, shoes)
+    else:
+        gl, gr, moved = growth.apply(p, pw, t, y, growth.TIMED_ENTRIES)
     if adjusting and ratchet.take_up(p, pw, fstate, y):
         moved = True
     return gl, gr, moved or worn
