@@ -31,28 +31,34 @@ from brake_sim_ros.model import layout as L
 from brake_sim_ros.model.compiled import JIT
 from brake_sim_ros.model.growth_law import LAW_FRICTION_WORK, severity_at
 
-# the shoes a booked entry's step moves the energy of (:func:`booked`): its own, or both
-_LEFT, _RIGHT, _BOTH = 1, 2, 3
+
+@njit(inline="always", **JIT)
+def _shoes_moved(p, g):
+    """The shoes whose energy the growth entry at ``g`` of ``p`` moves at its steps, a
+    mask (1 left, 2 right, 3 both), if :func:`grow` books them: a kind that moves the
+    geometry or a shoe's inertia growing with a law of time (a pivot or a lining wear:
+    its own shoe; a drum out of round or a flat: both); else 0."""
+    if int(p[g + L.G_LAW]) == LAW_FRICTION_WORK:
+        return 0
+    kind = int(p[g + L.G_KIND])
+    if kind == L.GK_DRUM or kind == L.GK_FLAT:
+        return 3
+    if kind == L.GK_PIVOT or kind == L.GK_WEAR:
+        return 1 << int(p[g + L.G_SHOE])
+    return 0
 
 
 @njit(**JIT)
 def booked(p):
-    """The entries whose steps :func:`grow` books: a kind that moves the geometry or a
-    shoe's inertia (pivot, drum out of round, drum flat, lining wear) growing with a law
-    of time. Returns the shoes whose energy they move (a mask: 1 left, 2 right, 3 both;
-    0: none) and whether a lining wears with its friction work (written apart)."""
+    """The shoes whose energy the growth entries of ``p`` that :func:`grow` books move
+    (a mask, :func:`_shoes_moved`; 0: none), and whether a lining wears with its friction
+    work (its geometry written apart)."""
     shoes = 0
     worked = False
     for j in range(int(p[L.P_GROWTH_COUNT])):
         g = L.P_GROWTH_BASE + j * L.GROWTH_STRIDE
-        if int(p[g + L.G_LAW]) == LAW_FRICTION_WORK:
-            worked = True
-            continue
-        kind = int(p[g + L.G_KIND])
-        if kind == L.GK_DRUM or kind == L.GK_FLAT:
-            shoes |= _BOTH
-        elif kind == L.GK_PIVOT or kind == L.GK_WEAR:
-            shoes |= _LEFT if int(p[g + L.G_SHOE]) == 0 else _RIGHT
+        shoes |= _shoes_moved(p, g)
+        worked = worked or int(p[g + L.G_LAW]) == LAW_FRICTION_WORK
     return shoes, worked
 
 
@@ -62,15 +68,13 @@ def _moves(p, pw, t, y):
     :func:`.growth.apply` would move the geometry now (its severity, as it computes it)."""
     for j in range(int(p[L.P_GROWTH_COUNT])):
         g = L.P_GROWTH_BASE + j * L.GROWTH_STRIDE
-        law = int(p[g + L.G_LAW])
-        kind = int(p[g + L.G_KIND])
-        geometric = kind == L.GK_PIVOT or kind == L.GK_DRUM or kind == L.GK_FLAT
-        if law == LAW_FRICTION_WORK or not (geometric or kind == L.GK_WEAR):
+        if _shoes_moved(p, g) == 0:
             continue
+        law = int(p[g + L.G_LAW])
         s = severity_at(
             t, law, p[g + L.G_ONSET], p[g + L.G_RATE], p[g + L.G_START], p[g + L.G_FINAL]
         )
-        if kind == L.GK_WEAR:  # a law of time: the severity in m, nothing written
+        if int(p[g + L.G_KIND]) == L.GK_WEAR:  # a law of time: the severity in m, nothing written
             s = growth.lining_wear(p, pw, g, int(p[g + L.G_SHOE]), t, y, s)
         if s != pw[g + L.G_NOW]:
             return True

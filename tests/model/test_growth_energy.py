@@ -37,6 +37,13 @@ GROWING = {
         '[defects.left]\nlining_wear_mm = {value = 5.0, growth = "friction_work",'
         " wear_rate_mm_per_mj = 200.0}\n"
     ),
+    # both at once: the work's wear booked as it wears, the pin's steps at each step, neither
+    # twice (the wear's strain, some 7 J, would show)
+    "work+pivot": (
+        '[defects.left]\nlining_wear_mm = {value = 2.0, growth = "friction_work",'
+        " wear_rate_mm_per_mj = 200.0}\npivot_radius_change_pct = {value = -2.0, onset_s = 0.1,"
+        ' growth = "linear", rate_per_s = 4.0}\n'
+    ),
 }
 # Without the booking the books were short by (J, measured 2026-11-28): wear 4.2 (study),
 # 3.5 (service); pivot 0.58, 0.33; drum 6.1e-4, 6.4e-4; the lining over its arc wearing
@@ -44,7 +51,9 @@ GROWING = {
 # it, within the same stop's integration error without a growing defect (study 3.6e-5 J;
 # service 6.2e-8 J, over the arc 1.3e-7 J): measured at most 1.9e-4 J (study, drum),
 # 8.9e-7 J (service) and 5.3e-5 J over the arc wearing with its work (of the 4 J or so
-# of strain the wear takes, as the point contact's in tests/model/test_lining_wear.py).
+# of strain the wear takes, as the point contact's in tests/model/test_lining_wear.py);
+# a wear with its work and a pivot growing together 0.59 and 0.33 before, 6.3e-4 and
+# 1.2e-4 J after (the work's wear booked continuously: to 2e-5 or so of its strain).
 STUDY_J, SERVICE_J = 3e-4, 1e-5
 
 
@@ -74,6 +83,8 @@ def _scenario(brake: str, defect: str, *, lined: bool = False):
         # the step limit's loaded angle once raised here (the lining held the shoe first)
         ("service", "drum", True, SERVICE_J),
         ("service", "work", True, 2e-4),
+        ("study", "work+pivot", False, 2e-3),
+        ("service", "work+pivot", False, 2e-3),
     ],
 )
 def test_a_growing_defect_leaves_the_energy_books_closed(brake, defect, lined, bound_j):

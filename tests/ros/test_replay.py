@@ -203,7 +203,13 @@ def test_replay_delivers_the_recording_in_order_and_in_time(recording: Path):
 
 
 def test_rate_and_start_offset(recording: Path):
-    """At 2x from 0.5 s: half the wall time, messages from 0.5 s on, ground truth first."""
+    """At 2x from 0.5 s: half the wall time, messages from 0.5 s on, ground truth first.
+
+    The pace is judged by the median of the messages' lateness against their due times
+    (as the in-time test, which also bounds the worst at 1x) and by the arrivals' slope
+    against log time (least squares over some 100 chunks), not by the span from the first
+    arrival: a late first message shortens that (under the suite's load one came 0.12 s
+    late, its followers on time)."""
     recorded, received = _listen(recording, 2, "--rate", "2", "--start-offset", "0.5")
     start_ns = recorded[0][2] + 500_000_000
     rec = _decoded_by_topic(recorded)
@@ -215,10 +221,14 @@ def test_rate_and_start_offset(recording: Path):
     )
     assert rx[stream.PIVOT_FORCES.name] == rec[stream.PIVOT_FORCES.name][first:]
     assert first > 0
+    log_times = [t for topic, _d, t in recorded if topic == stream.PIVOT_FORCES.name][first:]
     times = [t for topic, _d, t in received if topic == stream.PIVOT_FORCES.name]
-    span = times[-1] - times[0]
-    expected = (DURATION_S - 0.5 - 0.01) / 2.0
-    assert span == pytest.approx(expected, abs=0.1)
+    log_s = (np.array(log_times) - log_times[0]) * 1e-9
+    wall_s = np.array(times) - times[0]
+    late = wall_s - log_s / 2.0
+    late -= np.median(late)
+    assert np.median(np.abs(late)) <= TYPICAL_LATE_S, late
+    assert np.polyfit(log_s, wall_s, 1)[0] == pytest.approx(0.5, rel=0.1)
     # the defect ground truth recorded at t = 0 is published at the start
     assert rx[stream.DEFECTS.name] == rec[stream.DEFECTS.name]
 
