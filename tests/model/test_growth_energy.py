@@ -14,6 +14,7 @@ import pytest
 
 from brake_sim_ros.analysis.energy import energy_balance, parameters_at
 from brake_sim_ros.model import layout as L
+from brake_sim_ros.model.run_setup import SampleBlock
 from brake_sim_ros.scenarios.loader import parse_scenario
 from brake_sim_ros.stream.build import stepper_for
 
@@ -112,3 +113,19 @@ def test_the_parameters_at_a_sample_are_the_kernels_then():
     healthy = stepper_for(parse_scenario('name = "h"\nbrake = "service"\n'))
     p = healthy.packed_parameters
     assert parameters_at(p, healthy.run(0.01), 0) is p
+
+
+@pytest.mark.parametrize("brake", ["study", "service"])
+def test_a_run_booking_its_growth_steps_the_same_bits_whatever_its_blocks(brake):
+    """A block's first step books from the step before it, which it rebuilds
+    (growth_energy.previous_step): in blocks of 77 samples, the same bits as in one, the
+    books included, with a wear following its work and a pin growing in time at once."""
+    scenario = _scenario(brake, "work+pivot")
+    whole = stepper_for(scenario).run(0.5)
+    stepper = stepper_for(scenario)
+    total = len(whole)
+    blocks = []
+    while stepper.sample_index < total:
+        blocks.append(stepper.advance(min(77, total - stepper.sample_index)))
+    assert SampleBlock.concatenate(blocks).data.tobytes() == whole.data.tobytes()
+    assert whole["contact_loss_j"][-1] > 0.0
