@@ -171,20 +171,25 @@ def lining_energy_j(block: SampleBlock, packed: np.ndarray, rows: list[int]) -> 
     return [float(e) for e in lining.stored_energy_rows(packed, left, right, drum)]
 
 
-def line_pressure_pa(block: SampleBlock, packed: np.ndarray) -> np.ndarray:
-    """The service brake's line pressure at every row of ``block``, Pa: the pistons' mean
-    recorded force over the piston area (model/service.py: each piston pushes ``A p`` plus
-    its own commanded force's departure from the pistons' mean, so their mean is ``A p``),
-    exact while neither piston sits at its residual force."""
-    mean = 0.5 * (block["left_actuation_force_n"] + block["right_actuation_force_n"])
-    return mean / packed[L.P_PISTON_AREA]
+def line_pressure_pa(
+    block: SampleBlock, packed: np.ndarray, rows: list[int] | None = None
+) -> np.ndarray:
+    """The service brake's line pressure at every row of ``block`` (or at ``rows``), Pa:
+    the pistons' mean recorded force over the piston area (model/service.py: each piston
+    pushes ``A p`` plus its own commanded force's departure from the pistons' mean, so
+    their mean is ``A p``), exact while neither piston sits at its residual force."""
+    left, right = block["left_actuation_force_n"], block["right_actuation_force_n"]
+    if rows is not None:
+        left, right = left[rows], right[rows]
+    return 0.5 * (left + right) / packed[L.P_PISTON_AREA]
 
 
 def line_energy_j(block: SampleBlock, packed: np.ndarray, rows: list[int]) -> list[float]:
     """Energy the service brake's hydraulic circuit stores, ``C p^2 / 2`` and its air's
-    (J, :func:`.service.line_energy`), at ``rows`` of ``block`` (:func:`line_pressure_pa`)."""
-    pressure = line_pressure_pa(block, packed)
-    return [float(service.line_energy.py_func(packed, float(pressure[r]))) for r in rows]
+    (J, :func:`.service.line_energy`), at ``rows`` of ``block`` (:func:`line_pressure_pa`
+    there only)."""
+    pressure = line_pressure_pa(block, packed, rows)
+    return [float(service.line_energy.py_func(packed, float(p))) for p in pressure]
 
 
 def energy_balance(

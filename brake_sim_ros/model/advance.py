@@ -105,10 +105,6 @@ def fixed_step_advance(
     """
     n = y.shape[0]
     k1 = np.empty(n)
-    k2 = np.empty(n)
-    k3 = np.empty(n)
-    k4 = np.empty(n)
-    tmp = np.empty(n)
     y_new = np.empty(n)
     work = np.empty((8, n))
     h_start = np.empty(2)
@@ -289,10 +285,7 @@ def fixed_step_advance(
                 stuck,
                 ml,
                 mr,
-                k2,
-                k3,
-                k4,
-                tmp,
+                work,
                 out,
                 y_new,
                 free,

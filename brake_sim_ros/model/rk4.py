@@ -77,17 +77,36 @@ def rk4_step(
 
 
 @njit(**JIT)
-def rk4_step_call(
-    y, k1, t0, h, p, gl, tl, fl, gr, tr, fr, stuck, ml, mr, k2, k3, k4, tmp, out, y_out, free
-):
+def rk4_step_call(y, k1, t0, h, p, gl, tl, fl, gr, tr, fr, stuck, ml, mr, work, out, y_out, free):
     """:func:`rk4_step` as a call, the one compiled copy of it: every scheme's step and the
     steps that locate a contact switch take it (each inlined copy compiled on its own; the
     plain step's inlined copy and this call's took 33 s and 30 s of the fixed-step
-    kernel's 98 s of compile). ``free`` is a writable array wherever it is called (the
-    kernel's bound, or a copy of :data:`.kernel.NOT_FREE`): one signature, which the tests'
-    calls from Python share."""
+    kernel's 98 s of compile). Its stages' k2, k3, k4 and the stage state are ``work``'s
+    rows 0-3 (a 2-D array of rows of the state's length; the kernel's scratch). ``free`` is
+    a writable array wherever it is called (the kernel's bound, or a copy of
+    :data:`.kernel.NOT_FREE`): one signature, which the tests' calls from Python share."""
     rk4_step(
-        y, k1, t0, h, p, gl, tl, fl, gr, tr, fr, stuck, ml, mr, k2, k3, k4, tmp, out, y_out, free
+        y,
+        k1,
+        t0,
+        h,
+        p,
+        gl,
+        tl,
+        fl,
+        gr,
+        tr,
+        fr,
+        stuck,
+        ml,
+        mr,
+        work[0],
+        work[1],
+        work[2],
+        work[3],
+        out,
+        y_out,
+        free,
     )
 
 
@@ -124,10 +143,6 @@ def _locate_switch(
     the bracket (the first instant at or past the switch) is returned.
     """
     sign = 1.0 if on else -1.0
-    k2 = work[0]
-    k3 = work[1]
-    k4 = work[2]
-    tmp = work[3]
     yb = work[4]
     a = 0.0
     fa = max(sign * shoe_switch(p, shoe, ya)[1], 0.0)
@@ -157,10 +172,7 @@ def _locate_switch(
             stuck,
             ml,
             mr,
-            k2,
-            k3,
-            k4,
-            tmp,
+            work,
             out,
             yb,
             never,
@@ -197,10 +209,6 @@ def located_step(y, k1, t, dt, p, gl, tl, fl, gr, tr, fr, stuck, h_start, work, 
     start where the caller's bound does not hold.
     """
     n = y.shape[0]
-    k2 = work[0]
-    k3 = work[1]
-    k4 = work[2]
-    tmp = work[3]
     ya = work[5]
     yb = work[6]
     ka = work[7]
@@ -231,10 +239,7 @@ def located_step(y, k1, t, dt, p, gl, tl, fl, gr, tr, fr, stuck, h_start, work, 
             stuck,
             ml,
             mr,
-            k2,
-            k3,
-            k4,
-            tmp,
+            work,
             out,
             yb,
             never,
@@ -316,10 +321,7 @@ def located_step(y, k1, t, dt, p, gl, tl, fl, gr, tr, fr, stuck, h_start, work, 
             stuck,
             ml,
             mr,
-            k2,
-            k3,
-            k4,
-            tmp,
+            work,
             out,
             ya,
             never,

@@ -43,14 +43,15 @@ def _step(p, y, dt, free, mode, t_knots, f_knots):
     """One RK4 step of ``y`` (both shoes in contact mode ``mode``) with the bound ``free``;
     returns the new state and the stages that rode free."""
     n = y.shape[0]
-    k = [np.empty(n) for _ in range(4)]
-    tmp, y_out = np.empty(n), np.empty(n)
+    work = np.empty((4, n))  # the step's k2, k3, k4 and stage state (rk4_step_call)
+    k = [np.empty(n), work[0], work[1], work[2]]
+    y_out = np.empty(n)
     out = np.empty((1, L.N_COLUMNS))
     kernel.evaluate(y, p, 0.0, 0.0, 0, mode, mode, k[0], out, -1, 0.0)
     free = free.copy()  # writable, as the kernel's bound: the call the set-up compiled
     rk4.rk4_step_call(
         y, k[0], 0.0, dt, p, 1.0, t_knots, f_knots, 1.0, t_knots, f_knots, 0, mode, mode,
-        k[1], k[2], k[3], tmp, out, y_out, free,
+        work, out, y_out, free,
     )  # fmt: skip
     free_stages = 0
     for j, c in enumerate((0.5, 0.5, 1.0)):

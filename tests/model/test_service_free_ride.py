@@ -57,8 +57,9 @@ def _step(p, y, t0, dt, free, mode, knots):
     actuation ``knots``: left times, forces, right times, forces) with the bound ``free``;
     returns the new state and the stages that rode free."""
     n = y.shape[0]
-    k = [np.empty(n) for _ in range(4)]
-    tmp, y_out = np.empty(n), np.empty(n)
+    work = np.empty((4, n))  # the step's k2, k3, k4 and stage state (rk4_step_call)
+    k = [np.empty(n), work[0], work[1], work[2]]
+    y_out = np.empty(n)
     out = np.empty((1, L.N_COLUMNS))
     tl, fl, tr, fr = knots
     fe = (kernel.force(p, BASES[0], t0, tl, fl, 1.0), kernel.force(p, BASES[1], t0, tr, fr, 1.0))
@@ -66,7 +67,7 @@ def _step(p, y, t0, dt, free, mode, knots):
     free = free.copy()  # writable, as the kernel's bound: the call the set-up compiled
     rk4.rk4_step_call(
         y, k[0], t0, dt, p, 1.0, tl, fl, 1.0, tr, fr, 0, mode, mode,
-        k[1], k[2], k[3], tmp, out, y_out, free,
+        work, out, y_out, free,
     )  # fmt: skip
     free_stages = 0
     for j, c in enumerate((0.5, 0.5, 1.0)):
