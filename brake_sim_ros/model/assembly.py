@@ -23,7 +23,7 @@ from brake_sim_ros.model.defects import SERVICE_RUNOUT_UM, Defects, DrumDefect, 
 from brake_sim_ros.model.line_kinds import LINE
 from brake_sim_ros.model.packing import PackSite
 from brake_sim_ros.model.parameters import BrakeParameters
-from brake_sim_ros.model.placement import lining_mid_rad
+from brake_sim_ros.model.placement import POSE_IDS, lining_mid_rad
 from brake_sim_ros.model.service_parameters import ServiceBrakeParameters
 from brake_sim_ros.model.vehicle import DEFAULT_WHEEL_RADIUS_M
 
@@ -200,6 +200,7 @@ def _pack_growth(params: BrakeParameters, defects: Defects, p: np.ndarray) -> No
     p[nb + L.N_INERTIA] = g.inertia_about_pivot_kg_m2
     p[nb + L.N_MASS] = g.mass_kg
     p[nb + L.N_LINING_MID] = lining_mid_rad(params)
+    p[nb + L.N_POSE] = POSE_IDS[g.pose]
     entries = defects.growth
     if len(entries) > L.MAX_GROWTH_ENTRIES:
         raise ParameterError(

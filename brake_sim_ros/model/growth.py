@@ -26,44 +26,64 @@ _MM_PER_MJ_TO_M_PER_J = 1e-9
 
 
 @njit(**JIT)
-def shoe_placement(shift, mirror, px, py, tx, ty, mcx, mcy, inertia0, mass, mid0):
+def shoe_placement(shift, mirror, pose, px, py, tx, ty, mcx, mcy, inertia0, mass, mid0):
     """Assemble a shoe whose pin sits ``shift`` (a fraction of its nominal radius) out of
-    place: the rule of :func:`brake_sim_ros.model.placement.place_shoe` (documented there).
+    place by the pose rule ``pose``: the rules of
+    :func:`brake_sim_ros.model.placement.place_shoe` (documented there).
 
     Args:
         shift: the pin's radial displacement over its nominal distance from the drum
             centre, 1 (``pct / 100``).
         mirror: +1 for the left shoe, -1 for the right one (the mirror image about y).
+        pose: ``layout.POSE_TIP_ABUTMENT`` or ``layout.POSE_EYE_PISTON``.
         px, py: the nominal pin of the left shoe, m. tx, ty: its tip, m.
         mcx, mcy: its mass centre, m. inertia0: its inertia about the nominal pin, kg m^2.
         mass: the shoe's mass, kg. mid0: the polar angle of its lining arc's middle, rad.
 
     Returns:
         (pin x, pin y, lining centre x, lining centre y, lining middle angle rad, mass
-        centre x, mass centre y, inertia about the pin kg m^2, turn about the tip rad,
+        centre x, mass centre y, inertia about the pin kg m^2, tip x, tip y, turn rad,
         heel seat offset m), in the backing-plate frame (m), for the shoe ``mirror`` says.
+        The turn is the body's, about the tip (tip abutment) or about the moved pin (eye),
+        in the shoe's own sense.
     """
     qx, qy = px * (1.0 + shift), py * (1.0 + shift)  # the displaced pin P'
-    ax, ay = px - tx, py - ty  # tip -> nominal pin
-    bx, by = qx - tx, qy - ty  # tip -> displaced pin
-    turn = math.atan2(ax * by - ay * bx, ax * bx + ay * by)
-    c, s = math.cos(turn), math.sin(turn)
-    # points of the shoe body after the turn about the tip: the lining centre (the drum
-    # centre at rest) and the mass centre
-    cx = tx + c * (0.0 - tx) - s * (0.0 - ty)
-    cy = ty + s * (0.0 - tx) + c * (0.0 - ty)
-    gx = tx + c * (mcx - tx) - s * (mcy - ty)
-    gy = ty + s * (mcx - tx) + c * (mcy - ty)
-    chord = math.hypot(ax, ay)
-    seat = (math.hypot(bx, by) - chord) if chord > 0.0 else 0.0
-    # parallel-axis theorem: the inertia about the mass centre is the shoe's own
-    arm0 = (mcx - px) ** 2 + (mcy - py) ** 2
-    arm1 = (gx - qx) ** 2 + (gy - qy) ** 2
-    inertia = inertia0 + mass * (arm1 - arm0)
+    if pose == L.POSE_EYE_PISTON:
+        # the body goes with its pin, then turns about it until the tip is back on the
+        # piston's stop, x = tx: (a cos - b sin)(turn) = tx - qx for (a, b) = T - P, the
+        # root through 0 at no shift
+        ax, ay = tx - px, ty - py
+        lean = math.atan2(ay, ax)
+        reach = math.acos(min(1.0, max(-1.0, (tx - qx) / math.hypot(ax, ay))))
+        turn = (reach if lean >= 0.0 else -reach) - lean
+        c, s = math.cos(turn), math.sin(turn)
+        cx, cy = qx - c * px + s * py, qy - s * px - c * py
+        gx = qx + c * (mcx - px) - s * (mcy - py)
+        gy = qy + s * (mcx - px) + c * (mcy - py)
+        tipy = qy + s * ax + c * ay
+        inertia, seat = inertia0, 0.0
+    else:
+        ax, ay = px - tx, py - ty  # tip -> nominal pin
+        bx, by = qx - tx, qy - ty  # tip -> displaced pin
+        turn = math.atan2(ax * by - ay * bx, ax * bx + ay * by)
+        c, s = math.cos(turn), math.sin(turn)
+        # points of the shoe body after the turn about the tip: the lining centre (the
+        # drum centre at rest) and the mass centre
+        cx = tx + c * (0.0 - tx) - s * (0.0 - ty)
+        cy = ty + s * (0.0 - tx) + c * (0.0 - ty)
+        gx = tx + c * (mcx - tx) - s * (mcy - ty)
+        gy = ty + s * (mcx - tx) + c * (mcy - ty)
+        chord = math.hypot(ax, ay)
+        seat = (math.hypot(bx, by) - chord) if chord > 0.0 else 0.0
+        # parallel-axis theorem: the inertia about the mass centre is the shoe's own
+        arm0 = (mcx - px) ** 2 + (mcy - py) ** 2
+        arm1 = (gx - qx) ** 2 + (gy - qy) ** 2
+        inertia = inertia0 + mass * (arm1 - arm0)
+        tipy = ty
     mid = mid0 + turn
     if mirror < 0.0:
-        return -qx, qy, -cx, cy, math.pi - mid, -gx, gy, inertia, turn, seat
-    return qx, qy, cx, cy, mid, gx, gy, inertia, turn, seat
+        return -qx, qy, -cx, cy, math.pi - mid, -gx, gy, inertia, -tx, tipy, turn, seat
+    return qx, qy, cx, cy, mid, gx, gy, inertia, tx, tipy, turn, seat
 
 
 @njit(**JIT)
@@ -74,9 +94,9 @@ def lining_friction(mu, change_pct):
 
 
 @njit(**JIT)
-def write_placement(p, base, px, py, cx, cy, mid, gx, gy, inertia):
-    """Write a shoe's placement (pin, lining centre and middle, mass centre, inertia; as
-    :func:`shoe_placement` returns them) into its block at ``base`` of ``p``."""
+def write_placement(p, base, px, py, cx, cy, mid, gx, gy, inertia, tipx, tipy):
+    """Write a shoe's placement (pin, lining centre and middle, mass centre, inertia, tip;
+    as :func:`shoe_placement` returns them) into its block at ``base`` of ``p``."""
     p[base + L.S_PIVOT_X] = px
     p[base + L.S_PIVOT_Y] = py
     p[base + L.S_LINING_CENTRE_X] = cx
@@ -87,6 +107,8 @@ def write_placement(p, base, px, py, cx, cy, mid, gx, gy, inertia):
     p[base + L.S_MASS_CENTRE_X] = gx
     p[base + L.S_MASS_CENTRE_Y] = gy
     p[base + L.S_INERTIA] = inertia
+    p[base + L.S_TIP_X] = tipx
+    p[base + L.S_TIP_Y] = tipy
 
 
 @njit(**JIT)
@@ -183,6 +205,7 @@ def apply(p, pw, t, y, entries):
             pl = shoe_placement(
                 s / 100.0,
                 p[base + L.S_SIGN],
+                p[nb + L.N_POSE],
                 p[nb + L.N_PIVOT_X],
                 p[nb + L.N_PIVOT_Y],
                 p[nb + L.N_TIP_X],
@@ -193,7 +216,9 @@ def apply(p, pw, t, y, entries):
                 p[nb + L.N_MASS],
                 p[nb + L.N_LINING_MID],
             )
-            write_placement(pw, base, pl[0], pl[1], pl[2], pl[3], pl[4], pl[5], pl[6], pl[7])
+            write_placement(
+                pw, base, pl[0], pl[1], pl[2], pl[3], pl[4], pl[5], pl[6], pl[7], pl[8], pl[9]
+            )
         elif kind == L.GK_FRICTION:
             base = L.P_SHOE_BASE + shoe * L.SHOE_STRIDE
             pw[base + L.S_FRICTION_COEFFICIENT] = lining_friction(p[L.P_FRICTION_COEFFICIENT], s)

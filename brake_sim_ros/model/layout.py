@@ -85,7 +85,11 @@ N_MASS_CENTRE_Y = 5
 N_INERTIA = 6  # about the nominal pivot, kg m^2
 N_MASS = 7
 N_LINING_MID = 8  # polar angle of the lining arc's middle, rad
-NOMINAL_SIZE = 9
+N_POSE = 9  # the pose rule a moved pin places the shoe by (POSE_*)
+NOMINAL_SIZE = 10
+# pose rules (parameters.POSES, model/placement.py place_shoe)
+POSE_TIP_ABUTMENT = 0
+POSE_EYE_PISTON = 1
 
 # defects that change during the run (model/defects.py Defects.growth): the number of
 # entries, then per entry what it changes (G_KIND: a GK_* id, G_SHOE: 0 left, 1 right, -1

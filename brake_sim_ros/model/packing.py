@@ -66,7 +66,7 @@ def pack_nothing(site: PackSite) -> None:
 
 def pack_pivot(site: PackSite) -> None:
     """A pin moved radially: the shoe's placement (pin, lining centre and middle, mass
-    centre, inertia about the pin), :func:`.placement.place_shoe`."""
+    centre, inertia about the pin, tip), :func:`.placement.place_shoe`."""
     s = place_shoe(site.params, site.location, site.defect)
     growth.write_placement.py_func(
         site.p,
@@ -76,6 +76,7 @@ def pack_pivot(site: PackSite) -> None:
         s.lining_mid_rad,
         *s.mass_centre_xy_m,
         s.inertia_about_pivot_kg_m2,
+        *s.tip_xy_m,
     )
 
 

@@ -68,6 +68,12 @@ class DrivelineParameters:
         )
 
 
+# Pose rules: which three contacts hold a shoe at rest (model/placement.py place_shoe).
+# "tip-abutment": the tip held both ways by the piston, the heel in a seat open along the
+# tip-pin line; "eye-piston": the heel in an eye on its pin, the tip on the piston's stop.
+POSES: tuple[str, ...] = ("tip-abutment", "eye-piston")
+
+
 @dataclass(frozen=True)
 class ShoeGeometry:
     """Rigid-shoe geometry of the LEFT shoe at rest; the right shoe mirrors it about y.
@@ -120,9 +126,13 @@ class ShoeGeometry:
     mass_centre_x_m: float = -0.120
     mass_centre_y_m: float = 0.0
     inertia_about_pivot_kg_m2: float = 0.0494
+    # How the shoe sits between its pin and its piston, which decides where a moved pin
+    # puts it (POSES; brake_sim_ros.model.placement.place_shoe).
+    pose: str = "tip-abutment"
 
     def __post_init__(self) -> None:
         _finite(self)
+        _require(self.pose in POSES, "pose", self.pose, f"one of {list(POSES)}")
         r = self.drum_radius_m
         _require(0.05 <= r <= 0.5, "drum_radius_m", r, "0.05 to 0.5 m")
         _require(

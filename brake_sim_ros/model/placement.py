@@ -13,7 +13,11 @@ from dataclasses import dataclass
 from typing import Protocol
 
 from brake_sim_ros.model import growth
+from brake_sim_ros.model import layout as L
 from brake_sim_ros.model.parameters import BrakeParameters
+
+# the packed id of each pose rule (parameters.POSES)
+POSE_IDS: dict[str, int] = {"tip-abutment": L.POSE_TIP_ABUTMENT, "eye-piston": L.POSE_EYE_PISTON}
 
 
 class ShoePose(Protocol):
@@ -34,16 +38,19 @@ class ShoePlacement:
         pivot_xy_m: the pin, the axis the shoe turns about in service.
         lining_centre_xy_m, lining_radius_m, lining_mid_rad, lining_half_rad: the lining
             arc (centre, radius, polar angle of its middle seen from the centre, half span).
-        tip_xy_m: where the piston pushes; it stays on the piston whatever the pin does.
+        tip_xy_m: where the piston pushes; it stays on the piston's axis whatever the pin
+            does (and at its place across it with the tip abutment).
         actuation_dir: unit direction of the piston's push (fixed in the backing plate).
         mass_centre_xy_m: the shoe's mass centre.
         inertia_about_pivot_kg_m2: moment of inertia about the pin (parallel-axis theorem
             from the nominal value, for the pin's place in the shoe's heel seat).
-        abutment_turn_rad: angle the shoe body turned about its tip abutment to follow
-            the pin, rad, in the shoe's own sense (counter-clockwise for the left shoe,
-            clockwise for the right one, as its angle).
+        abutment_turn_rad: angle the shoe body turned to follow the pin (about its tip
+            abutment, or about the moved pin with the heel in an eye), rad, in the shoe's
+            own sense (counter-clockwise for the left shoe, clockwise for the right one, as
+            its angle).
         heel_seat_offset_m: part of the pin's displacement along the tip-pin line, taken
-            up in the heel seat (positive: the pin moved away from the tip), m.
+            up in the heel seat (positive: the pin moved away from the tip), m; 0 with the
+            heel in an eye.
     """
 
     sign: float
@@ -65,7 +72,10 @@ def place_shoe(params: BrakeParameters, side: str, defect: ShoePose) -> ShoePlac
 
     The nominal geometry (:class:`ShoeGeometry`, left shoe) has the lining concentric with
     the drum at rest. A pivot-radius defect moves the pin radially, ``delta = pct/100 * P``.
-    A rigid shoe at rest is held by two abutments and its return spring:
+    A rigid shoe in the plane is held at rest by three contacts; which three is its pose
+    rule (``ShoeGeometry.pose``), and the rule decides where a moved pin puts the shoe.
+
+    ``"tip-abutment"``:
 
     * the tip rests on the wheel-cylinder piston, retracted against its stop: the piston
       holds it along its axis, the slot in its end across it. The tip stays where it is,
@@ -80,13 +90,22 @@ def place_shoe(params: BrakeParameters, side: str, defect: ShoePose) -> ShoePlac
     lining, mass centre and heel follow, the tip stays on the piston. The part along the
     line is taken up in the seat: it does not move the body, but the shoe then turns on the
     pin at its new place ``P'`` (its moment arms and its inertia about the pin follow).
-
     To first order a radial pin shift thus closes the running clearance at the first
     contact by ``pct/100 * D * a / L`` (``D`` the distance of the tip-pin line from the drum
     centre, ``a`` the tip's distance from the contact normal, ``L`` the tip-pin distance):
-    opposite shifts move the lining by equal amounts in opposite directions. A pin at the
-    bottom of the drum moves mostly along the line (``D`` small), so it turns the shoe
-    little.
+    opposite shifts move the lining by equal amounts in opposite directions.
+
+    ``"eye-piston"``:
+
+    * the heel sits in a closed eye on the pin (two contacts): the body goes with its pin;
+    * the tip rests on the piston held on its stop, which holds it along the piston's axis
+      only (the tip slides across it in the slot). The body turns about the moved pin
+      ``P'`` until the tip is back on the stop (``x = T_x``, exactly).
+
+    The lining moves by about ``delta`` with the pin, which may exceed the running
+    clearance: the arc then first touches at one of its ends (see the validation report's
+    note on case 1). The inertia about the pin does not change (the pin stays at its place
+    in the shoe).
 
     A worn lining's arc has the radius of the new one less the wear (its surface moves in).
 
@@ -97,9 +116,10 @@ def place_shoe(params: BrakeParameters, side: str, defect: ShoePose) -> ShoePlac
     # function (model/growth.py); here its Python source runs, so the assembled geometry
     # keeps CPython's math to the last bit
     px, py = g.pivot_xy_m
-    qx, qy, cx, cy, mid, mx, my, inertia, turn, seat = growth.shoe_placement.py_func(
+    qx, qy, cx, cy, mid, mx, my, inertia, tx, ty, turn, seat = growth.shoe_placement.py_func(
         defect.pivot_radius_change_pct / 100.0,
         -1.0 if side == "right" else 1.0,
+        POSE_IDS[g.pose],
         px,
         py,
         g.tip_x_m,
@@ -118,7 +138,7 @@ def place_shoe(params: BrakeParameters, side: str, defect: ShoePose) -> ShoePlac
         lining_radius_m=worn_lining_radius(params, defect.lining_wear_mm),
         lining_mid_rad=mid,
         lining_half_rad=math.radians(0.5 * (g.lining_end_deg - g.lining_start_deg)),
-        tip_xy_m=(m * g.tip_x_m, g.tip_y_m),
+        tip_xy_m=(tx, ty),
         actuation_dir=(-m, 0.0),
         mass_centre_xy_m=(mx, my),
         inertia_about_pivot_kg_m2=inertia,

@@ -21,7 +21,13 @@ from brake_sim_ros.model.assembly import SIDES, ModelOptions
 from brake_sim_ros.model.cycle import LIMITS as CYCLE_LIMITS
 from brake_sim_ros.model.cycle import Cycle, Segment
 from brake_sim_ros.model.fidelity import ACCURACY_PRESETS, LEVEL_BY_NAME, OUTPUTS, Needs
-from brake_sim_ros.model.parameters import BRAKES, DEFAULT_BRAKE, PARAMETER_GROUPS, BrakeParameters
+from brake_sim_ros.model.parameters import (
+    BRAKES,
+    DEFAULT_BRAKE,
+    PARAMETER_GROUPS,
+    POSES,
+    BrakeParameters,
+)
 from brake_sim_ros.model.service_parameters import (
     ROAD_FRICTION_RANGE,
     ServiceBrakeParameters,
@@ -82,19 +88,26 @@ def parse_parameters(ctx: Checker, data: Any, base: BrakeParameters) -> BrakePar
     """``[parameters.<group>]``: overrides of the default parameters, group by group;
     ``[parameters.service]`` (and ``[parameters.service.tyre]``) on the service brake."""
     data = ctx.table(data, "parameters", {*PARAMETER_GROUPS, "service"})
-    overrides: dict[str, dict[str, float]] = {}
+    overrides: dict[str, dict[str, float | str]] = {}
     for group, values in data.items():
         if group == "service":
             continue
         cls = PARAMETER_GROUPS[group]
         names = {f.name for f in dataclasses.fields(cls)}
         values = ctx.table(values, f"parameters.{group}", names)
-        overrides[group] = {k: ctx.number(v, f"parameters.{group}.{k}") for k, v in values.items()}
+        overrides[group] = {k: _value(ctx, v, f"parameters.{group}.{k}") for k, v in values.items()}
     try:
         params = base.with_overrides(overrides)
     except BrakeSimError as exc:
         raise ScenarioError(f"{ctx.source}: [parameters]: {exc}") from exc
     return _parse_service(ctx, data["service"], params) if "service" in data else params
+
+
+def _value(ctx: Checker, value: Any, key: str) -> float | str:
+    """A parameter's value: a number, or for a shoe's pose one of the pose rules."""
+    if key == "parameters.shoe.pose":
+        return ctx.string(value, key, POSES)
+    return ctx.number(value, key)
 
 
 def _numbers(ctx: Checker, data: dict[str, Any], table: str) -> dict[str, float]:

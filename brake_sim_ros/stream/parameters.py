@@ -47,7 +47,12 @@ from brake_sim_ros.model.catalogue import (
 )
 from brake_sim_ros.model.defects import Defects, DrumDefect, LineDefect, ShoeDefect
 from brake_sim_ros.model.layout import SIDES
-from brake_sim_ros.model.parameters import PARAMETER_GROUPS, BrakeParameters, unit_of
+from brake_sim_ros.model.parameters import (
+    PARAMETER_GROUPS,
+    POSES,
+    BrakeParameters,
+    unit_of,
+)
 from brake_sim_ros.model.run_setup import BrakeSetup
 from brake_sim_ros.model.service_parameters import (
     ROAD_FRICTION_RANGE,
@@ -67,6 +72,12 @@ from brake_sim_ros.stream.run_parameters import (  # noqa: F401 (re-exported)
 DRIVE_LIMIT_RANGES = {name: (lo, hi) for name, lo, hi in DRIVE_LIMITS}
 
 # Fields that are initial conditions: a change applies at the next reset.
+# Model values a recording may lack, having been made before they existed: the value that
+# gave its run (build_model).
+LEGACY_VALUES: dict[str, Any] = {"shoe.pose": "tip-abutment"}
+# The model values that are names, not numbers, and the names allowed.
+NAMED_VALUES: dict[str, tuple[str, ...]] = {"shoe.pose": POSES}
+
 INITIAL_CONDITIONS = frozenset(
     {
         "driveline.initial_speed_rad_s",
@@ -269,6 +280,8 @@ def model_parameter_specs(params: BrakeParameters, defects: Defects) -> list[Par
             cls = {**PARAMETER_GROUPS, **SERVICE_GROUPS}[name.rsplit(".", 1)[0]]
             doc = _attribute_doc(cls, field_name) or _first_line(cls.__doc__)
             text = f"{field_name} ({unit_of(field_name)}): {doc}."
+            if name in NAMED_VALUES:
+                text = f"{field_name} (one of {', '.join(NAMED_VALUES[name])}): {doc}."
         if name in INITIAL_CONDITIONS:
             text += " Initial condition: a change applies at the next ~/reset."
         if parts[0] == "defects" and kind_of_field(parts[1], field_name).tied:
@@ -307,7 +320,9 @@ def build_model(
     defects = Defects(left=shoes["left"], right=shoes["right"], drum=drum, line=line)
     groups = {}
     for group, cls in PARAMETER_GROUPS.items():
-        groups[group] = cls(**{f.name: values[f"{group}.{f.name}"] for f in fields(cls)})
+        # a recording made before shoes had pose rules had the only one there was
+        given = {**LEGACY_VALUES, **values} if group == "shoe" else values
+        groups[group] = cls(**{f.name: given[f"{group}.{f.name}"] for f in fields(cls)})
     return BrakeParameters(**groups, service=_service_from(values)), defects
 
 

@@ -66,8 +66,9 @@ def packed_by_rule(
             m * pose.mass_centre[0],
             pose.mass_centre[1],
             pose.inertia_kg_m2,
+            m * pose.tip[0],
+            pose.tip[1],
         )
-        p[b + L.S_TIP_X], p[b + L.S_TIP_Y] = m * pose.tip[0], pose.tip[1]
         if indentation_at(p, b, 0.0) >= 0.0:
             raise ParameterError(
                 f"{side} pivot radius change {pct:+g} % under this pose puts the lining"

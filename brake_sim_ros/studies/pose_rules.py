@@ -119,9 +119,10 @@ def tip_abutment(params: BrakeParameters, pct: float) -> Pose:
     """The model's rule (:func:`.placement.place_shoe`)."""
     g = params.shoe
     px, py = g.pivot_xy_m
-    qx, qy, cx, cy, mid, mx, my, inertia, _turn, _seat = growth.shoe_placement.py_func(
+    qx, qy, cx, cy, mid, mx, my, inertia, tx, ty, _turn, _seat = growth.shoe_placement.py_func(
         pct / 100.0,
         1.0,
+        L.POSE_TIP_ABUTMENT,
         px,
         py,
         g.tip_x_m,
@@ -132,7 +133,7 @@ def tip_abutment(params: BrakeParameters, pct: float) -> Pose:
         g.mass_kg,
         lining_mid_rad(params),
     )
-    return Pose((qx, qy), (cx, cy), mid, (mx, my), inertia, (g.tip_x_m, g.tip_y_m))
+    return Pose((qx, qy), (cx, cy), mid, (mx, my), inertia, (tx, ty))
 
 
 def _pin_shift(params: BrakeParameters, pct: float) -> tuple[float, float]:
@@ -239,9 +240,16 @@ def packed(params: BrakeParameters, pose: Pose, crown_mm: float = 0.0, **defect)
         p[right + L.S_LINING_CENTRE_X] -= k * math.cos(lining_mid_rad(params))
         p[right + L.S_LINING_CENTRE_Y] += k * math.sin(lining_mid_rad(params))
     growth.write_placement.py_func(
-        p, b, *pose.pivot, cx, cy, pose.lining_mid_rad, *pose.mass_centre, pose.inertia_kg_m2
+        p,
+        b,
+        *pose.pivot,
+        cx,
+        cy,
+        pose.lining_mid_rad,
+        *pose.mass_centre,
+        pose.inertia_kg_m2,
+        *pose.tip,
     )
-    p[b + L.S_TIP_X], p[b + L.S_TIP_Y] = pose.tip
     return p
 
 

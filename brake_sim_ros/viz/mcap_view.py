@@ -27,7 +27,7 @@ from brake_sim_ros.recording.reader import Recording, RecordingReadError
 from brake_sim_ros.stream import parameters as ros_params
 from brake_sim_ros.viz.rerun_sink import RerunSink
 
-MAX_VALUE_CHARS = 100  # a model value is the repr() of one number
+MAX_VALUE_CHARS = 100  # a model value is the repr() of one number or name
 MAX_TEXT_CHARS = 100_000  # scenario text shown in the viewer
 
 
@@ -49,10 +49,12 @@ class ViewSummary:
     last_s: float | None
 
 
-def _model_value(name: str, text: str) -> float | int | bool:
+def _model_value(name: str, text: str) -> float | int | bool | str:
     if len(text) > MAX_VALUE_CHARS:
         raise ValueError(f"value of {name} is {len(text)} characters long")
     value = ast.literal_eval(text)
+    if isinstance(value, str) and name in ros_params.NAMED_VALUES:
+        return value
     if not isinstance(value, float | int | bool):
         raise ValueError(f"value of {name} is not a number")
     return value
@@ -62,7 +64,8 @@ def read_info(recording: Recording) -> RecordingInfo:
     """The model and scenario metadata of a checked recording.
 
     Raises:
-        RecordingReadError: model metadata that is not numbers, or that the core refuses.
+        RecordingReadError: model metadata that is not numbers (names where the model
+            has them), or that the core refuses.
     """
     params = defects = None
     model = recording.metadata_record(MODEL)

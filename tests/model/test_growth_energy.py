@@ -27,6 +27,12 @@ GROWING = {
         "[defects.left]\npivot_radius_change_pct = {value = -2.0, onset_s = 0.1,"
         ' growth = "linear", rate_per_s = 4.0}\n'
     ),
+    # the same with the heel in an eye on the pin (the body goes with it, the tip slides
+    # across the piston)
+    "pivot-eye": (
+        '[parameters.shoe]\npose = "eye-piston"\n[defects.left]\npivot_radius_change_pct ='
+        ' {value = -2.0, onset_s = 0.1, growth = "linear", rate_per_s = 4.0}\n'
+    ),
     # the drum goes oval under the shoes, 60 um of runout in the stop
     "drum": (
         '[defects.drum]\nharmonics = [{order = 2, amplitude_um = 60.0}]\ngrowth = "linear"\n'
@@ -75,6 +81,7 @@ def _scenario(brake: str, defect: str, *, lined: bool = False):
     [
         ("study", "wear", False, STUDY_J),
         ("study", "pivot", False, STUDY_J),
+        ("study", "pivot-eye", False, STUDY_J),
         ("study", "drum", False, STUDY_J),
         ("service", "wear", False, SERVICE_J),
         ("service", "pivot", False, SERVICE_J),

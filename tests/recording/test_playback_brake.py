@@ -41,3 +41,18 @@ def test_a_recording_without_a_readable_model_says_no_brake(recording, records, 
     brake, reason = recording.brake()
     assert brake == "" and why in reason
     assert "__import__" not in reason and "((" not in reason  # nothing of the file echoed
+
+
+def test_a_recording_from_before_pose_rules_reads_as_the_tip_abutment(recording):
+    """The example was recorded before shoes had pose rules: its model reads with the
+    only rule there was, and a name is read only where the model has one."""
+    record = dict(recording._recording.metadata_record(metadata.MODEL))
+    assert "shoe.pose" not in record
+    params, _ = metadata.model_from_record(record)
+    assert params.shoe.pose == "tip-abutment"
+    eye = {**record, "shoe.pose": repr("eye-piston")}
+    assert metadata.model_from_record(eye)[0].shoe.pose == "eye-piston"
+    for bad in ({**record, "shoe.pose": repr("eye")}, {**record, "shoe.mass_kg": repr("1.6")}):
+        recording._recording.metadata = [(metadata.MODEL, bad)]
+        brake, reason = recording.brake()
+        assert brake == "" and "not a model" in reason

@@ -174,6 +174,11 @@ def test_any_file_content_is_refused_without_quoting_it(sim, dirs, content):
         ({"driveline.flywheel_inertia_kg_m2": 0.0}, "allowed > 0"),
         ({"driveline.drum_inertia_kg_m2": 0.0}, "allowed > 0"),
         ({"friction.coefficient": math.nan}, ""),
+        (
+            {"shoe.pose": "eye"},
+            "pose='eye' is invalid: allowed one of ['tip-abutment', 'eye-piston']",
+        ),
+        ({"shoe.pose": 1.0}, "expected 'Type.STRING'"),
         ({"shoe.mass_kg": math.inf}, ""),
         ({"chunk_rate_hz": 1000.0, "state_rate_hz": 10000.0}, "cannot keep real time"),
         ({"real_time_factor": 1000.0}, "cannot keep real time"),

@@ -8,7 +8,7 @@ import pytest
 
 from brake_sim_ros.errors import ParameterError
 from brake_sim_ros.model.defects import Defects, ShoeDefect
-from brake_sim_ros.model.parameters import PARAMETER_GROUPS, BrakeParameters
+from brake_sim_ros.model.parameters import PARAMETER_GROUPS, POSES, BrakeParameters
 from brake_sim_ros.scenarios import builtin_names, load_scenario
 from brake_sim_ros.stream import parameters as ros_params
 
@@ -58,6 +58,9 @@ def test_round_trip_and_ranges_for_every_builtin_scenario(name):
         assert spec.description and "(" in spec.description
         if isinstance(spec.default, bool):  # a switch (the lining over its arc): no range
             assert spec.range is None, spec.name
+            continue
+        if isinstance(spec.default, str):  # a name (the shoe's pose): the names allowed
+            assert spec.range is None and all(p in spec.description for p in POSES), spec.name
             continue
         assert spec.range is not None, spec.name
         assert spec.range[0] <= spec.default <= spec.range[1], spec.name
