@@ -19,7 +19,7 @@ from brake_sim_ros.scenarios import load_scenario
 from brake_sim_ros.solvers import kernel_parts
 from brake_sim_ros.stream.run import RunResult, run_scenario
 
-IMPACTING_S = 0.3  # the impacting regime of the symmetric run ends at 0.27 s
+IMPACTING_S = 0.3  # the impacting regime of the symmetric run ends at 0.29 s
 
 # pytest writes each test module's assertion-rewritten bytecode beside it, and every later
 # run reads it; where PYTHONDONTWRITEBYTECODE is set it would write none, and every worker

@@ -268,8 +268,8 @@ KINDS: list[DefectKind] = [
         maximum=3500.0,
         limit=(
             "the peak runout stays below the gap between the resting shoes and the drum"
-            " (the running clearance, 3.5 mm nominal, checked at assembly) and the surface"
-            " slope sum k a_k / R0 at most 0.05"
+            " (the running clearance, 3.63 mm on the study brake, checked at assembly) and"
+            " the surface slope sum k a_k / R0 at most 0.05"
         ),
         description=(
             "drum radius harmonics r(psi) = R0 + sum a_k cos(k psi + phi_k), psi in the"

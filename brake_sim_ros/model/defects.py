@@ -161,9 +161,10 @@ class DrumDefect(_FieldSet):
     most once, at most :data:`MAX_DRUM_HARMONICS` harmonics; finite amplitudes >= 0 and
     phases; the surface slope ``sum_k k a_k / R0`` at most :data:`.contact.MAX_DRUM_SLOPE`; and the
     peak runout ``sum_k a_k`` below the gap between each resting shoe and the round drum
-    (the running clearance, 3.5 mm nominal; checked where the brake is assembled,
-    :func:`brake_sim_ros.model.assembly.pack`): a drum out of round by more would touch the
-    retracted shoes every revolution, a permanent contact. Service drums run out by
+    (the running clearance: 3.63 mm on the study brake, 0.3 mm on the service brake;
+    checked where the brake is assembled, :func:`brake_sim_ros.model.assembly.pack`): a
+    drum out of round by more would touch the retracted shoes every revolution, a
+    permanent contact. Service drums run out by
     50-150 um, about 50 um is a common service limit, and judder starts from 10-20 um
     (``TESTBED.md``); order 2 (ovality) dominates.
 

@@ -83,52 +83,50 @@ class ShoeGeometry:
     """
 
     drum_radius_m: float = 0.180  # [published]
-    # The calibration (brake_sim_ros/studies/calibration.py) chose the values below once, for
-    # the symmetric brake and cases 1, 5 and 7 together, within what a leading-trailing drum
-    # brake of this size allows: pins on an anchor at the bottom, tips at one wheel cylinder
-    # at the top. How the shoe sits between its pin and its piston, and what a pivot
-    # defect does to it: brake_sim_ros.model.placement.place_shoe.
+    # The study brake's shoe: a geometry of the calibration's space (leading-trailing,
+    # pins at the bottom, tips at one wheel cylinder at the top;
+    # brake_sim_ros/studies/calibration.py) drawn by the pose-rule study
+    # (brake_sim_ros/studies/pose_rule_study.py --sample 1500, seed 28) that puts the
+    # symmetric brake and cases 1, 5 and 7 in their published bands with the heel in an eye
+    # on its pin, rounded. How the shoe sits and what a moved pin does to it: ``pose`` and
+    # brake_sim_ros.model.placement.place_shoe.
     #
-    # Pivot pin 148 mm from the drum centre, 25 deg left of bottom dead centre (x = -63 mm:
-    # two pins 125 mm apart on one anchor plate). The shoe first touches the
-    # drum 90 deg from the pin (at 155 deg), where the normal force's arm is the whole pin
-    # radius. The pin's polar angle decides how much a radial pin shift moves the lining:
-    # only its part across the tip-pin line turns the shoe (about the tip), and a pin at the
-    # bottom moves mostly along that line. 245 deg is the calibration's bound: the pivot
-    # cases ask for the largest effect (validation report, notes on case 1).
-    pivot_radius_m: float = 0.148
-    pivot_polar_angle_deg: float = 245.0
-    # Running clearance between lining and drum at rest. Together with the pin radius it
-    # is the angular gap the shoe turns through before it strikes (1.35 deg); case 5
-    # (+79.7 % peak force for a 2 deg tilt) sets that gap, and with the shoe's inertia it
-    # puts the first impact at 56 N of the ramp. 3.5 mm is a worn, badly adjusted brake
-    # rather than a new one (0.3-0.5 mm), as the study's gap implies.
-    running_clearance_m: float = 0.0035
-    # Lining arc: from 115 deg (toe, 15 deg past the tip) to 195 deg (heel, 50 deg short of
-    # the pin): 80 deg of the usual 70-120, centred near where the shoe first touches
-    # (155 deg), so that the contact stays on the lining for every defect of the study.
-    lining_start_deg: float = 115.0
-    lining_end_deg: float = 195.0
+    # Pivot pin 134 mm from the drum centre, 22 deg left of bottom dead centre (x = -50 mm:
+    # two pins 100 mm apart on one anchor plate). The shoe first touches the drum near
+    # 159 deg, about 90 deg from the pin, where the normal force's arm is nearly the whole pin
+    # radius.
+    pivot_radius_m: float = 0.134
+    pivot_polar_angle_deg: float = 248.0
+    # Running clearance between lining and drum at rest. With the pin radius it is the
+    # angular gap the shoe turns through before it strikes (1.55 deg); case 5 (+79.7 % peak
+    # force for a 2 deg tilt) sets that gap, and with the shoe's inertia it puts the first
+    # impact at 55 N of the ramp. 3.63 mm is a worn, badly adjusted brake rather than a new
+    # one (0.3-0.5 mm), as the study's gap implies.
+    running_clearance_m: float = 0.00363
+    # Lining arc: from 114.4 deg (toe, 15 deg past the tip) to 198 deg (heel, 50 deg short
+    # of the pin): 84 deg of the usual 70-120, around where the shoe first touches.
+    lining_start_deg: float = 114.4
+    lining_end_deg: float = 198.0
     # Lining (friction material) width along the drum axis: the Hertzian contact length.
     lining_width_m: float = 0.045
-    # Shoe tip where the wheel-cylinder piston pushes, horizontally outward: 27 mm left of
-    # the axis (a 54 mm cylinder between the two tips), 150 mm up, just inside the shoe's
-    # web. The calibration's bound: a higher tip (farther from the pin) makes a pin shift
-    # turn the shoe more.
-    tip_x_m: float = -0.027
-    tip_y_m: float = 0.150
-    # Shoe mass and mass centre: web, table and lining as a uniform arc at 150 mm from the
-    # pin (245 deg) to the tip (100 deg), centroid (-112, +15) mm, moved 16 mm toward the
-    # heavier heel end (the anchor end of the web). Inertia about the pin: the arc's own
-    # 0.0153 kg m^2 about its mass centre (radius of gyration 98 mm) plus m d^2 =
-    # 0.0341 kg m^2. With the clearance it puts the first impact at 56 N.
-    mass_kg: float = 1.6
-    mass_centre_x_m: float = -0.120
-    mass_centre_y_m: float = 0.0
-    inertia_about_pivot_kg_m2: float = 0.0494
+    # Shoe tip where the wheel-cylinder piston pushes, horizontally outward: 21 mm left of
+    # the axis (a 42 mm cylinder between the two tips), 127 mm up, inside the shoe's web.
+    tip_x_m: float = -0.021
+    tip_y_m: float = 0.127
+    # Shoe mass and mass centre (web, table and lining): 1.26 kg at (-109, +13) mm, 150 mm
+    # from the pin. Inertia about the pin: 0.0100 kg m^2 about the mass centre (radius of
+    # gyration 89 mm) plus m d^2 = 0.0282 kg m^2. With the clearance it puts the first
+    # impact at 55 N.
+    mass_kg: float = 1.26
+    mass_centre_x_m: float = -0.1094
+    mass_centre_y_m: float = 0.0132
+    inertia_about_pivot_kg_m2: float = 0.0382
     # How the shoe sits between its pin and its piston, which decides where a moved pin
-    # puts it (POSES; brake_sim_ros.model.placement.place_shoe).
-    pose: str = "tip-abutment"
+    # puts it (POSES; brake_sim_ros.model.placement.place_shoe). The study's shoe: the heel
+    # in an eye on its pin, the tip on the piston held on its stop. With it a 3 % outward
+    # pin closes the study's case-1 share of the clearance (the validation report's notes
+    # on case 1, where the tip abutment is shown to close too little).
+    pose: str = "eye-piston"
 
     def __post_init__(self) -> None:
         _finite(self)
@@ -196,6 +194,37 @@ class ShoeGeometry:
         return (self.pivot_radius_m * math.cos(a), self.pivot_radius_m * math.sin(a))
 
 
+# The service brake's shoe (BrakeParameters.of_brake): a leading-trailing brake of the same
+# drum with its heels on an anchor at the bottom and its tips at one wheel cylinder at the
+# top, the heel in a seat open along the tip-pin line (the tip abutment), at the service
+# running clearance (SERVICE_RUNNING_CLEARANCE_M; a self-adjuster keeps it). The layout
+# is the one the study brake had until issue 28 took the eye-piston pose for the study:
+# * pin 148 mm from the drum centre, 25 deg left of bottom dead centre (x = -63 mm: two
+#   pins 125 mm apart on one anchor plate); the shoe first touches the drum 90 deg from
+#   the pin (at 155 deg), where the normal force's arm is the whole pin radius;
+# * lining from 115 deg (toe, 15 deg past the tip) to 195 deg (heel, 50 deg short of the
+#   pin): 80 deg of the usual 70-120;
+# * tip 27 mm left of the axis (a 54 mm cylinder between the two tips), 150 mm up;
+# * mass 1.6 kg: web, table and lining as a uniform arc at 150 mm from the pin (245 deg)
+#   to the tip (100 deg), centroid (-112, +15) mm, moved 16 mm toward the heavier heel
+#   end; inertia about the pin: the arc's own 0.0153 kg m^2 about its mass centre (radius
+#   of gyration 98 mm) plus m d^2 = 0.0341 kg m^2.
+SERVICE_SHOE = ShoeGeometry(
+    pivot_radius_m=0.148,
+    pivot_polar_angle_deg=245.0,
+    running_clearance_m=SERVICE_RUNNING_CLEARANCE_M,
+    lining_start_deg=115.0,
+    lining_end_deg=195.0,
+    tip_x_m=-0.027,
+    tip_y_m=0.150,
+    mass_kg=1.6,
+    mass_centre_x_m=-0.120,
+    mass_centre_y_m=0.0,
+    inertia_about_pivot_kg_m2=0.0494,
+    pose="tip-abutment",
+)
+
+
 @dataclass(frozen=True)
 class ContactParameters:
     """Hertzian line contact between lining and drum, Kelvin-Voigt normal force."""
@@ -207,10 +236,11 @@ class ContactParameters:
     # not the steel table, is what touches the drum.
     shoe_youngs_modulus_pa: float = 1.0e9
     shoe_poisson_ratio: float = 0.25
-    # Contact damping. About 11 % of critical for the shoe's effective mass at the contact
-    # (inertia / pin radius^2 = 2.3 kg) on the contact stiffness (3.7e7 N/m): a coefficient
-    # of restitution near 0.7 at the first impact.
-    damping_n_s_per_m: float = 2000.0
+    # Contact damping. About 6 % of critical for the study shoe's effective mass at the
+    # contact (inertia / pin radius^2 = 2.1 kg) on the contact stiffness (3.7e7 N/m): a
+    # coefficient of restitution near 0.8 at the first impact. Chosen with the study's
+    # shoe (ShoeGeometry), whose first-impact peak and period it sets with the clearance.
+    damping_n_s_per_m: float = 1000.0
 
     def __post_init__(self) -> None:
         _finite(self)
@@ -229,6 +259,12 @@ class ContactParameters:
             (1.0 - self.drum_poisson_ratio**2) / self.drum_youngs_modulus_pa
             + (1.0 - self.shoe_poisson_ratio**2) / self.shoe_youngs_modulus_pa
         )
+
+
+# The service brake's contact: its damping about 11 % of critical for its shoe's effective
+# mass at the contact (inertia / pin radius^2 = 2.3 kg) on the contact stiffness
+# (3.7e7 N/m), a coefficient of restitution near 0.7 at the first impact.
+SERVICE_CONTACT = ContactParameters(damping_n_s_per_m=2000.0)
 
 
 @dataclass(frozen=True)
@@ -284,8 +320,7 @@ class BrakeParameters:
         _require(brake in BRAKES, "brake", brake, f"one of {list(BRAKES)}")
         if brake == "study":
             return cls()
-        shoe = replace(ShoeGeometry(), running_clearance_m=SERVICE_RUNNING_CLEARANCE_M)
-        return cls(shoe=shoe, service=ServiceBrakeParameters())
+        return cls(shoe=SERVICE_SHOE, contact=SERVICE_CONTACT, service=ServiceBrakeParameters())
 
     @property
     def brake(self) -> str:

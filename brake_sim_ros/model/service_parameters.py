@@ -17,7 +17,7 @@ from brake_sim_ros.model.parameter_checks import require_finite as _finite
 
 # Running clearance of the service brake, a shoe, at the lining: workshop specifications
 # give about 0.6 mm on the drum's diameter (0.3 mm a shoe), which a self-adjuster holds as
-# the lining wears (TESTBED figures for the service brake). The study brake's is 3.5 mm
+# the lining wears (TESTBED figures for the service brake). The study brake's is 3.63 mm
 # (ShoeGeometry.running_clearance_m), as its calibration needs.
 SERVICE_RUNNING_CLEARANCE_M = 0.0003
 

@@ -28,7 +28,7 @@ told apart in a spectrum.
 The plate deflects by micrometres: a static 2 kN on the default first mode (5 kg at
 1.2 kHz) gives 7 um, and the published event peaks at 23 um at the backing plate during the
 first impacts (:class:`Structure` reports the displacements), against a running clearance
-of 3.5 mm and indentations up to 0.14 mm. What would feed back is the pin's motion relative
+of 3.6 mm and indentations up to 0.14 mm. What would feed back is the pin's motion relative
 to the drum's axis, and the drum turns on a hub carried by the same knuckle, so less than
 that. The neglect is small in steady contact; in the first impacts the plate's absolute
 motion reaches a sixth of the peak indentation, an upper bound on what is left out. A

@@ -55,7 +55,7 @@ DEFAULT_BRAKE = "service"  # the drive cycles' and campaigns' brake; "study" on 
 LEFT_OUT = {
     "service": {
         "pivot_radius_change": "from half its service limit (+1.5 %, the study's cases on a"
-        " 3.5 mm clearance) its lining starts inside the drum of the service brake's 0.3 mm"
+        " 3.63 mm clearance) its lining starts inside the drum of the service brake's 0.3 mm"
         " clearance, which the scenario loader refuses",
     },
     "study": {},

@@ -233,7 +233,7 @@ def verify(point: GridPoint) -> list[str]:
     return lines
 
 
-# The built-in scenarios of the cases the candidate's check runs, with the left shoe's defect.
+# The built-in scenarios of the cases a found geometry's check runs, with the left shoe's defect.
 SCENARIO_CASES = (
     ("case1_left_pivot_out", {"pivot_radius_change_pct": 3.0}),
     ("case2_left_pivot_in", {"pivot_radius_change_pct": -3.0}),

@@ -1,8 +1,8 @@
 """The pose-rule study's command (issue 28, case 1): the rules of
-:mod:`brake_sim_ros.studies.pose_rule_study` compared at the parameters in force, the candidate
-geometry (:data:`~brake_sim_ros.studies.pose_rules.EYE_PISTON_CANDIDATE`), a random sample
-of the calibration's space (:mod:`.pose_rule_sample`) and the validation's checks under
-each rule (:mod:`.pose_rule_validation`).
+:mod:`brake_sim_ros.studies.pose_rules` compared at the parameters in force (the study
+brake's), a random sample of the calibration's space (:mod:`.pose_rule_sample`; it found
+the study brake's geometry) and the validation's checks under each rule
+(:mod:`.pose_rule_validation`).
 
 Run it with ``python -m brake_sim_ros.studies.pose_rule_study`` (seconds; ``--help``).
 """
@@ -22,7 +22,7 @@ from brake_sim_ros.studies.pose_rule_sample import (
     verify,
 )
 from brake_sim_ros.studies.pose_rule_validation import print_validation
-from brake_sim_ros.studies.pose_rules import RULES, candidate_parameters, report_rule
+from brake_sim_ros.studies.pose_rules import RULES, report_rule
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -30,7 +30,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--rules", nargs="*", default=list(RULES), choices=list(RULES))
     parser.add_argument("--crown-mm", nargs="*", type=float, default=[0.0])
     parser.add_argument("--pcts", nargs="*", type=float, default=[-3.0, 3.0])
-    parser.add_argument("--candidate", action="store_true", help="figures of EYE_PISTON_CANDIDATE")
+    parser.add_argument(
+        "--verify", action="store_true", help="the calibration's figures of the parameters in force"
+    )
     parser.add_argument(
         "--validate",
         nargs="+",
@@ -39,27 +41,20 @@ def main(argv: list[str] | None = None) -> int:
         help="the validation's checks with the pins placed by these rules",
     )
     parser.add_argument(
-        "--on-candidate",
-        action="store_true",
-        help="--validate on EYE_PISTON_CANDIDATE's geometry, not the parameters in force",
-    )
-    parser.add_argument(
         "--sample", type=int, default=0, help="random geometries per rule (0: none)"
     )
     args = parser.parse_args(argv)
     params = BrakeParameters()
     if args.validate:
-        geometry_params = candidate_parameters(params) if args.on_candidate else params
         for name in args.validate:
-            print_validation(geometry_params, name)
+            print_validation(params, name)
         return 0
-    if args.candidate:
-        found = candidate_parameters(params)
-        point = grid_point(found, "eye-piston", 0.0, (0.0, 0.0, 0.0))
+    if args.verify:
+        point = grid_point(params, params.shoe.pose, 0.0, (0.0, 0.0, 0.0))
         cells = "  ".join(f"{k} {m:+.2f}" for k, m in point.misses.items())
-        print(f"eye-piston candidate: misses in band units: {cells}")
+        print(f"{params.shoe.pose}: misses in band units: {cells}")
         print("\n".join(verify(point)))
-        print("\n".join(scenario_check(found, "eye-piston")))
+        print("\n".join(scenario_check(params, params.shoe.pose)))
         return 0
     if args.sample:
         geometries = sample_geometries(params, args.sample)

@@ -5,8 +5,7 @@ given and each shoe with a pin defect placed by the rule; then the validation's 
 figures and checks (:mod:`.validation_checks`). The measured-acceleration part is left out.
 
 Run it with ``python -m brake_sim_ros.studies.pose_rule_study --validate RULE ...`` (at the
-parameters in force; ``--on-candidate``: on the study's candidate geometry); about 10 s of
-CPU a rule.
+parameters in force); about 10 s of CPU a rule.
 """
 
 from __future__ import annotations
@@ -38,6 +37,7 @@ from brake_sim_ros.studies.validation_checks import (
     Check,
     checks,
     figures,
+    free_travel,
 )
 
 
@@ -100,9 +100,11 @@ def validation_checks(
             progress(name)
         runs.append(CaseRun(case, name, shoe, _run(load_scenario(name), params, rule)))
     sweep: dict[str, dict[float, EventMetrics]] = {}
+    travel: dict[str, dict[float, float]] = {}
     symmetric = load_scenario(SYMMETRIC)
     for side in SIDES:
         sweep[side] = {0.0: base.metrics}
+        travel[side] = {0.0: free_travel(packed_by_rule(params, Defects(), rule), side)}
         for pct in SWEEP_PCT:
             if progress:
                 progress(f"pivot sweep: {side} {pct:+g} %")
@@ -111,7 +113,8 @@ def validation_checks(
                 symmetric, setup=dataclasses.replace(symmetric.setup, defects=defects)
             )
             sweep[side][pct] = _run(sc, params, rule, SWEEP_DURATION_S).metrics
-    return checks(figures(base.metrics, runs, sweep))
+            travel[side][pct] = free_travel(packed_by_rule(params, defects, rule), side)
+    return checks(figures(base.metrics, runs, sweep, travel=travel))
 
 
 def print_validation(params: BrakeParameters, rule_name: str) -> None:

@@ -14,14 +14,16 @@ a pose rule is a statement of which three. Each rule places the LEFT shoe for a 
 radially by ``pct`` % of its distance from the drum centre (the right shoe is its mirror
 image, as in the model):
 
-* ``tip-abutment`` (the model's rule, :func:`.placement.place_shoe`): the tip held both ways
+* ``tip-abutment`` (a model's rule, ``ShoeGeometry.pose``, the service brake's; the study
+  brake's until issue 28; :func:`.placement.place_shoe`): the tip held both ways
   by the piston and the slot in its end, the heel in a seat open along the tip-pin line:
   the body turns about the tip.
 * ``carried``: the heel in a closed eye on the pin (two contacts), the turn held by a stop
   that a radial pin shift slides along (an adjuster cam bearing radially on the web
   90 deg from the pin): the whole shoe moves with its pin; the piston follows the tip
   (a hydraulic piston is not a stop: the return spring holds the tip on it).
-* ``eye-piston``: the heel in an eye on the pin, the tip on a piston held on its stop
+* ``eye-piston`` (the other of the model's rules, the study brake's): the heel in an eye on
+  the pin, the tip on a piston held on its stop
   along its axis (the tip slides across it in the slot): the shoe turns about the moved
   pin until its tip is back on the piston.
 * ``eye-adjuster@A``: the heel in an eye on the pin, the web on an adjuster (a cam or
@@ -116,7 +118,8 @@ def _moved(pose: Pose, params: BrakeParameters, shift: tuple[float, float], turn
 
 
 def tip_abutment(params: BrakeParameters, pct: float) -> Pose:
-    """The model's rule (:func:`.placement.place_shoe`)."""
+    """The model's tip abutment (:func:`.placement.place_shoe`), whatever ``params``'
+    pose."""
     g = params.shoe
     px, py = g.pivot_xy_m
     qx, qy, cx, cy, mid, mx, my, inertia, tx, ty, _turn, _seat = growth.shoe_placement.py_func(
@@ -192,34 +195,6 @@ RULES: dict[str, tuple[Callable[[BrakeParameters, float], Pose], str]] = {
     "eye-adjuster@135": (eye_adjuster(135.0), "heel eye, adjuster on the web at 135 deg"),
     "eye-adjuster@175": (eye_adjuster(175.0), "heel eye, adjuster on the web at 175 deg"),
 }
-
-
-# A geometry of the calibration's space (:data:`.calibration.FREE`, friction held) that
-# brings case 1 into its bands under ``eye-piston`` with the symmetric brake, case 5 and
-# case 7 in theirs: found by ``--sample 1500`` (seed 28) and rounded (the lining from 15 deg
-# past the tip to 50 deg short of the pin, as the calibration draws it). Figures:
-# ``--candidate``.
-EYE_PISTON_CANDIDATE: dict[str, dict[str, float]] = {
-    "shoe": {
-        "pivot_radius_m": 0.134,
-        "pivot_polar_angle_deg": 248.0,
-        "running_clearance_m": 0.00363,
-        "lining_start_deg": 114.4,
-        "lining_end_deg": 198.0,
-        "tip_x_m": -0.021,
-        "tip_y_m": 0.127,
-        "mass_kg": 1.26,
-        "mass_centre_x_m": -0.1094,
-        "mass_centre_y_m": 0.0132,
-        "inertia_about_pivot_kg_m2": 0.0382,
-    },
-    "contact": {"damping_n_s_per_m": 1000.0},
-}
-
-
-def candidate_parameters(base: BrakeParameters) -> BrakeParameters:
-    """``base`` with :data:`EYE_PISTON_CANDIDATE`."""
-    return base.with_overrides(EYE_PISTON_CANDIDATE)
 
 
 def packed(params: BrakeParameters, pose: Pose, crown_mm: float = 0.0, **defect) -> np.ndarray:

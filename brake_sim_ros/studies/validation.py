@@ -29,6 +29,7 @@ from pathlib import Path
 
 from brake_sim_ros.analysis import measured_features as mf
 from brake_sim_ros.analysis.impacts import EventMetrics
+from brake_sim_ros.model.assembly import pack
 from brake_sim_ros.model.defects import Defects, ShoeDefect
 from brake_sim_ros.model.layout import SIDES
 from brake_sim_ros.recording.output import check_output, replace_output
@@ -43,6 +44,7 @@ from brake_sim_ros.studies.validation_checks import (
     Check,
     checks,
     figures,
+    free_travel,
 )
 from brake_sim_ros.studies.validation_report import markdown
 
@@ -62,20 +64,25 @@ def run_all(progress: Callable[[str], None] | None = None) -> tuple[RunResult, l
 
 def pivot_sweep(
     base: RunResult, progress: Callable[[str], None] | None = None
-) -> dict[str, dict[float, EventMetrics]]:
+) -> tuple[dict[str, dict[float, EventMetrics]], dict[str, dict[float, float]]]:
     """Metrics of the symmetric scenario with one shoe's pin moved by each of
-    :data:`SWEEP_PCT` (impacting regime only), keyed by side and change; 0 % is ``base``."""
+    :data:`SWEEP_PCT` (impacting regime only), keyed by side and change (0 % is ``base``),
+    and each run's :func:`.validation_checks.free_travel` of that shoe."""
     scenario = load_scenario(SYMMETRIC)
+    params = scenario.setup.params
     out: dict[str, dict[float, EventMetrics]] = {}
+    travel: dict[str, dict[float, float]] = {}
     for side in SIDES:
         out[side] = {0.0: base.metrics}
+        travel[side] = {0.0: free_travel(pack(params, scenario.setup.defects), side)}
         for pct in SWEEP_PCT:
             if progress:
                 progress(f"pivot sweep: {side} {pct:+g} %")
             defects = Defects(**{side: ShoeDefect(pivot_radius_change_pct=pct)})
             run = run_scenario(scenario.with_defects(defects), duration_s=SWEEP_DURATION_S)
             out[side][pct] = run.metrics
-    return out
+            travel[side][pct] = free_travel(pack(params, defects), side)
+    return out, travel
 
 
 def measure_cases(
@@ -103,11 +110,11 @@ def write_report(
         check_output(json_path, overwrite=True, option="--json")
     out_dir.mkdir(parents=True, exist_ok=True)
     base, runs = run_all(progress)
-    sweep = pivot_sweep(base, progress)
+    sweep, travel = pivot_sweep(base, progress)
     if progress:
         progress(f"measured acceleration: {len(runs) + 1} runs x {mf.DEFAULT_SEEDS} noise seeds")
     measured = measure_cases(base, runs)
-    fig = figures(base.metrics, runs, sweep, measured)
+    fig = figures(base.metrics, runs, sweep, measured, travel)
     check_list = checks(fig)
     params = load_scenario(SYMMETRIC).setup.params
     report = markdown(fig, check_list, base.metrics, params, measured)

@@ -155,38 +155,37 @@ def sweep_markdown(fig: dict) -> list[str]:
         return []
     lines = [
         "",
-        "## Pivot-location sweep (monotone response)",
+        "## Pivot-location sweep",
         "",
         "One shoe's pin moved radially by each change (the other shoe healthy); the first",
-        "impact of that shoe, changes against the symmetric brake. Opposite small",
-        "displacements must move each figure in opposite directions.",
+        "impact of that shoe, changes against the symmetric brake. The actuation at first",
+        "impact must follow the shoe's free travel to the drum (the cube root of I gap / a:",
+        "its inertia about the pin, the angle it turns through before it touches, the",
+        "actuation's arm; the checks above). The peak and the period also depend on where",
+        "the lining first touches, which a pin moved past the clearance changes (notes,",
+        "case 1): their shape is reported.",
     ]
     for side, sw in fig["pivot_sweep"].items():
         lines += [
             "",
             f"**{side} ({'leading' if side == 'left' else 'trailing'}) shoe**",
             "",
-            "| pivot radius change | actuation at first impact (N) | first-impact peak F_r (N)"
-            " | change | impact period T (ms) | change |",
-            "|---|---|---|---|---|---|",
+            "| pivot radius change | actuation at first impact (N) | from the free travel (N)"
+            " | first-impact peak F_r (N) | change | impact period T (ms) | change |",
+            "|---|---|---|---|---|---|---|",
         ]
         ch = sw["change_pct"]
         for i, pct in enumerate(sw["pivot_radius_change_pct"]):
             lines.append(
                 f"| {pct:+.0f} % | {sw['first_impact_actuation_n'][i]:.1f}"
+                f" | {sw['free_travel_actuation_n'][i]:.1f}"
                 f" | {sw['first_impact_peak_fr_n'][i]:.0f}"
                 f" | {ch['first_impact_peak_fr_n'][i]:+.1f} %"
                 f" | {1e3 * sw['period_s'][i]:.3f} | {ch['period_s'][i]:+.1f} % |"
             )
-        mono = sw["monotone"]
+        mono = {k: "yes" if v else "no" for k, v in sw["monotone"].items()}
         lines.append(
-            "| monotone | "
-            + " | ".join(
-                "yes" if mono[k] else "**no**"
-                for k in ("first_impact_actuation_n", "first_impact_peak_fr_n")
-            )
-            + " | | "
-            + ("yes" if mono["period_s"] else "**no**")
-            + " | |"
+            f"| monotone | {mono['first_impact_actuation_n']} | |"
+            f" {mono['first_impact_peak_fr_n']} | | {mono['period_s']} | |"
         )
     return lines

@@ -180,18 +180,21 @@ def test_validate_writes_report_and_json(tmp_path):
             "other_shoe_peak_fr_change_pct",
             "other_shoe_period_change_pct",
         }
-    # the study's calibration targets, checked on the figures the command wrote: every miss
-    # is one the report's notes explain as beyond the model (case 1's geometry), and every
-    # published change keeps its sign
+    # the study's calibration targets, checked on the figures the command wrote: every
+    # check within its band (case 1's too, since the study brake's heel sits in an eye), and
+    # every published change keeps its sign
     check_list = checks(fig)
     failed = [c for c in check_list if not c.passed]
-    assert all(c.model_limit for c in failed), failed
+    assert not failed, failed
     signs = [c for c in check_list if "sign of" in c.what]
     assert len(signs) == 6 and all(c.passed for c in signs)
-    # the pivot sweep: both shoes, every figure monotone
+    # the pivot sweep: both shoes' actuation at first impact follows the free travel; the
+    # eye's even response: a pin moved either way softens the leading shoe's first impact
     sweep = fig["pivot_sweep"]
     assert sweep["left"]["pivot_radius_change_pct"] == [-3.0, -2.0, -1.0, 0.0, 1.0, 2.0, 3.0]
-    assert all(all(sweep[s]["monotone"].values()) for s in ("left", "right"))
+    assert all(sweep[s]["free_travel_miss_pct"] <= 0.5 for s in ("left", "right"))
+    peak = sweep["left"]["change_pct"]["first_impact_peak_fr_n"]
+    assert peak[0] < 0.0 and peak[-1] < 0.0
     report = (tmp_path / "v" / "report.md").read_text()
     assert "| case 1: peak F_r change | -43.0 % |" in report
     assert "## Pivot-location sweep" in report

@@ -129,14 +129,23 @@ def test_a_parameter_draws_the_same_whatever_else_the_table_holds(monkeypatch):
 def test_the_corners_of_the_tolerance_box_are_valid_brakes():
     """Truncation keeps every unit valid: the shoe geometry at every corner of its
     tolerances (the parameters the core's geometric checks see) packs, for the defects of
-    every shipped scenario."""
+    every shipped scenario, but an inward pin on the study brake. Its shoe has the heel in
+    an eye on the pin: a pin 3 % in (cases 2 and 4) leaves the lining's toe end 0.28 mm off
+    the drum, which the clearance's and the pin's tolerances can take: that unit with that
+    defect would start on the drum, refused in one line naming the clearance."""
     geometry = [s for s in scatter.SCATTER if s.key.startswith("shoe.")]
     scenarios = [load_scenario(name) for name in builtin_names()]
+    refused = set()
     for signs in itertools.product((-1.0, 1.0), repeat=len(geometry)):
         drawn = {s.key: sign * s.limit for s, sign in zip(geometry, signs, strict=True)}
         params = scatter.with_deviations(BrakeParameters(), drawn)
         for scenario in scenarios:
-            pack(params, scenario.setup.defects, scenario.setup.options)
+            try:
+                pack(params, scenario.setup.defects, scenario.setup.options)
+            except ParameterError as exc:
+                assert "inside the drum" in str(exc) and "running clearance" in str(exc)
+                refused.add(scenario.name)
+    assert refused <= {"case2_left_pivot_in", "case4_right_pivot_in"}, refused
 
 
 def test_scatter_applies_around_the_scenarios_own_values():

@@ -152,7 +152,7 @@ SCENARIO = 'name = "oval"\n[defects.drum]\n'
         ("[{order = 2, amplitude_um = nan}]", "allowed a finite number"),
         ("[{order = 2, amplitude_um = 1, phase_deg = inf}]", "allowed a finite number"),
         ("[{order = 2, amplitude_um = 5}, {order = 2, amplitude_um = 1}]", "at most once"),
-        ("[{order = 2, amplitude_um = 3000}, {order = 1, amplitude_um = 600}]", "peak runout"),
+        ("[{order = 2, amplitude_um = 3000}, {order = 1, amplitude_um = 700}]", "peak runout"),
         ("[{order = 50, amplitude_um = 190}]", "slope"),
         ("[{order = 2, amp = 5}]", "unknown key"),
         ("[{amplitude_um = 5}]", "missing"),

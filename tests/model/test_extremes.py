@@ -40,6 +40,12 @@ STOP_REL = 0.001
 ENERGY_REL = 1e-6
 RAMP_S = (0.01, 0.06)
 
+# 95 % of the leading shoe's self-locking limit d/h at its first contact
+NEAR_LOCK_MU = (
+    0.95
+    * contact_arms(pack(BrakeParameters(), Defects()), L.P_SHOE_BASE, 0.0).self_locking_coefficient
+)
+
 
 def _setup(overrides: dict | None = None, force_n: float = NOMINAL_FORCE_N, **kw) -> BrakeSetup:
     params = BrakeParameters().with_overrides(overrides or {})
@@ -112,7 +118,8 @@ def test_zero_clearance_is_refused_naming_the_allowed_range():
 def test_initial_penetration_is_refused_naming_the_clearance(defect):
     """A defect that starts the lining inside the drum: refused with the penetration depth
     and the running clearance it had to respect."""
-    with pytest.raises(ParameterError, match=r"inside the drum.*running clearance 3\.50 mm"):
+    mm = f"{1e3 * BrakeParameters().shoe.running_clearance_m:.2f}"
+    with pytest.raises(ParameterError, match=rf"inside the drum.*running clearance {mm} mm"):
         pack(BrakeParameters(), Defects(left=defect))
 
 
@@ -145,7 +152,7 @@ def test_smoothing_width_below_the_model_range_is_refused():
         (_stiffness_scaled(100.0), NOMINAL_FORCE_N, "contact stiffness"),
         ({"contact": {"damping_n_s_per_m": 1e6}}, NOMINAL_FORCE_N, "contact damping 1e+06"),
         ({"friction": {"smoothing_speed_m_s": 1e-5}}, NOMINAL_FORCE_N, "smoothed over 1e-05"),
-        ({"friction": {"coefficient": 0.8}}, NOMINAL_FORCE_N, "friction"),
+        ({"friction": {"coefficient": NEAR_LOCK_MU}}, NOMINAL_FORCE_N, "friction"),
         ({}, MAX_ACTUATION_FORCE_N, "under 50000 N of actuation"),
     ],
     ids=["stiffness-x100", "damping-1e6", "smoothing-1e-5", "near-self-locking", "force-50kN"],
@@ -232,7 +239,7 @@ def test_very_high_contact_damping_converges_under_step_refinement(scheme: str):
     " turnover at limit/1, /2, /4, /8, /16: 4.4e-6, 7.5e-7, 3.1e-8, 2.1e-9, 1.3e-10), but at"
     " the limit itself the over-damped contact's rate c d^2 / I puts h lambda near RK4's"
     " stability edge, where RK4 is stable and inaccurate: the step limit has no accuracy"
-    " criterion for non-oscillatory modes",
+    " criterion for non-oscillatory modes (figures of the study brake's shoe before issue 28's)",
 )
 def test_very_high_contact_damping_energy_at_the_step_limit():
     """At its own step limit, the high-damping model must keep the energy requirement."""
@@ -262,9 +269,7 @@ def test_huge_actuation_force_runs_correctly_at_its_limit():
 
 
 def _near_self_locking_setup() -> BrakeSetup:
-    p = pack(BrakeParameters(), Defects())
-    mu = 0.95 * contact_arms(p, L.P_SHOE_BASE, 0.0).self_locking_coefficient
-    return _setup({"friction": {"coefficient": mu}})
+    return _setup({"friction": {"coefficient": NEAR_LOCK_MU}})
 
 
 @pytest.mark.xfail(
@@ -273,7 +278,8 @@ def _near_self_locking_setup() -> BrakeSetup:
     " coupling up against the held wheel, it breaks away twice and the contact reaches 2.7 mm"
     " (100 kN), far stiffer than the operating points the step limit is computed at: residual"
     " / turnover 7.9e-6 at the limit, 2.2e-6 at limit/2, 1.6e-10 at limit/4 (converging: the"
-    " books are exact, the limit is optimistic for stick-slip of a near-self-locking brake)",
+    " books are exact, the limit is optimistic for stick-slip of a near-self-locking brake;"
+    " figures of the study brake's shoe before issue 28's)",
 )
 def test_friction_near_self_locking_runs_correctly():
     """mu = 95 % of the self-locking limit d/h: the leading shoe's normal force is

@@ -1,4 +1,6 @@
-"""Assembled shoe pose and the response to the pivot location (issue 10, item 1).
+"""Assembled shoe pose under the tip abutment and the response to the pivot location
+(issue 10, item 1), on the study brake's old layout with that pose (:data:`TIP_STUDY`;
+the service brake's shoe; the heel in an eye: tests/model/test_pose.py).
 
 Pose invariants of :func:`place_shoe` (the tip stays on the piston, the heel follows the
 pin across the tip-pin line, the shoe is rigid, the right shoe mirrors the left), and the
@@ -17,14 +19,13 @@ from brake_sim_ros.analysis.impacts import shoe_metrics
 from brake_sim_ros.model import layout as L
 from brake_sim_ros.model.assembly import contact_arms, indentation_at, pack
 from brake_sim_ros.model.defects import Defects, ShoeDefect
-from brake_sim_ros.model.parameters import BrakeParameters
 from brake_sim_ros.model.placement import place_shoe
 from brake_sim_ros.model.run_setup import BrakeSetup
-from brake_sim_ros.scenarios import load_scenario
 from brake_sim_ros.solvers.fixed_step import FixedStepStepper
 from brake_sim_ros.solvers.stability import step_limit
+from tests.tip_abutment import TIP_STUDY
 
-PARAMS = BrakeParameters()
+PARAMS = TIP_STUDY
 SIDES = ("left", "right")
 SHIFTS_PCT = (-20.0, -3.0, -0.5, 0.5, 3.0, 20.0)
 BASE = {"left": L.P_SHOE_BASE, "right": L.P_SHOE_BASE + L.SHOE_STRIDE}
@@ -154,7 +155,9 @@ def test_angular_gap_closes_with_an_outward_pin_and_opens_with_an_inward_one(sid
 
 def _first_impact(side: str, pct: float) -> np.ndarray:
     """(actuation at first impact N, first-impact peak |F_pivot| N, impact period s)."""
-    setup = BrakeSetup(defects=Defects(**{side: ShoeDefect(pivot_radius_change_pct=pct)}))
+    setup = BrakeSetup(
+        params=PARAMS, defects=Defects(**{side: ShoeDefect(pivot_radius_change_pct=pct)})
+    )
     block = FixedStepStepper(setup, 2e-5).run(0.34)
     m = shoe_metrics(block, side, stop_time_s=None)
     return np.array([m.first_impact_actuation_n, m.first_impact_peak_n, m.period_s])
@@ -186,6 +189,7 @@ def test_inward_pin_leaves_the_leading_shoe_as_stiff_as_the_healthy_one():
     """Case 2 (leading pin 3 % inward) used to touch at the lining's toe, near self-locking,
     with a step limit seven times below the symmetric brake's. With the shoe held at its tip
     the first contact stays mid-lining and the limit within 15 % of the symmetric one."""
-    healthy = step_limit(load_scenario("symmetric").setup, 1300.0).max_step_s
-    case2 = step_limit(load_scenario("case2_left_pivot_in").setup, 1300.0).max_step_s
+    healthy = step_limit(BrakeSetup(params=PARAMS), 1300.0).max_step_s
+    inward = Defects(left=ShoeDefect(pivot_radius_change_pct=-3.0))
+    case2 = step_limit(BrakeSetup(params=PARAMS, defects=inward), 1300.0).max_step_s
     assert case2 >= 0.85 * healthy, (case2, healthy)

@@ -255,7 +255,7 @@ def test_a_pivot_that_moves_in_the_contact_regime_changes_the_steady_pivot_force
     force = run.pivot_force_magnitude("left")[late].mean()
     want = ref.pivot_force_magnitude("left")[late].mean()
     was = healthy.pivot_force_magnitude("left")[late].mean()
-    assert abs(want - was) > 0.05 * was  # the defect matters in the contact regime
+    assert abs(want - was) > 0.02 * was  # the defect matters in the contact regime (4x the bound)
     assert force == pytest.approx(want, rel=0.005)
 
 

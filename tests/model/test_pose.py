@@ -23,8 +23,9 @@ from brake_sim_ros.model.growth_law import Growth
 from brake_sim_ros.model.parameters import POSES, BrakeParameters, ShoeGeometry
 from brake_sim_ros.model.placement import POSE_IDS, place_shoe
 from brake_sim_ros.scenarios.loader import parse_scenario
+from tests.tip_abutment import TIP_STUDY
 
-EYE = BrakeParameters().with_overrides({"shoe": {"pose": "eye-piston"}})
+EYE = BrakeParameters()  # the study brake's shoe
 SHIFTS_PCT = (-2.0, -0.5, 0.5, 3.0, 10.0)
 
 
@@ -79,14 +80,15 @@ def test_the_heel_in_an_eye_carries_the_body_with_its_pin_and_turns_it_onto_the_
     assert turn == pytest.approx(px * shift / (g.tip_y_m - py), rel=0.5 * abs(shift))
 
 
-def test_the_tip_abutment_pose_is_the_default_and_its_tip_never_moves():
-    assert ShoeGeometry().pose == "tip-abutment"
-    params = BrakeParameters()
-    s = place_shoe(params, "left", ShoeDefect(pivot_radius_change_pct=3.0))
-    assert s.tip_xy_m == (params.shoe.tip_x_m, params.shoe.tip_y_m)
+def test_the_study_brake_has_the_eye_and_the_service_brake_the_tip_abutment():
+    assert BrakeParameters().shoe.pose == "eye-piston"
+    params = BrakeParameters.of_brake("service")
+    assert params.shoe.pose == "tip-abutment"
+    s = place_shoe(params, "left", ShoeDefect(pivot_radius_change_pct=0.2))
+    assert s.tip_xy_m == (params.shoe.tip_x_m, params.shoe.tip_y_m)  # it never moves
 
 
-@pytest.mark.parametrize("params", [BrakeParameters(), EYE], ids=["tip-abutment", "eye-piston"])
+@pytest.mark.parametrize("params", [TIP_STUDY, EYE], ids=["tip-abutment", "eye-piston"])
 def test_a_growing_pin_is_placed_by_the_same_rule_as_a_pin_set_from_the_start(params):
     """The compiled re-placement (growth.apply) at the final severity writes the static
     pack's shoe block, tip included, and the healthy one at severity 0."""

@@ -188,7 +188,7 @@ def test_the_service_brake_has_its_clearance_and_springs_and_study_stays_default
     service = parse_scenario('name = "s"\nbrake = "service"\n').setup.params
     assert service.brake == "service"
     assert service.shoe.running_clearance_m == SERVICE_RUNNING_CLEARANCE_M == 0.0003
-    assert study.shoe.running_clearance_m == 0.0035
+    assert study.shoe.running_clearance_m == 0.00363
     # a scenario's own parameters still override the brake's defaults
     text = 'name = "s"\nbrake = "service"\n[parameters.shoe]\nrunning_clearance_m = 0.0005\n'
     assert parse_scenario(text).setup.params.shoe.running_clearance_m == 0.0005

@@ -207,8 +207,9 @@ def test_tone_ring_edges_give_the_drum_speed_and_one_index_per_revolution(stop):
     middle = 0.5 * (edges[1:] + edges[:-1])
     true = np.interp(middle, stop.time_s, stop["drum_speed_rad_s"])
     # a tooth's mean speed against the speed at mid-tooth: exact to second order where
-    # the speed is smooth (after the impacts, which shake the drum on its coupling)
-    smooth = middle > IMPACTING_S
+    # the speed is smooth (after the impacts, which shake the drum on its coupling, and
+    # 20 ms for the last one's shake to pass)
+    smooth = middle > IMPACTING_S + 0.02
     assert np.max(np.abs(speed[smooth] / true[smooth] - 1)) < 1e-4
     assert np.max(np.abs(speed / true - 1)) < 0.02
     turns = (stop["drum_angle_rad"][-1] - stop["drum_angle_rad"][0]) / (2 * np.pi)

@@ -13,10 +13,11 @@ from brake_sim_ros.model.defects import ShoeDefect
 from brake_sim_ros.model.parameters import BrakeParameters
 from brake_sim_ros.model.placement import place_shoe
 from brake_sim_ros.studies import pose_rules as pr
+from tests.tip_abutment import TIP_STUDY
 
 
 def test_the_tip_abutment_rule_is_the_models_placement():
-    params = BrakeParameters()
+    params = TIP_STUDY
     for pct in (-3.0, 3.0):
         study = pr.tip_abutment(params, pct)
         model = place_shoe(params, "left", ShoeDefect(pivot_radius_change_pct=pct))
@@ -25,11 +26,29 @@ def test_the_tip_abutment_rule_is_the_models_placement():
         assert study.inertia_kg_m2 == model.inertia_about_pivot_kg_m2
 
 
+def test_the_eye_piston_rule_solved_numerically_is_the_models_closed_form():
+    """The study solves the turn that puts the tip back on the piston's stop by root
+    finding; the model (the study brake's pose) in closed form: the same shoe."""
+    params = BrakeParameters()
+    for pct in (-3.0, -0.5, 3.0):
+        study = pr.eye_piston(params, pct)
+        model = place_shoe(params, "left", ShoeDefect(pivot_radius_change_pct=pct))
+        for a, b in (
+            (study.pivot, model.pivot_xy_m),
+            (study.lining_centre, model.lining_centre_xy_m),
+            (study.mass_centre, model.mass_centre_xy_m),
+            (study.tip, model.tip_xy_m),
+        ):
+            assert a == pytest.approx(b, abs=1e-14)
+        assert study.lining_mid_rad == pytest.approx(model.lining_mid_rad, abs=1e-14)
+        assert study.inertia_kg_m2 == pytest.approx(model.inertia_about_pivot_kg_m2, rel=1e-13)
+
+
 def test_a_shoe_carried_by_its_pin_nearly_touches_at_its_heel_end():
     """3 % of a 148 mm pin radius is 4.44 mm, more than the 3.5 mm clearance: moved with
     its pin, the lining keeps clear of the drum only by its heel end (at 195 deg, 50 deg
     short of the pin), whose gap is the drum radius less the distance of the moved end."""
-    params = BrakeParameters()
+    params = TIP_STUDY
     g = params.shoe
     pct = 3.0
     p = pr.packed(params, pr.carried(params, pct), pivot_radius_change_pct=pct)
@@ -73,20 +92,20 @@ def test_the_shape_of_a_response():
 
 
 def test_a_pin_held_shoe_reaches_case_1_in_the_calibrations_space():
-    """Under ``eye-piston`` the study's candidate geometry puts case 1's three figures, the
+    """Under ``eye-piston`` the study brake's geometry puts case 1's three figures, the
     symmetric first impact and case 5 inside their published bands (the validation's
     bands, band units <= 1), assembled clear of the drum and short of self-locking at
     both ends of the sweep; the inward pin softens the first impact as well (an even
     response: the first contact at the lining's toe end)."""
     from brake_sim_ros.studies.pose_rule_sample import grid_point
 
-    params = pr.candidate_parameters(BrakeParameters())
+    params = BrakeParameters()
     point = grid_point(params, "eye-piston", 0.0, (0.0, 0.0, 0.0))
     assert not point.admissible
     assert set(point.misses) == {"sym.Fe", "5.peak", "5.T", "1.peak", "1.T", "1.Fe"}
     assert all(abs(m) <= 1.0 for m in point.misses.values()), point.misses
     assert point.case2_peak_pct < 0.0
-    # the model's rule with the same geometry leaves case 1 outside
+    # the tip abutment with the same geometry leaves case 1 outside
     model = grid_point(params, "tip-abutment", 0.0, (0.0, 0.0, 0.0))
     assert any(abs(model.misses[k]) > 1.0 for k in ("1.peak", "1.T", "1.Fe"))
 
@@ -101,7 +120,7 @@ def test_a_rule_places_the_right_shoe_as_the_models_mirror_image():
     from brake_sim_ros.model.defects import Defects
     from brake_sim_ros.studies.pose_rule_validation import packed_by_rule
 
-    params = BrakeParameters()
+    params = TIP_STUDY
     for side, pct in (("left", 3.0), ("right", -3.0), ("right", 2.0)):
         defects = Defects(**{side: ShoeDefect(pivot_radius_change_pct=pct)})
         model = pack(params, defects)
