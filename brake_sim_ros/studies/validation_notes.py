@@ -178,10 +178,15 @@ def notes(fig: dict, params: BrakeParameters) -> str:
   checks). At the toe end the leading shoe's self-locking limit d/h falls to
   {eye_in.self_locking_mu:.2f} ({eye0.self_locking_mu:.2f} at the healthy pin; the lining's
   mu = {mu:g} is {100 * mu / eye_in.self_locking_mu:.0f} % of it): an inward pin makes the
-  leading shoe grabby. In the contact regime the leading shoe's pivot force changes by
-  {c1["contact_fr_change_pct"]:+.1f} % (case 1) and {c2["contact_fr_change_pct"]:+.1f} %
-  (case 2), the trailing shoe's by {fig["cases"]["3"]["contact_fr_change_pct"]:+.1f} % (case
-  3) and {fig["cases"]["4"]["contact_fr_change_pct"]:+.1f} % (case 4).
+  leading shoe grabby: its friction's self-servo, 1 / (1 - mu h / d), is
+  {1 / (1 - mu / eye_in.self_locking_mu):.1f} there against
+  {1 / (1 - mu / eye0.self_locking_mu):.1f} at the healthy pin. In the contact regime the
+  leading shoe's pivot force changes by {c1["contact_fr_change_pct"]:+.1f} % (case 1) and
+  {c2["contact_fr_change_pct"]:+.1f} % (case 2), the trailing shoe's by
+  {fig["cases"]["3"]["contact_fr_change_pct"]:+.1f} % (case 3) and
+  {fig["cases"]["4"]["contact_fr_change_pct"]:+.1f} % (case 4): a trailing shoe's pin force
+  is the small difference of its large actuation and contact forces, and a first contact
+  moved to an arc's end changes both arms.
 * **Case 7 first impact.** The study reports +11.1 % peak pivot force and an unchanged
   impact period for 10 % more actuation on the leading shoe. Here the first impact changes
   by {c7["peak_fr_change_pct"]:+.1f} % and the period by {c7["period_change_pct"]:+.1f} %:
