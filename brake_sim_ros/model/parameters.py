@@ -72,6 +72,9 @@ class DrivelineParameters:
 # "tip-abutment": the tip held both ways by the piston, the heel in a seat open along the
 # tip-pin line; "eye-piston": the heel in an eye on its pin, the tip on the piston's stop.
 POSES: tuple[str, ...] = ("tip-abutment", "eye-piston")
+# The parameters whose values are names, not numbers ("group.field"), and the names allowed
+# (a scenario's [parameters.<group>], the node's parameters, a recording's model).
+NAMED_FIELDS: dict[str, tuple[str, ...]] = {"shoe.pose": POSES}
 
 
 @dataclass(frozen=True)

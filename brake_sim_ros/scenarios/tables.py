@@ -24,8 +24,8 @@ from brake_sim_ros.model.fidelity import ACCURACY_PRESETS, LEVEL_BY_NAME, OUTPUT
 from brake_sim_ros.model.parameters import (
     BRAKES,
     DEFAULT_BRAKE,
+    NAMED_FIELDS,
     PARAMETER_GROUPS,
-    POSES,
     BrakeParameters,
 )
 from brake_sim_ros.model.service_parameters import (
@@ -104,10 +104,9 @@ def parse_parameters(ctx: Checker, data: Any, base: BrakeParameters) -> BrakePar
 
 
 def _value(ctx: Checker, value: Any, key: str) -> float | str:
-    """A parameter's value: a number, or for a shoe's pose one of the pose rules."""
-    if key == "parameters.shoe.pose":
-        return ctx.string(value, key, POSES)
-    return ctx.number(value, key)
+    """A parameter's value: a number, or one of its names (NAMED_FIELDS)."""
+    names = NAMED_FIELDS.get(key.removeprefix("parameters."))
+    return ctx.number(value, key) if names is None else ctx.string(value, key, names)
 
 
 def _numbers(ctx: Checker, data: dict[str, Any], table: str) -> dict[str, float]:

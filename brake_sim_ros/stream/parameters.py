@@ -48,8 +48,8 @@ from brake_sim_ros.model.catalogue import (
 from brake_sim_ros.model.defects import Defects, DrumDefect, LineDefect, ShoeDefect
 from brake_sim_ros.model.layout import SIDES
 from brake_sim_ros.model.parameters import (
+    NAMED_FIELDS,
     PARAMETER_GROUPS,
-    POSES,
     BrakeParameters,
     unit_of,
 )
@@ -75,8 +75,6 @@ DRIVE_LIMIT_RANGES = {name: (lo, hi) for name, lo, hi in DRIVE_LIMITS}
 # Model values a recording may lack, having been made before they existed: the value that
 # gave its run (build_model).
 LEGACY_VALUES: dict[str, Any] = {"shoe.pose": "tip-abutment"}
-# The model values that are names, not numbers, and the names allowed.
-NAMED_VALUES: dict[str, tuple[str, ...]] = {"shoe.pose": POSES}
 
 INITIAL_CONDITIONS = frozenset(
     {
@@ -280,8 +278,8 @@ def model_parameter_specs(params: BrakeParameters, defects: Defects) -> list[Par
             cls = {**PARAMETER_GROUPS, **SERVICE_GROUPS}[name.rsplit(".", 1)[0]]
             doc = _attribute_doc(cls, field_name) or _first_line(cls.__doc__)
             text = f"{field_name} ({unit_of(field_name)}): {doc}."
-            if name in NAMED_VALUES:
-                text = f"{field_name} (one of {', '.join(NAMED_VALUES[name])}): {doc}."
+            if name in NAMED_FIELDS:
+                text = f"{field_name} (one of {', '.join(NAMED_FIELDS[name])}): {doc}."
         if name in INITIAL_CONDITIONS:
             text += " Initial condition: a change applies at the next ~/reset."
         if parts[0] == "defects" and kind_of_field(parts[1], field_name).tied:

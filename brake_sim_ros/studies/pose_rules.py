@@ -117,15 +117,15 @@ def _moved(pose: Pose, params: BrakeParameters, shift: tuple[float, float], turn
     )
 
 
-def tip_abutment(params: BrakeParameters, pct: float) -> Pose:
-    """The model's tip abutment (:func:`.placement.place_shoe`), whatever ``params``'
-    pose."""
+def _model_rule(params: BrakeParameters, pct: float, pose: int) -> Pose:
+    """The model's placement (:func:`.placement.place_shoe`) by its rule ``pose``
+    (``layout.POSE_*``), whatever ``params``' own pose."""
     g = params.shoe
     px, py = g.pivot_xy_m
     qx, qy, cx, cy, mid, mx, my, inertia, tx, ty, _turn, _seat = growth.shoe_placement.py_func(
         pct / 100.0,
         1.0,
-        L.POSE_TIP_ABUTMENT,
+        pose,
         px,
         py,
         g.tip_x_m,
@@ -137,6 +137,11 @@ def tip_abutment(params: BrakeParameters, pct: float) -> Pose:
         lining_mid_rad(params),
     )
     return Pose((qx, qy), (cx, cy), mid, (mx, my), inertia, (tx, ty))
+
+
+def tip_abutment(params: BrakeParameters, pct: float) -> Pose:
+    """The model's tip abutment."""
+    return _model_rule(params, pct, L.POSE_TIP_ABUTMENT)
 
 
 def _pin_shift(params: BrakeParameters, pct: float) -> tuple[float, float]:
@@ -169,9 +174,9 @@ def carried(params: BrakeParameters, pct: float) -> Pose:
 
 
 def eye_piston(params: BrakeParameters, pct: float) -> Pose:
-    """Heel in an eye, tip back on the piston's axis position (its stop)."""
-    g = params.shoe
-    return held_by_stop(params, pct, (g.tip_x_m, g.tip_y_m), (-1.0, 0.0))
+    """The model's heel in an eye, tip back on the piston's axis position (its stop):
+    :func:`held_by_stop` with the tip on a stop facing -x, in closed form."""
+    return _model_rule(params, pct, L.POSE_EYE_PISTON)
 
 
 def eye_adjuster(angle_deg: float) -> Callable[[BrakeParameters, float], Pose]:

@@ -53,10 +53,11 @@ BANDS = {
 
 # Pivot-location sweep: radius changes of one shoe's pin, %, around the symmetric brake.
 # Its actuation at first impact must follow the free travel's cube root within this, %.
-# The hand calculation is exact for a shoe that nothing but the ramp moves before it
-# touches; what is left is where the onset falls between two physics steps and the
-# Hertzian contact's first micrometres (measured 2026-11-28: 0.02 % with the eye, 0.00 %
-# with the tip abutment).
+# The hand calculation holds for a shoe that nothing but the ramp moves before it
+# touches, on the actuation's arm at first contact (contact_arms: it turns by the gap, so
+# the arm changes by about 0.3 % on the way, 0.1 % in F_e); what is left is that, where the
+# onset falls between two physics steps and the Hertzian contact's first micrometres
+# (measured 2026-11-28: 0.06 % with the eye, 0.01 % with the tip abutment).
 FREE_TRAVEL_BAND_PCT = 0.5
 SWEEP_PCT = (-3.0, -2.0, -1.0, 1.0, 2.0, 3.0)
 # Each sweep run covers the impacting regime only: the first two impacts of every step
@@ -98,10 +99,7 @@ def free_travel(p: np.ndarray, side: str) -> float:
     arms = contact_arms(p, base, 0.0)
     if arms is None:
         return math.nan
-    tdx = p[base + L.S_TIP_X] - p[base + L.S_PIVOT_X]
-    tdy = p[base + L.S_TIP_Y] - p[base + L.S_PIVOT_Y]
-    arm = abs(tdx * p[base + L.S_ACTUATION_DIR_Y] - tdy * p[base + L.S_ACTUATION_DIR_X])
-    return p[base + L.S_INERTIA] * arms.onset_angle_rad / arm
+    return p[base + L.S_INERTIA] * arms.onset_angle_rad / arms.actuation_arm_m
 
 
 def sweep_figures(

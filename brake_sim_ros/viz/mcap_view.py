@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 from brake_sim_ros.errors import BrakeSimError
 from brake_sim_ros.model.defects import Defects
-from brake_sim_ros.model.parameters import BrakeParameters
+from brake_sim_ros.model.parameters import NAMED_FIELDS, BrakeParameters
 from brake_sim_ros.recording import cdr
 from brake_sim_ros.recording.metadata import MODEL, SCENARIO
 from brake_sim_ros.recording.reader import Recording, RecordingReadError
@@ -53,7 +53,7 @@ def _model_value(name: str, text: str) -> float | int | bool | str:
     if len(text) > MAX_VALUE_CHARS:
         raise ValueError(f"value of {name} is {len(text)} characters long")
     value = ast.literal_eval(text)
-    if isinstance(value, str) and name in ros_params.NAMED_VALUES:
+    if isinstance(value, str) and name in NAMED_FIELDS:
         return value
     if not isinstance(value, float | int | bool):
         raise ValueError(f"value of {name} is not a number")

@@ -30,8 +30,11 @@ def test_the_eye_piston_rule_solved_numerically_is_the_models_closed_form():
     """The study solves the turn that puts the tip back on the piston's stop by root
     finding; the model (the study brake's pose) in closed form: the same shoe."""
     params = BrakeParameters()
+    g = params.shoe
     for pct in (-3.0, -0.5, 3.0):
-        study = pr.eye_piston(params, pct)
+        # the study's general rule (an eye, and a stop bearing on one body point) with the
+        # piston's stop: the tip held along -x
+        study = pr.held_by_stop(params, pct, (g.tip_x_m, g.tip_y_m), (-1.0, 0.0))
         model = place_shoe(params, "left", ShoeDefect(pivot_radius_change_pct=pct))
         for a, b in (
             (study.pivot, model.pivot_xy_m),
