@@ -236,6 +236,11 @@ def _wait_for_monitor(listener: Listener, proc: subprocess.Popen, log: Path) -> 
         30.0,
     )
     assert ready and proc.poll() is None, log.read_text()
+    # the graph shows an endpoint before it has matched ours: a first /diagnostics (1 s
+    # period) received says this listener's subscriptions to the monitor are matched (a
+    # loaded machine once lost the first ~/health to that gap)
+    heard = listener.spin_until(lambda: len(listener.diagnostics) >= 1, 10.0)
+    assert heard and proc.poll() is None, log.read_text()
     listener.spin_until(lambda: False, 0.3)  # both ends of every match settled
 
 
