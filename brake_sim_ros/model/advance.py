@@ -22,7 +22,7 @@ from brake_sim_ros.model import (
     thermal,
 )
 from brake_sim_ros.model import layout as L
-from brake_sim_ros.model.compiled import JIT
+from brake_sim_ros.model.compiled import JIT, JIT_ALLOCATING
 
 # by name, not as kernel.NOT_FREE: numba cannot resolve a module's array attribute in a call
 from brake_sim_ros.model.kernel import NOT_FREE
@@ -48,7 +48,7 @@ def _update_regime(kstate, k_regime, k_flag, k_change, touching, step, settle_st
     kstate[k_regime] = regime
 
 
-@njit(**JIT)
+@njit(**JIT_ALLOCATING)
 def fixed_step_advance(
     y,
     step0,
@@ -102,13 +102,85 @@ def fixed_step_advance(
     by the same speed controller (:func:`.cycle.live_control`).
 
     Returns the number of rows written. Stops early (status in kstate) on a non-finite state.
+
+    This shell allocates the loop's arrays (scratch, and the working copy of ``p`` where
+    the run changes it) and hands them to :func:`_advance`, which is compiled without
+    numba's reference counting: a counted array costs two atomic operations at every call
+    that passes it, about half of a step's time in the stepping loop.
     """
     n = y.shape[0]
-    k1 = np.empty(n)
-    y_new = np.empty(n)
-    work = np.empty((8, n))
-    h_start = np.empty(2)
-    h_end = np.empty(4)
+    growing = p[L.P_GROWTH_COUNT] > 0.0
+    cycling = p[L.P_CYCLE_COUNT] > 0.0
+    speed_held = p[L.P_LIVE_SPEED_CONTROL] > 0.0
+    heating = n > L.Y_BRAKE_TEMPERATURE and p[L.P_THERMAL] > 0.0
+    pw = growth.working_copy(p) if growing or cycling or speed_held or heating else p
+    return _advance(
+        y,
+        step0,
+        dt,
+        n_steps,
+        p,
+        pw,
+        tl,
+        fl,
+        tr,
+        fr,
+        gain_override,
+        kstate,
+        fstate,
+        settle_steps,
+        record_every,
+        out,
+        scheme,
+        np.empty((_WORK_ROWS, n)),
+        np.empty(2),
+        np.empty(4),
+        np.zeros(2),
+        np.zeros(2),
+        NOT_FREE.copy(),
+        NOT_FREE.copy(),
+    )
+
+
+# the rows of _advance's scratch: the RK4 stages' and the located steps' (rk4.py), then
+# the first stage's derivative and the step's new state
+_WORK_ROWS = 10
+
+
+@njit(**JIT)
+def _advance(
+    y,
+    step0,
+    dt,
+    n_steps,
+    p,
+    pw,
+    tl,
+    fl,
+    tr,
+    fr,
+    gain_override,
+    kstate,
+    fstate,
+    settle_steps,
+    record_every,
+    out,
+    scheme,
+    work,
+    h_start,
+    h_end,
+    ramp_t,
+    ramp_f,
+    free,
+    never,
+):
+    """:func:`fixed_step_advance`'s loop, given its arrays: ``pw`` (``p`` itself, or its
+    working copy where the run changes it), ``work`` (``_WORK_ROWS`` rows of the state's
+    length), the located scheme's switching functions at a step's start (2,) and end (4,),
+    a cycle's ramp knots (2,), and two writable copies of :data:`.kernel.NOT_FREE`."""
+    n = y.shape[0]
+    k1 = work[8]
+    y_new = work[9]
     gl = p[L.P_SHOE_BASE + L.S_ACTUATION_GAIN]
     gr = p[L.P_SHOE_BASE + L.SHOE_STRIDE + L.S_ACTUATION_GAIN]
     growing = p[L.P_GROWTH_COUNT] > 0.0
@@ -118,9 +190,6 @@ def fixed_step_advance(
     # the brake's temperature sets the linings' friction (model/thermal.py)
     # (a service run carries the temperature slot without a thermal state: P_THERMAL 0)
     heating = n > L.Y_BRAKE_TEMPERATURE and p[L.P_THERMAL] > 0.0
-    pw = growth.working_copy(p) if growing or cycling or speed_held or heating else p
-    ramp_t = np.zeros(2)
-    ramp_f = np.zeros(2)
     if cycling:  # the cycle commands both shoes' brake force (model/cycle.py)
         tl = ramp_t
         fl = ramp_f
@@ -171,8 +240,7 @@ def fixed_step_advance(
     # RK4 stages skip the contact geometry where the shoes provably exert nothing
     # (rides_free): on a round drum with a fixed geometry, each shoe's indentation at the
     # step's start and twice the largest distance of its lining from its pivot
-    free = NOT_FREE.copy()
-    never = NOT_FREE.copy()  # the located sub-steps' (writable: one signature of rk4_step_call)
+    # never: the located sub-steps' (writable: one signature of rk4_step_call)
     free[bound + 1] = 2.0 * kernel.lining_reach(pw, bl)
     free[bound + 3] = 2.0 * kernel.lining_reach(pw, br)
     for i in range(n_steps):

@@ -392,10 +392,9 @@ def live_control(p, y):
 def _enter(p, base, seg, y, kstate, fstate, t):
     """Start segment ``seg`` at ``t``: its brake ramp from the force now to its own; a
     hold with a load draws its factor (``base``: the packed vector the factor scales)."""
+    # the ramp's knots are interleaved in fstate (times at T0 and T1, forces at F0 and F1)
     f_now = actuation.pwl(
-        t,
-        np.array([fstate[L.F_RAMP_T0], fstate[L.F_RAMP_T1]]),
-        np.array([fstate[L.F_RAMP_F0], fstate[L.F_RAMP_F1]]),
+        t, fstate[L.F_RAMP_T0 : L.F_RAMP_T1 + 1 : 2], fstate[L.F_RAMP_F0 : L.F_RAMP_F1 + 1 : 2]
     )
     fstate[L.F_SEGMENT_START] = t
     n = int(p[L.P_CYCLE_COUNT])

@@ -18,7 +18,7 @@ import math
 from numba import njit
 
 from brake_sim_ros.model import layout as L
-from brake_sim_ros.model.compiled import JIT
+from brake_sim_ros.model.compiled import JIT, JIT_ALLOCATING
 from brake_sim_ros.model.growth_law import LAW_FRICTION_WORK, severity_at
 
 # mm of wear per MJ of friction work (the scenario's unit) -> m per J (the kernel's)
@@ -111,7 +111,7 @@ def write_placement(p, base, px, py, cx, cy, mid, gx, gy, inertia, tipx, tipy):
     p[base + L.S_TIP_Y] = tipy
 
 
-@njit(**JIT)
+@njit(**JIT_ALLOCATING)
 def working_copy(p):
     """A copy of ``p`` for :func:`apply`, with no severity set yet."""
     pw = p.copy()
@@ -167,9 +167,12 @@ def apply(p, pw, t, y, entries):
     """
     bl = L.P_SHOE_BASE
     br = L.P_SHOE_BASE + L.SHOE_STRIDE
-    gains = [p[bl + L.S_ACTUATION_GAIN], p[br + L.S_ACTUATION_GAIN]]
-    shares = [p[bl + L.S_SHARE], p[br + L.S_SHARE]]
-    pressure = [p[bl + L.S_PRESSURE_FACTOR], p[br + L.S_PRESSURE_FACTOR]]
+    gain_l = p[bl + L.S_ACTUATION_GAIN]
+    gain_r = p[br + L.S_ACTUATION_GAIN]
+    share_l = p[bl + L.S_SHARE]
+    share_r = p[br + L.S_SHARE]
+    pressure_l = p[bl + L.S_PRESSURE_FACTOR]
+    pressure_r = p[br + L.S_PRESSURE_FACTOR]
     regain = False
     nb = L.P_NOMINAL_BASE
     moved = False
@@ -188,12 +191,15 @@ def apply(p, pw, t, y, entries):
         if kind == L.GK_WEAR:
             s = lining_wear(p, pw, g, shoe, t, y, s)
         if kind == L.GK_SHARE:
-            shares[shoe] = 0.5 + s
-            shares[1 - shoe] = 0.5 - s
+            share_l = 0.5 + s if shoe == 0 else 0.5 - s
+            share_r = 0.5 - s if shoe == 0 else 0.5 + s
             regain = True
             continue
         if kind == L.GK_GAIN:
-            pressure[shoe] = 1.0 + s / 100.0
+            if shoe == 0:
+                pressure_l = 1.0 + s / 100.0
+            else:
+                pressure_r = 1.0 + s / 100.0
             regain = True
             continue
         if s == pw[g + L.G_NOW]:
@@ -237,6 +243,6 @@ def apply(p, pw, t, y, entries):
             pw[lb + L.LN_WEAR] = s
             pw[L.P_SHOE_BASE + shoe * L.SHOE_STRIDE + L.S_LINING_RADIUS] = p[lb + L.LN_RADIUS] - s
     if regain:
-        for i in range(2):
-            gains[i] = 2.0 * shares[i] * pressure[i]
-    return gains[0], gains[1], moved
+        gain_l = 2.0 * share_l * pressure_l
+        gain_r = 2.0 * share_r * pressure_r
+    return gain_l, gain_r, moved

@@ -35,7 +35,7 @@ import numpy as np
 from numba import njit
 
 from brake_sim_ros.errors import ParameterError
-from brake_sim_ros.model.compiled import JIT
+from brake_sim_ros.model.compiled import JIT, JIT_ALLOCATING
 
 # how a severity evolves after its onset; the index is the law's id in the compiled model
 GROWTH_LAWS: tuple[str, ...] = ("step", "linear", "exponential", "friction_work")
@@ -86,7 +86,7 @@ def severity_at(t, law, onset_s, rate, start, final):
     return final
 
 
-@njit(**JIT)
+@njit(**JIT_ALLOCATING)
 def severity_series(times, law, onset_s, rate, start, final):
     """:func:`severity_at` at each of ``times`` (s, shape (n,)), in the kind's unit."""
     out = np.empty(times.shape[0])

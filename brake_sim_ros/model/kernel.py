@@ -19,7 +19,7 @@ from numba import njit
 
 from brake_sim_ros.model import actuation, contact, lining, service, standstill, thermal, vehicle
 from brake_sim_ros.model import layout as L
-from brake_sim_ros.model.compiled import JIT
+from brake_sim_ros.model.compiled import JIT, JIT_ALLOCATING
 
 _pwl = actuation.pwl
 
@@ -481,7 +481,7 @@ def _wear_rates(p, power_left, power_right, dydt):
     dydt[L.Y_RIGHT_WEAR] = p[b + L.LINING_STRIDE] * power_right
 
 
-@njit(**JIT)
+@njit(**JIT_ALLOCATING)
 def evaluate_rows(ys, times, p, fe_left, fe_right, stuck, out):
     """Recorded quantities for many states: ``ys`` (n, N_STATE) at ``times`` into ``out``
     (``stuck``: the drum's stick state for all of them)."""
@@ -502,7 +502,7 @@ def evaluate_rows(ys, times, p, fe_left, fe_right, stuck, out):
         )
 
 
-@njit(**JIT)
+@njit(**JIT_ALLOCATING)
 def rhs(y, p, fe_left, fe_right, stuck, mode_left, mode_right, dydt):
     """Time derivative only (see :func:`evaluate`)."""
     no_out = np.empty((0, L.N_COLUMNS))

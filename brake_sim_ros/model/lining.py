@@ -49,7 +49,7 @@ from numba import njit
 
 from brake_sim_ros.model import contact
 from brake_sim_ros.model import layout as L
-from brake_sim_ros.model.compiled import JIT
+from brake_sim_ros.model.compiled import JIT, JIT_ALLOCATING
 
 # Nodes of the arc's quadrature (midpoint rule): a spacing of 2.5 deg on the 80 deg
 # lining, the half width of the catalogue's default flat (see the module notes).
@@ -313,7 +313,7 @@ def shoe_energy(p, base, theta, drum_angle):
     return energy
 
 
-@njit(**JIT)
+@njit(**JIT_ALLOCATING)
 def stored_energy_rows(p, left_angle, right_angle, drum_angle):
     """Elastic energy of both linings' foundations (J, :func:`shoe_energy`) at each row of
     shoe and drum angles (rad, arrays of one length)."""

@@ -32,7 +32,7 @@ from numba import njit
 
 from brake_sim_ros.model import contact, kernel, standstill
 from brake_sim_ros.model import layout as L
-from brake_sim_ros.model.compiled import JIT
+from brake_sim_ros.model.compiled import JIT, JIT_ALLOCATING
 
 N_ROTOR = 6
 R_FLY_ANGLE, R_DRUM_ANGLE, R_FLY_SPEED, R_DRUM_SPEED, R_FRICTION, R_DAMPER = range(N_ROTOR)
@@ -283,7 +283,7 @@ def _record(o, t, y, p, fel, fer, stuck, cache, fstate):
     o[COL_BRAKING_TORQUE] = -torque
 
 
-@njit(**JIT)
+@njit(**JIT_ALLOCATING)
 def advance(y, step0, h, n_steps, p, tl, fl, tr, fr, touch, shoes, cache, kstate, fstate, out):
     """Advance the rotor ``n_steps`` macro steps of ``h`` seconds, one sample per step.
 

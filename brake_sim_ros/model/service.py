@@ -55,7 +55,7 @@ import numpy as np
 from numba import njit
 
 from brake_sim_ros.model import layout as L
-from brake_sim_ros.model.compiled import JIT
+from brake_sim_ros.model.compiled import JIT, JIT_ALLOCATING
 
 
 @njit(inline="always", **JIT)
@@ -226,7 +226,7 @@ def shoe_energy(p, shoe, theta):
     return stored_energy(p, shoe, travel)
 
 
-@njit(**JIT)
+@njit(**JIT_ALLOCATING)
 def stored_energy_rows(p, left_angle, right_angle):
     """Elastic energy of both shoes' springs and stops (J, :func:`shoe_energy`) at each
     pair of shoe angles (rad, arrays of one length)."""

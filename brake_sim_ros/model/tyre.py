@@ -46,7 +46,7 @@ import numpy as np
 from numba import njit
 
 from brake_sim_ros.model import layout as L
-from brake_sim_ros.model.compiled import JIT
+from brake_sim_ros.model.compiled import JIT, JIT_ALLOCATING
 from brake_sim_ros.model.vehicle import GRAVITY_M_S2
 
 
@@ -129,7 +129,7 @@ def stored_energy(p, z):
     return 0.5 * p[L.P_TYRE_STIFFNESS] * wheel_load(p) * z * z
 
 
-@njit(**JIT)
+@njit(**JIT_ALLOCATING)
 def stored_energy_rows(p, z, flywheel_inertia):
     """:func:`stored_energy` (J) at each deflection ``z`` (m) with the flywheel inertia
     in force there (kg m^2; a cycle's load changes it), arrays of one length."""

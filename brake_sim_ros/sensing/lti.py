@@ -36,7 +36,7 @@ import numpy as np
 from numba import njit
 from scipy.linalg import expm, matrix_balance
 
-from brake_sim_ros.model.compiled import JIT
+from brake_sim_ros.model.compiled import JIT_ALLOCATING
 
 
 @dataclass(frozen=True)
@@ -309,7 +309,7 @@ def transposed(*matrices: np.ndarray) -> tuple[np.ndarray, ...]:
     return tuple(np.ascontiguousarray(np.swapaxes(m, -1, -2)) for m in matrices)
 
 
-@njit(**JIT)
+@njit(**JIT_ALLOCATING)
 def lti_advance(
     x_size, u_size, y_size, phi_t, g_prev_t, g_next_t, c_t, d_t, x, u_prev, u, y
 ):  # pragma: no cover

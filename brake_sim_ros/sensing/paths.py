@@ -21,7 +21,7 @@ import math
 import numpy as np
 from numba import njit
 
-from brake_sim_ros.model.compiled import JIT
+from brake_sim_ros.model.compiled import JIT, JIT_ALLOCATING
 from brake_sim_ros.sensing import faults as sf
 from brake_sim_ros.sensing.lti import SampledLti, transposed
 
@@ -131,7 +131,7 @@ def _faults_at(t, f_kind, f_onset, f_end, f_size):  # pragma: no cover - compile
     return label, gain, bias, limit, loose, stuck, dropped
 
 
-@njit(**JIT)
+@njit(**JIT_ALLOCATING)
 def analog_advance(  # pragma: no cover - compiled
     x_size,
     draw_size,
