@@ -97,6 +97,9 @@ def main(argv: list[str] | None = None) -> int:
 
 def _main(argv: list[str]) -> int:
     if argv[:1] and argv[0] in PHYSICS_COMMANDS and not {"-h", "--help"} & set(argv):
+        from brake_sim_ros.datasets.threads import one_numerics_thread
+
+        one_numerics_thread()  # before numpy's BLAS starts its threads
         from brake_sim_ros.solvers.warmup import ensure_compiled
 
         ensure_compiled()  # says so, once per installed version, instead of a silent pause

@@ -1,5 +1,7 @@
 """One numerics thread per sweep worker: the pool gives the parallelism, so numba, the
 BLAS behind numpy and OpenMP must not each start a thread per core in every worker.
+A command that runs the physics in its own process takes one too, unless its user set
+the variables (:func:`one_numerics_thread`).
 
 Kept apart from :mod:`.sweep` so that the fork server (:mod:`.warm_worker`) sets the
 limits before anything imports numba or numpy.
@@ -22,3 +24,14 @@ def limit_threads() -> None:
     (effective for libraries imported afterwards, and for processes started from it)."""
     for name in THREAD_LIMIT_VARIABLES:
         os.environ[name] = "1"
+
+
+def one_numerics_thread() -> None:
+    """Each of :data:`THREAD_LIMIT_VARIABLES` that the environment does not set, set to 1:
+    for a command's own process (``brake-sim simulate``, ``bench``, ``node`` ...), before
+    it imports numpy. Its matrices have a few dozen rows at most, where a BLAS thread per
+    core buys nothing, and OpenBLAS's threads spin on a core after every call: after the
+    sensors' set-up that took a fifth to a third of the CPU of ``brake-sim bench cycle``
+    (2026-11-28, 2 cores)."""
+    for name in THREAD_LIMIT_VARIABLES:
+        os.environ.setdefault(name, "1")
