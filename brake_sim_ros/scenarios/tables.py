@@ -129,7 +129,15 @@ def _parse_service(ctx: Checker, data: Any, params: BrakeParameters) -> BrakePar
     spec = params.service
     names = {f.name for f in dataclasses.fields(ServiceBrakeParameters)}
     data = ctx.table(data, "parameters.service", names)
-    values = _numbers(ctx, data, "parameters.service")
+    # its switches (the lining over its arc) are true or false, the rest numbers
+    switches = {n for n in names if isinstance(getattr(spec, n), bool) and n in data}
+    for name in switches:
+        if not isinstance(data[name], bool):
+            raise ctx.fail(f"parameters.service.{name}", data[name], "true or false")
+    values = _numbers(
+        ctx, {k: v for k, v in data.items() if k not in switches}, "parameters.service"
+    )
+    values.update({name: data[name] for name in switches})
     tyre = spec.tyre
     if "tyre" in data:
         given = data["tyre"]

@@ -15,6 +15,7 @@ from brake_sim_ros.model.assembly import pack
 from brake_sim_ros.model.parameters import BrakeParameters
 from brake_sim_ros.scenarios.loader import parse_scenario
 from brake_sim_ros.stream import parameters as ros_params
+from brake_sim_ros.stream.build import stepper_for
 
 SERVICE = (
     'name = "t"\nbrake = "service"\nroad_friction = 0.5\n'
@@ -40,6 +41,29 @@ def test_the_service_table_sets_the_service_brake_and_leaves_the_rest_at_its_def
     p = pack(params, parse_scenario(SERVICE).setup.defects)
     assert p[L.P_SPRING_BASE + L.R_PRELOAD] == 90.0
     assert p[L.P_TYRE_STIFFNESS] == 55.0
+
+
+SCENARIO_POINT = parse_scenario('name = "t"\nbrake = "service"\n')
+
+
+def test_the_lining_over_its_arc_is_the_scenarios_choice():
+    """``distributed_lining = true`` packs the lining's nodes (model/lining.py) and the
+    stepper takes the physics steps its stiffer contact needs; the default keeps the
+    point contact; the flat values carry the switch and rebuild it."""
+    text = 'name = "t"\nbrake = "service"\n[parameters.service]\ndistributed_lining = true\n'
+    setup = parse_scenario(text).setup
+    assert setup.params.service.distributed_lining is True
+    assert pack(setup.params, setup.defects)[L.P_LINING_NODE_STIFFNESS] > 0.0
+    point = SCENARIO_POINT.setup
+    assert pack(point.params, point.defects)[L.P_LINING_NODE_STIFFNESS] == 0.0
+    # its step limit (3.6e-5 s at the default force) is below the 25.6 kHz sample's period
+    assert (stepper_for(parse_scenario(text)).substeps, stepper_for(SCENARIO_POINT).substeps) == (
+        2,
+        1,
+    )
+    values = ros_params.model_values(setup.params, setup.defects)
+    assert values["service.distributed_lining"] is True
+    assert ros_params.build_model(values)[0] == setup.params
 
 
 def test_the_flat_values_carry_the_service_brake_and_rebuild_it():
@@ -117,6 +141,14 @@ def test_the_node_parameters_describe_the_service_brake_with_the_cores_bounds():
             "'parameters.service.return_spring_preload_n' = 'stiff' is invalid: allowed a number",
         ),
         ('brake = "service"\n[parameters.service]\ntyre = 3\n', "allowed a table"),
+        (
+            'brake = "service"\n[parameters.service]\ndistributed_lining = 1\n',
+            "'parameters.service.distributed_lining' = 1 is invalid: allowed true or false",
+        ),
+        (
+            'brake = "service"\n[parameters.service]\nreturn_spring_preload_n = true\n',
+            "'parameters.service.return_spring_preload_n' = true is invalid: allowed a number",
+        ),
         (
             'brake = "service"\n[parameters.service.tyre]\npeak_ratio = inf\n',
             "'parameters.service.tyre.peak_ratio' = inf is invalid: allowed a finite number",
