@@ -10,6 +10,7 @@ limits before anything imports numba or numpy.
 from __future__ import annotations
 
 import os
+import sys
 
 THREAD_LIMIT_VARIABLES = (
     "NUMBA_NUM_THREADS",
@@ -32,6 +33,10 @@ def one_numerics_thread() -> None:
     it imports numpy. Its matrices have a few dozen rows at most, where a BLAS thread per
     core buys nothing, and OpenBLAS's threads spin on a core after every call: after the
     sensors' set-up that took a fifth to a third of the CPU of ``brake-sim bench cycle``
-    (2026-11-28, 2 cores)."""
+    (2026-11-28, 2 cores). Nothing once numpy is imported (``brake_sim_ros.cli.main``
+    called from a program that has it): its BLAS read them then, and the caller's
+    environment is the caller's."""
+    if "numpy" in sys.modules:
+        return
     for name in THREAD_LIMIT_VARIABLES:
         os.environ.setdefault(name, "1")
