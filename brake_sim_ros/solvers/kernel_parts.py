@@ -180,6 +180,9 @@ def turn() -> Iterator[None]:
     wall-clock behaviour) waits for it to end. No lock without a cache directory one may
     write to: numba then compiles without caching, as it does without this module."""
     cache = numba.config.CACHE_DIR
+    if not cache:  # numba's own places beside the sources: none of ours to lock
+        yield
+        return
     try:
         Path(cache).mkdir(parents=True, exist_ok=True)
         lock = open(Path(cache) / f"{_MARKER}.lock", "w")  # noqa: SIM115 - closed below

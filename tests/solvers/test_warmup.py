@@ -204,3 +204,13 @@ def test_the_marker_is_found_before_the_model_is_imported(tmp_path):
         [sys.executable, "-c", code], capture_output=True, text=True, env=env, check=True
     ).stdout.strip()
     assert out.startswith(str(tmp_path / "numba")), out
+
+
+def test_without_a_cache_directory_of_ours_no_lock_is_taken(tmp_path, monkeypatch):
+    """numba's CACHE_DIR empty (its own places beside the sources): the compile's turn
+    takes no lock and leaves no lock file in the working directory."""
+    monkeypatch.setattr(numba.config, "CACHE_DIR", "")
+    monkeypatch.chdir(tmp_path)
+    with warmup.turn():
+        pass
+    assert list(tmp_path.iterdir()) == []
