@@ -105,8 +105,8 @@ def fixed_step_advance(
 
     This shell allocates the loop's arrays (scratch, and the working copy of ``p`` where
     the run changes it) and hands them to :func:`_advance`, which is compiled without
-    numba's reference counting: a counted array costs two atomic operations at every call
-    that passes it, about half of a step's time in the stepping loop.
+    numba's reference counting (:mod:`.compiled`): allocating here, it would count the
+    arrays of every call in the loop.
     """
     n = y.shape[0]
     growing = p[L.P_GROWTH_COUNT] > 0.0
