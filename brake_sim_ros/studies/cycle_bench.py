@@ -10,7 +10,8 @@ runs with and without sensors alternate, so a change of the machine's load hits 
 physics alone and physics plus sensors as multiples of real time, the latter split into the
 stepping, the sensors and the rest (the loop's own work; the benchmark's own records of
 segments are not counted), and each run's figure; then the issue's figure on one line (the
-cycle with the default sensors, at least 30x real time), the stops and phases the cycle went
+cycle with the default sensors: its target, 30x real time, and its goal, 50x, each met or
+not), the stops and phases the cycle went
 through, and the energy books over the whole cycle (drive work in against the losses, road
 load and the change of stored energy; :func:`brake_sim_ros.analysis.energy.energy_balance`);
 and what the vehicle costs per sample where the shoes ride free (4 s without braking,
@@ -34,6 +35,7 @@ from brake_sim_ros.scenarios.loader import parse_toml
 from brake_sim_ros.stream.build import sensor_bank_for, stepper_for
 
 TARGET_RTF = 30.0
+GOAL_RTF = 50.0  # with the default sensors (issue 31)
 # free-rolling runs for the vehicle's cost: no brake force, shoes off the drum
 _FREE = 'name = "free"\n[actuation]\npeak_force_n = 0.0\n'
 _OVERHEAD_CASES = (
@@ -142,10 +144,12 @@ def main(argv: list[str] | None = None) -> int:
         )
     rtf = duration / best[cases[1][0]][0]
     verdict = "met" if rtf >= TARGET_RTF else "NOT met"
+    goal = "met" if rtf >= GOAL_RTF else "not met"
     print(
         f"  {scenario.name} cycle, {scenario.setup.params.brake} brake, preset"
         f" {scenario.solver.preset}, default sensors:"
-        f" {rtf:.1f}x real time (target >= {TARGET_RTF:.0f}x: {verdict})"
+        f" {rtf:.1f}x real time (target >= {TARGET_RTF:.0f}x: {verdict};"
+        f" goal >= {GOAL_RTF:.0f}x: {goal})"
     )
     stops = sum(k.endswith(":brake") for k in kinds)
     print(f"  phases: {len(kinds)} ({stops} brake segments): {' '.join(kinds)}")
