@@ -56,7 +56,7 @@ from __future__ import annotations
 
 import json
 import os
-from collections.abc import Mapping, Sequence
+from collections.abc import Collection, Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -123,6 +123,7 @@ def history_table(
     unit_values: Sequence[UnitValue],
     conditions: Mapping[str, Any],
     cycle: Cycle | None = None,
+    sample_columns: Collection[str] | None = None,
 ) -> pa.Table:
     """The table of ``samples``, with ``sensors`` (a fresh bank, fed the whole run here)
     what they measured, and the ground truth of ``defects`` (the brake's defects in force
@@ -130,7 +131,8 @@ def history_table(
     ``Scenario.unit_values()``) and of the run's ``conditions``
     (``Scenario.conditions_record()``); with the run's drive ``cycle``, the label column
     ``phase`` (from the samples' ``cycle_segment``); ``metadata`` goes into the
-    ``brake_sim`` key as JSON."""
+    ``brake_sim`` key as JSON. ``sample_columns``: the samples' columns to write besides
+    ``time_s`` (default every one; a sweep that keeps a few does not build the rest)."""
     n = len(samples)
     index = samples.first_index + np.arange(n, dtype=np.int64)
     history = samples.as_dict()
@@ -139,6 +141,8 @@ def history_table(
     columns: dict[str, pa.Array] = {"sample_index": pa.array(index)}
     fields = [pa.field("sample_index", pa.int64())]
     for name, values in history.items():
+        if sample_columns is not None and name != "time_s" and name not in sample_columns:
+            continue
         columns[name] = pa.array(np.asarray(values, dtype=np.float64))
         fields.append(pa.field(name, pa.float64()))
     if sensors is not None:
@@ -201,11 +205,13 @@ def run_table(
     result: RunResult,
     duration_s: float,
     extra: Mapping[str, Any] | None = None,
+    sample_columns: Collection[str] | None = None,
 ) -> pa.Table:
     """The table of a finished run of ``scenario`` (``simulate --out``, each run of a
     sweep): :func:`history_table` with the scenario's sensors, defects, unit and drawn
     conditions, and the run's parameters and the full scenario text (``scenario_toml``)
-    in the metadata, plus ``extra`` (a sweep's run id and split)."""
+    in the metadata, plus ``extra`` (a sweep's run id and split); ``sample_columns`` as
+    :func:`history_table`'s."""
     from brake_sim_ros import __version__
     from brake_sim_ros.stream.build import sensor_bank_for
 
@@ -237,6 +243,7 @@ def run_table(
         unit_values=scenario.unit_values(),
         conditions=scenario.conditions_record(),
         cycle=scenario.setup.cycle,
+        sample_columns=sample_columns,
     )
 
 

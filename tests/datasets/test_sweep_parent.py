@@ -14,6 +14,7 @@ import pytest
 
 from brake_sim_ros.campaigns import load_campaign, parse_campaign
 from brake_sim_ros.campaigns.axes import DefectChoice, condition_points
+from brake_sim_ros.campaigns.campaign import plan_runs
 from brake_sim_ros.datasets.parquet import measured_column
 from brake_sim_ros.datasets.sweep import sweep
 from brake_sim_ros.datasets.sweep_output import DONE_DIR, MANIFEST_NAME
@@ -156,3 +157,38 @@ def test_the_nominal_unit_is_the_scenarios_own_brake_and_sensors():
     unit_brake(params, "nominal", 1)
     assert unit_brake(twin, "nominal", 1) is twin
     assert unit_sensor_set(sensors, "nominal", 1) is sensors
+
+
+def test_a_run_that_keeps_a_few_columns_writes_the_full_tables_selection(tmp_path):
+    """A campaign's ``outputs.columns``: the run builds only the samples' columns it keeps
+    (datasets/parquet.py ``sample_columns``) and its file has the bytes of the full
+    table's selection written as the sweep writes; a column it does not write is refused
+    with the samples' columns among those allowed."""
+    import pyarrow.parquet as pq
+
+    from brake_sim_ros.datasets.parquet import run_table
+    from brake_sim_ros.datasets.sweep import run_task
+    from brake_sim_ros.stream.run import run_scenario
+
+    kept = CAMPAIGN.replace(
+        "sample_rate_hz = 2560.0\n",
+        'sample_rate_hz = 2560.0\ncolumns = ["left_pivot_fx_n", "measured:line_pressure [bar]"]\n',
+    )
+    spec = plan_runs(parse_campaign(kept, "test"))[0]
+    outcome = run_task(spec, str(tmp_path))
+    assert outcome.status == "ok", outcome.error
+    written = pq.read_table(tmp_path / outcome.file)
+    scenario = parse_scenario(spec.scenario_text, spec.run_id)
+    extra = {"run_id": spec.run_id, "split": spec.split}
+    full = run_table(scenario, run_scenario(scenario), scenario.duration_s, extra)
+    assert "right_pivot_fx_n" in full.column_names
+    assert "right_pivot_fx_n" not in written.column_names
+    assert "left_pivot_fx_n" in written.column_names
+    again = tmp_path / "full_selected.parquet"
+    pq.write_table(full.select(written.column_names), again, compression="zstd")
+    assert again.read_bytes() == (tmp_path / outcome.file).read_bytes()
+    bad = dataclasses.replace(spec, keep=(*spec.keep, "no_such_column"))
+    refused = run_task(bad, str(tmp_path / "bad"))
+    assert refused.status == "failed"
+    assert "'no_such_column' is not a column of this run" in refused.error
+    assert "right_pivot_fx_n" in refused.error
