@@ -25,6 +25,21 @@ def limit_threads() -> None:
     (effective for libraries imported afterwards, and for processes started from it)."""
     for name in THREAD_LIMIT_VARIABLES:
         os.environ[name] = "1"
+    _keep_kernel_cache()
+
+
+def _keep_kernel_cache() -> None:
+    """Where numba is imported already: numba reads its ``NUMBA_*`` settings again when one
+    changes (at its next compile), its cache directory with them, which would drop the
+    directory ``brake_sim_ros.model`` pointed it at (numba's default places beside the
+    sources instead). Read them now and point it back."""
+    if "numba" not in sys.modules:
+        return
+    import numba
+
+    cache = numba.config.CACHE_DIR
+    numba.config.reload_config()
+    numba.config.CACHE_DIR = cache
 
 
 def one_numerics_thread() -> None:

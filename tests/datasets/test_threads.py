@@ -50,3 +50,27 @@ def test_a_process_with_numpy_keeps_its_environment(monkeypatch):
         monkeypatch.delenv(name, raising=False)
     one_numerics_thread()
     assert not [name for name in THREAD_LIMIT_VARIABLES if name in os.environ]
+
+
+KEPT = """
+import brake_sim_ros.model
+import numba
+from numba import njit
+from brake_sim_ros.datasets.threads import limit_threads
+ours = numba.config.CACHE_DIR
+limit_threads()
+njit(lambda x: x + 1)(1)  # a compile: numba reads its changed settings then
+print(ours != "" and numba.config.CACHE_DIR == ours)
+"""
+
+
+def test_limiting_threads_after_numba_keeps_the_kernel_cache():
+    """A worker (or a benchmark) that limits its threads after numba is imported keeps
+    numba's cache at the kernels' directory (numba would read NUMBA_NUM_THREADS again and
+    its cache directory with it, back to its default)."""
+    base = {k: v for k, v in os.environ.items() if k not in THREAD_LIMIT_VARIABLES}
+    base.pop("NUMBA_CACHE_DIR", None)
+    done = subprocess.run(
+        [sys.executable, "-c", KEPT], env=base, capture_output=True, text=True, timeout=120
+    )
+    assert done.stdout.strip() == "True", done.stderr
