@@ -109,10 +109,7 @@ def fixed_step_advance(
     arrays of every call in the loop.
     """
     n = y.shape[0]
-    growing = p[L.P_GROWTH_COUNT] > 0.0
-    cycling = p[L.P_CYCLE_COUNT] > 0.0
-    speed_held = p[L.P_LIVE_SPEED_CONTROL] > 0.0
-    heating = n > L.Y_BRAKE_TEMPERATURE and p[L.P_THERMAL] > 0.0
+    growing, cycling, speed_held, heating = _changes(p, n)
     pw = growth.working_copy(p) if growing or cycling or speed_held or heating else p
     return _advance(
         y,
@@ -139,6 +136,21 @@ def fixed_step_advance(
         np.zeros(2),
         NOT_FREE.copy(),
         NOT_FREE.copy(),
+    )
+
+
+@njit(inline="always", **JIT)
+def _changes(p, n):
+    """What changes ``p`` during a run (into the loop's working copy) for a state of ``n``
+    entries: (defects grow; a drive cycle's controller sets the drive torque and the brake
+    force; a live target speed sets the drive torque (cycle.LiveDrive); the brake's
+    temperature sets the linings' friction, model/thermal.py: a service run carries the
+    temperature slot without a thermal state, P_THERMAL 0)."""
+    return (
+        p[L.P_GROWTH_COUNT] > 0.0,
+        p[L.P_CYCLE_COUNT] > 0.0,
+        p[L.P_LIVE_SPEED_CONTROL] > 0.0,
+        n > L.Y_BRAKE_TEMPERATURE and p[L.P_THERMAL] > 0.0,
     )
 
 
@@ -183,13 +195,7 @@ def _advance(
     y_new = work[9]
     gl = p[L.P_SHOE_BASE + L.S_ACTUATION_GAIN]
     gr = p[L.P_SHOE_BASE + L.SHOE_STRIDE + L.S_ACTUATION_GAIN]
-    growing = p[L.P_GROWTH_COUNT] > 0.0
-    # a vehicle's controller writes the step's drive torque into the working copy
-    cycling = p[L.P_CYCLE_COUNT] > 0.0
-    speed_held = p[L.P_LIVE_SPEED_CONTROL] > 0.0  # a live target speed (cycle.LiveDrive)
-    # the brake's temperature sets the linings' friction (model/thermal.py)
-    # (a service run carries the temperature slot without a thermal state: P_THERMAL 0)
-    heating = n > L.Y_BRAKE_TEMPERATURE and p[L.P_THERMAL] > 0.0
+    growing, cycling, speed_held, heating = _changes(p, n)
     if cycling:  # the cycle commands both shoes' brake force (model/cycle.py)
         tl = ramp_t
         fl = ramp_f

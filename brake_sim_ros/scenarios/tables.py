@@ -88,14 +88,14 @@ def parse_parameters(ctx: Checker, data: Any, base: BrakeParameters) -> BrakePar
     """``[parameters.<group>]``: overrides of the default parameters, group by group;
     ``[parameters.service]`` (and ``[parameters.service.tyre]``) on the service brake."""
     data = ctx.table(data, "parameters", {*PARAMETER_GROUPS, "service"})
-    overrides: dict[str, dict[str, float | str]] = {}
+    overrides: dict[str, dict[str, Any]] = {}
     for group, values in data.items():
         if group == "service":
             continue
         cls = PARAMETER_GROUPS[group]
         names = {f.name for f in dataclasses.fields(cls)}
         values = ctx.table(values, f"parameters.{group}", names)
-        overrides[group] = {k: _value(ctx, v, f"parameters.{group}.{k}") for k, v in values.items()}
+        overrides[group] = _values(ctx, values, f"parameters.{group}", getattr(base, group))
     try:
         params = base.with_overrides(overrides)
     except BrakeSimError as exc:
@@ -103,15 +103,28 @@ def parse_parameters(ctx: Checker, data: Any, base: BrakeParameters) -> BrakePar
     return _parse_service(ctx, data["service"], params) if "service" in data else params
 
 
-def _value(ctx: Checker, value: Any, key: str) -> float | str:
-    """A parameter's value: a number, or one of its names (NAMED_FIELDS)."""
+def _value(ctx: Checker, value: Any, key: str, default: object = None) -> float | str | bool:
+    """A parameter's value: one of its names (NAMED_FIELDS), true or false for a switch
+    (a field whose ``default`` is a bool: the service brake's lining over its arc), else
+    a number."""
     names = NAMED_FIELDS.get(key.removeprefix("parameters."))
-    return ctx.number(value, key) if names is None else ctx.string(value, key, names)
+    if names is not None:
+        return ctx.string(value, key, names)
+    if isinstance(default, bool):
+        if not isinstance(value, bool):
+            raise ctx.fail(key, value, "true or false")
+        return value
+    return ctx.number(value, key)
 
 
-def _numbers(ctx: Checker, data: dict[str, Any], table: str) -> dict[str, float]:
-    """Every value of ``data`` but a sub-table ``tyre``, as a number."""
-    return {k: ctx.number(v, f"{table}.{k}") for k, v in data.items() if k != "tyre"}
+def _values(ctx: Checker, data: dict[str, Any], table: str, defaults: object) -> dict[str, Any]:
+    """Every value of ``data`` but the service table's sub-table ``tyre`` (:func:`_value`;
+    ``defaults``: the dataclass instance whose fields they override)."""
+    return {
+        k: _value(ctx, v, f"{table}.{k}", getattr(defaults, k))
+        for k, v in data.items()
+        if k != "tyre"
+    }
 
 
 def _parse_service(ctx: Checker, data: Any, params: BrakeParameters) -> BrakeParameters:
@@ -129,15 +142,7 @@ def _parse_service(ctx: Checker, data: Any, params: BrakeParameters) -> BrakePar
     spec = params.service
     names = {f.name for f in dataclasses.fields(ServiceBrakeParameters)}
     data = ctx.table(data, "parameters.service", names)
-    # its switches (the lining over its arc) are true or false, the rest numbers
-    switches = {n for n in names if isinstance(getattr(spec, n), bool) and n in data}
-    for name in switches:
-        if not isinstance(data[name], bool):
-            raise ctx.fail(f"parameters.service.{name}", data[name], "true or false")
-    values = _numbers(
-        ctx, {k: v for k, v in data.items() if k not in switches}, "parameters.service"
-    )
-    values.update({name: data[name] for name in switches})
+    values = _values(ctx, data, "parameters.service", spec)
     tyre = spec.tyre
     if "tyre" in data:
         given = data["tyre"]
@@ -151,7 +156,7 @@ def _parse_service(ctx: Checker, data: Any, params: BrakeParameters) -> BrakePar
         tyre_names = {f.name for f in dataclasses.fields(TyreParameters)} - {"road_friction"}
         given = ctx.table(given, "parameters.service.tyre", tyre_names)
         try:
-            tyre = dataclasses.replace(tyre, **_numbers(ctx, given, "parameters.service.tyre"))
+            tyre = dataclasses.replace(tyre, **_values(ctx, given, "parameters.service.tyre", tyre))
         except BrakeSimError as exc:
             raise ScenarioError(f"{ctx.source}: [parameters.service.tyre]: {exc}") from exc
     try:
