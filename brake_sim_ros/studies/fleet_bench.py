@@ -1,14 +1,15 @@
 """The 10,000-run campaign, swept and scored: ``brake-sim bench fleet [--full] [--out DIR]``.
 
-:data:`CAMPAIGN_FILE` (``fleet10k``: every catalogue defect at three severities and a
-healthy brake, eight drawn forces, twenty units; 10,720 runs of 1.2 s at 25.6 kHz keeping
-the default sensors' measured channels) is swept on a local pool, then the ``impact``
+:data:`CAMPAIGN_FILE` (``fleet10k``, on the service brake: every defect kind it carries
+but the pivot radius at three severities and a healthy brake, eight drawn forces, twenty
+units; 11,680 runs of 1.2 s at 25.6 kHz keeping the default sensors' measured channels)
+is swept on a local pool, then the ``impact``
 baseline (the best of the reference campaign's scores) is fitted on its train split and
 scored on its test split. Prints the wall time of each phase, runs per second, the disk
 the dataset takes and the score's headline figures.
 
 Without ``--full`` a slice runs: the same file with its first ``--units`` units (default
-8) and ``--draws`` forces (default 1): 536 runs of the same length, rate, columns, defects
+8) and ``--draws`` forces (default 1): 584 runs of the same length, rate, columns, defects
 and severities. Its figures are then extrapolated to the whole campaign at the slice's
 rate per run, and printed as an extrapolation.
 """
