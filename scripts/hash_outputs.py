@@ -15,7 +15,9 @@ brake until they moved to the service brake (issue 28): their lines keep their l
 meaning on the study brake (``tests/study_cycles.py``: the files with ``brake = "study"``).
 Then the service brake: the built-in cycles as they ship (urban with its default sensors),
 20 s of urban with every fixed-step scheme, three applications and releases (shoes leaving
-and landing on their rest stops) on a line with air and a leak, and a stop on a wet road.
+and landing on their rest stops) on a line with air and a leak, a stop on a wet road, and
+the lining over its arc (``distributed_lining``): 14 s of urban with both RK4 schemes, the
+applications, and a stop on a drum with a flat.
 ``--quick``: the first three runs only.
 
 Without the ROS message package: the stepper and the sensor bank are built as
@@ -55,6 +57,7 @@ SERVICE_APPLICATIONS = (
     "[defects.line]\nair_in_line_ml = 1.0\nline_leak_pct = 20.0\n"
 )
 SERVICE_WET = 'name = "wet"\nbrake = "service"\nroad_friction = 0.4\n'
+LINED = "\n[parameters.service]\ndistributed_lining = true\n"
 FLAT = (
     "\n[defects.drum]\nflat_depth_um = 40.0\nflat_width_deg = 20.0\n"
     "[[defects.drum.harmonics]]\norder = 3\namplitude_um = 20.0\nphase_deg = 10.0\n"
@@ -149,6 +152,21 @@ def service_hashes() -> None:
     label = "service brake, 3 applications, air and leak"
     print(run_hash(label, applications, 77, sensors=applications.sensors), flush=True)
     print(run_hash("service brake, wet road stop", parse_scenario(SERVICE_WET), 1000))
+    lined_hashes()
+
+
+def lined_hashes() -> None:
+    """The service brake with its lining over the arc: urban with both RK4 schemes, the
+    applications, a stop on a drum with a flat."""
+    lined = parse_scenario(load_scenario("urban").text + LINED)
+    for scheme in ("rk4-located", "rk4"):
+        label = "urban 14 s, service brake, lining over its arc"
+        print(run_hash(label, lined, 1000, scheme=scheme, duration_s=14.0), flush=True)
+    label = "service brake, 3 applications, lining over its arc"
+    print(run_hash(label, parse_scenario(SERVICE_APPLICATIONS + LINED), 77), flush=True)
+    flat = parse_scenario('name = "flat"\nbrake = "service"\n' + FLAT + LINED)
+    label = "service brake, drum with a flat, lining over its arc"
+    print(run_hash(label, flat, 1000, duration_s=2.0))
 
 
 if __name__ == "__main__":

@@ -237,8 +237,9 @@ def _advance(
     can_hold = can_hold and p[L.P_LINING_NODE_STIFFNESS] <= 0.0
     round_drum = p[L.P_DRUM_WAVE_COUNT] <= 0.0 and p[L.P_FLAT_DEPTH] <= 0.0
     # the service brake's tips push (springs, stops, pistons): its free stages evaluate them
-    # (kernel.stage_evaluate); with its lining over the arc (not the point contact) they
-    # never ride free
+    # (kernel.stage_evaluate); with its lining over the arc, its located steps bound them
+    # by the deepest node (the switch test's, of the state that starts the step: no step
+    # changes the geometry, and a stuck drum, whose evaluation differs, never rides free)
     lined = p[L.P_LINING_NODE_STIFFNESS] > 0.0
     bound = 4 if p[L.P_SERVICE] > 0.0 else 0  # its slots in the bound (kernel.NOT_FREE)
     held = False
@@ -341,9 +342,13 @@ def _advance(
                 # modes frozen for the step; k1 (auto) equals k1 with these modes
                 ml = L.CONTACT_ON if h_start[0] > 0.0 else L.CONTACT_OFF
                 mr = L.CONTACT_ON if h_start[1] > 0.0 else L.CONTACT_OFF
-            if round_drum and not growing and not lined:
-                free[bound] = kin_l[0]
-                free[bound + 2] = kin_r[0]
+            if round_drum and not growing:
+                if not lined:
+                    free[bound] = kin_l[0]
+                    free[bound + 2] = kin_r[0]
+                elif located:  # the lining's deepest node at the step's start (h_end)
+                    free[bound] = h_end[0]
+                    free[bound + 2] = h_end[2]
             rk4.rk4_step_call(
                 y,
                 k1,

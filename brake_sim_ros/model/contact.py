@@ -33,6 +33,7 @@ from numba import njit
 
 from brake_sim_ros.model import layout as L
 from brake_sim_ros.model.compiled import JIT
+from brake_sim_ros.model.smooth_sign import smooth_sign
 
 # Largest surface slope of the drum, ``sum_k k a_k / R0`` (rad): the contact geometry tilts
 # the normal by the local slope at one contact point, a small-slope model; 0.05 (a tilt of
@@ -277,7 +278,7 @@ def sliding_friction(p, base, fn, v_slide):
     if fn <= 0.0:
         return 0.0
     mu = p[base + L.S_FRICTION_COEFFICIENT]
-    return mu * fn * math.tanh(v_slide / p[L.P_FRICTION_SMOOTHING_SPEED])
+    return mu * fn * smooth_sign(v_slide / p[L.P_FRICTION_SMOOTHING_SPEED])
 
 
 @njit(inline="always", **JIT)

@@ -86,13 +86,10 @@ def lining_point(p, base, c, sn, cb, sb):
 
 
 @njit(inline="always", **JIT)
-def node_state(p, base, c, sn, w, cb, sb, drum_angle, drum_speed):
-    """One node's contact at arc angle ``beta`` (cos ``cb``, sin ``sb``) of the shoe
-    turned by ``phi`` (cos ``c``, sin ``sn``) at ``w`` = d(phi)/dt rad/s, the drum at
-    ``drum_angle`` turning at ``drum_speed`` (rad): (delta m, delta' m/s, grad g x,
-    grad g y, tangent x, tangent y, friction arm m, sliding speed m/s, node x m, node y
-    m, r' m/rad, d delta / d phi m/rad).
-    """
+def node_depth(p, base, c, sn, w, cb, sb, drum_angle, drum_speed):
+    """One node's penetration, the first part of :func:`node_state`: (delta m, delta' m/s,
+    node x m, node y m, its radial unit vector x and y, r' m/rad, its distance from the
+    drum centre m, d delta / d phi m/rad). What a node that presses nothing needs."""
     px = p[base + L.S_PIVOT_X]
     py = p[base + L.S_PIVOT_Y]
     x, y = lining_point(p, base, c, sn, cb, sb)
@@ -105,19 +102,52 @@ def node_state(p, base, c, sn, w, cb, sb, drum_angle, drum_speed):
     else:
         radius, slope = contact.drum_radius(p, math.atan2(y, x) - drum_angle)
     delta = dist - radius
-    tilt = slope / dist
     arm_r = (x - px) * ny - (y - py) * nx
-    arm_t = (x - px) * nx + (y - py) * ny
-    d_phi = arm_r - tilt * arm_t
-    delta_dot = w * d_phi + slope * drum_speed
-    gx = nx + tilt * ny
-    gy = ny - tilt * nx
-    norm = math.sqrt(1.0 + tilt * tilt)
-    tx = -gy / norm
-    ty = gx / norm
+    if slope == 0.0:  # no tilt: d_phi is arm_r (the expression below with tilt 0)
+        d_phi = arm_r
+    else:
+        arm_t = (x - px) * nx + (y - py) * ny
+        d_phi = arm_r - slope / dist * arm_t
+    return delta, w * d_phi + slope * drum_speed, x, y, nx, ny, slope, dist, d_phi
+
+
+@njit(inline="always", **JIT)
+def node_tail(p, base, w, drum_speed, x, y, nx, ny, slope, dist):
+    """The rest of :func:`node_state` from :func:`node_depth`'s node: (grad g x, grad g y,
+    tangent x, tangent y, friction arm m, sliding speed m/s)."""
+    px = p[base + L.S_PIVOT_X]
+    py = p[base + L.S_PIVOT_Y]
+    if slope == 0.0:  # no tilt: the expressions below with tilt 0 (the same values)
+        gx = nx
+        gy = ny
+        tx = -gy
+        ty = gx
+        arm = dist
+    else:
+        tilt = slope / dist
+        gx = nx + tilt * ny
+        gy = ny - tilt * nx
+        norm = math.sqrt(1.0 + tilt * tilt)
+        tx = -gy / norm
+        ty = gx / norm
+        arm = dist / norm
     vt = tx * (-w * (y - py)) + ty * (w * (x - px))
-    arm = dist / norm
-    return delta, delta_dot, gx, gy, tx, ty, arm, drum_speed * arm - vt, x, y, slope, d_phi
+    return gx, gy, tx, ty, arm, drum_speed * arm - vt
+
+
+@njit(inline="always", **JIT)
+def node_state(p, base, c, sn, w, cb, sb, drum_angle, drum_speed):
+    """One node's contact at arc angle ``beta`` (cos ``cb``, sin ``sb``) of the shoe
+    turned by ``phi`` (cos ``c``, sin ``sn``) at ``w`` = d(phi)/dt rad/s, the drum at
+    ``drum_angle`` turning at ``drum_speed`` (rad): (delta m, delta' m/s, grad g x,
+    grad g y, tangent x, tangent y, friction arm m, sliding speed m/s, node x m, node y
+    m, r' m/rad, d delta / d phi m/rad).
+    """
+    delta, delta_dot, x, y, nx, ny, slope, dist, d_phi = node_depth(
+        p, base, c, sn, w, cb, sb, drum_angle, drum_speed
+    )
+    gx, gy, tx, ty, arm, v = node_tail(p, base, w, drum_speed, x, y, nx, ny, slope, dist)
+    return delta, delta_dot, gx, gy, tx, ty, arm, v, x, y, slope, d_phi
 
 
 @njit(**JIT)
@@ -140,7 +170,6 @@ def shoe_contact(p, base, theta, omega, drum_speed, actuation, mode, stuck, shar
     k = p[L.P_LINING_NODE_STIFFNESS]
     cd = p[L.P_LINING_NODE_DAMPING]
     mu = p[base + L.S_FRICTION_COEFFICIENT]
-    v_s = p[L.P_FRICTION_SMOOTHING_SPEED]
     fx = 0.0
     fy = 0.0
     moment = 0.0
@@ -153,21 +182,34 @@ def shoe_contact(p, base, theta, omega, drum_speed, actuation, mode, stuck, shar
     v_sum = 0.0
     eps = -math.inf
     eps_dot = 0.0
-    v_deep = 0.0
+    # the deepest node's place, radial unit vector, r' and distance (its sliding speed is
+    # computed once, below, where it is recorded)
     x_deep = 0.0
     y_deep = 0.0
+    nx_deep = 0.0
+    ny_deep = 0.0
+    slope_deep = 0.0
+    dist_deep = 0.0
     cb, sb, cd_, sd_ = first_node(p, base)
     for _ in range(NODES):
-        d, d_dot, gx, gy, tx, ty, arm, v, x, y, slope, _ = node_state(
+        d, d_dot, x, y, nx, ny, slope, dist, _ = node_depth(
             p, base, c, sn, w, cb, sb, drum_angle, drum_speed
         )
         cb, sb = cb * cd_ - sb * sd_, sb * cd_ + cb * sd_
         if d > eps:
             eps = d
             eps_dot = d_dot
-            v_deep = v
             x_deep = x
             y_deep = y
+            nx_deep = nx
+            ny_deep = ny
+            slope_deep = slope
+            dist_deep = dist
+        if d <= 0.0:
+            # presses nothing: no force, and its damper's loss (f - k max(d, 0)) d' and
+            # elastic force are zeros (the sums below skip them)
+            continue
+        gx, gy, tx, ty, arm, v = node_tail(p, base, w, drum_speed, x, y, nx, ny, slope, dist)
         f = 0.0
         if pressing and d > 0.0:
             f = k * d + cd * d_dot
@@ -180,7 +222,7 @@ def shoe_contact(p, base, theta, omega, drum_speed, actuation, mode, stuck, shar
             elastic += spring
         if f <= 0.0:
             continue
-        ff = share * mu * f if stuck else mu * f * math.tanh(v / v_s)
+        ff = share * mu * f if stuck else contact.sliding_friction(p, base, f, v)
         fcx = -f * gx + ff * tx
         fcy = -f * gy + ff * ty
         fx += fcx
@@ -192,7 +234,14 @@ def shoe_contact(p, base, theta, omega, drum_speed, actuation, mode, stuck, shar
         m_centre += x * fcy - y * fcx
         v_sum += f * v
     fn_rec, ff_rec, xr, yr = _equivalent(fx, fy, m_centre, p[L.P_DRUM_RADIUS])
-    v_rec = v_sum / fn_sum if fn_sum > 0.0 else v_deep
+    if fn_sum > 0.0:
+        v_rec = v_sum / fn_sum
+    elif eps > -math.inf:  # nothing presses: the deepest node's sliding speed
+        v_rec = node_tail(
+            p, base, w, drum_speed, x_deep, y_deep, nx_deep, ny_deep, slope_deep, dist_deep
+        )[5]
+    else:
+        v_rec = 0.0
     if fn_sum <= 0.0:
         xr, yr = x_deep, y_deep
     tdx = p[base + L.S_TIP_X] - px
@@ -259,11 +308,12 @@ def switching(p, base, theta, omega, drum_angle, drum_speed):
     h = -math.inf
     cb, sb, cd_, sd_ = first_node(p, base)
     for _ in range(NODES):
-        st = node_state(p, base, c, sn, s * omega, cb, sb, drum_angle, drum_speed)
+        d, d_dot, _, _, _, _, _, _, _ = node_depth(
+            p, base, c, sn, s * omega, cb, sb, drum_angle, drum_speed
+        )
         cb, sb = cb * cd_ - sb * sd_, sb * cd_ + cb * sd_
-        d = st[0]
         eps = max(eps, d)
-        h = max(h, min(d, d + tau * st[1]))
+        h = max(h, min(d, d + tau * d_dot))
     return eps, h
 
 
@@ -283,12 +333,14 @@ def hold(p, base, theta, drum_angle):
     capacity = 0.0
     cb, sb, cd_, sd_ = first_node(p, base)
     for _ in range(NODES):
-        st = node_state(p, base, c, sn, 0.0, cb, sb, drum_angle, 0.0)
+        d, _, x, y, nx, ny, slope, dist, _ = node_depth(
+            p, base, c, sn, 0.0, cb, sb, drum_angle, 0.0
+        )
         cb, sb = cb * cd_ - sb * sd_, sb * cd_ + cb * sd_
-        if st[0] > 0.0:
-            f = k * st[0]
-            torque -= f * st[10]
-            capacity += mu * f * st[6]
+        if d > 0.0:
+            f = k * d
+            torque -= f * slope
+            capacity += mu * f * node_tail(p, base, 0.0, 0.0, x, y, nx, ny, slope, dist)[4]
     return torque, capacity
 
 
@@ -306,10 +358,10 @@ def shoe_energy(p, base, theta, drum_angle):
     cb, sb, cd_, sd_ = first_node(p, base)
     energy = 0.0
     for _ in range(NODES):
-        st = node_state(p, base, c, sn, 0.0, cb, sb, drum_angle, 0.0)
+        d = node_depth(p, base, c, sn, 0.0, cb, sb, drum_angle, 0.0)[0]
         cb, sb = cb * cd_ - sb * sd_, sb * cd_ + cb * sd_
-        if st[0] > 0.0:
-            energy += 0.5 * k * st[0] * st[0]
+        if d > 0.0:
+            energy += 0.5 * k * d * d
     return energy
 
 

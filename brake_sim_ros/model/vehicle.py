@@ -39,6 +39,7 @@ from numba import njit
 from brake_sim_ros.errors import ParameterError
 from brake_sim_ros.model import layout as L
 from brake_sim_ros.model.compiled import JIT
+from brake_sim_ros.model.smooth_sign import smooth_sign
 
 GRAVITY_M_S2 = 9.80665  # standard gravity
 # Width of the rolling resistance's smoothed sign, m/s (0.036 km/h): well below any speed
@@ -153,7 +154,7 @@ def road_load_torque(p, flywheel_speed):
     motion (see the module doc); the rule, written once."""
     r = p[L.P_WHEEL_RADIUS]
     v = flywheel_speed * r
-    rolling = p[L.P_ROLLING_FORCE] * math.tanh(v / p[L.P_ROLLING_SMOOTHING_SPEED])
+    rolling = p[L.P_ROLLING_FORCE] * smooth_sign(v / p[L.P_ROLLING_SMOOTHING_SPEED])
     return r * (rolling + p[L.P_GRADE_FORCE] + p[L.P_DRAG_FACTOR] * v * abs(v))
 
 

@@ -7,7 +7,10 @@ test_free_ride.py, which also checks it against the contact geometry). These tes
 real states of the service brake (the urban cycle; an application and its release: the
 shoes at rest on their stops, approaching the drum, braking, returning and landing) both
 ways for identical bits, compare the free evaluation with the full one slot by slot, and
-check that a state in contact or a held drum never rides free.
+check that a state in contact or a held drum never rides free. With the lining over its
+arc (``distributed_lining``) the bound's indentation is the deepest node's (the located
+scheme's switch test, ``lining.switching``), and the free ride is the lined evaluation's
+where no node presses.
 """
 
 from __future__ import annotations
@@ -28,6 +31,7 @@ APPLICATION = (
     'name = "application"\nbrake = "service"\nduration_s = 0.7\n[actuation]\n'
     f'profile = "piecewise"\n[actuation.left]\n{_KNOTS}[actuation.right]\n{_KNOTS}'
 )
+LINED = "[parameters.service]\ndistributed_lining = true\n"
 # before the application (on the stops), approaching, braking, released, returning, landed
 APPLICATION_TIMES_S = (0.05, 0.11, 0.13, 0.2, 0.26, 0.28, 0.3, 0.35, 0.45, 0.65)
 
@@ -35,11 +39,15 @@ APPLICATION_TIMES_S = (0.05, 0.11, 0.13, 0.2, 0.26, 0.28, 0.3, 0.35, 0.45, 0.65)
 def _bound(p: np.ndarray, y: np.ndarray) -> np.ndarray:
     """The free-ride bound of the state ``y`` as the kernel builds it on the service brake."""
     free = kernel.NOT_FREE.copy()
+    lined = p[L.P_LINING_NODE_STIFFNESS] > 0.0
     for i, base in enumerate(BASES):
-        kin = contact.kinematics(
-            p, base, y[L.Y_LEFT_ANGLE + i], y[L.Y_LEFT_SPEED + i], y[L.Y_DRUM_ANGLE], 0.0
-        )
-        free[4 + 2 * i] = kin[0]  # the service brake's slots
+        if lined:  # the deepest node's (the located scheme's switch test)
+            eps = rk4.shoe_switch(p, i, y)[0]
+        else:
+            eps = contact.kinematics(
+                p, base, y[L.Y_LEFT_ANGLE + i], y[L.Y_LEFT_SPEED + i], y[L.Y_DRUM_ANGLE], 0.0
+            )[0]
+        free[4 + 2 * i] = eps  # the service brake's slots
         free[4 + 2 * i + 1] = 2.0 * kernel.lining_reach(p, base)
     return free
 
@@ -94,7 +102,9 @@ def _compare(p, y, t0, dt, knots) -> tuple[int, int]:
 
 
 def _in_contact(p: np.ndarray, y: np.ndarray) -> bool:
-    """Whether either lining touches the drum at ``y``."""
+    """Whether either lining touches the drum at ``y`` (a node of a lining over its arc)."""
+    if p[L.P_LINING_NODE_STIFFNESS] > 0.0:
+        return any(rk4.shoe_switch(p, i, y)[0] > 0.0 for i in range(2))
     return any(
         contact.kinematics(p, base, y[L.Y_LEFT_ANGLE + i], 0.0, y[L.Y_DRUM_ANGLE], 0.0)[0] > 0.0
         for i, base in enumerate(BASES)
@@ -125,12 +135,14 @@ def test_free_stages_step_the_service_urban_cycle_with_the_same_bits():
 
 
 @pytest.mark.slow
-def test_free_stages_step_applications_and_releases_with_the_same_bits():
+@pytest.mark.parametrize("lining", ["point", "arc"])
+def test_free_stages_step_applications_and_releases_with_the_same_bits(lining):
     """The shoes on their rest stops, leaving them, approaching the drum under a rising
     line pressure, braking, released and returning to land on their stops: the stages that
     ride free (clear of the drum: also approaching and returning, whose tips move the
-    shoes) give the full evaluation's bits, those in contact never ride free."""
-    scenario = parse_scenario(APPLICATION)
+    shoes) give the full evaluation's bits, those in contact never ride free. With the
+    point contact and with the lining over its arc."""
+    scenario = parse_scenario(APPLICATION + (LINED if lining == "arc" else ""))
     stepper = stepper_for(scenario)
     dt = stepper.physics_step_s
     p = stepper.packed_parameters
@@ -151,12 +163,13 @@ def test_free_stages_step_applications_and_releases_with_the_same_bits():
 
 
 @pytest.mark.slow
-def test_the_free_evaluation_is_the_full_one_where_the_bound_holds():
+@pytest.mark.parametrize("lining", ["point", "arc"])
+def test_the_free_evaluation_is_the_full_one_where_the_bound_holds(lining):
     """``kernel.stage_evaluate``'s free ride against ``kernel.evaluate`` on the same state,
     every slot of the derivative bit for bit (but the sign of a zero), over the
     application's run (every 2 ms) wherever it rides free at the state itself (no turn
-    since the bound's state)."""
-    scenario = parse_scenario(APPLICATION)
+    since the bound's state). With the point contact and with the lining over its arc."""
+    scenario = parse_scenario(APPLICATION + (LINED if lining == "arc" else ""))
     stepper = stepper_for(scenario)
     p = stepper.packed_parameters
     tl, fl, tr, fr = scenario.setup.actuation.as_arrays()
