@@ -1,8 +1,9 @@
 """The spread of a fleet: how unit-to-unit scatter moves stop time and first-impact force.
 
-``brake-sim bench units [--units N] [--seed S] [--scenario NAME] [--preset P]`` runs the
-scenario (default the published event, fast preset) for units ``unit-0000`` ... of one
-seed and prints mean, standard deviation, minimum and maximum of the stop time and of the
+``brake-sim bench units [--units N] [--seed S] [--scenario NAME] [--brake B] [--preset P]``
+runs the scenario (default the published event, on the service brake as fleets are since
+issue 28; ``--brake study`` for the study brake's; fast preset) for units ``unit-0000`` ...
+of one seed and prints mean, standard deviation, minimum and maximum of the stop time and of the
 leading (left) shoe's first-impact peak pivot force, beside what a linear model of the
 scatter predicts: each parameter of the scenario's brake's scatter table
 (:func:`~brake_sim_ros.fleet.scatter.scatter_table`: the study brake's or the service
@@ -22,8 +23,10 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from brake_sim_ros.fleet.scatter import NOMINAL_UNIT, Scatter, scatter_table, with_deviations
+from brake_sim_ros.model.parameters import BRAKES
 from brake_sim_ros.scenarios import Scenario, load_scenario
 from brake_sim_ros.stream.run import run_scenario
+from brake_sim_ros.studies.cycle_bench import on_brake
 
 FIRST_IMPACT_SIDE = "left"  # the leading shoe
 # Simulated time per unit, s: the published event's 7.5 s is too short for a unit whose
@@ -99,11 +102,15 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--units", type=int, default=50, help="units in the fleet (default 50)")
     parser.add_argument("--seed", type=int, default=0, help="the fleet's seed (default 0)")
     parser.add_argument("--scenario", default="symmetric", help="default: symmetric")
+    parser.add_argument(
+        "--brake", choices=BRAKES, default="service", help="the brake (default service)"
+    )
     parser.add_argument("--preset", default="fast", help="solver preset (default fast)")
     args = parser.parse_args(argv)
     if not 2 <= args.units <= 100_000:
         parser.error(f"--units {args.units}: allowed 2 to 100000")
-    scenario = load_scenario(args.scenario).with_solver(preset=args.preset)
+    scenario = on_brake(load_scenario(args.scenario), args.brake)
+    scenario = scenario.with_solver(preset=args.preset)
     scenario = scenario.with_unit(NOMINAL_UNIT, fleet_seed=args.seed)
     start = time.perf_counter()
     rows = fleet(scenario, fleet_unit_ids(args.units))
@@ -111,8 +118,8 @@ def main(argv: list[str] | None = None) -> int:
     predicted, parts = linear_spread(scenario)
     nominal = figures(scenario)
     print(
-        f"fleet of {args.units} units (unit-0000 ...) of scenario {scenario.name}, seed"
-        f" {args.seed}, preset {args.preset}: {wall:.1f} s wall"
+        f"fleet of {args.units} units (unit-0000 ...) of scenario {scenario.name} on the"
+        f" {args.brake} brake, seed {args.seed}, preset {args.preset}: {wall:.1f} s wall"
     )
     print(
         f"{'figure':34s} {'nominal':>9s} {'mean':>9s} {'std':>8s} {'min':>9s} {'max':>9s}"

@@ -284,7 +284,8 @@ preset = "fast"
 
 
 @pytest.mark.slow
-def test_fifty_units_spread_stop_time_and_first_impact_as_the_scatter_predicts():
+@pytest.mark.parametrize("brake", ["study", "service"])
+def test_fifty_units_spread_stop_time_and_first_impact_as_the_scatter_predicts(brake):
     """The spread across 50 units against a linear model of the scatter, derived before
     the fleet is run: each parameter moved one sigma alone gives its effect on a figure,
     the predicted standard deviation is the root sum of squares of the effects times each
@@ -294,9 +295,12 @@ def test_fifty_units_spread_stop_time_and_first_impact_as_the_scatter_predicts()
     about 1/sqrt(2 x 49) = 10 %, so 0.6-1.4 of the prediction is four standard errors;
     0.2 more above allows for what the linear model leaves out (a peak force and a stop
     time are smooth but not linear over +-3 sigma). Spread must be nonzero, and the stop
-    time must fall with the friction coefficient (the braking torque rises with it).
+    time must fall with the friction coefficient (the braking torque rises with it). On
+    either brake (each its own scatter table).
     """
-    scenario = parse_scenario(SHORT_STOP).with_unit(scatter.NOMINAL_UNIT, fleet_seed=2)
+    text = ("" if brake == "study" else 'brake = "service"\n') + SHORT_STOP
+    scenario = parse_scenario(text).with_unit(scatter.NOMINAL_UNIT, fleet_seed=2)
+    assert scenario.setup.params.brake == brake
     predicted, parts = fleet_study.linear_spread(scenario, duration_s=4.0)
     ids = fleet_study.fleet_unit_ids(50)
     rows = fleet_study.fleet(scenario, ids, duration_s=4.0)
