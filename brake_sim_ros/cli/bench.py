@@ -42,5 +42,5 @@ BENCH = Command(
 SEVERITY = Command(  # parsed by the study (main() hands it the arguments)
     "severity",
     "sweep each defect from healthy to its service limit and report how signal"
-    " features move: brake-sim severity [--out DIR] [--duration S]",
+    " features move: brake-sim severity [--out DIR] [--duration S] [--brake B]",
 )

@@ -2,9 +2,15 @@
 in service, and how a few signal features move, so a user sees what is detectable and
 from what size.
 
-For every kind (:data:`~brake_sim_ros.model.catalogue.KINDS`) and location, the symmetric
-scenario is run with that one defect at :data:`STEPS` fractions of the kind's service limit
-(0, 20, ..., 100 %; ``Defects.single``), for ``--duration`` simulated seconds. Features:
+For every kind the brake carries (:data:`~brake_sim_ros.model.catalogue.KINDS`; the line's
+and the seized adjuster's on the service brake) and location, the symmetric scenario on
+the ``--brake`` named (default the service brake, the product's; ``study`` for the
+published brake) is run with that one defect at :data:`STEPS` fractions of the kind's
+service limit (0, 20, ..., 100 %; ``Defects.single``), for ``--duration`` simulated
+seconds. A size the brake cannot be assembled with (on the service brake, a pin moved out
+by half its limit or more starts the lining inside the drum of its 0.3 mm clearance) is
+not run: its features are NaN, the report lists it with the refusal's one line, and the
+command counts the refused sizes in one line. Features:
 
 * at the defective shoe, from the pivot force (the model's own signal): the first-impact
   peak ``|F_pivot|`` (N), the first-to-second impact period (ms), the number of impacts,
@@ -39,17 +45,21 @@ import numpy as np
 
 from brake_sim_ros.analysis import measured_features as mf
 from brake_sim_ros.analysis.orders import order_amplitude
+from brake_sim_ros.errors import BrakeSimError
 from brake_sim_ros.model import catalogue
 from brake_sim_ros.model.catalogue import DefectKind
 from brake_sim_ros.model.defects import Defects
 from brake_sim_ros.model.layout import SIDES
+from brake_sim_ros.model.parameters import BRAKES
 from brake_sim_ros.recording.output import check_output, replace_output
-from brake_sim_ros.scenarios import load_scenario
+from brake_sim_ros.scenarios import Scenario, load_scenario
 from brake_sim_ros.sensing.sensors import SensorBank, SensorSet
 from brake_sim_ros.stream.run import run_scenario
+from brake_sim_ros.studies.cycle_bench import on_brake
 
 STEPS = (0.0, 0.2, 0.4, 0.6, 0.8, 1.0)  # fractions of the service limit
 BASE_SCENARIO = "symmetric"
+DEFAULT_BRAKE = "service"  # the product's brake; "study" for the published one
 DEFAULT_DURATION_S = 2.0
 ORDER_WINDOW_S = (0.8, 1.9)  # contact regime with the actuation held (published event)
 SEED = 0
@@ -70,10 +80,21 @@ FEATURES: dict[str, str] = {  # key: label (unit)
 ABSOLUTE = frozenset({"order_2_line_n", "order_1_line_n"})
 
 
-def features(defects: Defects, location: str, duration_s: float) -> dict[str, float]:
-    """The :data:`FEATURES` of the base scenario with ``defects``, at shoe ``location``
-    (the leading, left, shoe for the drum)."""
-    scenario = load_scenario(BASE_SCENARIO).with_defects(defects)
+def base_scenario(brake: str = DEFAULT_BRAKE) -> Scenario:
+    """:data:`BASE_SCENARIO` on the brake ``brake`` (:data:`BRAKES`)."""
+    return on_brake(load_scenario(BASE_SCENARIO), brake)
+
+
+def features(
+    defects: Defects, location: str, duration_s: float, brake: str = DEFAULT_BRAKE
+) -> dict[str, float]:
+    """The :data:`FEATURES` of the base scenario on ``brake`` with ``defects``, at shoe
+    ``location`` (the leading, left, shoe for the drum).
+
+    Raises:
+        BrakeSimError: the brake cannot be assembled with ``defects`` (one line).
+    """
+    scenario = base_scenario(brake).with_defects(defects)
     run = run_scenario(scenario, duration_s=duration_s)
     side = location if location in SIDES else SIDES[0]
     shoe = run.metrics.shoe(side)
@@ -119,21 +140,30 @@ def sweep(
     healthy: dict[str, float],
     progress: Callable[[str], None] | None = None,
     steps: tuple[float, ...] = STEPS,
+    brake: str = DEFAULT_BRAKE,
 ) -> dict[str, object]:
-    """One kind at one location at ``steps`` (fractions of its service limit, 0 first):
-    severities and each feature's values (the first is ``healthy``)."""
+    """One kind at one location at ``steps`` (fractions of its service limit, 0 first) on
+    ``brake``: severities, each feature's values (the first is ``healthy``; NaN at a size
+    the brake refuses) and the refused sizes with the refusal's line."""
     severities = [f * kind.service_limit + 0.0 for f in steps]
     rows = [healthy]
+    refused: list[list[object]] = []
     for severity in severities[1:]:
         if progress:
             progress(f"{location} {kind.name} {severity:+g} {kind.unit}")
-        rows.append(features(Defects.single(kind.name, location, severity), location, duration_s))
+        defects = Defects.single(kind.name, location, severity)
+        try:
+            rows.append(features(defects, location, duration_s, brake))
+        except BrakeSimError as exc:  # not assembled: no run, its features missing
+            refused.append([severity, str(exc)])
+            rows.append(dict.fromkeys(FEATURES, math.nan))
     return {
         "kind": kind.name,
         "location": location,
         "unit": kind.unit,
         "severities": severities,
         "values": {k: [r[k] for r in rows] for k in FEATURES},
+        "refused": refused,
     }
 
 
@@ -142,16 +172,16 @@ def sweeps(
     progress: Callable[[str], None] | None = None,
     kinds: tuple[DefectKind, ...] | None = None,
     steps: tuple[float, ...] = STEPS,
+    brake: str = DEFAULT_BRAKE,
 ) -> list[dict[str, object]]:
-    """``kinds`` (default: every kind the base scenario's brake carries) at every location,
-    healthy runs shared per location."""
+    """``kinds`` (default: every kind ``brake`` carries) at every location, healthy runs
+    shared per location."""
     if kinds is None:
-        circuit = load_scenario(BASE_SCENARIO).setup.params.service is not None
-        kinds = catalogue.brake_kinds(circuit)
+        kinds = catalogue.brake_kinds(base_scenario(brake).setup.params.service is not None)
     locations = list(dict.fromkeys(loc for k in kinds for loc in k.locations))
-    healthy = {loc: features(Defects(), loc, duration_s) for loc in locations}
+    healthy = {loc: features(Defects(), loc, duration_s, brake) for loc in locations}
     return [
-        sweep(kind, loc, duration_s, healthy[loc], progress, steps)
+        sweep(kind, loc, duration_s, healthy[loc], progress, steps, brake)
         for kind in kinds
         for loc in kind.locations
     ]
@@ -164,13 +194,16 @@ def change_pct(value: float, base: float) -> float:
     return 100.0 * (value - base) / abs(base)
 
 
-def report_markdown(results: list[dict[str, object]], duration_s: float) -> str:
+def report_markdown(
+    results: list[dict[str, object]], duration_s: float, brake: str = DEFAULT_BRAKE
+) -> str:
     lines = [
         "# Defect severity sweeps",
         "",
-        f"Scenario `{BASE_SCENARIO}` with one defect, {duration_s:g} s simulated, default"
-        f" sensors (seed {SEED}). Severity from healthy to the kind's service limit"
-        " (`brake-sim defects`); each cell: value (change against healthy).",
+        f"Scenario `{BASE_SCENARIO}` on the {brake} brake with one defect, {duration_s:g} s"
+        f" simulated, default sensors (seed {SEED}). Severity from healthy to the kind's"
+        " service limit (`brake-sim defects`); each cell: value (change against healthy);"
+        " nan at a size the brake refuses (listed under its table).",
         "",
     ]
     for r in results:
@@ -195,6 +228,8 @@ def report_markdown(results: list[dict[str, object]], duration_s: float) -> str:
             ]
             lines.append(f"| {label} | " + " | ".join(cells) + " |")
         lines.append("")
+        for severity, reason in r.get("refused", []):
+            lines += [f"Refused at {severity:+g} {r['unit']}: {reason}", ""]
     return "\n".join(lines)
 
 
@@ -239,18 +274,20 @@ def write_report(
     progress: Callable[[str], None] | None = None,
     kinds: tuple[DefectKind, ...] | None = None,
     steps: tuple[float, ...] = STEPS,
-) -> Path:
-    """Run the sweeps; write ``report.md``, a figure per kind and location and
-    ``severity.json``."""
+    brake: str = DEFAULT_BRAKE,
+) -> tuple[Path, int]:
+    """Run the sweeps on ``brake``; write ``report.md``, a figure per kind and location
+    and ``severity.json``. Returns the report's path and how many sizes were refused."""
     check_output(out_dir / "report.md", overwrite=True, option="--out")  # before the work
     out_dir.mkdir(parents=True, exist_ok=True)
-    results = sweeps(duration_s, progress, kinds, steps)
+    results = sweeps(duration_s, progress, kinds, steps, brake)
     for r in results:
         plot(r, out_dir)
     text = json.dumps(results, indent=1, allow_nan=True)
     replace_output(out_dir / "severity.json", lambda tmp: tmp.write_text(text, encoding="utf-8"))
-    report = report_markdown(results, duration_s)
-    return replace_output(out_dir / "report.md", lambda tmp: tmp.write_text(report, "utf-8"))
+    report = report_markdown(results, duration_s, brake)
+    path = replace_output(out_dir / "report.md", lambda tmp: tmp.write_text(report, "utf-8"))
+    return path, sum(len(r["refused"]) for r in results)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -266,12 +303,23 @@ def main(argv: list[str] | None = None) -> int:
         help=f"simulated seconds per run (default {DEFAULT_DURATION_S:g}; 6.6 for the"
         " contact-regime force)",
     )
+    parser.add_argument(
+        "--brake",
+        choices=BRAKES,
+        default=DEFAULT_BRAKE,
+        help=f"the brake (default {DEFAULT_BRAKE})",
+    )
     args = parser.parse_args(argv)
     if not mf.IMPACT_WINDOW_S[1] <= args.duration <= 60.0:
         parser.error(f"--duration {args.duration:g}: allowed {mf.IMPACT_WINDOW_S[1]:g} to 60 s")
-    path = write_report(
-        Path(args.out), args.duration, lambda what: print(f"running {what}", file=sys.stderr)
+    path, refused = write_report(
+        Path(args.out),
+        args.duration,
+        lambda what: print(f"running {what}", file=sys.stderr),
+        brake=args.brake,
     )
+    if refused:
+        print(f"refused: {refused} sizes the {args.brake} brake cannot be assembled with (report)")
     print(f"report: {path}")
     return 0
 
