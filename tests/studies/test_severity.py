@@ -149,8 +149,9 @@ def test_a_size_the_service_brake_cannot_be_assembled_with_is_listed_not_run(tmp
 def test_a_seized_adjuster_raises_its_shoes_first_contact_force_on_the_service_brake():
     """The seized adjuster leaves more clearance: the piston takes more fluid before the
     lining lands, later on the rise and at a larger force, at half and at all of its
-    limit. (Not on every finer step: the full sweep gives the left shoe 77.8 N at 0.4 mm
-    and 75.7 N at 0.6 mm, docs/scenarios.md.)"""
+    limit. (Not on every finer step: the piston's force ripples while the shoe travels,
+    and the full sweep gives the left shoe 77.8 N at 0.4 mm and 75.7 N at 0.6 mm,
+    docs/scenarios.md.)"""
     kind = KIND_BY_NAME["adjuster_seized"]
     healthy = severity.features(Defects(), "left", DURATION_S, "service")
     result = severity.sweep(
