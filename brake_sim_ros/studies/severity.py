@@ -45,7 +45,7 @@ import numpy as np
 
 from brake_sim_ros.analysis import measured_features as mf
 from brake_sim_ros.analysis.orders import order_amplitude
-from brake_sim_ros.errors import BrakeSimError
+from brake_sim_ros.errors import ParameterError
 from brake_sim_ros.model import catalogue
 from brake_sim_ros.model.catalogue import DefectKind
 from brake_sim_ros.model.defects import Defects
@@ -92,7 +92,7 @@ def features(
     ``location`` (the leading, left, shoe for the drum).
 
     Raises:
-        BrakeSimError: the brake cannot be assembled with ``defects`` (one line).
+        ParameterError: the brake cannot be assembled with ``defects`` (one line).
     """
     scenario = base_scenario(brake).with_defects(defects)
     run = run_scenario(scenario, duration_s=duration_s)
@@ -154,7 +154,7 @@ def sweep(
         defects = Defects.single(kind.name, location, severity)
         try:
             rows.append(features(defects, location, duration_s, brake))
-        except BrakeSimError as exc:  # not assembled: no run, its features missing
+        except ParameterError as exc:  # not assembled: no run, its features missing
             refused.append([severity, str(exc)])
             rows.append(dict.fromkeys(FEATURES, math.nan))
     return {
