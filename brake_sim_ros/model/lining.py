@@ -182,29 +182,21 @@ def shoe_contact(p, base, theta, omega, drum_speed, actuation, mode, stuck, shar
     v_sum = 0.0
     eps = -math.inf
     eps_dot = 0.0
-    # the deepest node's place, radial unit vector, r' and distance (its sliding speed is
-    # computed once, below, where it is recorded)
-    x_deep = 0.0
-    y_deep = 0.0
-    nx_deep = 0.0
-    ny_deep = 0.0
-    slope_deep = 0.0
-    dist_deep = 0.0
+    # the deepest node's arc angle (its place and sliding speed are computed again, once,
+    # where nothing presses and they are recorded)
+    cb_deep = 1.0
+    sb_deep = 0.0
     cb, sb, cd_, sd_ = first_node(p, base)
     for _ in range(NODES):
         d, d_dot, x, y, nx, ny, slope, dist, _ = node_depth(
             p, base, c, sn, w, cb, sb, drum_angle, drum_speed
         )
-        cb, sb = cb * cd_ - sb * sd_, sb * cd_ + cb * sd_
         if d > eps:
             eps = d
             eps_dot = d_dot
-            x_deep = x
-            y_deep = y
-            nx_deep = nx
-            ny_deep = ny
-            slope_deep = slope
-            dist_deep = dist
+            cb_deep = cb
+            sb_deep = sb
+        cb, sb = cb * cd_ - sb * sd_, sb * cd_ + cb * sd_
         if d <= 0.0:
             # presses nothing: no force, and its damper's loss (f - k max(d, 0)) d' and
             # elastic force are zeros (the sums below skip them)
@@ -236,14 +228,11 @@ def shoe_contact(p, base, theta, omega, drum_speed, actuation, mode, stuck, shar
     fn_rec, ff_rec, xr, yr = _equivalent(fx, fy, m_centre, p[L.P_DRUM_RADIUS])
     if fn_sum > 0.0:
         v_rec = v_sum / fn_sum
-    elif eps > -math.inf:  # nothing presses: the deepest node's sliding speed
-        v_rec = node_tail(
-            p, base, w, drum_speed, x_deep, y_deep, nx_deep, ny_deep, slope_deep, dist_deep
-        )[5]
+    elif eps > -math.inf:  # nothing presses: the deepest node's place and sliding speed
+        deep = node_state(p, base, c, sn, w, cb_deep, sb_deep, drum_angle, drum_speed)
+        v_rec, xr, yr = deep[7], deep[8], deep[9]
     else:
-        v_rec = 0.0
-    if fn_sum <= 0.0:
-        xr, yr = x_deep, y_deep
+        v_rec, xr, yr = 0.0, 0.0, 0.0
     tdx = p[base + L.S_TIP_X] - px
     tdy = p[base + L.S_TIP_Y] - py
     tx = c * tdx - sn * tdy

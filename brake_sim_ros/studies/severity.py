@@ -35,6 +35,7 @@ the signal carries, not a detection rate.
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import math
 import sys
@@ -80,8 +81,10 @@ FEATURES: dict[str, str] = {  # key: label (unit)
 ABSOLUTE = frozenset({"order_2_line_n", "order_1_line_n"})
 
 
+@functools.cache
 def base_scenario(brake: str = DEFAULT_BRAKE) -> Scenario:
-    """:data:`BASE_SCENARIO` on the brake ``brake`` (:data:`BRAKES`)."""
+    """:data:`BASE_SCENARIO` on the brake ``brake`` (:data:`BRAKES`), parsed once (a frozen
+    Scenario: each run takes its own copy with its defects)."""
     return on_brake(load_scenario(BASE_SCENARIO), brake)
 
 

@@ -313,3 +313,11 @@ def test_fifty_units_spread_stop_time_and_first_impact_as_the_scatter_predicts(b
     mu = np.array([scatter.deviations(u, 2)["friction.coefficient"] for u in ids])
     assert parts["friction.coefficient"].stop_time_s < 0
     assert np.corrcoef(mu, stop)[0, 1] < -0.5
+
+
+def test_bench_units_refuses_an_unknown_brake_in_one_line(capsys):
+    with pytest.raises(SystemExit) as exc:
+        fleet_study.main(["--brake", "disc", "--units", "2"])
+    assert exc.value.code == 2
+    err = capsys.readouterr().err.strip().splitlines()[-1]
+    assert "--brake: invalid choice: 'disc'" in err and "'service'" in err

@@ -159,3 +159,13 @@ def test_a_seized_adjuster_raises_its_shoes_first_contact_force_on_the_service_b
     )
     force = result["values"]["first_impact_actuation_n"]
     assert result["refused"] == [] and force[0] < force[1] < force[2]
+
+
+def test_the_cli_refuses_an_unknown_brake_in_one_line_before_any_run(tmp_path, capsys):
+    out = tmp_path / "sev"
+    with pytest.raises(SystemExit) as exc:
+        main(["severity", "--brake", "disc", "--out", str(out)])
+    assert exc.value.code == 2
+    err = capsys.readouterr().err.strip().splitlines()[-1]
+    assert "--brake: invalid choice: 'disc'" in err and "'service'" in err
+    assert not out.exists()
