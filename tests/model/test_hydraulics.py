@@ -5,6 +5,7 @@ parameters (piston area, R, C, the shoe's lever), never read off a run."""
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
@@ -221,3 +222,68 @@ def test_the_step_limit_needs_no_hydraulic_mode():
     assert np.abs(full.imag).max() == pytest.approx(np.abs(held.imag).max(), rel=0.01)
     # and the circuit's own rate is there, near 1 / (R C)
     assert np.any(np.abs(full.real + 1.0 / (R * C)) < 0.2 / (R * C))
+
+
+STROKE_FORCE_N = 63.0  # above the springs' 60 N preload, below the 66 N that closes the gap
+STROKE_S = 0.6
+
+
+def _smoothed(x: np.ndarray, n: int) -> np.ndarray:
+    """The running mean of ``x`` over ``n`` samples (valid part, centred)."""
+    return np.convolve(x, np.ones(n) / n, mode="valid")
+
+
+def test_the_shoes_ring_on_the_fluid_through_their_stroke():
+    """A held 63 N per shoe, above the return springs' 60 N preload and below the 66 N at
+    which the tips (0.6 mm of travel at 10 N/mm) close the 0.3 mm clearance: the shoes lift
+    off their stops and move out together, never touching the drum. Both pistons share one
+    line, so each tip sits on the fluid's spring ``2 A^2 / C`` beside its return spring's
+    rate ``k``, with the shoe's inertia about its pin at the tip's arm, ``m = I / a^2``:
+
+    * they ring in phase at ``f = sqrt((2 A^2 / C + k) / m) / 2 pi`` (within 2 %): the
+      ripple of the piston force while a shoe travels (docs/scenarios.md);
+    * damped by the line's flow alone (``omega R C >> 1``): ``zeta = (2 A^2 / C) /
+      (2 A^2 / C + k) / (2 omega R C)`` (within 10 %);
+    * and creep out as the source fills the pistons through the line, with the time
+      constant ``R (C + 2 A^2 / k)`` (within 5 %), 21 times the pressure's ``R C``."""
+    stepper = _stepper(_held(STROKE_FORCE_N))
+    block = stepper.run(STROKE_S)
+    assert np.all(block["left_normal_force_n"] == 0.0)
+    assert np.all(block["right_normal_force_n"] == 0.0)
+    placed = place_shoe(SERVICE, "left", Defects().left)
+    arm = abs(
+        (placed.tip_xy_m[0] - placed.pivot_xy_m[0]) * placed.actuation_dir[1]
+        - (placed.tip_xy_m[1] - placed.pivot_xy_m[1]) * placed.actuation_dir[0]
+    )
+    mass = placed.inertia_about_pivot_kg_m2 / arm**2
+    fluid = 2.0 * AREA**2 / C
+    k = SPEC.return_spring_rate_n_per_m
+    omega = math.sqrt((fluid + k) / mass)
+    zeta = fluid / (fluid + k) / (2.0 * omega * R * C)
+    tau = R * (C + 2.0 * AREA**2 / k)
+
+    u = _tip_travel("left", block["left_angle_rad"])
+    np.testing.assert_array_equal(u, _tip_travel("right", block["right_angle_rad"]))
+    t = block.time_s
+    # off the stop once the tip is past the stop's give (4 um: the preload's net 40 N on
+    # k_st) by 10 um
+    give = (SPEC.return_spring_preload_n - SPEC.residual_force_n) / SPEC.stop_stiffness_n_per_m
+    lifted = int(np.argmax(u > give + 1e-5))
+    assert 0 < lifted < 0.2 * FS
+    period_n = round(FS * 2.0 * math.pi / omega)
+    # the ring: the travel less its running mean over a period, zero crossings upward
+    mean = _smoothed(u, period_n)
+    ring = u[period_n // 2 : period_n // 2 + mean.shape[0]] - mean
+    window = slice(lifted, lifted + 10 * period_n)
+    ring, tr = ring[window], t[period_n // 2 :][window]
+    up = np.flatnonzero((ring[:-1] < 0.0) & (ring[1:] >= 0.0))
+    assert up.shape[0] >= 7
+    frequency = 1.0 / np.median(np.diff(tr[up]))
+    assert frequency == pytest.approx(omega / (2.0 * math.pi), rel=0.02)
+    peaks = np.array([ring[a:b].max() for a, b in itertools.pairwise(up)])
+    measured_zeta = -np.polyfit(np.arange(peaks.shape[0]), np.log(peaks), 1)[0] / (2 * math.pi)
+    assert measured_zeta == pytest.approx(zeta, rel=0.10)
+    # the creep: three running means a tenth of a second apart, from 0.2 s on
+    i1, i2, i3 = (int((0.2 + 0.1 * j) * FS) for j in range(3))
+    creep_tau = 0.1 / math.log((mean[i2] - mean[i1]) / (mean[i3] - mean[i2]))
+    assert creep_tau == pytest.approx(tau, rel=0.05)
