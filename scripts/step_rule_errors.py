@@ -19,9 +19,9 @@ import math
 
 from brake_sim_ros.analysis.comparison import metric_errors
 from brake_sim_ros.analysis.impacts import event_metrics
-from brake_sim_ros.campaigns.toml_text import dumps
 from brake_sim_ros.scenarios import Scenario, load_scenario, parse_scenario
 from brake_sim_ros.scenarios.loader import parse_toml
+from brake_sim_ros.scenarios.toml_text import dumps
 from brake_sim_ros.solvers.fixed_step import FixedStepStepper
 from brake_sim_ros.solvers.stability import STABILITY_MARGIN, STEPS_PER_PERIOD
 

@@ -4,8 +4,7 @@ brake (issue 28): the same files with ``brake = "study"``. For the tests (and th
 
 from __future__ import annotations
 
-from brake_sim_ros.scenarios import Scenario, load_scenario
-from brake_sim_ros.studies.cycle_bench import on_brake
+from brake_sim_ros.scenarios import Scenario, load_scenario, on_brake
 
 
 def on_study_brake(name: str) -> Scenario:

@@ -28,9 +28,9 @@ from brake_sim_ros.campaigns.axes import (
     point_columns,
 )
 from brake_sim_ros.campaigns.splits import HeldOut, assign_units
-from brake_sim_ros.campaigns.toml_text import dumps
 from brake_sim_ros.errors import BrakeSimError
 from brake_sim_ros.scenarios.loader import parse_scenario
+from brake_sim_ros.scenarios.toml_text import dumps
 
 # samples of one run: the run's history is kept in memory to be written (about 40 float64
 # columns: 2e6 samples is some 650 MB with the table's copy)

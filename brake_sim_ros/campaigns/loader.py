@@ -46,7 +46,6 @@ from brake_sim_ros.campaigns.splits import (
     unit_counts,
     value_kind,
 )
-from brake_sim_ros.campaigns.toml_text import dumps
 from brake_sim_ros.errors import BrakeSimError
 from brake_sim_ros.model.catalogue import KIND_BY_NAME, brake_kinds
 from brake_sim_ros.model.parameters import BRAKES
@@ -58,6 +57,7 @@ from brake_sim_ros.scenarios.loader import (
     parse_scenario,
     parse_toml,
 )
+from brake_sim_ros.scenarios.toml_text import dumps
 
 CAMPAIGN_PACKAGE = "brake_sim_ros.campaigns.builtin"
 MAX_RUNS = 100_000  # runs of one campaign (a manifest row and a file each)

@@ -13,6 +13,7 @@ if TYPE_CHECKING:
     from brake_sim_ros.scenarios.loader import (
         builtin_names,
         load_scenario,
+        on_brake,
         parse_scenario,
         read_scenario_file,
     )
@@ -23,6 +24,7 @@ __all__ = [
     "SolverSettings",
     "builtin_names",
     "load_scenario",
+    "on_brake",
     "parse_scenario",
     "read_scenario_file",
 ]

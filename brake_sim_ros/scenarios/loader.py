@@ -58,6 +58,7 @@ from brake_sim_ros.scenarios.tables import (
     parse_thermal,
     parse_vehicle,
 )
+from brake_sim_ros.scenarios.toml_text import dumps
 from brake_sim_ros.scenarios.types import DEFAULT_SAMPLE_RATE_HZ, SAMPLE_RATE_RANGE_HZ, Scenario
 
 BUILTIN_PACKAGE = "brake_sim_ros.scenarios.builtin"
@@ -167,6 +168,21 @@ def parse_scenario(text: str, source: str = "<string>") -> Scenario:
         raise
     except BrakeSimError as exc:  # a check of the model (parameters, profile, defects)
         raise ScenarioError(f"{source}: {exc}") from exc
+
+
+def on_brake(scenario: Scenario, brake: str) -> Scenario:
+    """``scenario`` on the brake ``brake`` (``model.parameters.BRAKES``): its data with the
+    top-level ``brake`` key set so, as a campaign sets its base's (written again as TOML
+    text, :func:`.toml_text.dumps`) and parsed again; itself if it is on that brake already.
+
+    Raises:
+        ScenarioError: the scenario does not hold on this brake (one line).
+    """
+    if scenario.setup.params.brake == brake:
+        return scenario
+    data = parse_toml(scenario.text, scenario.source)
+    data["brake"] = brake
+    return parse_scenario(dumps(data), scenario.source)
 
 
 def _name(ctx: Checker, value: Any) -> str:

@@ -27,11 +27,9 @@ import time
 import numpy as np
 
 from brake_sim_ros.analysis.energy import energy_balance
-from brake_sim_ros.campaigns.toml_text import dumps
 from brake_sim_ros.model.parameters import BRAKES
 from brake_sim_ros.model.run_setup import SampleBlock
-from brake_sim_ros.scenarios import Scenario, load_scenario, parse_scenario
-from brake_sim_ros.scenarios.loader import parse_toml
+from brake_sim_ros.scenarios import load_scenario, on_brake, parse_scenario
 from brake_sim_ros.stream.build import sensor_bank_for, stepper_for
 
 TARGET_RTF = 30.0
@@ -78,22 +76,6 @@ def _run(scenario, chunk_samples: int, with_sensors: bool):
     cpu = clock() - start - bookkeeping
     end = SampleBlock(last.data[-1:].copy(), total - 1, last.sample_period_s)
     return (cpu, stepping, sensing), SampleBlock.concatenate([first, end]), segments
-
-
-def on_brake(scenario: Scenario, brake: str) -> Scenario:
-    """``scenario`` on the brake ``brake`` (:data:`BRAKES`): its data with the top-level
-    ``brake`` key set so, as a campaign sets its base's (written again as TOML text,
-    :func:`brake_sim_ros.campaigns.toml_text.dumps`) and parsed again; itself if it is on
-    that brake already.
-
-    Raises:
-        ScenarioError: the scenario does not hold on this brake (one line).
-    """
-    if scenario.setup.params.brake == brake:
-        return scenario
-    data = parse_toml(scenario.text, scenario.source)
-    data["brake"] = brake
-    return parse_scenario(dumps(data), scenario.source)
 
 
 def main(argv: list[str] | None = None) -> int:

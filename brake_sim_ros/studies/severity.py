@@ -53,10 +53,9 @@ from brake_sim_ros.model.defects import Defects
 from brake_sim_ros.model.layout import SIDES
 from brake_sim_ros.model.parameters import BRAKES
 from brake_sim_ros.recording.output import check_output, replace_output
-from brake_sim_ros.scenarios import Scenario, load_scenario
+from brake_sim_ros.scenarios import Scenario, load_scenario, on_brake
 from brake_sim_ros.sensing.sensors import SensorBank, SensorSet
 from brake_sim_ros.stream.run import run_scenario
-from brake_sim_ros.studies.cycle_bench import on_brake
 
 STEPS = (0.0, 0.2, 0.4, 0.6, 0.8, 1.0)  # fractions of the service limit
 BASE_SCENARIO = "symmetric"

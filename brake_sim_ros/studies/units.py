@@ -24,9 +24,8 @@ import numpy as np
 
 from brake_sim_ros.fleet.scatter import NOMINAL_UNIT, Scatter, scatter_table, with_deviations
 from brake_sim_ros.model.parameters import BRAKES
-from brake_sim_ros.scenarios import Scenario, load_scenario
+from brake_sim_ros.scenarios import Scenario, load_scenario, on_brake
 from brake_sim_ros.stream.run import run_scenario
-from brake_sim_ros.studies.cycle_bench import on_brake
 
 FIRST_IMPACT_SIDE = "left"  # the leading shoe
 # Simulated time per unit, s: the published event's 7.5 s is too short for a unit whose

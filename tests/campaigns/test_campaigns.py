@@ -14,9 +14,9 @@ from brake_sim_ros.campaigns import CampaignError, builtin_campaigns, load_campa
 from brake_sim_ros.campaigns.axes import DefectChoice, defect_choices
 from brake_sim_ros.campaigns.campaign import run_seed
 from brake_sim_ros.campaigns.splits import SPLITS, HeldOut, leaks, unit_counts
-from brake_sim_ros.campaigns.toml_text import dumps
 from brake_sim_ros.model.catalogue import KINDS, brake_kinds
 from brake_sim_ros.scenarios import parse_scenario
+from brake_sim_ros.scenarios.toml_text import dumps
 
 PIVOT = "pivot_radius_change"
 TINY = """

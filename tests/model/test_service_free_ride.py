@@ -20,9 +20,8 @@ import pytest
 
 from brake_sim_ros.model import contact, kernel, rk4
 from brake_sim_ros.model import layout as L
-from brake_sim_ros.scenarios import load_scenario, parse_scenario
+from brake_sim_ros.scenarios import load_scenario, on_brake, parse_scenario
 from brake_sim_ros.stream.build import stepper_for
-from brake_sim_ros.studies.cycle_bench import on_brake
 
 BASES = (L.P_SHOE_BASE, L.P_SHOE_BASE + L.SHOE_STRIDE)
 _KNOTS = "times_s = [0.0, 0.1, 0.15, 0.25, 0.27]\nforces_n = [0.0, 0.0, 1000.0, 1000.0, 0.0]\n"

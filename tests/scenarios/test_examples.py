@@ -5,8 +5,8 @@ from __future__ import annotations
 from pathlib import Path
 
 from brake_sim_ros.campaigns.loader import load_campaign
-from brake_sim_ros.campaigns.toml_text import dumps
 from brake_sim_ros.scenarios import load_scenario, parse_scenario
+from brake_sim_ros.scenarios.toml_text import dumps
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 

@@ -6,8 +6,8 @@ from __future__ import annotations
 import pytest
 
 from brake_sim_ros.errors import ScenarioError
-from brake_sim_ros.scenarios import load_scenario, parse_scenario
-from brake_sim_ros.studies.cycle_bench import main, on_brake
+from brake_sim_ros.scenarios import load_scenario, on_brake, parse_scenario
+from brake_sim_ros.studies.cycle_bench import main
 
 
 def test_on_brake_sets_the_brake_and_keeps_the_rest():
