@@ -1,7 +1,8 @@
 """What every command of ``brake-sim`` shares: exit codes, the parser class, a command's
 entry in the parser, the progress report and the one-line form of an error.
 
-Imports nothing beyond the standard library: ``brake-sim --help`` and every command's
+Imports nothing beyond the standard library (and :mod:`brake_sim_ros.command_line`,
+which neither does): ``brake-sim --help`` and every command's
 start pay only for what the command itself imports.
 """
 
@@ -12,24 +13,14 @@ import sys
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import NoReturn
 
-EXIT_ERROR = 2
+# the parser and its exit code, for the commands (defined below the studies, which share them)
+from brake_sim_ros.command_line import EXIT_ERROR, Parser  # noqa: F401
+
 EXIT_BROKEN_PIPE = 141  # 128 + SIGPIPE, what a shell reports for a pipe its reader closed
 EXIT_INTERRUPTED = 130  # 128 + SIGINT
 
 DEBUG_HELP = "on a user detector's error, show its traceback too"
-
-
-class Parser(argparse.ArgumentParser):
-    """argparse, but a bad command line is one line on stderr (exit 2), not the usage."""
-
-    def error(self, message: str) -> NoReturn:
-        text = " ".join(message.split())
-        text = "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)
-        if len(text) > 500:
-            text = text[:400] + " ... " + text[-60:]
-        self.exit(EXIT_ERROR, f"{self.prog}: error: {text} (see {self.prog} --help)\n")
 
 
 @dataclass(frozen=True)

@@ -30,7 +30,6 @@ import json
 import os
 import re
 import secrets
-import stat
 from collections.abc import Callable, Iterator
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -38,7 +37,7 @@ from typing import TYPE_CHECKING, Any
 
 from brake_sim_ros.errors import BrakeSimError
 from brake_sim_ros.recording.mcap_format import describe_path
-from brake_sim_ros.recording.output import OutputError, atomic_output
+from brake_sim_ros.recording.output import OutputError, atomic_output, output_directory
 
 if TYPE_CHECKING:
     from brake_sim_ros.campaigns.loader import RunSpec
@@ -141,25 +140,12 @@ def write_whole(path: Path, write: Callable[[Path], None]) -> None:
 
 
 def _make_directory(out: Path) -> None:
-    """``out`` made (with its parents) if missing; refused if a link or not a directory."""
-    name = describe_path(out)
+    """``out`` made (with its parents) if missing; refused if a link or not a directory
+    (:func:`.output_directory`'s rules, as a SweepError)."""
     try:
-        info = os.lstat(out)
-    except FileNotFoundError:
-        info = None
-    except OSError as exc:
-        raise SweepError(f"--out {name}: cannot check it ({exc.strerror or exc})") from None
-    if info is None:
-        try:
-            out.mkdir(parents=True)
-        except OSError as exc:
-            raise SweepError(f"--out {name}: cannot make it ({exc.strerror or exc})") from None
-    elif stat.S_ISLNK(info.st_mode):
-        raise SweepError(
-            f"--out {name} is a symbolic link: outputs are never written through a link"
-        )
-    elif not stat.S_ISDIR(info.st_mode):
-        raise SweepError(f"--out {name} exists and is not a directory: allowed a directory")
+        output_directory(out, "--out")
+    except OutputError as exc:
+        raise SweepError(str(exc)) from None
 
 
 def prepare_output(out: Path, lock_text: str) -> None:

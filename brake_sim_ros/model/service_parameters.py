@@ -254,10 +254,10 @@ class ServiceBrakeParameters:
             value = getattr(self, name)
             _require(low <= value <= high, name, value, allowed)
         _require(
-            self.stop_damping_n_s_per_m >= 0.0,
+            0.0 <= self.stop_damping_n_s_per_m <= 1e5,
             "stop_damping_n_s_per_m",
             self.stop_damping_n_s_per_m,
-            ">= 0",
+            "0 to 1e5 N s/m (twice the critical damping of the stiffest stop on the shoe)",
         )
 
     @property

@@ -71,6 +71,38 @@ def _make_directory(directory: Path, made: list[Path]) -> None:
         made.remove(directory)
 
 
+def output_directory(path: str | os.PathLike[str], option: str = "--out") -> Path:
+    """The directory ``path`` a command writes its files into: made (with its parents)
+    if missing; refused if empty, a symbolic link or not a directory, or if it cannot be
+    made. Nothing else is written.
+
+    Raises:
+        OutputError: one line naming the directory.
+    """
+    if not os.fspath(path).strip():
+        raise OutputError(f"{option} {os.fspath(path)!r}: allowed a directory path")
+    out = Path(path)
+    name = describe_path(out)
+    try:
+        info = os.lstat(out)
+    except FileNotFoundError:
+        info = None
+    except OSError as exc:
+        raise OutputError(f"{option} {name}: cannot check it ({exc.strerror or exc})") from None
+    if info is None:
+        try:
+            out.mkdir(parents=True)
+        except OSError as exc:
+            raise OutputError(f"{option} {name}: cannot make it ({exc.strerror or exc})") from None
+    elif stat.S_ISLNK(info.st_mode):
+        raise OutputError(
+            f"{option} {name} is a symbolic link: outputs are never written through a link"
+        )
+    elif not stat.S_ISDIR(info.st_mode):
+        raise OutputError(f"{option} {name} exists and is not a directory: allowed a directory")
+    return out
+
+
 def same_file(a: str | os.PathLike[str], b: str | os.PathLike[str]) -> bool:
     """Whether two output paths name one file (the same directory and name, or the same
     existing file through another path)."""

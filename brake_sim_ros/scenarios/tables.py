@@ -155,8 +155,9 @@ def _parse_service(ctx: Checker, data: Any, params: BrakeParameters) -> BrakePar
             )
         tyre_names = {f.name for f in dataclasses.fields(TyreParameters)} - {"road_friction"}
         given = ctx.table(given, "parameters.service.tyre", tyre_names)
+        tyre_values = _values(ctx, given, "parameters.service.tyre", tyre)  # names its key
         try:
-            tyre = dataclasses.replace(tyre, **_values(ctx, given, "parameters.service.tyre", tyre))
+            tyre = dataclasses.replace(tyre, **tyre_values)
         except BrakeSimError as exc:
             raise ScenarioError(f"{ctx.source}: [parameters.service.tyre]: {exc}") from exc
     try:

@@ -26,7 +26,6 @@ objective moved by less than 1 %.
 
 from __future__ import annotations
 
-import argparse
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -35,6 +34,7 @@ import numpy as np
 from scipy.optimize import minimize
 
 from brake_sim_ros.analysis.impacts import contact_regime_force, shoe_metrics
+from brake_sim_ros.command_line import Parser
 from brake_sim_ros.errors import BrakeSimError
 from brake_sim_ros.model.defects import Defects, ShoeDefect
 from brake_sim_ros.model.layout import SIDES
@@ -314,7 +314,7 @@ def describe(params: BrakeParameters) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = Parser(description=__doc__.splitlines()[0])
     parser.add_argument("--evaluations", type=int, default=400)
     parser.add_argument("--describe-only", action="store_true")
     parser.add_argument(

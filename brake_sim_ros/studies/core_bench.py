@@ -11,7 +11,6 @@ and stop time against the adaptive reference.
 
 from __future__ import annotations
 
-import argparse
 import time
 from collections.abc import Callable
 
@@ -19,6 +18,7 @@ import numpy as np
 from numba import njit
 
 from brake_sim_ros.analysis.impacts import EventMetrics, event_metrics
+from brake_sim_ros.command_line import Parser
 from brake_sim_ros.model import kernel
 from brake_sim_ros.model import layout as L
 from brake_sim_ros.model.layout import SIDES
@@ -78,7 +78,7 @@ def _timed_run(make: Callable[[], FixedStepStepper], duration: float, repeats: i
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="brake-sim bench core", description=__doc__)
+    parser = Parser(prog="brake-sim bench core", description=__doc__)
     parser.add_argument("--scenario", default="symmetric")
     parser.add_argument(
         "--steps",

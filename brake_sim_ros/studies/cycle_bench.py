@@ -21,12 +21,13 @@ with a ``[cycle]`` (road load and the controller), on the ``--brake`` named.
 
 from __future__ import annotations
 
-import argparse
+import math
 import time
 
 import numpy as np
 
 from brake_sim_ros.analysis.energy import energy_balance
+from brake_sim_ros.command_line import Parser
 from brake_sim_ros.model.parameters import BRAKES
 from brake_sim_ros.model.run_setup import SampleBlock
 from brake_sim_ros.scenarios import load_scenario, on_brake, parse_scenario
@@ -34,6 +35,8 @@ from brake_sim_ros.stream.build import sensor_bank_for, stepper_for
 
 TARGET_RTF = 30.0
 GOAL_RTF = 50.0  # with the default sensors (issue 31)
+CHUNK_RANGE_S = (0.001, 1.0)  # simulated s per chunk: the node's 10 ms lies inside
+MAX_REPEATS = 20
 # free-rolling runs for the vehicle's cost: no brake force, shoes off the drum
 _FREE = 'name = "free"\n[actuation]\npeak_force_n = 0.0\n'
 _OVERHEAD_CASES = (
@@ -79,7 +82,7 @@ def _run(scenario, chunk_samples: int, with_sensors: bool):
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="brake-sim bench cycle", description=__doc__)
+    parser = Parser(prog="brake-sim bench cycle", description=__doc__)
     parser.add_argument("--scenario", default="urban")
     parser.add_argument(
         "--brake", choices=BRAKES, default=None, help="the brake (default the scenario's)"
@@ -88,6 +91,12 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--chunk-s", type=float, default=0.1, help="simulated s per chunk")
     parser.add_argument("--repeats", type=int, default=3)
     args = parser.parse_args(argv)
+    if not (math.isfinite(args.chunk_s) and CHUNK_RANGE_S[0] <= args.chunk_s <= CHUNK_RANGE_S[1]):
+        parser.error(
+            f"--chunk-s {args.chunk_s!r}: allowed {CHUNK_RANGE_S[0]:g} to {CHUNK_RANGE_S[1]:g} s"
+        )
+    if not 1 <= args.repeats <= MAX_REPEATS:
+        parser.error(f"--repeats {args.repeats}: allowed 1 to {MAX_REPEATS}")
     scenario = load_scenario(args.scenario)
     if args.brake is not None:
         scenario = on_brake(scenario, args.brake)

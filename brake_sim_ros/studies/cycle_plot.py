@@ -12,11 +12,11 @@ page). Needs matplotlib.
 
 from __future__ import annotations
 
-import argparse
 from pathlib import Path
 
 import numpy as np
 
+from brake_sim_ros.command_line import Parser
 from brake_sim_ros.model.cycle import KMH_PER_M_S
 from brake_sim_ros.recording.output import replace_output
 from brake_sim_ros.scenarios import load_scenario
@@ -120,7 +120,7 @@ def plot_cycle(traces: dict[str, np.ndarray], path: Path, title: str) -> Path:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__)
+    parser = Parser(description=__doc__)
     parser.add_argument("--scenario", default="urban")
     parser.add_argument("--out", type=Path, default=Path("docs/urban_cycle.png"))
     args = parser.parse_args(argv)

@@ -28,7 +28,6 @@ brakes they were not trained on, at a stated false-alarm rate.
 
 from __future__ import annotations
 
-import argparse
 import math
 import time
 from collections import defaultdict
@@ -37,6 +36,7 @@ from pathlib import Path
 import numpy as np
 
 from brake_sim_ros.campaigns.loader import parse_campaign
+from brake_sim_ros.command_line import Parser
 from brake_sim_ros.datasets import open as open_dataset
 from brake_sim_ros.datasets.sweep import sweep
 from brake_sim_ros.detection import evaluate, metrics
@@ -222,9 +222,7 @@ def table(result: dict, brake: str | None = None) -> str:
 
 
 def main(argv: list[str]) -> int:
-    parser = argparse.ArgumentParser(
-        prog="brake-sim bench detectability", description=__doc__.splitlines()[0]
-    )
+    parser = Parser(prog="brake-sim bench detectability", description=__doc__.splitlines()[0])
     parser.add_argument("--out", required=True, help="the study's dataset directory")
     parser.add_argument(
         "--brake",

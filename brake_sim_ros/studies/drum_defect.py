@@ -10,12 +10,12 @@ on the drum angle (:mod:`brake_sim_ros.analysis.orders`).
 
 from __future__ import annotations
 
-import argparse
 from dataclasses import dataclass
 
 import numpy as np
 
 from brake_sim_ros.analysis.orders import order_amplitude
+from brake_sim_ros.command_line import Parser
 from brake_sim_ros.model.defects import Defects, DrumDefect
 from brake_sim_ros.model.layout import SIDES
 from brake_sim_ros.model.run_setup import BrakeSetup
@@ -75,9 +75,7 @@ def sweep(
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(
-        prog="brake-sim bench drum", description=__doc__.splitlines()[0]
-    )
+    parser = Parser(prog="brake-sim bench drum", description=__doc__.splitlines()[0])
     parser.add_argument("--order", type=int, default=2, help="harmonic order k (default 2)")
     parser.add_argument(
         "--severities",

@@ -14,13 +14,13 @@ where a level does not deliver that output.
 
 from __future__ import annotations
 
-import argparse
 import dataclasses
 import math
 from typing import Any
 
 from brake_sim_ros.analysis.comparison import metric_errors, relative_error
 from brake_sim_ros.analysis.energy import ENERGY_COLUMNS, energy_balance
+from brake_sim_ros.command_line import Parser
 from brake_sim_ros.model.fidelity import LEVELS, Needs
 from brake_sim_ros.model.layout import SIDES
 from brake_sim_ros.scenarios import load_scenario
@@ -118,7 +118,7 @@ def _fmt(x: float, pct: bool = True) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="brake-sim bench fidelity", description=__doc__)
+    parser = Parser(prog="brake-sim bench fidelity", description=__doc__)
     parser.add_argument("--scenario", action="append", help="scenario(s); default symmetric")
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--accuracy", choices=("fast", "balanced", "accurate"))

@@ -16,7 +16,6 @@ rate per run, and printed as an extrapolation.
 
 from __future__ import annotations
 
-import argparse
 import dataclasses
 import os
 import tempfile
@@ -26,6 +25,7 @@ from pathlib import Path
 from brake_sim_ros.campaigns import load_campaign
 from brake_sim_ros.campaigns.axes import condition_points
 from brake_sim_ros.campaigns.campaign import Campaign
+from brake_sim_ros.command_line import Parser
 from brake_sim_ros.datasets.sweep import start_pool_server, sweep
 from brake_sim_ros.errors import BrakeSimError
 
@@ -48,12 +48,17 @@ def _disk_bytes(root: Path) -> int:
     return sum(p.stat().st_size for p in root.rglob("*") if p.is_file() and not p.is_symlink())
 
 
+# the smallest slice whose train split gives the baseline its three healthy training stops
+MIN_UNITS = 5
+MAX_WORKERS = 1024  # as brake-sim sweep's --workers
+
+
 def sliced(campaign: Campaign, units: int, draws: int) -> Campaign:
     """``campaign`` on its first ``units`` units with ``draws`` drawn points."""
-    if not 3 <= units <= len(campaign.unit_ids):
+    if not MIN_UNITS <= units <= len(campaign.unit_ids):
         raise BrakeSimError(
-            f"bench fleet --units {units}: allowed 3 to {len(campaign.unit_ids)}"
-            " (a train, a validation and a test unit at least)"
+            f"bench fleet --units {units}: allowed {MIN_UNITS} to {len(campaign.unit_ids)}"
+            f" (fewer leave the {DETECTOR} baseline under three healthy training stops)"
         )
     if not 1 <= draws <= campaign.draw_count:
         raise BrakeSimError(f"bench fleet --draws {draws}: allowed 1 to {campaign.draw_count}")
@@ -125,15 +130,15 @@ def run(campaign: Campaign, full_runs: int, out: Path, workers: int) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(
-        prog="brake-sim bench fleet", description=__doc__.split("\n")[0]
-    )
+    parser = Parser(prog="brake-sim bench fleet", description=__doc__.split("\n")[0])
     parser.add_argument("--full", action="store_true", help="every run of the campaign")
     parser.add_argument("--units", type=int, default=8, help="slice: units (default 8)")
     parser.add_argument("--draws", type=int, default=1, help="slice: drawn forces (default 1)")
     parser.add_argument("--workers", type=int, default=os.cpu_count() or 1)
     parser.add_argument("--out", type=Path, help="keep the dataset in this new directory")
     args = parser.parse_args(argv)
+    if not 1 <= args.workers <= MAX_WORKERS:
+        parser.error(f"--workers {args.workers}: allowed 1 to {MAX_WORKERS} worker processes")
     campaign = load_campaign(CAMPAIGN_FILE)
     full_runs = run_count(campaign)
     if not args.full:

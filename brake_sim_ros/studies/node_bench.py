@@ -33,7 +33,6 @@ all of its publishing work. Both processes share the machine's cores.
 
 from __future__ import annotations
 
-import argparse
 import contextlib
 import math
 import os
@@ -45,6 +44,7 @@ import time
 from collections.abc import Iterator
 from pathlib import Path
 
+from brake_sim_ros.command_line import Parser
 from brake_sim_ros.ros.harness import NodeProcess, SimClient, domain_id_for
 
 WARM_UP_S = 2.0
@@ -292,7 +292,7 @@ def run(
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(
+    parser = Parser(
         prog="python -m brake_sim_ros.studies.node_bench", description=__doc__.split("\n\n")[0]
     )
     parser.add_argument(

@@ -9,8 +9,7 @@ Run it with ``python -m brake_sim_ros.studies.pose_rule_study`` (seconds; ``--he
 
 from __future__ import annotations
 
-import argparse
-
+from brake_sim_ros.command_line import Parser
 from brake_sim_ros.model.parameters import BrakeParameters
 from brake_sim_ros.studies import pose_rules
 from brake_sim_ros.studies.pose_rule_sample import (
@@ -26,7 +25,7 @@ from brake_sim_ros.studies.pose_rules import RULES, report_rule
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=pose_rules.__doc__.splitlines()[0])
+    parser = Parser(description=pose_rules.__doc__.splitlines()[0])
     parser.add_argument("--rules", nargs="*", default=list(RULES), choices=list(RULES))
     parser.add_argument("--crown-mm", nargs="*", type=float, default=[0.0])
     parser.add_argument("--pcts", nargs="*", type=float, default=[-3.0, 3.0])

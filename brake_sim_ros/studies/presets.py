@@ -12,12 +12,12 @@ worse shoe).
 
 from __future__ import annotations
 
-import argparse
 import dataclasses
 
 import numpy as np
 
 from brake_sim_ros.analysis.impacts import event_metrics
+from brake_sim_ros.command_line import Parser
 from brake_sim_ros.model.actuation import Actuation, ForceProfile
 from brake_sim_ros.scenarios import load_scenario
 from brake_sim_ros.solvers.presets import PRESETS
@@ -56,7 +56,7 @@ def phase_errors(shifts_s: tuple[float, ...] = SHIFTS_S) -> dict[str, np.ndarray
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="brake-sim bench presets", description=__doc__)
+    parser = Parser(prog="brake-sim bench presets", description=__doc__)
     parser.parse_args(argv)
     errors = phase_errors()
     print("\nlargest over the phases, against each preset's bound:")

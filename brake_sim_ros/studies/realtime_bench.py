@@ -12,11 +12,11 @@ start-up calibration the node runs, with its verdict.
 
 from __future__ import annotations
 
-import argparse
 import time
 
 import numpy as np
 
+from brake_sim_ros.command_line import Parser
 from brake_sim_ros.model import layout as L
 from brake_sim_ros.scenarios import load_scenario
 from brake_sim_ros.solvers.realtime import (
@@ -41,7 +41,7 @@ def _regime_of(block) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="brake-sim bench realtime", description=__doc__)
+    parser = Parser(prog="brake-sim bench realtime", description=__doc__)
     parser.add_argument("--scenario", default="symmetric")
     parser.add_argument("--chunk-samples", type=int, default=256, help="samples per chunk")
     parser.add_argument("--repeats", type=int, default=4, help="whole events to run")

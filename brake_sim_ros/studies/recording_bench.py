@@ -12,7 +12,6 @@ Prints:
 
 from __future__ import annotations
 
-import argparse
 import os
 import sys
 import tempfile
@@ -20,6 +19,7 @@ import time
 from pathlib import Path
 
 from brake_sim_ros import stream
+from brake_sim_ros.command_line import Parser
 from brake_sim_ros.recording.record import record_offline
 from brake_sim_ros.recording.writer import RecordingOptions
 from brake_sim_ros.ros.harness import NodeProcess, domain_id_for
@@ -98,9 +98,7 @@ def run(scenario_name: str, sim_s: float, node_s: float) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(
-        prog="brake-sim bench recording", description=__doc__.split("\n\n")[0]
-    )
+    parser = Parser(prog="brake-sim bench recording", description=__doc__.split("\n\n")[0])
     parser.add_argument("--scenario", default="symmetric")
     parser.add_argument("--sim-seconds", type=float, default=7.5, metavar="S")
     parser.add_argument(

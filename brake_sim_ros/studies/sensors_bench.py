@@ -24,9 +24,8 @@ unit-to-unit scatter is modelled).
 
 from __future__ import annotations
 
-import argparse
-
 from brake_sim_ros.analysis import measured_features as mf
+from brake_sim_ros.command_line import Parser
 from brake_sim_ros.model.run_setup import SampleBlock
 from brake_sim_ros.scenarios import builtin_names, load_scenario
 from brake_sim_ros.sensing.sensors import SensorBank
@@ -126,7 +125,7 @@ def cases(duration_s: float, seeds: int) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="brake-sim bench sensors", description=__doc__)
+    parser = Parser(prog="brake-sim bench sensors", description=__doc__)
     parser.add_argument("--scenario", default="symmetric")
     parser.add_argument("--duration", type=float, default=None, help="s (default: scenario's)")
     parser.add_argument("--chunk", type=int, default=256, help="samples per streaming chunk")

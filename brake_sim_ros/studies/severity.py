@@ -34,7 +34,6 @@ the signal carries, not a detection rate.
 
 from __future__ import annotations
 
-import argparse
 import functools
 import json
 import math
@@ -46,13 +45,19 @@ import numpy as np
 
 from brake_sim_ros.analysis import measured_features as mf
 from brake_sim_ros.analysis.orders import order_amplitude
+from brake_sim_ros.command_line import Parser
 from brake_sim_ros.errors import ParameterError
 from brake_sim_ros.model import catalogue
 from brake_sim_ros.model.catalogue import DefectKind
 from brake_sim_ros.model.defects import Defects
 from brake_sim_ros.model.layout import SIDES
 from brake_sim_ros.model.parameters import BRAKES
-from brake_sim_ros.recording.output import check_output, replace_output
+from brake_sim_ros.recording.output import (
+    check_output,
+    output_directory,
+    probe_output,
+    replace_output,
+)
 from brake_sim_ros.scenarios import Scenario, load_scenario, on_brake
 from brake_sim_ros.sensing.sensors import SensorBank, SensorSet
 from brake_sim_ros.stream.run import run_scenario
@@ -169,6 +174,11 @@ def sweep(
     }
 
 
+def brake_kinds(brake: str) -> tuple[DefectKind, ...]:
+    """Every catalogue kind ``brake`` carries."""
+    return catalogue.brake_kinds(base_scenario(brake).setup.params.service is not None)
+
+
 def sweeps(
     duration_s: float,
     progress: Callable[[str], None] | None = None,
@@ -179,7 +189,7 @@ def sweeps(
     """``kinds`` (default: every kind ``brake`` carries) at every location, healthy runs
     shared per location."""
     if kinds is None:
-        kinds = catalogue.brake_kinds(base_scenario(brake).setup.params.service is not None)
+        kinds = brake_kinds(brake)
     locations = list(dict.fromkeys(loc for k in kinds for loc in k.locations))
     healthy = {loc: features(Defects(), loc, duration_s, brake) for loc in locations}
     return [
@@ -271,7 +281,7 @@ def plot(result: dict[str, object], out_dir: Path) -> Path:
 
 
 def write_report(
-    out_dir: Path,
+    out_dir: str | Path,
     duration_s: float,
     progress: Callable[[str], None] | None = None,
     kinds: tuple[DefectKind, ...] | None = None,
@@ -279,9 +289,17 @@ def write_report(
     brake: str = DEFAULT_BRAKE,
 ) -> tuple[Path, int]:
     """Run the sweeps on ``brake``; write ``report.md``, a figure per kind and location
-    and ``severity.json``. Returns the report's path and how many sizes were refused."""
-    check_output(out_dir / "report.md", overwrite=True, option="--out")  # before the work
-    out_dir.mkdir(parents=True, exist_ok=True)
+    and ``severity.json``. Returns the report's path and how many sizes were refused.
+
+    Every output is checked before the work (the directory made, each file's rules, a file
+    created there and removed): a refusal is one line, and no file is written."""
+    if kinds is None:
+        kinds = brake_kinds(brake)
+    out_dir = output_directory(out_dir, "--out")
+    names = [f"{loc}_{kind.name}.png" for kind in kinds for loc in kind.locations]
+    for name in ("severity.json", *names):
+        check_output(out_dir / name, overwrite=True, option="--out")
+    probe_output(out_dir / "report.md", overwrite=True, option="--out")
     results = sweeps(duration_s, progress, kinds, steps, brake)
     for r in results:
         plot(r, out_dir)
@@ -293,9 +311,7 @@ def write_report(
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(
-        prog="brake-sim severity", description=__doc__.split("\n\n")[0]
-    )
+    parser = Parser(prog="brake-sim severity", description=__doc__.split("\n\n")[0])
     parser.add_argument("--out", default="out/severity", help="report directory")
     parser.add_argument(
         "--duration",
@@ -315,7 +331,7 @@ def main(argv: list[str] | None = None) -> int:
     if not mf.IMPACT_WINDOW_S[1] <= args.duration <= 60.0:
         parser.error(f"--duration {args.duration:g}: allowed {mf.IMPACT_WINDOW_S[1]:g} to 60 s")
     path, refused = write_report(
-        Path(args.out),
+        args.out,
         args.duration,
         lambda what: print(f"running {what}", file=sys.stderr),
         brake=args.brake,

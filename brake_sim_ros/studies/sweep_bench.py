@@ -17,7 +17,6 @@ are the same bytes (every file but the manifest's cost column).
 
 from __future__ import annotations
 
-import argparse
 import os
 import tempfile
 import time
@@ -28,6 +27,7 @@ import pyarrow.parquet as pq
 from brake_sim_ros.campaigns import load_campaign
 from brake_sim_ros.campaigns.campaign import Campaign
 from brake_sim_ros.campaigns.loader import parse_campaign
+from brake_sim_ros.command_line import Parser
 from brake_sim_ros.datasets.sweep import SweepSummary, start_pool_server, sweep
 from brake_sim_ros.datasets.sweep_output import DONE_DIR, MANIFEST_NAME
 from brake_sim_ros.datasets.threads import limit_threads
@@ -142,9 +142,7 @@ def _dask(campaign: Campaign, directory: Path) -> list[str]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(
-        prog="brake-sim bench sweep", description=__doc__.split("\n")[0]
-    )
+    parser = Parser(prog="brake-sim bench sweep", description=__doc__.split("\n")[0])
     parser.add_argument(
         "--campaign",
         default="demo",

@@ -14,7 +14,6 @@ its sigma.
 
 from __future__ import annotations
 
-import argparse
 import math
 import time
 from collections.abc import Sequence
@@ -22,6 +21,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from brake_sim_ros.command_line import Parser
 from brake_sim_ros.fleet.scatter import NOMINAL_UNIT, Scatter, scatter_table, with_deviations
 from brake_sim_ros.model.parameters import BRAKES
 from brake_sim_ros.scenarios import Scenario, load_scenario, on_brake
@@ -95,9 +95,7 @@ def linear_spread(
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(
-        prog="brake-sim bench units", description=__doc__.splitlines()[0]
-    )
+    parser = Parser(prog="brake-sim bench units", description=__doc__.splitlines()[0])
     parser.add_argument("--units", type=int, default=50, help="units in the fleet (default 50)")
     parser.add_argument("--seed", type=int, default=0, help="the fleet's seed (default 0)")
     parser.add_argument("--scenario", default="symmetric", help="default: symmetric")
@@ -108,6 +106,8 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if not 2 <= args.units <= 100_000:
         parser.error(f"--units {args.units}: allowed 2 to 100000")
+    if not 0 <= args.seed < 2**63:
+        parser.error(f"--seed {args.seed}: allowed 0 to 2^63 - 1")
     scenario = on_brake(load_scenario(args.scenario), args.brake)
     scenario = scenario.with_solver(preset=args.preset)
     scenario = scenario.with_unit(NOMINAL_UNIT, fleet_seed=args.seed)

@@ -27,7 +27,6 @@ Caps (so the whole study takes a few minutes on one core): adaptive solvers are 
 
 from __future__ import annotations
 
-import argparse
 import csv
 import math
 import time
@@ -40,6 +39,7 @@ import numpy as np
 from brake_sim_ros.analysis.comparison import metric_errors
 from brake_sim_ros.analysis.energy import energy_balance
 from brake_sim_ros.analysis.impacts import EventMetrics, event_metrics
+from brake_sim_ros.command_line import Parser
 from brake_sim_ros.errors import BrakeSimError
 from brake_sim_ros.model.run_setup import SampleBlock
 from brake_sim_ros.scenarios import load_scenario
@@ -330,7 +330,7 @@ def write_study(result: StudyResult, out_dir: Path) -> list[Path]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="brake-sim bench accuracy", description=__doc__)
+    parser = Parser(prog="brake-sim bench accuracy", description=__doc__)
     parser.add_argument("--out", default="out/accuracy", help="directory for the table and plot")
     parser.add_argument("--scenario", default="symmetric")
     parser.add_argument(

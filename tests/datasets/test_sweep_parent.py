@@ -135,8 +135,8 @@ def test_the_fleet_slice_keeps_the_runs_settings():
     assert part.unit_ids == campaign.unit_ids[:8]
     # one force of eight, on 8 units of 20
     assert fleet_bench.run_count(part) == fleet_bench.run_count(campaign) // (8 * 20) * 8
-    with pytest.raises(BrakeSimError, match="--units 2: allowed 3 to 20"):
-        fleet_bench.sliced(campaign, 2, 1)
+    with pytest.raises(BrakeSimError, match="--units 4: allowed 5 to 20"):
+        fleet_bench.sliced(campaign, 4, 1)
 
 
 def test_the_fleet_benchmark_sweeps_and_scores_a_campaign_end_to_end(tmp_path):

@@ -18,8 +18,9 @@ import pytest
 PACKAGE = "brake_sim_ros"
 ROOT = Path(__file__).resolve().parents[2] / PACKAGE
 
-# the top-level modules errors.py, identifiers.py, regular_file.py and the package's __init__
-_BASE = {"errors", "identifiers", "regular_file", "__init__"}
+# the top-level modules errors.py, identifiers.py, regular_file.py, command_line.py and the
+# package's __init__
+_BASE = {"errors", "identifiers", "regular_file", "command_line", "__init__"}
 _CORE = _BASE | {"model"}
 _SOLVERS = _CORE | {"analysis", "sensing", "solvers"}
 _LIBRARY = _SOLVERS | {"fleet", "scenarios"}
@@ -34,6 +35,7 @@ ALLOWED: dict[str, set[str]] = {
     "errors": set(),
     "identifiers": set(),
     "regular_file": set(),  # the bounded read of every checked file
+    "command_line": set(),  # the one-line parser of every command line
     "model": _BASE,
     "sensing": _CORE,  # what sensors measure of the physics' sample blocks
     "analysis": _CORE | {"sensing"},  # features of measured channels too
