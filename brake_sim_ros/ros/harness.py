@@ -292,8 +292,8 @@ class SimClient:
     def wait_for_node(self, timeout_s: float = 30.0) -> None:
         """Wait until the node is up and discovered both ways.
 
-        Its latched ground truth arrived, its services answer, it subscribes to our
-        commands (actuation and drive) and we see its stream publishers. A node that
+        Its latched ground truth arrived, its services answer, its readers of our commands
+        (actuation and drive) matched our writers and we see its stream publishers. A node that
         starts running at once publishes before any subscriber has matched (volatile
         topics do not replay), so start it paused and unpause it after this to receive its
         stream from sample 0.
@@ -301,11 +301,14 @@ class SimClient:
         self.wait_for(lambda: bool(self.rx.defects), timeout_s, "DefectState from the node")
         for client in (self._step, self._reset, self._set, self._set_atomic, self._get):
             self.wait_for(client.service_is_ready, timeout_s, f"service {client.srv_name}")
+        # matched to our own publisher, not only seen in the graph: a command published
+        # before the node's reader matched our writer is lost (volatile), and the graph
+        # can show the reader first under load
         for commands in (self.actuation, self.drive_commands):
             self.wait_for(
-                lambda commands=commands: self.node.count_subscribers(commands.topic_name) > 0,
+                lambda commands=commands: commands.get_subscription_count() > 0,
                 timeout_s,
-                f"subscriber of {commands.topic_name}",
+                f"subscriber of {commands.topic_name} matched to our publisher",
             )
         for topic in self._stream_topics:
             self.wait_for(
