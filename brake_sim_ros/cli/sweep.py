@@ -8,17 +8,17 @@ import sys
 from pathlib import Path
 
 from brake_sim_ros.cli.common import Command
-from brake_sim_ros.errors import BrakeSimError
 
 
 def cmd_sweep(args: argparse.Namespace) -> int:
     """``brake-sim sweep CAMPAIGN --out DIR``: the campaign checked and planned before the
     directory is made; then every run, resuming a sweep of the same campaign there."""
     from brake_sim_ros.campaigns import load_campaign
+    from brake_sim_ros.datasets.executors import check_workers
     from brake_sim_ros.datasets.sweep import sweep
 
-    if args.workers is not None and not 1 <= args.workers <= 1024:
-        raise BrakeSimError(f"--workers {args.workers}: allowed 1 to 1024 worker processes")
+    if args.workers is not None:
+        check_workers(args.workers)
     campaign = load_campaign(args.campaign)
     summary, outcomes = sweep(
         campaign, Path(args.out), workers=args.workers, scheduler=args.scheduler, quiet=args.quiet

@@ -20,10 +20,21 @@ from brake_sim_ros.errors import BrakeSimError
 
 T = TypeVar("T")
 WORKERS_TIMEOUT_S = 60.0  # how long a cluster may have no worker before the sweep ends
+MAX_WORKERS = 1024  # local worker processes a command may ask for
 DIED = (
     "a worker process died (killed, or out of memory?) with {n} runs unfinished: the"
     " finished ones are kept; run the command again to resume"
 )
+
+
+def check_workers(workers: int, option: str = "--workers") -> None:
+    """Refuse a count of local worker processes outside 1 to :data:`MAX_WORKERS`.
+
+    Raises:
+        BrakeSimError: one line naming ``option``.
+    """
+    if not 1 <= workers <= MAX_WORKERS:
+        raise BrakeSimError(f"{option} {workers}: allowed 1 to {MAX_WORKERS} worker processes")
 
 
 class ExecutorError(BrakeSimError, ValueError):

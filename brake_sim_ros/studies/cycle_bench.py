@@ -31,6 +31,7 @@ from brake_sim_ros.command_line import Parser
 from brake_sim_ros.model.parameters import BRAKES
 from brake_sim_ros.model.run_setup import SampleBlock
 from brake_sim_ros.scenarios import load_scenario, on_brake, parse_scenario
+from brake_sim_ros.solvers.realtime import MAX_CHUNK_SAMPLES
 from brake_sim_ros.stream.build import sensor_bank_for, stepper_for
 
 TARGET_RTF = 30.0
@@ -105,6 +106,11 @@ def main(argv: list[str] | None = None) -> int:
         parser.error(f"scenario {scenario.name!r} has no [cycle]: allowed a cycle scenario")
     stepper = stepper_for(scenario)
     chunk = max(1, round(args.chunk_s / stepper.sample_period_s))
+    if chunk > MAX_CHUNK_SAMPLES:  # a block's memory: the stream's own bound
+        parser.error(
+            f"--chunk-s {args.chunk_s:g}: {chunk} samples at {scenario.sample_rate_hz:g} Hz;"
+            f" allowed at most {MAX_CHUNK_SAMPLES} samples a chunk"
+        )
     stepper.advance(10)  # compile, or load the compiled kernel from the cache
     duration = scenario.duration_s
     print(

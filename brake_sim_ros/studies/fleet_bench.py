@@ -26,6 +26,7 @@ from brake_sim_ros.campaigns import load_campaign
 from brake_sim_ros.campaigns.axes import condition_points
 from brake_sim_ros.campaigns.campaign import Campaign
 from brake_sim_ros.command_line import Parser
+from brake_sim_ros.datasets.executors import check_workers
 from brake_sim_ros.datasets.sweep import start_pool_server, sweep
 from brake_sim_ros.errors import BrakeSimError
 
@@ -50,7 +51,6 @@ def _disk_bytes(root: Path) -> int:
 
 # the smallest slice whose train split gives the baseline its three healthy training stops
 MIN_UNITS = 5
-MAX_WORKERS = 1024  # as brake-sim sweep's --workers
 
 
 def sliced(campaign: Campaign, units: int, draws: int) -> Campaign:
@@ -137,8 +137,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--workers", type=int, default=os.cpu_count() or 1)
     parser.add_argument("--out", type=Path, help="keep the dataset in this new directory")
     args = parser.parse_args(argv)
-    if not 1 <= args.workers <= MAX_WORKERS:
-        parser.error(f"--workers {args.workers}: allowed 1 to {MAX_WORKERS} worker processes")
+    check_workers(args.workers)
     campaign = load_campaign(CAMPAIGN_FILE)
     full_runs = run_count(campaign)
     if not args.full:

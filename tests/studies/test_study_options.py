@@ -74,3 +74,17 @@ def test_severity_refuses_an_out_that_is_no_directory_in_one_line(kind, tmp_path
         expected = "(Not a directory)"
     line = _refusal(["severity", "--out", str(out)], capsys)
     assert expected in line
+
+
+def test_bench_cycle_refuses_a_chunk_beyond_the_streams_bound(tmp_path, capsys):
+    """1 s chunks at 102.4 kHz are 102,400 samples a block: beyond the stream's 65,536."""
+    from brake_sim_ros.scenarios import load_scenario
+
+    text = load_scenario("urban").text.replace(
+        "sample_rate_hz = 25600.0", "sample_rate_hz = 102400.0"
+    )
+    assert "sample_rate_hz = 102400.0" in text
+    path = tmp_path / "urban_fast.toml"
+    path.write_text(text)
+    line = _refusal(["bench", "cycle", "--scenario", str(path), "--chunk-s", "1"], capsys)
+    assert "102400 samples at 102400 Hz; allowed at most 65536 samples a chunk" in line
