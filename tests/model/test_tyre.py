@@ -216,12 +216,14 @@ def _run(text: str):
     return scenario, stepper, stepper.run(scenario.duration_s)
 
 
-def _panic(road_friction: float, duration_s: float) -> str:
-    """20 kN per shoe in 50 ms from 100 km/h: far past what the tyre holds."""
+def _panic(road_friction: float, duration_s: float, contact: str = "point") -> str:
+    """20 kN per shoe in 50 ms from 100 km/h: far past what the tyre holds; on the service
+    brake's point contact or its lining over the arc (``contact`` "arc")."""
     return (
         f'name = "panic"\nbrake = "service"\nroad_friction = {road_friction}\n'
         f"duration_s = {duration_s}\n"
         "[actuation]\npeak_force_n = 20000.0\nstart_s = 0.05\nfull_s = 0.1\n"
+        + ("[parameters.service]\ndistributed_lining = true\n" if contact == "arc" else "")
     )
 
 
@@ -242,10 +244,18 @@ def _first_rest(time_s: np.ndarray, speed: np.ndarray) -> float:
     )
 
 
-@pytest.fixture(scope="module", params=[(DRY_ROAD_FRICTION, 4.2), (0.5, 6.6)], ids=["dry", "wet"])
+@pytest.fixture(
+    scope="module",
+    params=[
+        (DRY_ROAD_FRICTION, 4.2, "point"),
+        (0.5, 6.6, "point"),
+        (DRY_ROAD_FRICTION, 4.2, "arc"),
+    ],
+    ids=["dry", "wet", "dry-arc"],
+)
 def panic(request):
-    road, duration = request.param
-    return road, *_run(_panic(road, duration))
+    road, duration, contact = request.param
+    return road, *_run(_panic(road, duration, contact))
 
 
 def test_a_locked_wheel_skids_and_the_car_decelerates_at_the_road_friction(panic):
