@@ -129,7 +129,7 @@ def cmd_score(args: argparse.Namespace) -> int:
 def _checked_score_options(args: argparse.Namespace) -> list[str | None]:
     """The detectors ``score`` takes (None: the one the --model file holds), every option
     and output checked before the work."""
-    from brake_sim_ros.recording.output import check_output
+    from brake_sim_ros.recording.output import check_output, check_output_directory
 
     if not (args.hold_s >= 0.0 and args.hold_s <= 3600.0):
         raise BrakeSimError(f"--hold {args.hold_s!r}: allowed 0 to 3600 s")
@@ -152,8 +152,8 @@ def _checked_score_options(args: argparse.Namespace) -> list[str | None]:
         if _inside_samples(args.directory, args.windows):
             raise BrakeSimError(f"--windows {args.windows}: inside the dataset's samples")
         check_output(args.windows, inputs=inputs, overwrite=True, option="--windows")
-    if args.report:
-        _check_report_directory(args.report)
+    if args.report:  # before the work; made when the report is written
+        check_output_directory(args.report, "--report")
     return names
 
 
@@ -230,17 +230,6 @@ def _write_windows(path: str, rows: list[dict]) -> None:
     table = windows_table(rows)
     replace_output(path, lambda tmp: pq.write_table(table, tmp), option="--windows")
     print(f"windows: {table.num_rows} in {path}")
-
-
-def _check_report_directory(directory: str) -> None:
-    """Refuse a report directory that is a link or not a directory, before any work."""
-    from brake_sim_ros.recording.mcap_format import describe_path
-
-    out = Path(directory)
-    if out.is_symlink():
-        raise BrakeSimError(f"--report {describe_path(out)}: a link; allowed a directory path")
-    if out.exists() and not out.is_dir():
-        raise BrakeSimError(f"--report {describe_path(out)}: not a directory")
 
 
 def _write_report(directory: str, scores: list[dict], *, inputs: list[str]) -> None:

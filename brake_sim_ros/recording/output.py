@@ -71,10 +71,10 @@ def _make_directory(directory: Path, made: list[Path]) -> None:
         made.remove(directory)
 
 
-def output_directory(path: str | os.PathLike[str], option: str = "--out") -> Path:
-    """The directory ``path`` a command writes its files into: made (with its parents)
-    if missing; refused if empty, a symbolic link or not a directory, or if it cannot be
-    made. Nothing else is written.
+def check_output_directory(path: str | os.PathLike[str], option: str = "--out") -> Path:
+    """Check the directory ``path`` a command will write its files into, before its work
+    (nothing is made): refused if empty, a symbolic link or not a directory, or if missing
+    where its nearest existing parent is not a writable directory.
 
     Raises:
         OutputError: one line naming the directory.
@@ -85,21 +85,40 @@ def output_directory(path: str | os.PathLike[str], option: str = "--out") -> Pat
     name = describe_path(out)
     try:
         info = os.lstat(out)
-    except FileNotFoundError:
+    except (FileNotFoundError, NotADirectoryError):
         info = None
     except OSError as exc:
         raise OutputError(f"{option} {name}: cannot check it ({exc.strerror or exc})") from None
-    if info is None:
+    if info is not None and stat.S_ISLNK(info.st_mode):
+        raise OutputError(
+            f"{option} {name} is a symbolic link: outputs are never written through a link"
+        )
+    if info is not None and not stat.S_ISDIR(info.st_mode):
+        raise OutputError(f"{option} {name} exists and is not a directory: allowed a directory")
+    missing = _missing_parents(out)
+    existing = missing[0].parent if missing else out
+    if not existing.is_dir():
+        raise OutputError(f"{option} {name}: {describe_path(existing)} is not a directory")
+    if not os.access(existing, os.W_OK | os.X_OK):
+        raise OutputError(f"{option} {name}: directory {describe_path(existing)} is not writable")
+    return out
+
+
+def output_directory(path: str | os.PathLike[str], option: str = "--out") -> Path:
+    """The directory ``path`` a command writes its files into, checked
+    (:func:`check_output_directory`) and made (with its parents) if missing. Nothing else is
+    written.
+
+    Raises:
+        OutputError: one line naming the directory.
+    """
+    out = check_output_directory(path, option)
+    name = describe_path(out)
+    if not out.is_dir():
         try:
             out.mkdir(parents=True)
         except OSError as exc:
             raise OutputError(f"{option} {name}: cannot make it ({exc.strerror or exc})") from None
-    elif stat.S_ISLNK(info.st_mode):
-        raise OutputError(
-            f"{option} {name} is a symbolic link: outputs are never written through a link"
-        )
-    elif not stat.S_ISDIR(info.st_mode):
-        raise OutputError(f"{option} {name} exists and is not a directory: allowed a directory")
     return out
 
 

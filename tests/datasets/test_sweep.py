@@ -280,7 +280,7 @@ def test_a_new_output_directory_is_made_with_its_parents(tmp_path):
     assert (out / LOCK_NAME).read_text() == "lock"
     blocker = tmp_path / "file"
     blocker.write_text("")
-    with pytest.raises(SweepError, match="Not a directory"):
+    with pytest.raises(SweepError, match="file is not a directory"):
         prepare_output(blocker / "demo", "lock")
     assert blocker.read_text() == ""
 

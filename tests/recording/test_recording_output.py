@@ -14,7 +14,13 @@ from pathlib import Path
 import pytest
 
 from brake_sim_ros.cli import main as cli_main
-from brake_sim_ros.recording.output import OutputError, atomic_output, check_output
+from brake_sim_ros.recording.output import (
+    OutputError,
+    atomic_output,
+    check_output,
+    check_output_directory,
+    output_directory,
+)
 from brake_sim_ros.recording.reader import open_recording
 from brake_sim_ros.recording.record import record_offline
 from brake_sim_ros.recording.recover import RecoverError, recover
@@ -116,6 +122,42 @@ def test_bad_output_places_are_refused_first(bag: Path, tmp_path: Path):
         with pytest.raises(OutputError, match="is not writable"):
             recover(bag, locked / "fixed.mcap")
     assert _files(tmp_path) == ["file"]
+
+
+def test_an_output_directory_is_checked_before_the_work_and_made_only_when_asked(
+    tmp_path: Path,
+):
+    """``check_output_directory`` refuses what ``output_directory`` would refuse, in one
+    line and making nothing; a missing directory under a writable one passes unmade."""
+    blocker = tmp_path / "file"
+    blocker.write_text("")
+    real = tmp_path / "real"
+    real.mkdir()
+    link = tmp_path / "link"
+    link.symlink_to(real, target_is_directory=True)
+    refused = {
+        "": "allowed a directory path",
+        str(link): "is a symbolic link",
+        str(blocker): "exists and is not a directory",
+        str(blocker / "sub"): "is not a directory",
+    }
+    if os.geteuid() != 0:  # root may write anywhere
+        locked = tmp_path / "locked"
+        locked.mkdir(mode=0o500)
+        refused[str(locked / "a" / "b")] = "is not writable"
+        refused[str(locked)] = "is not writable"
+    for path, words in refused.items():
+        for check in (check_output_directory, output_directory):
+            with pytest.raises(OutputError, match=words) as info:
+                check(path, "--report")
+            assert "\n" not in str(info.value) and str(info.value).startswith("--report")
+    fresh = tmp_path / "new" / "deeper"
+    assert check_output_directory(fresh) == fresh and not fresh.parent.exists()
+    assert output_directory(fresh).is_dir()
+    made = {p.name for p in tmp_path.iterdir()} - {"file", "link", "real", "locked"}
+    assert made == {"new"} and not any(real.iterdir())
+    if os.geteuid() != 0:
+        assert not any((tmp_path / "locked").iterdir())
 
 
 def test_a_failure_while_writing_leaves_nothing(bag: Path, tmp_path: Path, monkeypatch):

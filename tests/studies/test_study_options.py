@@ -71,7 +71,7 @@ def test_severity_refuses_an_out_that_is_no_directory_in_one_line(kind, tmp_path
         blocker = tmp_path / "blocker"
         blocker.write_text("a file where a directory would go")
         out = blocker / "sev"
-        expected = "(Not a directory)"
+        expected = f"{blocker} is not a directory"
     line = _refusal(["severity", "--out", str(out)], capsys)
     assert expected in line
 
