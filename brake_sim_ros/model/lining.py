@@ -306,6 +306,30 @@ def switching(p, base, theta, omega, drum_angle, drum_speed):
     return eps, h
 
 
+# Where the lining's circle stays this far (m) inside a round drum, no node can touch it:
+# a node's computed penetration exceeds the circle's by rounding alone (2e-16 m where the
+# lining is concentric with the drum, its rest; below 1e-15 m always).
+CLEAR_MARGIN_M = 1e-9
+
+
+@njit(**JIT)
+def switching_bound(p, base, theta, omega, drum_angle, drum_speed):
+    """:func:`switching` where its signs are all a step's end needs (the contact modes of
+    the next step, whether a shoe touches, the free-ride bound's indentation, which may be
+    larger than the deepest node's): on a round drum, where the lining's whole circle stays
+    clear of the drum by more than :data:`CLEAR_MARGIN_M` (``|C| + r - R``, ``C`` the arc's
+    centre, ``r`` its radius, ``R`` the drum's), that clearance less the margin twice (m,
+    negative: an upper bound of both whatever the nodes' rounding), without a node; else
+    :func:`switching` itself. A shoe off the drum then costs no node at a step's end."""
+    if p[base + L.S_ENABLED] > 0.0 and p[L.P_DRUM_WAVE_COUNT] <= 0.0 and p[L.P_FLAT_DEPTH] <= 0.0:
+        phi = p[base + L.S_SIGN] * theta
+        cx, cy = contact.arc_centre(p, base, math.cos(phi), math.sin(phi))
+        reach = math.sqrt(cx * cx + cy * cy) + p[base + L.S_LINING_RADIUS] - p[L.P_DRUM_RADIUS]
+        if reach < -CLEAR_MARGIN_M:
+            return reach + CLEAR_MARGIN_M, reach + CLEAR_MARGIN_M
+    return switching(p, base, theta, omega, drum_angle, drum_speed)
+
+
 @njit(**JIT)
 def hold(p, base, theta, drum_angle):
     """What the lining of the shoe at ``theta`` (rad, at rest) does on a held drum at

@@ -37,6 +37,25 @@ def shoe_switch(p, shoe, y):
     )
 
 
+@njit(**JIT)
+def shoe_switch_sign(p, shoe, y):
+    """:func:`shoe_switch` for a step's end, whose signs alone are read (the next step's
+    contact modes, whether the shoe touches) besides an upper bound of the indentation (the
+    free-ride bound's): the lining over its arc clear of a round drum skips its nodes
+    (:func:`.lining.switching_bound`); the point contact's is :func:`shoe_switch`'s. The
+    location of a switch inside a step takes :func:`shoe_switch`: its values steer it."""
+    if p[L.P_LINING_NODE_STIFFNESS] > 0.0:
+        return lining.switching_bound(
+            p,
+            L.P_SHOE_BASE + shoe * L.SHOE_STRIDE,
+            y[L.Y_LEFT_ANGLE + shoe],
+            y[L.Y_LEFT_SPEED + shoe],
+            y[L.Y_DRUM_ANGLE],
+            y[L.Y_DRUM_SPEED],
+        )
+    return shoe_switch(p, shoe, y)
+
+
 @njit(inline="always", **JIT)
 def rk4_step(
     y, k1, t0, h, p, gl, tl, fl, gr, tr, fr, stuck, ml, mr, k2, k3, k4, tmp, out, y_out, free

@@ -11,6 +11,8 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from brake_sim_ros.analysis.energy import energy_balance
 from brake_sim_ros.model import contact, lining
@@ -330,3 +332,44 @@ def test_each_shoe_obeys_its_equation_of_motion_at_every_sample():
         )
         assert smooth.sum() > 0.98 * smooth.size
         assert np.abs(residual[smooth]).max() < 0.01 * np.abs(generalised).max(), side
+
+
+@settings(max_examples=150, deadline=None, derandomize=True)
+@given(
+    theta=st.floats(-0.01, 0.01),
+    omega=st.floats(-50.0, 50.0),
+    drum_angle=st.floats(-10.0, 10.0),
+    drum_speed=st.floats(-120.0, 120.0),
+)
+def test_the_switching_bound_keeps_every_sign_and_bounds_the_depth(
+    theta, omega, drum_angle, drum_speed
+):
+    """A step's end reads the lining's switching function for its signs and an upper bound
+    of its indentation (model/rk4.py, ``shoe_switch_sign``): where the lining's circle is
+    clear of the round drum the bound skips the nodes and returns that clearance, an upper
+    bound of both with their signs; elsewhere the nodes' exact values."""
+    p = pack(_service(), Defects())
+    for base in (BASE, BASE + L.SHOE_STRIDE):
+        args = (p, base, theta, omega, drum_angle, drum_speed)
+        eps, h = lining.switching(*args)
+        bound_eps, bound_h = lining.switching_bound(*args)
+        if (bound_eps, bound_h) != (eps, h):
+            assert bound_eps == bound_h < 0.0
+            assert eps < bound_eps and h < bound_h
+        assert (bound_eps > 0.0) == (eps > 0.0) and (bound_h > 0.0) == (h > 0.0)
+
+
+def test_the_switching_bound_skips_the_nodes_only_where_the_lining_is_clear():
+    """At rest (0.3 mm clear) the bound is the clearance, -0.3 mm (less the margin: the
+    lining is concentric with the drum there, where the nodes' rounding makes one 2e-16 m
+    deeper than the circle); pressing (3 mrad out) or on a drum with a flat it is the
+    nodes' own value."""
+    p = pack(_service(), Defects())
+    rest = lining.switching_bound(p, BASE, 0.0, 0.0, 0.0, 100.0)
+    assert rest[0] == rest[1] == pytest.approx(-0.3e-3 + lining.CLEAR_MARGIN_M, abs=1e-15)
+    assert rest != lining.switching(p, BASE, 0.0, 0.0, 0.0, 100.0)
+    pressed = (p, BASE, 0.003, 0.0, 0.0, 100.0)
+    assert lining.switching_bound(*pressed) == lining.switching(*pressed)
+    flat = _with_flat(p, 1e-4, 0.0, 5.0)
+    at_rest = (flat, BASE, 0.0, 0.0, 0.0, 100.0)
+    assert lining.switching_bound(*at_rest) == lining.switching(*at_rest)
