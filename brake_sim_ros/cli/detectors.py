@@ -40,6 +40,18 @@ def _inside_samples(directory: str, path: str) -> bool:
     return os.path.commonpath([samples, os.path.realpath(Path(path).parent)]) == samples
 
 
+def _dataset_inputs(directory: str) -> list[Path]:
+    """The files of the dataset in ``directory`` that no output may replace."""
+    root = Path(directory)
+    return [root / "manifest.parquet", root / "campaign.lock"]
+
+
+def _outside_samples(directory: str, path: str, option: str) -> None:
+    """Refuse an output ``path`` (``option``) inside the dataset's samples, in one line."""
+    if _inside_samples(directory, path):
+        raise BrakeSimError(f"{option} {path}: inside the dataset's samples; allowed elsewhere")
+
+
 # --- fit -----------------------------------------------------------------------------------
 def cmd_fit(args: argparse.Namespace) -> int:
     """``brake-sim fit DIR --detector NAME --out MODEL.json``: fit a detector on one split
@@ -51,10 +63,8 @@ def cmd_fit(args: argparse.Namespace) -> int:
     from brake_sim_ros.recording.output import atomic_output, probe_output
 
     dataset = open_dataset(args.directory)
-    root = Path(args.directory)
-    inputs = [root / "manifest.parquet", root / "campaign.lock"]
-    if _inside_samples(args.directory, args.out):
-        raise BrakeSimError(f"--out {args.out}: inside the dataset's samples; allowed elsewhere")
+    inputs = _dataset_inputs(args.directory)
+    _outside_samples(args.directory, args.out, "--out")
     probe_output(args.out, inputs=inputs, overwrite=args.overwrite, option="--out")
     try:
         detector = make_detector(args.detector)
@@ -115,14 +125,15 @@ def cmd_score(args: argparse.Namespace) -> int:
         scores.append(score)
         for line in score_lines(score, fitted, args.split):
             print(line)
-    if args.out:
+    if args.out is not None:
         text = json.dumps(scores[0], indent=1, sort_keys=True)
         replace_output(args.out, lambda tmp: tmp.write_text(text + "\n"))
         print(f"JSON: {args.out}")
-    if args.windows:
+    if args.windows is not None:
         _write_windows(args.windows, window_rows)
-    if args.report:
-        _write_report(args.report, scores, inputs=[args.model] if args.model else [])
+    if args.report is not None:
+        inputs = [*_dataset_inputs(args.directory), *([args.model] if args.model else [])]
+        _write_report(args.report, scores, inputs=inputs)
     return 0
 
 
@@ -133,27 +144,35 @@ def _checked_score_options(args: argparse.Namespace) -> list[str | None]:
 
     if not (args.hold_s >= 0.0 and args.hold_s <= 3600.0):
         raise BrakeSimError(f"--hold {args.hold_s!r}: allowed 0 to 3600 s")
+    for name in args.detector or []:
+        if not name.strip():
+            raise BrakeSimError(f"--detector {name!r}: allowed a detector's name")
+    if args.model is not None and not args.model.strip():
+        raise BrakeSimError(f"--model {args.model!r}: allowed a saved detector's file")
     # without --detector: the saved detector the file holds, or rms
     names: list[str | None] = args.detector or ([None] if args.model else ["rms"])
-    if args.out and len(names) > 1:
+    if args.out is not None and len(names) > 1:
         raise BrakeSimError("--out with several --detector: allowed one detector (or --report)")
-    if args.windows and len(names) > 1:
+    if args.windows is not None and len(names) > 1:
         raise BrakeSimError("--windows with several --detector: allowed one detector")
-    if args.windows and not args.windows.endswith(".parquet"):
+    if args.windows is not None and not args.windows.endswith(".parquet"):
         raise BrakeSimError(f"--windows {args.windows!r}: allowed a FILE.parquet path")
     if args.model and len(names) > 1:
         raise BrakeSimError("--model with several --detector: allowed one detector")
     if args.model and args.fit_split is not None:
         raise BrakeSimError("--fit-split with --model: the saved detector is fitted already")
-    inputs = [args.model] if args.model else []
-    if args.out:
-        check_output(args.out, inputs=inputs, overwrite=True, option="--out")  # before the work
-    if args.windows:
-        if _inside_samples(args.directory, args.windows):
-            raise BrakeSimError(f"--windows {args.windows}: inside the dataset's samples")
+    # before the work: no output replaces the dataset's files, the model or lands in samples
+    inputs = [*_dataset_inputs(args.directory), *([args.model] if args.model else [])]
+    if args.out is not None:
+        _outside_samples(args.directory, args.out, "--out")
+        check_output(args.out, inputs=inputs, overwrite=True, option="--out")
+    if args.windows is not None:
+        _outside_samples(args.directory, args.windows, "--windows")
         check_output(args.windows, inputs=inputs, overwrite=True, option="--windows")
-    if args.report:  # before the work; made when the report is written
+    if args.report is not None:  # made when the report is written
         check_output_directory(args.report, "--report")
+        if _inside_samples(args.directory, str(Path(args.report) / "file")):  # its files'
+            raise BrakeSimError(f"--report {args.report}: inside the dataset's samples")
     return names
 
 

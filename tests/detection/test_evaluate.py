@@ -143,6 +143,39 @@ def test_the_score_command_writes_the_json_and_refuses_in_one_line(dataset, tmp_
     assert json.loads(out.read_text())["detector"] == "kurtosis"  # not written through
 
 
+@pytest.mark.parametrize(
+    ("option", "where", "words"),
+    [
+        ("--out", "manifest.parquet", "an output never replaces an input"),
+        ("--out", "campaign.lock", "an output never replaces an input"),
+        ("--windows", "manifest.parquet", "an output never replaces an input"),
+        ("--out", "samples/x.json", "inside the dataset's samples"),
+        ("--windows", "samples/w.parquet", "inside the dataset's samples"),
+        ("--report", "samples/rep", "inside the dataset's samples"),
+        ("--out", None, "allowed a file path"),
+        ("--windows", None, "allowed a FILE.parquet path"),
+        ("--report", None, "allowed a directory path"),
+        ("--detector", None, "allowed a detector's name"),
+        ("--model", None, "allowed a saved detector's file"),
+    ],
+)
+def test_score_never_writes_over_its_dataset_nor_takes_an_empty_option(
+    dataset, option, where, words, capsys
+):
+    """The dataset is score's input: its manifest and lock are never replaced and nothing is
+    written among its samples (it would be read as one); an empty path or name is refused,
+    never taken as the option left out. One line each, before the work, nothing changed."""
+    from brake_sim_ros import cli
+
+    before = {p: p.read_bytes() for p in dataset.root.rglob("*") if p.is_file()}
+    value = "" if where is None else str(dataset.root / where)
+    assert cli.main(["score", str(dataset.root), option, value]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and words in err, err
+    after = {p: p.read_bytes() for p in dataset.root.rglob("*") if p.is_file()}
+    assert after == before
+
+
 @pytest.mark.slow
 def test_the_baselines_report_is_written_whole_and_the_same_twice(dataset, tmp_path, capsys):
     from brake_sim_ros import cli
