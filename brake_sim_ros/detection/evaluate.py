@@ -221,6 +221,10 @@ class SplitBrakeError(DatasetError):
     """A split's runs come from both brakes: no detector is fitted on them."""
 
 
+class SplitChannelError(DatasetError):
+    """A run of a split lacks a channel the detector reads: no detector is fitted on it."""
+
+
 class SplitWindows:
     """The training windows of a split, read from the dataset run by run each time it is
     iterated: a detector's fit holds one run's channels at a time, not the split's (a
@@ -247,6 +251,12 @@ class SplitWindows:
                 raise SplitRateError(
                     f"split {self.split}: runs at {shown} Hz; allowed one sample rate to fit"
                     " a detector on"
+                )
+            missing = [c for c in self.detector.channels if c not in run.channels]
+            if missing:
+                raise SplitChannelError(
+                    f"split {self.split}: {run.where} has no channel {missing[0]!r}; detector"
+                    f" {self.detector.name} reads {list(self.detector.channels)}"
                 )
             self.brakes.add(run.brake)
             if len(self.brakes) > 1:
@@ -281,11 +291,13 @@ def fit(detector: Detector, dataset: SweepDataset, split: str = "train") -> int:
     Raises:
         SplitRateError: the split's runs are at several sample rates (one line).
         SplitBrakeError: the split's runs come from both brakes (one line).
+        SplitChannelError: a run of the split lacks a channel the detector reads (one line).
     """
     windows = SplitWindows(detector, dataset, split)
     if next(iter(windows), None) is None:  # reads runs up to the first window only
         _no_window(detector, dataset, split, windows.longest)
-    with user_code(detector, "fit", passthrough=(SplitRateError, SplitBrakeError)):
+    passthrough = (SplitRateError, SplitBrakeError, SplitChannelError)
+    with user_code(detector, "fit", passthrough=passthrough):
         detector.fit(windows)
     if windows.rates:
         detector.fitted_rate_hz = windows.rates.pop()

@@ -321,3 +321,37 @@ def test_a_split_at_two_sample_rates_is_one_line_not_the_detectors_error(dataset
             evaluate.fit(TwoPasses(), Mixed(), "train")
     finally:
         evaluate.read_run = original
+
+
+def test_a_run_without_the_detectors_channel_is_one_line_not_the_detectors_error(
+    dataset, tmp_path, capsys
+):
+    """A train run whose file lacks a measured channel (rehashed into its manifest, so that
+    it reads as intact) is named in one line before the detector's fit sees its windows."""
+    import hashlib
+    import shutil
+
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    from brake_sim_ros import cli
+
+    root = tmp_path / "ds"
+    shutil.copytree(dataset.root, root)
+    manifest = pq.read_table(root / "manifest.parquet")
+    rows = manifest.to_pylist()
+    row = next(r for r in rows if r["run_id"] == dataset.runs("train")[1])
+    path = root / row["file"]
+    table = pq.read_table(path)
+    measured = [c for c in table.column_names if c.startswith("measured:")]
+    pq.write_table(table.drop(measured).replace_schema_metadata(table.schema.metadata), path)
+    row["sha256"] = hashlib.sha256(path.read_bytes()).hexdigest()
+    pq.write_table(pa.Table.from_pylist(rows, schema=manifest.schema), root / "manifest.parquet")
+    for argv in (
+        ["fit", str(root), "--detector", "rms", "--out", str(tmp_path / "m.json")],
+        ["score", str(root), "--detector", "rms"],
+    ):
+        assert cli.main(argv) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and f"run {row['run_id']}" in err and "no channel" in err
+    assert not (tmp_path / "m.json").exists()
