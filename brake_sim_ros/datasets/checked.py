@@ -47,6 +47,8 @@ MANIFEST_TYPES = {
     "sha256": pa.string(),
     "rows": pa.int64(),
 }
+# what a run of the manifest became: written whole, or failed with its error
+STATUSES = ("ok", "failed")
 # a constant sample step, to this relative tolerance (the times are i / rate in float64)
 STEP_TOLERANCE = 1e-6
 
@@ -173,13 +175,14 @@ def parse_manifest(data: bytes, lock: dict[str, Any], where: str) -> pa.Table:
 
 
 def check_agreement(manifest: pa.Table, lock: dict[str, Any], where: str) -> None:
-    """The manifest lists the lock's runs, each with the lock's unit and split, and each
-    finished run with its file, SHA-256 and rows.
+    """The manifest lists the lock's runs, each with the lock's unit, split and label
+    columns (its defect, severity and force: a NaN agrees with nothing), a status of
+    :data:`STATUSES`, and each finished run with its file, SHA-256 and rows.
 
     Raises:
         DatasetError: one line naming the run.
     """
-    rows = manifest.select(list(MANIFEST_TYPES)).to_pylist()
+    rows = manifest.to_pylist()
     locked = {r["run_id"]: r for r in lock["runs"]}
     if len(rows) != len(locked) or {r["run_id"] for r in rows} != set(locked):
         raise DatasetError(f"{where} and the lock list different runs: damaged")
@@ -187,6 +190,18 @@ def check_agreement(manifest: pa.Table, lock: dict[str, Any], where: str) -> Non
         run = locked[row["run_id"]]
         if (run["unit_id"], run["split"]) != (row["unit_id"], row["split"]):
             raise DatasetError(f"{where}: run {row['run_id']} disagrees with the lock: damaged")
+        columns = run.get("columns", {})
+        for name, value in columns.items() if isinstance(columns, dict) else ():
+            if name not in row or row[name] != value:
+                raise DatasetError(
+                    f"{where}: run {row['run_id']}: {name} {row.get(name)!r} is not the"
+                    f" lock's {value!r}: damaged"
+                )
+        if row["status"] not in STATUSES:
+            raise DatasetError(
+                f"{where}: run {row['run_id']}: status {row['status']!r}, allowed one of"
+                f" {list(STATUSES)}: damaged"
+            )
         if row["status"] == "ok" and (
             row["file"] != run_file(row["run_id"])
             or not isinstance(row["sha256"], str)

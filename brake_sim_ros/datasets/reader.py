@@ -206,14 +206,24 @@ def _refuse_leaks(root: Path, manifest: pa.Table, lock: dict[str, Any]) -> None:
 
 def check(dataset: SweepDataset) -> None:
     """Leakage (a unit in two splits, a held-out value outside test) and damage (a
-    finished run's file missing, changed or not a regular time series).
+    finished run's file missing, changed or not a regular time series, or its columns not
+    the other runs').
 
     Raises:
         DatasetError: the first problem, with how many there are.
     """
     _refuse_leaks(dataset.root, dataset.manifest, dataset.lock)
+    first: tuple[str, list[str]] | None = None
     for run_id in dataset.runs():  # the manifest agrees with the lock (checked on opening)
-        dataset.run_table(run_id)
+        names = dataset.run_table(run_id).column_names
+        if first is None:
+            first = (run_id, names)
+        elif names != first[1]:  # one campaign, one set of outputs
+            other = sorted(set(first[1]) ^ set(names)) or ["their order"]
+            raise DatasetError(
+                f"{dataset.run_where(run_id)}: its columns are not run {first[0]}'s"
+                f" ({other[0]!r} differs): damaged"
+            )
 
 
 def info_text(dataset: SweepDataset) -> str:

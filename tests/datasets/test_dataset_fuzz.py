@@ -186,6 +186,20 @@ DAMAGE: dict[str, Callable[[Path], None]] = {
     "manifest run in another split": _manifest_change(
         lambda m: _set_column(m, "split", pa.array(["train"] * m.num_rows))
     ),
+    "manifest severity NaN": _manifest_change(
+        lambda m: _set_column(
+            m, "defect_severity", pa.array([float("nan")] * m.num_rows, pa.float64())
+        )
+    ),
+    "manifest run labelled another defect": _manifest_change(
+        lambda m: _set_column(m, "defect_kind", pa.array(["healthy"] * m.num_rows))
+    ),
+    "manifest status not ok or failed": _manifest_change(
+        lambda m: _set_column(m, "status", pa.array(["done"] * m.num_rows))
+    ),
+    "measured channels dropped, manifest updated": lambda d: _rewrite_run(
+        d, lambda t: t.drop([c for c in t.column_names if c.startswith("measured:")])
+    ),
     "manifest not Parquet": lambda d: (d / MANIFEST_NAME).write_bytes(b"PAR1 nonsense"),
     "manifest removed": lambda d: (d / MANIFEST_NAME).unlink(),
     "manifest a FIFO": _replace_with_fifo(MANIFEST_NAME),
