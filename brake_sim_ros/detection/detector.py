@@ -276,7 +276,19 @@ class Detector(abc.ABC):
         )
 
     def window_samples(self, sample_rate_hz: float) -> int:
-        return max(1, round(self.window_s * sample_rate_hz))
+        """The window's length at ``sample_rate_hz``, samples: ``window_s`` rounded.
+
+        Raises:
+            ValueError: a window under half a sample there (one line: never one sample
+                standing in for it).
+        """
+        n = round(self.window_s * sample_rate_hz)
+        if n < 1:
+            raise ValueError(
+                f"detector {self.name}: window_s {self.window_s:g} s is under one sample at"
+                f" {sample_rate_hz:g} Hz; allowed at least 1 / {sample_rate_hz:g} s"
+            )
+        return n
 
     def reset(self) -> None:
         """Forget the partial window (a new run, a new brake)."""

@@ -592,5 +592,17 @@ def load(
         loaded = _LOADERS[kind](kind, doc["parameters"], doc["state"], c)
     else:
         loaded = load_state(user, doc["parameters"], doc["state"], c)
+    unread = sorted(set(channels) - set(loaded.channels))
+    if unread:  # the units it was fitted with are of channels it reads (fit records them)
+        raise c.fail(
+            "fitted_at.channels",
+            f"{unread[0]!r} is a channel the detector does not read; allowed channels of"
+            f" {sorted(loaded.channels)}",
+        )
+    if rate is not None:
+        try:
+            loaded.window_samples(rate)
+        except ValueError as exc:
+            raise c.fail("parameters.window_s", str(exc)) from None
     loaded.fitted_rate_hz, loaded.fitted_brake, loaded.fitted_channels = rate, brake, channels
     return loaded

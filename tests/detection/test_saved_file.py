@@ -232,7 +232,18 @@ def test_a_threshold_detector_round_trips_and_checks_its_parameters(tmp_path):
     )
     doc["parameters"]["window_s"] = -1.0
     assert "parameters.window_s" in _refused(_write(tmp_path, doc), "kurtosis")
+    # a window under a sample at the fitted rate, never one sample standing in for it
+    doc["fitted_at"]["sample_rate_hz"] = FS
+    doc["parameters"]["window_s"] = 1e-300
+    assert "under one sample at 2560 Hz" in _refused(_write(tmp_path, doc), "kurtosis")
     doc["parameters"]["window_s"] = 0.1
+    # the units it records are of the channel it reads: a threshold learned on y is never
+    # applied to x by a file whose channel was changed
+    doc["fitted_at"]["channels"] = {d.channels[0]: "m/s^2"}
+    saved.load(_write(tmp_path, doc), "kurtosis")
+    doc["parameters"]["channel"] = "backing_plate_accel_x"
+    assert "does not read" in _refused(_write(tmp_path, doc), "kurtosis")
+    doc["parameters"]["channel"] = d.channels[0]
     for huge in ("1" + "0" * 400, "1e400"):  # Python reads 1e400 as infinity
         path = tmp_path / "huge.json"
         path.write_text(json.dumps(doc).replace('"threshold": 4.25', f'"threshold": {huge}'))
