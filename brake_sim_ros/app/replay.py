@@ -24,6 +24,7 @@ from rclpy.executors import ExternalShutdownException
 from rclpy.utilities import remove_ros_args
 
 from brake_sim_ros.app.stop import start_ros
+from brake_sim_ros.command_line import Parser
 from brake_sim_ros.errors import BrakeSimError
 from brake_sim_ros.recording.playback import Recording
 from brake_sim_ros.recording.reader import RecordingReadError
@@ -31,7 +32,7 @@ from brake_sim_ros.ros.replay import ReplayNode, serve
 
 
 def _parse_cli(argv: list[str]) -> argparse.Namespace:
-    parser = argparse.ArgumentParser(
+    parser = Parser(
         prog="brake-sim replay",
         description="Publish an MCAP recording on ROS 2 with its original timing.",
     )
@@ -74,12 +75,12 @@ def main(args: list[str] | None = None) -> int:
     try:
         recording = Recording(cli.recording, cli.topics)
     except BrakeSimError as exc:
-        print(f"brake-sim replay: {exc}", file=sys.stderr)
+        print(f"brake-sim replay: error: {exc}", file=sys.stderr)
         return 1
     if cli.start_offset >= recording.duration_s and recording.duration_s > 0:
         recording.close()
         print(
-            f"brake-sim replay: --start-offset {cli.start_offset:g} s is past the end of"
+            f"brake-sim replay: error: --start-offset {cli.start_offset:g} s is past the end of"
             f" {cli.recording} ({recording.duration_s:.6g} s)",
             file=sys.stderr,
         )
@@ -97,7 +98,7 @@ def main(args: list[str] | None = None) -> int:
                 recording, rate=cli.rate, start_offset_s=cli.start_offset, brake=brake
             )
         except BrakeSimError as exc:
-            print(f"brake-sim replay: {exc}", file=sys.stderr)
+            print(f"brake-sim replay: error: {exc}", file=sys.stderr)
             return 1
         topics = ", ".join(f"{t.name} ({t.count})" for t in recording.topics.values())
         says = (
@@ -123,7 +124,7 @@ def main(args: list[str] | None = None) -> int:
         print(f"brake-sim replay: published {node.published} messages", flush=True)
         return 0
     except RecordingReadError as exc:  # the file changed after it was checked
-        print(f"brake-sim replay: {exc}", file=sys.stderr)
+        print(f"brake-sim replay: error: {exc}", file=sys.stderr)
         return 1
     except (KeyboardInterrupt, ExternalShutdownException):
         return 0

@@ -19,6 +19,7 @@ Drawn with matplotlib's Agg backend: no display needed.
 
 from __future__ import annotations
 
+import zipfile
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -184,8 +185,9 @@ def read_run(source: str, run_id: str | None) -> tuple[dict[str, np.ndarray], st
         try:
             with np.load(path, allow_pickle=False) as data:
                 return {k: data[k] for k in data.files}, path.name
-        except (OSError, ValueError) as exc:
-            raise ValueError(f"{source}: not a readable .npz file ({exc})") from None
+        except (OSError, ValueError, EOFError, zipfile.BadZipFile) as exc:
+            # the kind of failure only: a damaged archive's own text may quote its bytes
+            raise ValueError(f"{source}: not a readable .npz file ({type(exc).__name__})") from None
     raise ValueError(f"{source}: allowed a dataset directory, a .parquet or a .npz run file")
 
 

@@ -32,7 +32,7 @@ from brake_sim_ros.analysis.impacts import EventMetrics
 from brake_sim_ros.model.assembly import pack
 from brake_sim_ros.model.defects import Defects, ShoeDefect
 from brake_sim_ros.model.layout import SIDES
-from brake_sim_ros.recording.output import check_output, replace_output
+from brake_sim_ros.recording.output import check_output, output_directory, replace_output
 from brake_sim_ros.scenarios import load_scenario
 from brake_sim_ros.stream.run import RunResult, run_scenario
 from brake_sim_ros.studies.validation_checks import (
@@ -105,10 +105,10 @@ def write_report(
 ) -> tuple[dict, list[Check]]:
     """Run everything and write report.md, figures.json and the plots into ``out_dir``
     (each replaced whole, never through a link: ``recording.output.replace_output``)."""
-    check_output(out_dir / "report.md", overwrite=True, option="--out")  # before the work
+    out_dir = output_directory(out_dir, "--out")  # before the work: never a link
+    check_output(out_dir / "report.md", overwrite=True, option="--out")
     if json_path is not None:
         check_output(json_path, overwrite=True, option="--json")
-    out_dir.mkdir(parents=True, exist_ok=True)
     base, runs = run_all(progress)
     sweep, travel = pivot_sweep(base, progress)
     if progress:
