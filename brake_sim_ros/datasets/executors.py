@@ -13,6 +13,7 @@ from __future__ import annotations
 import concurrent.futures
 import contextlib
 import multiprocessing
+import threading
 from collections.abc import Callable, Iterator, Sequence
 from typing import Any, Protocol, TypeVar
 
@@ -20,6 +21,7 @@ from brake_sim_ros.errors import BrakeSimError
 
 T = TypeVar("T")
 WORKERS_TIMEOUT_S = 60.0  # how long a cluster may have no worker before the sweep ends
+CONNECT_TIMEOUT_S = 10.0  # how long a scheduler may take to be connected to, s
 MAX_WORKERS = 1024  # local worker processes a command may ask for
 DIED = (
     "a worker process died (killed, or out of memory?) with {n} runs unfinished: the"
@@ -126,6 +128,43 @@ class _Dask:
         return next(iter(self.map(fn, [item], [key])))
 
 
+def _connect(client_class: Any, scheduler: str) -> Any:
+    """A Dask client of the scheduler at ``scheduler``, within :data:`CONNECT_TIMEOUT_S`.
+
+    The client's own timeout covers the connection, not the handshake: a server that is no
+    Dask scheduler may never answer it (an HTTP server waits for a request), or answer it
+    with bytes read as a message's length (3 EiB, once). The client is made in a thread
+    waited for that long; whatever it raises is the scheduler's refusal, in one line.
+
+    Raises:
+        ExecutorError: no Dask scheduler answered there in time.
+    """
+    made: list[Any] = []
+    failed: list[BaseException] = []
+
+    def connect() -> None:
+        try:
+            made.append(client_class(scheduler, timeout=CONNECT_TIMEOUT_S))
+        except BaseException as exc:  # any failure is the scheduler's
+            failed.append(exc)
+
+    thread = threading.Thread(target=connect, name="dask-connect", daemon=True)
+    thread.start()
+    thread.join(CONNECT_TIMEOUT_S + 5.0)
+    if made:
+        return made[0]
+    if failed:
+        exc = failed[0]
+        why = one_line(exc) if isinstance(exc, OSError | TimeoutError | ValueError) else ""
+        raise ExecutorError(
+            f"--scheduler {scheduler}: cannot connect ({why or type(exc).__name__}): allowed"
+            " a Dask scheduler's address"
+        )
+    raise ExecutorError(
+        f"--scheduler {scheduler}: no Dask scheduler answered in {CONNECT_TIMEOUT_S + 5.0:.0f} s"
+    )
+
+
 @contextlib.contextmanager
 def open_executor(
     workers: int, scheduler: str | None, initializer: Callable[[], None]
@@ -153,10 +192,7 @@ def open_executor(
         raise ExecutorError(
             "--scheduler needs dask.distributed: pip install 'dask[distributed]'"
         ) from None
-    try:
-        client = Client(scheduler, timeout=10)
-    except (OSError, TimeoutError, ValueError) as exc:
-        raise ExecutorError(f"--scheduler {scheduler}: cannot connect ({one_line(exc)})") from None
+    client = _connect(Client, scheduler)
     try:
         yield _Dask(client, scheduler)
     finally:
