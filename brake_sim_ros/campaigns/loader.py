@@ -218,14 +218,21 @@ def _parse(data: dict[str, Any], text: str, source: str, directory: Path | None)
 
 def _refuse_idle_rules(ctx: Checker, campaign: Campaign) -> None:
     """Refuse a held-out rule that matches no condition of the campaign (it would hold
-    nothing out), in one line."""
+    nothing out), or rules that together match every condition (nothing left to train on),
+    in one line."""
     if campaign.held_out:
         points = condition_points(
             campaign.axes, campaign.draw_method, campaign.draw_count, campaign.seed
         )
-        problem = idle_rule([point_columns(p) for p in points], campaign.held_out)
+        rows = [point_columns(p) for p in points]
+        problem = idle_rule(rows, campaign.held_out)
         if problem is not None:
             raise CampaignError(f"{ctx.source}: key 'split.held_out[{problem[0]}]': {problem[1]}")
+        if all(any(rule.matches(row) for rule in campaign.held_out) for row in rows):
+            raise CampaignError(
+                f"{ctx.source}: key 'split.held_out': holds out every condition, so train and"
+                " validation would be empty; allowed rules that leave some conditions to train on"
+            )
 
 
 def _set_brake(ctx: Checker, top: dict[str, Any], base_data: dict[str, Any]) -> None:
@@ -273,6 +280,8 @@ def _outputs(ctx: Checker, data: Any) -> Outputs:
     if rate is not None:
         rate = ctx.number(rate, "outputs.sample_rate_hz", 1.0, 1e6)
     columns = data.get("columns", [])
+    if "columns" in data and columns == []:  # left out means every column; [] means none
+        raise ctx.fail("outputs.columns", columns, "1 or more column names (leave it out: all)")
     if (
         not isinstance(columns, list)
         or len(columns) > 1000

@@ -49,6 +49,23 @@ def test_held_out_rules_that_hold_nothing_out_are_refused(tmp_path, rule, says):
     assert "\n" not in message and says in message and "split.held_out[0]" in message
 
 
+def test_held_out_rules_that_hold_every_condition_out_are_refused(tmp_path):
+    path = tmp_path / "c.toml"
+    path.write_text(BASE + 'held_out = [{column = "peak_force_n", min = 0.0, max = 1e6}]\n')
+    with pytest.raises(CampaignError) as info:
+        load_campaign(path)
+    message = str(info.value)
+    assert "\n" not in message and "holds out every condition" in message
+
+
+def test_an_empty_column_list_is_refused_not_read_as_every_column(tmp_path):
+    path = tmp_path / "c.toml"
+    path.write_text(BASE.replace("[split]", "[outputs]\ncolumns = []\n[split]"))
+    with pytest.raises(CampaignError) as info:
+        load_campaign(path)
+    assert "outputs.columns" in str(info.value) and "1 or more" in str(info.value)
+
+
 @pytest.mark.parametrize(
     "rule",
     [
