@@ -50,11 +50,14 @@ class VibrationThreshold(Detector):
         self.window_s = float(window_s)
         self.k = float(k)
         self.threshold: float | None = None
+        self.unjudged_windows = 0  # healthy training windows without a finite sample
 
     def fit(self, windows: Iterable[TrainingWindow]) -> None:
         """Threshold = mean + k std of the statistic over the healthy windows."""
         f = STATISTICS[self.statistic]
         values = [f(w.channels[self.channels[0]]) for w in windows if w.healthy]
+        # windows without a finite sample (a dropout throughout) are left out, and counted
+        self.unjudged_windows = sum(not np.isfinite(v) for v in values)
         values = [v for v in values if np.isfinite(v)]
         if len(values) < 2:
             raise ValueError(

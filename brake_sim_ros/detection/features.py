@@ -63,20 +63,28 @@ MIN_PRESSURE_BAR = 1.0
 
 
 def rms(x: np.ndarray) -> float:
-    """Root mean square, the channel's unit (NaN samples ignored)."""
+    """Root mean square, the channel's unit (NaN samples ignored; NaN without a sample)."""
+    if not np.isfinite(x).any():  # a dropout throughout: nothing to judge, no warning
+        return math.nan
     return float(np.sqrt(np.nanmean(np.square(x))))
 
 
 def kurtosis(x: np.ndarray) -> float:
-    """Kurtosis (3 for Gaussian noise; impacts raise it), NaN samples ignored."""
+    """Kurtosis (3 for Gaussian noise; impacts raise it), NaN samples ignored; NaN without
+    a sample."""
+    if not np.isfinite(x).any():
+        return math.nan
     centred = x - np.nanmean(x)
     var = np.nanmean(centred**2)
     return float(np.nanmean(centred**4) / (var * var)) if var > 0.0 else 0.0
 
 
 def crest_factor(x: np.ndarray) -> float:
-    """Peak over RMS (about 3-4 for Gaussian noise), NaN samples ignored."""
+    """Peak over RMS (about 3-4 for Gaussian noise), NaN samples ignored; NaN without a
+    sample."""
     r = rms(x)
+    if math.isnan(r):
+        return math.nan
     return float(np.nanmax(np.abs(x)) / r) if r > 0.0 else 0.0
 
 

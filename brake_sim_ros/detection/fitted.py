@@ -153,10 +153,13 @@ def load_state(detector: Detector, parameters: object, state: object, c: Any) ->
 
 def facts_text(detector: Detector) -> str:
     """What ``detector`` was fitted on, for what the CLI prints: its rate and its brake,
-    e.g. ``at 5120 Hz on the study brake`` (``not recorded`` where the file says nothing)."""
+    e.g. ``at 5120 Hz on the study brake`` (``not recorded`` where the file says nothing),
+    and the training windows a dropout left without a sample, counted."""
     rate = detector.fitted_rate_hz
     brake = detector.fitted_brake
+    unjudged = getattr(detector, "unjudged_windows", 0)
     return (
         f"at {'a rate not recorded' if rate is None else f'{rate:g} Hz'} on"
         f" {'a brake not recorded' if brake is None else f'the {brake} brake'}"
+        + (f"; {unjudged} healthy windows without a finite sample left out" if unjudged else "")
     )

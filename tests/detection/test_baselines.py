@@ -239,3 +239,26 @@ def test_the_detectability_floor_is_the_smallest_fraction_detected_from_there_up
     assert "| drum_out_of_round (150 um) | orders | 0.5 (75 um) |" in text
     assert "| - | 3/4 | - | 4/4 |" in text and "(2 per hour)" in text  # 0.75 not run
     assert "| friction_change (-50 %) | orders | not detected |" in text
+
+
+@pytest.mark.filterwarnings("error::RuntimeWarning")
+def test_a_window_a_dropout_emptied_is_left_out_of_the_fit_and_counted():
+    """A healthy window whose channel is NaN throughout (a dropout) has no statistic: it is
+    left out of the threshold, counted, and warns nothing (numpy's mean of an empty slice)."""
+    from brake_sim_ros.detection.baselines import VibrationThreshold
+    from brake_sim_ros.detection.fitted import facts_text
+
+    rng = np.random.default_rng(3)
+    windows = [
+        TrainingWindow({"backing_plate_accel_y": rng.normal(0.0, 1.0, 256)}, 2560.0, ())
+        for _ in range(8)
+    ]
+    empty = TrainingWindow({"backing_plate_accel_y": np.full(256, np.nan)}, 2560.0, ())
+    for name in ("rms", "kurtosis", "crest"):
+        assert math.isnan(f.STATISTICS[name](empty.channels["backing_plate_accel_y"]))
+        whole, gapped = VibrationThreshold(name), VibrationThreshold(name)
+        whole.fit(windows)
+        gapped.fit([*windows[:4], empty, empty, *windows[4:]])
+        assert gapped.threshold == whole.threshold
+        assert (whole.unjudged_windows, gapped.unjudged_windows) == (0, 2)
+        assert "2 healthy windows without a finite sample left out" in facts_text(gapped)
