@@ -440,7 +440,7 @@ def test_replay_loading(bag: Bag, case: Case, tmp_path: Path, capfd):
         code = replay_main(["brake-sim replay", str(broken)])  # refused before ROS starts
         assert code == 1
         line = _one_line_error(capfd.readouterr().err)
-        assert line == f"brake-sim replay: {exc}"
+        assert line == f"brake-sim replay: error: {exc}"
         return
     try:
         got = Counter((t, ns, data) for t, data, ns in recording.messages())
