@@ -36,14 +36,18 @@ def load_model(path: str, name: str | None) -> Detector:
 def _inside_samples(directory: str, path: str) -> bool:
     """Whether ``path``'s directory is inside the dataset's samples (a file there would be
     read as one of them)."""
-    samples = os.path.realpath(Path(directory) / "samples")
+    from brake_sim_ros.datasets.sweep_output import SAMPLES_DIR
+
+    samples = os.path.realpath(Path(directory) / SAMPLES_DIR)
     return os.path.commonpath([samples, os.path.realpath(Path(path).parent)]) == samples
 
 
 def _dataset_inputs(directory: str) -> list[Path]:
     """The files of the dataset in ``directory`` that no output may replace."""
+    from brake_sim_ros.datasets.sweep_output import LOCK_NAME, MANIFEST_NAME
+
     root = Path(directory)
-    return [root / "manifest.parquet", root / "campaign.lock"]
+    return [root / MANIFEST_NAME, root / LOCK_NAME]
 
 
 def _outside_samples(directory: str, path: str, option: str) -> None:
