@@ -327,7 +327,11 @@ def cmd_plot(args: argparse.Namespace) -> int:
     probe_output(args.out, inputs=[args.source], overwrite=args.overwrite, option="--out")
     try:
         columns, name = plot.read_run(args.source, args.run)
-        windows = None if args.windows is None else plot.read_windows(args.windows, name)
+        windows = (
+            None
+            if args.windows is None
+            else plot.read_windows(args.windows, name, columns.get("time_s"))
+        )
         with atomic_output(args.out, overwrite=args.overwrite, option="--out") as tmp:
             plot.draw(columns, tmp, title=name, windows=windows)
     except ValueError as exc:

@@ -191,20 +191,38 @@ def read_run(source: str, run_id: str | None) -> tuple[dict[str, np.ndarray], st
     raise ValueError(f"{source}: allowed a dataset directory, a .parquet or a .npz run file")
 
 
-def read_windows(path: str, run_id: str) -> dict[str, np.ndarray]:
-    """The rows of ``run_id`` in a windows file (``brake-sim score --windows``).
+def read_windows(path: str, run_id: str, time_s: Any = None) -> dict[str, np.ndarray]:
+    """The rows of ``run_id`` in a windows file (``brake-sim score --windows``); with the
+    run's sample times ``time_s`` (s), each window's last sample must be one of them, at
+    its index: a file of another dataset's run of that id is refused.
 
     Raises:
-        ValueError: unreadable, or no window of that run (one line).
+        ValueError: unreadable, no window of that run, or windows not at the run's samples
+            (one line).
     """
     import pyarrow.parquet as pq
 
     try:
-        table = pq.read_table(path, columns=["run_id", "time_s", "health_index", "alarm"])
+        table = pq.read_table(
+            path, columns=["run_id", "sample_index", "time_s", "health_index", "alarm"]
+        )
     except (OSError, ValueError, KeyError) as exc:
         raise ValueError(f"--windows {path}: not a windows file ({exc})") from None
     rows = table.to_pydict()
     keep = np.array(rows["run_id"]) == run_id
     if not keep.any():
         raise ValueError(f"--windows {path}: no window of run {run_id}")
-    return {k: np.asarray(v)[keep] for k, v in rows.items() if k != "run_id"}
+    out = {k: np.asarray(v)[keep] for k, v in rows.items() if k != "run_id"}
+    if time_s is not None:
+        time_s = np.asarray(time_s, dtype=np.float64)
+        index = out["sample_index"].astype(np.int64)
+        inside = (index >= 0) & (index < time_s.size)
+        same = inside & (time_s[np.clip(index, 0, time_s.size - 1)] == out["time_s"])
+        if not same.all():
+            i = int(np.flatnonzero(~same)[0])
+            raise ValueError(
+                f"--windows {path}: its window {i} of run {run_id} ends at sample"
+                f" {int(index[i])}, {out['time_s'][i]:g} s, not a sample of this run there:"
+                " allowed the windows score wrote for this run"
+            )
+    return out

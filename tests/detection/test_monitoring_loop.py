@@ -186,6 +186,8 @@ def _png_size(path: Path) -> tuple[int, int]:
 
 def test_plot_writes_a_png_for_a_run_of_each_kind_of_source(slow, tmp_path, capsys):
     import matplotlib.image
+    import pyarrow as pa
+    import pyarrow.parquet as pq
 
     run = tmp_path / "run.parquet"
     argv = ["simulate", "case5_left_tilted", "--duration", "0.4", "--quiet"]
@@ -215,3 +217,15 @@ def test_plot_writes_a_png_for_a_run_of_each_kind_of_source(slow, tmp_path, caps
         assert cli.main(["plot", *bad]) == cli.EXIT_ERROR
         assert capsys.readouterr().err.count("\n") == 1
     assert not list(tmp_path.glob("[abc].*"))
+    # windows of another run of that id (another dataset's, at another rate: its windows end
+    # at other times of the same indices) are refused, not drawn over this run
+    table = pq.read_table(windows)
+    other = tmp_path / "other.parquet"
+    index = table.schema.get_field_index("time_s")
+    doubled = pa.array([2.0 * t for t in table["time_s"].to_pylist()], pa.float64())
+    pq.write_table(table.set_column(index, table.schema.field(index), doubled), other)
+    argv = ["plot", str(slow), "--run", test_run, "--windows", str(other)]
+    assert cli.main([*argv, "--out", str(tmp_path / "d.png")]) == cli.EXIT_ERROR
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "not a sample of this run" in err
+    assert not (tmp_path / "d.png").exists()
