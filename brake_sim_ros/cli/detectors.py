@@ -33,15 +33,6 @@ def load_model(path: str, name: str | None) -> Detector:
     return saved.load(path, None if user else name, where=_model_where(path), user=user)
 
 
-def _inside_samples(directory: str, path: str) -> bool:
-    """Whether ``path``'s directory is inside the dataset's samples (a file there would be
-    read as one of them)."""
-    from brake_sim_ros.datasets.sweep_output import SAMPLES_DIR
-
-    samples = os.path.realpath(Path(directory) / SAMPLES_DIR)
-    return os.path.commonpath([samples, os.path.realpath(Path(path).parent)]) == samples
-
-
 def _dataset_inputs(directory: str) -> list[Path]:
     """The files of the dataset in ``directory`` that no output may replace."""
     from brake_sim_ros.datasets.sweep_output import LOCK_NAME, MANIFEST_NAME
@@ -50,10 +41,22 @@ def _dataset_inputs(directory: str) -> list[Path]:
     return [root / MANIFEST_NAME, root / LOCK_NAME]
 
 
-def _outside_samples(directory: str, path: str, option: str) -> None:
-    """Refuse an output ``path`` (``option``) inside the dataset's samples, in one line."""
-    if _inside_samples(directory, path):
+def _outside_samples(directory: str, path: str, option: str, *, is_directory: bool = False) -> None:
+    """Refuse an output ``path`` (``option``; a file, or with ``is_directory`` a directory
+    for files) inside the dataset's samples, where a file would be read as one of them, in
+    one line."""
+    from brake_sim_ros.datasets.sweep_output import SAMPLES_DIR
+
+    samples = os.path.realpath(Path(directory) / SAMPLES_DIR)
+    place = os.path.realpath(Path(path) if is_directory else Path(path).parent)
+    if os.path.commonpath([samples, place]) == samples:
         raise BrakeSimError(f"{option} {path}: inside the dataset's samples; allowed elsewhere")
+
+
+def _score_inputs(args: argparse.Namespace) -> list[Path | str]:
+    """What ``score`` reads and no output of it may replace: the dataset's files and the
+    ``--model`` file."""
+    return [*_dataset_inputs(args.directory), *([args.model] if args.model else [])]
 
 
 # --- fit -----------------------------------------------------------------------------------
@@ -136,8 +139,7 @@ def cmd_score(args: argparse.Namespace) -> int:
     if args.windows is not None:
         _write_windows(args.windows, window_rows)
     if args.report is not None:
-        inputs = [*_dataset_inputs(args.directory), *([args.model] if args.model else [])]
-        _write_report(args.report, scores, inputs=inputs)
+        _write_report(args.report, scores, inputs=_score_inputs(args))
     return 0
 
 
@@ -166,7 +168,7 @@ def _checked_score_options(args: argparse.Namespace) -> list[str | None]:
     if args.model and args.fit_split is not None:
         raise BrakeSimError("--fit-split with --model: the saved detector is fitted already")
     # before the work: no output replaces the dataset's files, the model or lands in samples
-    inputs = [*_dataset_inputs(args.directory), *([args.model] if args.model else [])]
+    inputs = _score_inputs(args)
     if args.out is not None:
         _outside_samples(args.directory, args.out, "--out")
         check_output(args.out, inputs=inputs, overwrite=True, option="--out")
@@ -175,8 +177,7 @@ def _checked_score_options(args: argparse.Namespace) -> list[str | None]:
         check_output(args.windows, inputs=inputs, overwrite=True, option="--windows")
     if args.report is not None:  # made when the report is written
         check_output_directory(args.report, "--report")
-        if _inside_samples(args.directory, str(Path(args.report) / "file")):  # its files'
-            raise BrakeSimError(f"--report {args.report}: inside the dataset's samples")
+        _outside_samples(args.directory, args.report, "--report", is_directory=True)
     return names
 
 
@@ -255,7 +256,7 @@ def _write_windows(path: str, rows: list[dict]) -> None:
     print(f"windows: {table.num_rows} in {path}")
 
 
-def _write_report(directory: str, scores: list[dict], *, inputs: list[str]) -> None:
+def _write_report(directory: str, scores: list[dict], *, inputs: list[Path | str]) -> None:
     """``score --report DIR``: each detector's JSON and the figures, every file's rules
     checked before the first is written."""
     from brake_sim_ros.detection.report import report_files

@@ -599,7 +599,7 @@ def load(
             f"{unread[0]!r} is a channel the detector does not read; allowed channels of"
             f" {sorted(loaded.channels)}",
         )
-    if rate is not None:
+    if rate is not None and user is None:  # a user's window_samples runs guarded, later
         try:
             loaded.window_samples(rate)
         except ValueError as exc:

@@ -220,8 +220,8 @@ def _advance(
     auto = L.CONTACT_AUTO
     located = scheme == L.SCHEME_RK4_LOCATED
     if located:
-        h_end[0], h_end[1] = rk4.shoe_switch_sign(pw, 0, y)
-        h_end[2], h_end[3] = rk4.shoe_switch_sign(pw, 1, y)
+        h_end[0], h_end[1] = rk4.shoe_switch(pw, 0, y, True)
+        h_end[2], h_end[3] = rk4.shoe_switch(pw, 1, y, True)
     # The located scheme tests the contact switches on the state that ends a step; the
     # next step's first evaluation needs the same contact kinematics of the same state, so
     # it takes them (kin_l, kin_r; same bits) while nothing changed the state or the
@@ -259,8 +259,8 @@ def _advance(
                 gl = 1.0
                 gr = 1.0
             if located and moved:  # the contact modes of the step follow the geometry now
-                h_end[0], h_end[1] = rk4.shoe_switch_sign(pw, 0, y)
-                h_end[2], h_end[3] = rk4.shoe_switch_sign(pw, 1, y)
+                h_end[0], h_end[1] = rk4.shoe_switch(pw, 0, y, True)
+                h_end[2], h_end[3] = rk4.shoe_switch(pw, 1, y, True)
         if heating:
             thermal.fade_linings(p, pw, y[L.Y_BRAKE_TEMPERATURE])
         if cycling:
@@ -384,8 +384,8 @@ def _advance(
                     el, hl = contact.switching_of(pw, kin_l)
                     er, hr = contact.switching_of(pw, kin_r)
                 else:
-                    el, hl = rk4.shoe_switch_sign(pw, 0, y_new)
-                    er, hr = rk4.shoe_switch_sign(pw, 1, y_new)
+                    el, hl = rk4.shoe_switch(pw, 0, y_new, True)
+                    er, hr = rk4.shoe_switch(pw, 1, y_new, True)
                 if (hl > 0.0) != (h_start[0] > 0.0) or (hr > 0.0) != (h_start[1] > 0.0):
                     # a contact switches inside this step: redo it split at the switches
                     fstate[L.F_SWITCHES] += rk4.located_step(

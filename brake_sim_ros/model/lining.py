@@ -281,17 +281,36 @@ def _equivalent(fx, fy, moment, radius):
     return fn, ff, radius * nx, radius * ny
 
 
+# Where the lining's circle stays this far (m) inside a round drum, no node can touch it:
+# a node's computed penetration exceeds the circle's by rounding alone (2e-16 m where the
+# lining is concentric with the drum, its rest; below 1e-15 m always).
+CLEAR_MARGIN_M = 1e-9
+
+
 @njit(**JIT)
-def switching(p, base, theta, omega, drum_angle, drum_speed):
+def switching(p, base, theta, omega, drum_angle, drum_speed, signs_only):
     """(largest penetration m, switching function m) of the lining: ``max_i min(delta_i,
     delta_i + tau delta_i')`` is positive exactly when some node penetrates and pushes
-    (:func:`shoe_contact`), and continuous in the state. A removed shoe: (-1, -1)."""
+    (:func:`shoe_contact`), and continuous in the state. A removed shoe: (-1, -1).
+
+    ``signs_only``: for a step's end, which reads the two signs alone (the next step's
+    contact modes, whether the shoe touches) besides an upper bound of the penetration (the
+    free-ride bound's). Then, on a round drum whose lining's whole circle stays clear of it
+    by more than :data:`CLEAR_MARGIN_M` (``|C| + r - R``: ``C`` the arc's centre, ``r`` its
+    radius, ``R`` the drum's), both are that clearance less the margin (m, negative: an
+    upper bound of both whatever the nodes' rounding), without a node. The location of a
+    switch inside a step reads the values (False)."""
     if p[base + L.S_ENABLED] <= 0.0:
         return -1.0, -1.0
     s = p[base + L.S_SIGN]
     phi = s * theta
     c = math.cos(phi)
     sn = math.sin(phi)
+    if signs_only and p[L.P_DRUM_WAVE_COUNT] <= 0.0 and p[L.P_FLAT_DEPTH] <= 0.0:
+        cx, cy = contact.arc_centre(p, base, c, sn)
+        reach = math.sqrt(cx * cx + cy * cy) + p[base + L.S_LINING_RADIUS] - p[L.P_DRUM_RADIUS]
+        if reach < -CLEAR_MARGIN_M:
+            return reach + CLEAR_MARGIN_M, reach + CLEAR_MARGIN_M
     tau = p[L.P_LINING_NODE_DAMPING] / p[L.P_LINING_NODE_STIFFNESS]
     eps = -math.inf
     h = -math.inf
@@ -304,30 +323,6 @@ def switching(p, base, theta, omega, drum_angle, drum_speed):
         eps = max(eps, d)
         h = max(h, min(d, d + tau * d_dot))
     return eps, h
-
-
-# Where the lining's circle stays this far (m) inside a round drum, no node can touch it:
-# a node's computed penetration exceeds the circle's by rounding alone (2e-16 m where the
-# lining is concentric with the drum, its rest; below 1e-15 m always).
-CLEAR_MARGIN_M = 1e-9
-
-
-@njit(**JIT)
-def switching_bound(p, base, theta, omega, drum_angle, drum_speed):
-    """:func:`switching` where its signs are all a step's end needs (the contact modes of
-    the next step, whether a shoe touches, the free-ride bound's indentation, which may be
-    larger than the deepest node's): on a round drum, where the lining's whole circle stays
-    clear of the drum by more than :data:`CLEAR_MARGIN_M` (``|C| + r - R``, ``C`` the arc's
-    centre, ``r`` its radius, ``R`` the drum's), that clearance less the margin twice (m,
-    negative: an upper bound of both whatever the nodes' rounding), without a node; else
-    :func:`switching` itself. A shoe off the drum then costs no node at a step's end."""
-    if p[base + L.S_ENABLED] > 0.0 and p[L.P_DRUM_WAVE_COUNT] <= 0.0 and p[L.P_FLAT_DEPTH] <= 0.0:
-        phi = p[base + L.S_SIGN] * theta
-        cx, cy = contact.arc_centre(p, base, math.cos(phi), math.sin(phi))
-        reach = math.sqrt(cx * cx + cy * cy) + p[base + L.S_LINING_RADIUS] - p[L.P_DRUM_RADIUS]
-        if reach < -CLEAR_MARGIN_M:
-            return reach + CLEAR_MARGIN_M, reach + CLEAR_MARGIN_M
-    return switching(p, base, theta, omega, drum_angle, drum_speed)
 
 
 @njit(**JIT)

@@ -13,11 +13,13 @@ from brake_sim_ros.model.compiled import JIT
 
 
 @njit(**JIT)
-def shoe_switch(p, shoe, y):
+def shoe_switch(p, shoe, y, signs_only):
     """:func:`contact.switching_function` of shoe 0 (left) or 1 (right) for the state ``y``
-    (the service brake's lining over its arc: :func:`.lining.switching`, a call). A call
-    itself, not inlined: the steps test it at a dozen places, and each inlined copy
-    compiles on its own."""
+    (the service brake's lining over its arc: :func:`.lining.switching`, a call, which
+    skips its nodes where it is clear of the drum and ``signs_only``: a step's end, which
+    reads the signs alone besides an upper bound of the indentation; the location of a
+    switch, whose values steer it, passes False). A call itself, not inlined: the steps
+    test it at a dozen places, and each inlined copy compiles on its own."""
     if p[L.P_LINING_NODE_STIFFNESS] > 0.0:
         return lining.switching(
             p,
@@ -26,6 +28,7 @@ def shoe_switch(p, shoe, y):
             y[L.Y_LEFT_SPEED + shoe],
             y[L.Y_DRUM_ANGLE],
             y[L.Y_DRUM_SPEED],
+            signs_only,
         )
     return contact.switching_function(
         p,
@@ -35,25 +38,6 @@ def shoe_switch(p, shoe, y):
         y[L.Y_DRUM_ANGLE],
         y[L.Y_DRUM_SPEED],
     )
-
-
-@njit(**JIT)
-def shoe_switch_sign(p, shoe, y):
-    """:func:`shoe_switch` for a step's end, whose signs alone are read (the next step's
-    contact modes, whether the shoe touches) besides an upper bound of the indentation (the
-    free-ride bound's): the lining over its arc clear of a round drum skips its nodes
-    (:func:`.lining.switching_bound`); the point contact's is :func:`shoe_switch`'s. The
-    location of a switch inside a step takes :func:`shoe_switch`: its values steer it."""
-    if p[L.P_LINING_NODE_STIFFNESS] > 0.0:
-        return lining.switching_bound(
-            p,
-            L.P_SHOE_BASE + shoe * L.SHOE_STRIDE,
-            y[L.Y_LEFT_ANGLE + shoe],
-            y[L.Y_LEFT_SPEED + shoe],
-            y[L.Y_DRUM_ANGLE],
-            y[L.Y_DRUM_SPEED],
-        )
-    return shoe_switch(p, shoe, y)
 
 
 @njit(inline="always", **JIT)
@@ -164,7 +148,7 @@ def _locate_switch(
     sign = 1.0 if on else -1.0
     yb = work[4]
     a = 0.0
-    fa = max(sign * shoe_switch(p, shoe, ya)[1], 0.0)
+    fa = max(sign * shoe_switch(p, shoe, ya, False)[1], 0.0)
     b = rem
     fb = f_end
     side = 0
@@ -196,7 +180,7 @@ def _locate_switch(
             yb,
             never,
         )
-        fs = sign * shoe_switch(p, shoe, yb)[1]
+        fs = sign * shoe_switch(p, shoe, yb, False)[1]
         if fs > 0.0:
             a = s
             fa = fs
@@ -263,8 +247,8 @@ def located_step(y, k1, t, dt, p, gl, tl, fl, gr, tr, fr, stuck, h_start, work, 
             yb,
             never,
         )
-        el, hl = shoe_switch(p, 0, yb)
-        er, hr = shoe_switch(p, 1, yb)
+        el, hl = shoe_switch(p, 0, yb, False)
+        er, hr = shoe_switch(p, 1, yb, False)
         bad_l = (hl > 0.0) != on_l
         bad_r = (hr > 0.0) != on_r
         if not (bad_l or bad_r) or switches >= L.MAX_SWITCHES_PER_STEP:
@@ -354,8 +338,8 @@ def located_step(y, k1, t, dt, p, gl, tl, fl, gr, tr, fr, stuck, h_start, work, 
         if dt - tau <= tol:
             for j in range(n):
                 yb[j] = ya[j]
-            el, hl = shoe_switch(p, 0, yb)
-            er, hr = shoe_switch(p, 1, yb)
+            el, hl = shoe_switch(p, 0, yb, False)
+            er, hr = shoe_switch(p, 1, yb, False)
             break
         ml = L.CONTACT_ON if on_l else L.CONTACT_OFF
         mr = L.CONTACT_ON if on_r else L.CONTACT_OFF

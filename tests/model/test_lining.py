@@ -345,14 +345,14 @@ def test_the_switching_bound_keeps_every_sign_and_bounds_the_depth(
     theta, omega, drum_angle, drum_speed
 ):
     """A step's end reads the lining's switching function for its signs and an upper bound
-    of its indentation (model/rk4.py, ``shoe_switch_sign``): where the lining's circle is
-    clear of the round drum the bound skips the nodes and returns that clearance, an upper
-    bound of both with their signs; elsewhere the nodes' exact values."""
+    of its indentation (``signs_only``): where the lining's circle is clear of the round
+    drum it skips the nodes and returns that clearance, an upper bound of both with their
+    signs; elsewhere the nodes' exact values."""
     p = pack(_service(), Defects())
     for base in (BASE, BASE + L.SHOE_STRIDE):
         args = (p, base, theta, omega, drum_angle, drum_speed)
-        eps, h = lining.switching(*args)
-        bound_eps, bound_h = lining.switching_bound(*args)
+        eps, h = lining.switching(*args, False)
+        bound_eps, bound_h = lining.switching(*args, True)
         if (bound_eps, bound_h) != (eps, h):
             assert bound_eps == bound_h < 0.0
             assert eps < bound_eps and h < bound_h
@@ -365,11 +365,11 @@ def test_the_switching_bound_skips_the_nodes_only_where_the_lining_is_clear():
     deeper than the circle); pressing (3 mrad out) or on a drum with a flat it is the
     nodes' own value."""
     p = pack(_service(), Defects())
-    rest = lining.switching_bound(p, BASE, 0.0, 0.0, 0.0, 100.0)
+    rest = lining.switching(p, BASE, 0.0, 0.0, 0.0, 100.0, True)
     assert rest[0] == rest[1] == pytest.approx(-0.3e-3 + lining.CLEAR_MARGIN_M, abs=1e-15)
-    assert rest != lining.switching(p, BASE, 0.0, 0.0, 0.0, 100.0)
+    assert rest != lining.switching(p, BASE, 0.0, 0.0, 0.0, 100.0, False)
     pressed = (p, BASE, 0.003, 0.0, 0.0, 100.0)
-    assert lining.switching_bound(*pressed) == lining.switching(*pressed)
+    assert lining.switching(*pressed, True) == lining.switching(*pressed, False)
     flat = _with_flat(p, 1e-4, 0.0, 5.0)
     at_rest = (flat, BASE, 0.0, 0.0, 0.0, 100.0)
-    assert lining.switching_bound(*at_rest) == lining.switching(*at_rest)
+    assert lining.switching(*at_rest, True) == lining.switching(*at_rest, False)

@@ -41,7 +41,7 @@ def _bound(p: np.ndarray, y: np.ndarray) -> np.ndarray:
     lined = p[L.P_LINING_NODE_STIFFNESS] > 0.0
     for i, base in enumerate(BASES):
         if lined:  # the deepest node's (the located scheme's switch test)
-            eps = rk4.shoe_switch(p, i, y)[0]
+            eps = rk4.shoe_switch(p, i, y, False)[0]
         else:
             eps = contact.kinematics(
                 p, base, y[L.Y_LEFT_ANGLE + i], y[L.Y_LEFT_SPEED + i], y[L.Y_DRUM_ANGLE], 0.0
@@ -103,7 +103,7 @@ def _compare(p, y, t0, dt, knots) -> tuple[int, int]:
 def _in_contact(p: np.ndarray, y: np.ndarray) -> bool:
     """Whether either lining touches the drum at ``y`` (a node of a lining over its arc)."""
     if p[L.P_LINING_NODE_STIFFNESS] > 0.0:
-        return any(rk4.shoe_switch(p, i, y)[0] > 0.0 for i in range(2))
+        return any(rk4.shoe_switch(p, i, y, False)[0] > 0.0 for i in range(2))
     return any(
         contact.kinematics(p, base, y[L.Y_LEFT_ANGLE + i], 0.0, y[L.Y_DRUM_ANGLE], 0.0)[0] > 0.0
         for i, base in enumerate(BASES)
